@@ -1,0 +1,162 @@
+"""Time histories and summaries of a run, and writing them atomically."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .runner import RunResult
+
+__all__ = ["history_table", "summary", "write_outputs", "atomic_write_text", "HISTORY_UNITS"]
+
+HISTORY_UNITS = {
+    "time": "s",
+    "position_x": "m", "position_y": "m", "position_z": "m",
+    "velocity_x": "m/s", "velocity_y": "m/s", "velocity_z": "m/s",
+    "speed": "m/s", "path_length": "m", "tip_depth": "m",
+    "attitude_w": "1", "attitude_x": "1", "attitude_y": "1", "attitude_z": "1",
+    "angular_velocity_x": "rad/s", "angular_velocity_y": "rad/s", "angular_velocity_z": "rad/s",
+    "axis_angle": "deg", "velocity_angle": "deg", "attack_angle": "deg", "total_attack_angle": "deg",
+    "force_x": "N", "force_y": "N", "force_z": "N",
+    "moment_x": "N m", "moment_y": "N m", "moment_z": "N m",
+    "resistance_centre_from_tip": "m",
+}
+
+
+def _rotations(attitude: np.ndarray) -> np.ndarray:
+    """Body-to-world rotation matrices of an (n, 4) array of unit quaternions."""
+    w, x, y, z = attitude.T
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], axis=-1),
+        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], axis=-1),
+        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=-1),
+    ], axis=1)
+
+
+def _plane_angle(vectors: np.ndarray) -> np.ndarray:
+    """Angle (deg) in the vertical plane from the inward normal -Z towards +X."""
+    return np.degrees(np.arctan2(vectors[:, 0], -vectors[:, 2]))
+
+
+def history_table(result: RunResult) -> pd.DataFrame:
+    """One row per recorded step; the columns and their units are :data:`HISTORY_UNITS`.
+
+    ``attack_angle`` is signed in the vertical plane (``axis_angle -
+    velocity_angle``); ``total_attack_angle`` is the unsigned 3-D angle between
+    the axis and the velocity.  ``resistance_centre_from_tip`` is the point R on
+    the axis with ``M = R x F`` (least squares over the transverse force),
+    measured back from the nose tip; it is empty when the transverse force
+    vanishes.
+    """
+    tr = result.trajectory
+    rotation = _rotations(tr.attitude)
+    axis = rotation[:, :, 0]
+    tip = tr.position + rotation @ result.prepared.tip
+    speed = np.linalg.norm(tr.velocity, axis=1)
+    direction = tr.velocity / np.where(speed > 0, speed, 1.0)[:, None]
+    total_attack = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", axis, direction), -1.0, 1.0)))
+    axis_angle = _plane_angle(axis)
+    velocity_angle = _plane_angle(tr.velocity)
+    attack = (axis_angle - velocity_angle + 180.0) % 360.0 - 180.0
+    force_body = np.einsum("nji,nj->ni", rotation, tr.force)
+    transverse2 = force_body[:, 1] ** 2 + force_body[:, 2] ** 2
+    ahead = (tr.moment[:, 2] * force_body[:, 1] - tr.moment[:, 1] * force_body[:, 2])
+    defined = transverse2 > (1e-9 * np.linalg.norm(force_body, axis=1)) ** 2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        centre = np.where(defined, result.prepared.mass.centre_from_tip - ahead / transverse2, np.nan)
+    columns = {
+        "time": tr.time,
+        "position_x": tr.position[:, 0], "position_y": tr.position[:, 1], "position_z": tr.position[:, 2],
+        "velocity_x": tr.velocity[:, 0], "velocity_y": tr.velocity[:, 1], "velocity_z": tr.velocity[:, 2],
+        "speed": speed, "path_length": tr.path_length, "tip_depth": -tip[:, 2],
+        "attitude_w": tr.attitude[:, 0], "attitude_x": tr.attitude[:, 1],
+        "attitude_y": tr.attitude[:, 2], "attitude_z": tr.attitude[:, 3],
+        "angular_velocity_x": tr.angular_velocity[:, 0], "angular_velocity_y": tr.angular_velocity[:, 1],
+        "angular_velocity_z": tr.angular_velocity[:, 2],
+        "axis_angle": axis_angle, "velocity_angle": velocity_angle,
+        "attack_angle": attack, "total_attack_angle": total_attack,
+        "force_x": tr.force[:, 0], "force_y": tr.force[:, 1], "force_z": tr.force[:, 2],
+        "moment_x": tr.moment[:, 0], "moment_y": tr.moment[:, 1], "moment_z": tr.moment[:, 2],
+        "resistance_centre_from_tip": centre,
+    }
+    return pd.DataFrame(columns)
+
+
+def summary(result: RunResult, history: pd.DataFrame | None = None) -> dict:
+    """The run's headline numbers (SI units, angles in degrees)."""
+    h = history_table(result) if history is None else history
+    mass = result.prepared.mass
+    stats = result.trajectory.statistics
+    first, last = h.iloc[0], h.iloc[-1]
+    return {
+        "scene": result.scene.name,
+        "depth": float(h["tip_depth"].max()),
+        "path_length": float(last["path_length"]),
+        "end_reason": result.trajectory.end_reason,
+        "final_time": float(last["time"]),
+        "final_speed": float(last["speed"]),
+        "final_position": [float(last[f"position_{c}"]) for c in "xyz"],
+        "max_attack_angle": float(h["total_attack_angle"].max()),
+        "final_attack_angle": float(last["attack_angle"]),
+        "axis_angle_change": float(last["axis_angle"] - first["axis_angle"]),
+        "wall_time": result.wall_time,
+        "integration_time": result.integration_time,
+        "mass": mass.mass,
+        "centre_of_mass_from_tip": mass.centre_from_tip,
+        "axial_inertia": mass.axial_inertia,
+        "transverse_inertia": mass.transverse_inertia,
+        "surface_points": len(result.prepared.quadrature),
+        "tetrahedra": result.prepared.n_tetra,
+        "steps": stats.get("steps"),
+        "rejected_steps": stats.get("rejected_steps"),
+        "forced_steps": stats.get("forced_steps"),
+        "load_evaluations": stats.get("load_evaluations"),
+    }
+
+
+def atomic_write_text(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file renamed into place."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _json_safe(value):
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_safe(v) for v in value]
+    return value
+
+
+def write_outputs(result: RunResult, out_dir: str | os.PathLike, every: int = 1,
+                  history: pd.DataFrame | None = None) -> dict[str, Path]:
+    """Write ``summary.json`` (with the resolved scene) and ``history.csv`` into ``out_dir``."""
+    out = Path(out_dir)
+    h = history_table(result) if history is None else history
+    record = summary(result, h)
+    record["scene_resolved"] = result.scene.model_dump(mode="json")
+    record["history_units"] = HISTORY_UNITS
+    paths = {"summary": out / "summary.json"}
+    if result.scene.outputs.history:
+        kept = h.iloc[::every]
+        if kept.index[-1] != h.index[-1]:
+            kept = pd.concat([kept, h.iloc[[-1]]])  # always keep the end
+        paths["history"] = out / "history.csv"
+        atomic_write_text(paths["history"], kept.to_csv(index=False, float_format="%.10g"))
+    atomic_write_text(paths["summary"], json.dumps(_json_safe(record), indent=2) + "\n")
+    return paths

@@ -1,0 +1,180 @@
+"""Wire a scene through the three rooms: mesh -> fem_loads -> dynamics.
+
+World frame: ``X`` horizontal in the paper's vertical plane, ``Y`` horizontal
+out of it, ``Z`` up; the target fills ``Z < 0``.  Body frame: ``x`` along the
+projectile axis towards the nose, origin at the centre of mass; at the start
+``y`` is the world ``Y`` (for zero yaw), so a pitch rate in the vertical plane
+is ``angular_velocity[1]``.  Angles in the vertical plane are measured from the
+inward normal ``-Z`` towards ``+X``: the oblique angle ``beta`` of the
+velocity, the axis angle ``phi = beta + alpha`` and the attack angle
+``alpha``.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from dynamics import METHODS, Event, RigidBody, State, Trajectory, simulate
+from fem_loads import (DAFLLoads, MassProperties, ResistanceLaw, SurfaceQuadrature, mass_properties,
+                       resistance_law, surface_quadrature, to_skfem)
+from mesh import (BODY, COUNTERWEIGHT, ConeNose, Interior, OgiveNose, Profile, ProjectileGeometry,
+                  cached_mesh, place_counterweight)
+
+from .schema import LawSpec, Numerics, Projectile, Scene
+
+__all__ = ["PreparedProjectile", "prepare_projectile", "resolve_law", "initial_state", "run_scene",
+           "RunResult", "STOPPED", "EXITED", "DEFAULT_BODY_DENSITY"]
+
+STOPPED, EXITED = "stopped", "exited"
+DEFAULT_BODY_DENSITY = 7850.0  # steel (kg/m^3)
+
+
+@dataclass(frozen=True)
+class PreparedProjectile:
+    """Everything about a projectile that a run needs, computed once."""
+
+    geometry: ProjectileGeometry
+    mass: MassProperties
+    quadrature: SurfaceQuadrature
+    n_tetra: int
+
+    @property
+    def profile(self) -> Profile:
+        return self.geometry.profile
+
+    @property
+    def tip(self) -> np.ndarray:
+        """The nose tip relative to the centre of mass, body frame (m)."""
+        return -self.mass.centre
+
+
+def projectile_geometry(spec: Projectile) -> tuple[ProjectileGeometry, dict[int, float]]:
+    """The geometry and region densities a projectile spec describes (before any mass scaling)."""
+    nose = OgiveNose(spec.nose.crh) if spec.nose.shape == "ogive" else ConeNose(spec.nose.half_angle)
+    profile = Profile(spec.diameter, spec.length, nose)
+    body_density = spec.body_density or DEFAULT_BODY_DENSITY
+    if spec.interior is None:
+        return ProjectileGeometry(profile), {BODY: body_density}
+    interior = Interior(spec.interior.wall_thickness, spec.interior.tail_thickness)
+    weight = spec.counterweight
+    if weight is None:
+        return ProjectileGeometry(profile, interior), {BODY: body_density}
+    if weight.start is not None:
+        span = (weight.start, weight.end)
+    else:
+        span = place_counterweight(profile, interior, body_density, weight.density, spec.mass,
+                                   spec.centre_target)
+    return ProjectileGeometry(profile, interior, span), {BODY: body_density, COUNTERWEIGHT: weight.density}
+
+
+@functools.lru_cache(maxsize=16)
+def _prepare(spec_json: str, numerics_json: str) -> PreparedProjectile:
+    spec = Projectile.model_validate_json(spec_json)
+    numerics = Numerics.model_validate_json(numerics_json)
+    geometry, densities = projectile_geometry(spec)
+    mesh = cached_mesh(geometry, numerics.mesh_size, numerics.geometry_order)
+    fem_mesh = to_skfem(mesh)
+    if spec.mass_properties is not None:
+        given = spec.mass_properties
+        mass = MassProperties.axisymmetric(given.mass, given.centre_of_mass, given.axial_inertia,
+                                           given.transverse_inertia)
+    else:
+        mass = mass_properties(mesh, densities, fem_mesh)
+        if spec.mass is not None and spec.counterweight is None:
+            # a homogeneous body of the given mass: scale its density
+            scale = spec.mass / mass.mass
+            mass = MassProperties(spec.mass, mass.centre, mass.inertia * scale, mass.volume)
+    if spec.transverse_inertia_scale != 1.0:
+        mass = mass.with_transverse_scale(spec.transverse_inertia_scale)
+    quadrature = surface_quadrature(mesh, mass.centre, geometry.profile, numerics.normals,
+                                    numerics.quadrature_order, fem_mesh)
+    return PreparedProjectile(geometry, mass, quadrature, len(mesh.tetra))
+
+
+def prepare_projectile(scene: Scene) -> PreparedProjectile:
+    """Mesh (through the disk cache), mass properties and surface quadrature of a scene's projectile."""
+    mesh_fields = {"mesh_size", "geometry_order", "normals", "quadrature_order"}
+    numerics = scene.numerics.model_dump_json(include=mesh_fields)
+    return _prepare(scene.projectile.model_dump_json(), numerics)
+
+
+def resolve_law(law: str | LawSpec) -> ResistanceLaw:
+    """The resistance law a scene names or gives by coefficients."""
+    if isinstance(law, str):
+        return resistance_law(law)
+    return ResistanceLaw.from_coefficients(law.A, law.sigma_0, law.B, law.rho_0)
+
+
+def initial_attitude(oblique_angle: float, attack_angle: float, yaw_angle: float) -> np.ndarray:
+    """Body-to-world rotation at impact (angles in degrees)."""
+    phi = math.radians(oblique_angle + attack_angle)
+    psi = math.radians(yaw_angle)
+    axis = math.cos(psi) * np.array([math.sin(phi), 0.0, -math.cos(phi)]) + math.sin(psi) * np.array([0, 1.0, 0])
+    y_world = np.array([0.0, 1.0, 0.0])
+    side = y_world - (y_world @ axis) * axis
+    side /= np.linalg.norm(side)
+    return np.column_stack([axis, side, np.cross(axis, side)])
+
+
+def initial_state(scene: Scene, prepared: PreparedProjectile) -> State:
+    """The tip touches the surface at the origin; at grazing incidence the lowest point does."""
+    from dynamics.quaternion import from_rotation_matrix
+
+    impact = scene.impact
+    rotation = initial_attitude(impact.oblique_angle, impact.attack_angle, impact.yaw_angle)
+    beta = math.radians(impact.oblique_angle)
+    velocity = impact.speed * np.array([math.sin(beta), 0.0, -math.cos(beta)])
+    position = rotation @ (-prepared.tip)  # the tip at the origin
+    # lowest point of the exact surface relative to the tip: min over s of
+    # (-s axis_Z - r(s) |transverse part of Z|)
+    profile = prepared.profile
+    s = np.linspace(0.0, profile.length, 20001)
+    up = rotation[2]
+    lowest = float(np.min(-s * up[0] - profile.radius_at(s) * math.hypot(up[1], up[2])))
+    position[2] -= min(lowest, 0.0)
+    return State(0.0, position, velocity, from_rotation_matrix(rotation),
+                 np.asarray(impact.angular_velocity, dtype=float))
+
+
+@dataclass
+class RunResult:
+    """A finished run: the scene, its projectile, the trajectory and the wall time."""
+
+    scene: Scene
+    prepared: PreparedProjectile
+    trajectory: Trajectory
+    wall_time: float
+    integration_time: float
+
+
+def run_scene(scene: Scene) -> RunResult:
+    """Run one scene end to end."""
+    start = time.perf_counter()
+    prepared = prepare_projectile(scene)
+    numerics = scene.numerics
+    loads = DAFLLoads(prepared.quadrature, resolve_law(scene.target.law), numerics.normal_velocity_guard)
+    body = RigidBody(prepared.mass.mass, prepared.mass.inertia)
+    state = initial_state(scene, prepared)
+    events = [
+        Event(STOPPED, lambda st: st.speed - numerics.stop_speed, direction=-1),
+        # every surface point back above the surface after having been inside
+        Event(EXITED, lambda st: loads.lowest_height(st.position, st.rotation), direction=1),
+    ]
+    method = METHODS[numerics.integrator]()
+    integrate_start = time.perf_counter()
+    if method.adaptive:
+        length, speed = prepared.profile.length, scene.impact.speed
+        scales = np.array([length] * 3 + [speed] * 3 + [1.0] * 3 + [speed / length] * 3 + [length])
+        trajectory = simulate(body, loads, state, method, time_limit=numerics.time_limit,
+                              rtol=numerics.rtol, atol=numerics.rtol * scales,
+                              first_step=1e-3 * length / speed, events=events)
+    else:
+        trajectory = simulate(body, loads, state, method, time_limit=numerics.time_limit,
+                              time_step=numerics.time_step, events=events)
+    end = time.perf_counter()
+    return RunResult(scene, prepared, trajectory, end - start, end - integrate_start)

@@ -1,0 +1,14 @@
+"""Rigid-body dynamics: state, quaternion kinematics, Runge-Kutta integrators and events.
+
+This package takes a load function and knows nothing of meshes or resistance laws.
+"""
+
+from .integrators import METHODS, RK4, DormandPrince54, RungeKutta
+from .rigid_body import LoadFunction, RigidBody, State
+from .simulate import MAX_STEPS, NON_FINITE, TIME_LIMIT, Event, Trajectory, simulate
+
+__all__ = [
+    "RigidBody", "State", "LoadFunction",
+    "RungeKutta", "RK4", "DormandPrince54", "METHODS",
+    "Event", "Trajectory", "simulate", "TIME_LIMIT", "NON_FINITE", "MAX_STEPS",
+]

@@ -1,0 +1,178 @@
+"""Explicit Runge-Kutta methods on the rigid-body state (Runge-Kutta-Munthe-Kaas).
+
+Within one step the attitude is written ``q = q0 * exp(u)`` with a rotation
+vector ``u`` that starts at zero, so the step integrates a plain ODE for
+``(x, v, u, omega, s)``: ``du/dt = dexp^-1_u(omega)``
+(:func:`~dynamics.quaternion.right_jacobian_inverse`).  The new attitude
+``q0 * exp(u1)`` is a product of unit quaternions: it stays on the unit sphere
+up to round-off, which one renormalisation per step removes.  With the exact
+``dexp^-1`` the method keeps the classical order of its tableau.
+
+Concrete methods differ only in their tableau, as in scipy's ``integrate._ivp``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .quaternion import exp_map, multiply, normalize, right_jacobian_inverse, rotation_matrix
+from .rigid_body import LoadFunction, RigidBody, State
+
+__all__ = ["RungeKutta", "RK4", "DormandPrince54", "Evaluation", "StepResult", "METHODS"]
+
+# layout of the increment vector z = (x, v, u, omega, s) used inside a step
+POSITION, VELOCITY, ROTATION, ANGULAR_VELOCITY, PATH = (
+    slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12), slice(12, 13))
+N_INCREMENTS = 13
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """Loads and accelerations at one state (one call of the load function)."""
+
+    acceleration: np.ndarray  # world frame (m/s^2)
+    angular_acceleration: np.ndarray  # body frame (rad/s^2)
+    force: np.ndarray  # world frame (N)
+    moment: np.ndarray  # body frame, about the centre of mass (N m)
+
+
+def evaluate(body: RigidBody, loads: LoadFunction, position: np.ndarray, velocity: np.ndarray,
+             attitude: np.ndarray, angular_velocity: np.ndarray) -> Evaluation:
+    """Call the load function once and apply Newton-Euler."""
+    force, moment = loads(position, velocity, rotation_matrix(attitude), angular_velocity)
+    acceleration, angular_acceleration = body.accelerations(force, moment, angular_velocity)
+    return Evaluation(acceleration, angular_acceleration, force, moment)
+
+
+@dataclass(frozen=True)
+class StepResult:
+    """Outcome of one Runge-Kutta step.
+
+    Attributes
+    ----------
+    state : State
+        The state at the end of the step.
+    error : ndarray or None
+        Local error estimate of the increments ``(x, v, u, omega, s)``, for
+        methods with an embedded pair.
+    first : Evaluation
+        The evaluation at the start of the step (reusable after a rejection).
+    last : Evaluation or None
+        For first-same-as-last methods, the evaluation at the end of the step.
+    """
+
+    state: State
+    error: np.ndarray | None
+    first: Evaluation
+    last: Evaluation | None
+
+
+class RungeKutta:
+    """Base class of explicit Runge-Kutta methods on the rigid-body state.
+
+    Contract: :meth:`step` advances a :class:`~dynamics.rigid_body.State` by
+    ``h`` seconds, calling the load function once per stage (once less when
+    the first evaluation is passed in), and returns a :class:`StepResult`.  The
+    attitude of the result is a unit quaternion to round-off.  Subclasses set
+    only the class attributes:
+
+    Attributes
+    ----------
+    A : ndarray, shape (stages, stages)
+        Runge-Kutta matrix (strictly lower triangular).
+    b : ndarray, shape (stages,)
+        Weights of the solution.
+    c : ndarray, shape (stages,)
+        Nodes.
+    b_error : ndarray or None
+        ``b - b_hat``: weights of the embedded error estimate, or None.
+    order : int
+        Order of the solution.
+    error_order : int
+        Order of the embedded estimate (step-size control uses ``1/(error_order + 1)``).
+    fsal : bool
+        True if the last stage is evaluated at the end of the step.
+    """
+
+    A: np.ndarray
+    b: np.ndarray
+    c: np.ndarray
+    b_error: np.ndarray | None = None
+    order: int
+    error_order: int = 0
+    fsal: bool = False
+
+    @property
+    def adaptive(self) -> bool:
+        return self.b_error is not None
+
+    @property
+    def stages(self) -> int:
+        return len(self.b)
+
+    def step(self, body: RigidBody, loads: LoadFunction, state: State, h: float,
+             first: Evaluation | None = None) -> StepResult:
+        """Advance ``state`` by ``h`` seconds."""
+        x0, v0, q0, w0 = state.position, state.velocity, state.attitude, state.angular_velocity
+        k = np.empty((self.stages, N_INCREMENTS))
+        evaluations: list[Evaluation] = []
+        for i in range(self.stages):
+            z = h * (self.A[i, :i] @ k[:i]) if i else np.zeros(N_INCREMENTS)
+            x, v, u, w = x0 + z[POSITION], v0 + z[VELOCITY], z[ROTATION], w0 + z[ANGULAR_VELOCITY]
+            q = multiply(q0, exp_map(u)) if i else q0
+            if i == 0 and first is not None:
+                e = first
+            else:
+                e = evaluate(body, loads, x, v, q, w)
+            evaluations.append(e)
+            k[i, POSITION] = v
+            k[i, VELOCITY] = e.acceleration
+            k[i, ROTATION] = right_jacobian_inverse(u, w) if i else w
+            k[i, ANGULAR_VELOCITY] = e.angular_acceleration
+            k[i, PATH] = np.sqrt(v @ v)
+        z = h * (self.b @ k)
+        new = State(
+            time=state.time + h,
+            position=x0 + z[POSITION],
+            velocity=v0 + z[VELOCITY],
+            attitude=normalize(multiply(q0, exp_map(z[ROTATION]))),
+            angular_velocity=w0 + z[ANGULAR_VELOCITY],
+            path_length=state.path_length + float(z[PATH][0]),
+        )
+        error = h * (self.b_error @ k) if self.b_error is not None else None
+        return StepResult(new, error, evaluations[0], evaluations[-1] if self.fsal else None)
+
+
+class RK4(RungeKutta):
+    """The classical fourth-order Runge-Kutta method (fixed step)."""
+
+    A = np.array([[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1, 0]], dtype=float)
+    b = np.array([1, 2, 2, 1], dtype=float) / 6
+    c = np.array([0, 0.5, 0.5, 1], dtype=float)
+    order = 4
+
+
+class DormandPrince54(RungeKutta):
+    """Dormand-Prince 5(4) with first-same-as-last stage (adaptive step)."""
+
+    A = np.array([
+        [0, 0, 0, 0, 0, 0, 0],
+        [1 / 5, 0, 0, 0, 0, 0, 0],
+        [3 / 40, 9 / 40, 0, 0, 0, 0, 0],
+        [44 / 45, -56 / 15, 32 / 9, 0, 0, 0, 0],
+        [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0, 0, 0],
+        [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656, 0, 0],
+        [35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0],
+    ])
+    b = np.array([35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0])
+    c = np.array([0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1, 1])
+    b_error = b - np.array([5179 / 57600, 0, 7571 / 16695, 393 / 640, -92097 / 339200,
+                            187 / 2100, 1 / 40])
+    order = 5
+    error_order = 4
+    fsal = True
+
+
+METHODS: dict[str, type[RungeKutta]] = {"rk4": RK4, "dopri54": DormandPrince54}

@@ -1,0 +1,92 @@
+"""Unit quaternions ``q = (w, x, y, z)`` (scalar first) for rigid-body attitude.
+
+``rotation_matrix(q)`` maps body coordinates to world coordinates; attitude
+kinematics with the body-frame angular velocity ``omega`` read
+``dq/dt = q * (0, omega) / 2``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["multiply", "exp_map", "rotation_matrix", "from_rotation_matrix",
+           "right_jacobian_inverse", "normalize"]
+
+
+def multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Hamilton product ``p * q``."""
+    pw, px, py, pz = p
+    qw, qx, qy, qz = q
+    return np.array([
+        pw * qw - px * qx - py * qy - pz * qz,
+        pw * qx + px * qw + py * qz - pz * qy,
+        pw * qy - px * qz + py * qw + pz * qx,
+        pw * qz + px * qy - py * qx + pz * qw,
+    ])
+
+
+def exp_map(rotation_vector: np.ndarray) -> np.ndarray:
+    """Unit quaternion of the rotation by ``|v|`` radians about ``v``."""
+    angle = math.sqrt(float(rotation_vector @ rotation_vector))
+    half = 0.5 * angle
+    # sin(half)/angle, with its series near zero so that the map stays smooth
+    scale = math.sin(half) / angle if angle > 1e-8 else 0.5 - angle * angle / 48.0
+    return np.array([math.cos(half), *(scale * rotation_vector)])
+
+
+def normalize(q: np.ndarray) -> np.ndarray:
+    """``q / |q|``."""
+    return q / math.sqrt(float(q @ q))
+
+
+def rotation_matrix(q: np.ndarray) -> np.ndarray:
+    """Body-to-world rotation matrix of a unit quaternion."""
+    w, x, y, z = q
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+def from_rotation_matrix(matrix: np.ndarray) -> np.ndarray:
+    """Unit quaternion (with ``w >= 0``) of a rotation matrix (Shepperd's method)."""
+    m = np.asarray(matrix, dtype=float)
+    trace = np.trace(m)
+    candidates = np.array([trace, m[0, 0], m[1, 1], m[2, 2]])
+    k = int(np.argmax(candidates))
+    if k == 0:
+        w = 0.5 * math.sqrt(1.0 + trace)
+        q = np.array([w, (m[2, 1] - m[1, 2]) / (4 * w), (m[0, 2] - m[2, 0]) / (4 * w),
+                      (m[1, 0] - m[0, 1]) / (4 * w)])
+    else:
+        i = k - 1
+        j, l = (i + 1) % 3, (i + 2) % 3
+        r = math.sqrt(1.0 + m[i, i] - m[j, j] - m[l, l])
+        v = np.zeros(3)
+        v[i] = 0.5 * r
+        v[j] = (m[j, i] + m[i, j]) / (2 * r)
+        v[l] = (m[l, i] + m[i, l]) / (2 * r)
+        w = (m[l, j] - m[j, l]) / (2 * r)
+        q = np.array([w, *v])
+    q = normalize(q)
+    return q if q[0] >= 0 else -q
+
+
+def right_jacobian_inverse(u: np.ndarray, omega: np.ndarray) -> np.ndarray:
+    """``du/dt`` for ``q = q0 * exp(u)`` turning with body angular velocity ``omega``.
+
+    The inverse right Jacobian of SO(3):
+    ``omega + u x omega / 2 + c(|u|) u x (u x omega)`` with
+    ``c(t) = (1 - (t/2) cot(t/2)) / t^2``.
+    """
+    angle2 = float(u @ u)
+    if angle2 < 1e-6:
+        c = 1.0 / 12.0 + angle2 / 720.0 + angle2 * angle2 / 30240.0
+    else:
+        angle = math.sqrt(angle2)
+        c = (1.0 - 0.5 * angle / math.tan(0.5 * angle)) / angle2
+    cross = np.cross(u, omega)
+    return omega + 0.5 * cross + c * np.cross(u, cross)

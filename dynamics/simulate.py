@@ -1,0 +1,262 @@
+"""Time integration of a rigid body under a load function, with terminal events.
+
+:func:`simulate` advances a :class:`~dynamics.rigid_body.State` with a fixed
+step (any method) or with error control (methods with an embedded pair) until
+a terminal event or the time limit.  An event is a scalar function of the
+state crossing zero in a given direction; its time is located to round-off by
+Brent's method on re-taken partial steps from the last accepted state, so the
+run ends exactly at the event and nothing is integrated past it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import optimize
+
+from .integrators import Evaluation, RungeKutta, StepResult, evaluate
+from .rigid_body import LoadFunction, RigidBody, State
+
+__all__ = ["Event", "Trajectory", "simulate", "TIME_LIMIT", "NON_FINITE", "MAX_STEPS"]
+
+TIME_LIMIT, NON_FINITE, MAX_STEPS = "time_limit", "non_finite", "max_steps"
+
+
+@dataclass(frozen=True)
+class Event:
+    """A terminal event: ``function(state)`` crossing zero.
+
+    Parameters
+    ----------
+    name : str
+        The end reason reported when the event fires.
+    function : callable
+        ``function(state) -> float``; continuous in time.
+    direction : {1, -1, 0}
+        1: fires when the function rises through zero, -1: when it falls, 0: either.
+    """
+
+    name: str
+    function: Callable[[State], float]
+    direction: int = 0
+
+    def crossed(self, before: float, after: float) -> bool:
+        if self.direction >= 0 and before < 0.0 <= after:
+            return True
+        return self.direction <= 0 and before > 0.0 >= after
+
+
+@dataclass
+class Trajectory:
+    """Recorded states and loads of a run (one row per accepted step, plus the start).
+
+    Attributes
+    ----------
+    time : ndarray, shape (n,)
+    position, velocity : ndarray, shape (n, 3)
+        Centre of mass, world frame (m, m/s).
+    attitude : ndarray, shape (n, 4)
+        Unit quaternions, body to world.
+    angular_velocity : ndarray, shape (n, 3)
+        Body frame (rad/s).
+    path_length : ndarray, shape (n,)
+        Distance travelled by the centre of mass (m).
+    force : ndarray, shape (n, 3)
+        Load on the body, world frame (N).
+    moment : ndarray, shape (n, 3)
+        Moment about the centre of mass, body frame (N m).
+    end_reason : str
+        Name of the event that ended the run, ``time_limit``, ``non_finite`` or ``max_steps``.
+    statistics : dict
+        ``steps``, ``rejected_steps``, ``forced_steps`` (accepted at the step
+        floor with the error above tolerance) and ``load_evaluations``.
+    """
+
+    time: np.ndarray
+    position: np.ndarray
+    velocity: np.ndarray
+    attitude: np.ndarray
+    angular_velocity: np.ndarray
+    path_length: np.ndarray
+    force: np.ndarray
+    moment: np.ndarray
+    end_reason: str
+    statistics: dict = field(default_factory=dict)
+
+    def state(self, index: int = -1) -> State:
+        return State(float(self.time[index]), self.position[index], self.velocity[index],
+                     self.attitude[index], self.angular_velocity[index], float(self.path_length[index]))
+
+
+class _Recorder:
+    def __init__(self) -> None:
+        self.rows: list[tuple[State, Evaluation]] = []
+
+    def add(self, state: State, evaluation: Evaluation) -> None:
+        self.rows.append((state, evaluation))
+
+    def trajectory(self, end_reason: str, statistics: dict) -> Trajectory:
+        states = [s for s, _ in self.rows]
+        evals = [e for _, e in self.rows]
+        return Trajectory(
+            time=np.array([s.time for s in states]),
+            position=np.array([s.position for s in states]),
+            velocity=np.array([s.velocity for s in states]),
+            attitude=np.array([s.attitude for s in states]),
+            angular_velocity=np.array([s.angular_velocity for s in states]),
+            path_length=np.array([s.path_length for s in states]),
+            force=np.array([e.force for e in evals]),
+            moment=np.array([e.moment for e in evals]),
+            end_reason=end_reason,
+            statistics=statistics,
+        )
+
+
+def _error_norm(result: StepResult, before: State, rtol: float, atol: np.ndarray) -> float:
+    """RMS of the error estimate scaled by ``atol + rtol |value|``."""
+    after = result.state
+    magnitude = np.concatenate([
+        np.maximum(np.abs(before.position), np.abs(after.position)),
+        np.maximum(np.abs(before.velocity), np.abs(after.velocity)),
+        np.zeros(3),  # the rotation increment starts from zero: absolute tolerance only
+        np.maximum(np.abs(before.angular_velocity), np.abs(after.angular_velocity)),
+        [max(before.path_length, after.path_length)],
+    ])
+    scaled = result.error / (atol + rtol * magnitude)
+    return float(np.sqrt(np.mean(scaled * scaled)))
+
+
+def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: RungeKutta, *,
+             time_limit: float, time_step: float | None = None, rtol: float | None = None,
+             atol: np.ndarray | float | None = None, first_step: float = 1e-6,
+             min_step: float = 1e-10, max_step: float = math.inf,
+             events: Sequence[Event] = (), max_steps: int = 5_000_000) -> Trajectory:
+    """Integrate the motion of ``body`` under ``loads`` from ``initial``.
+
+    Parameters
+    ----------
+    body : RigidBody
+        Mass and inertia.
+    loads : LoadFunction
+        Resultant force (world) and moment (body) for a state.
+    initial : State
+        The start.
+    method : RungeKutta
+        The Runge-Kutta method.
+    time_limit : float
+        The run ends at this time (s) if no event ends it first.
+    time_step : float, optional
+        Fixed step (s).  Give either this or ``rtol``.
+    rtol : float, optional
+        Relative tolerance of the error control (needs an adaptive method).
+    atol : float or ndarray, shape (13,), optional
+        Absolute tolerance of the increments ``(x, v, u, omega, s)``; default ``rtol``.
+    first_step, min_step, max_step : float
+        Step sizes of the error control (s).  A step that still fails the
+        tolerance at ``min_step`` is accepted and counted in
+        ``statistics["forced_steps"]``: the load is discontinuous, and at a jump
+        no step size meets a tolerance on a smooth error model.
+    events : sequence of Event
+        Terminal events, checked after every step.
+    max_steps : int
+        Safety limit on the number of steps.
+    """
+    if (time_step is None) == (rtol is None):
+        raise ValueError("give exactly one of time_step (fixed step) and rtol (error control)")
+    if rtol is not None and not method.adaptive:
+        raise ValueError(f"{type(method).__name__} has no error estimate: use a fixed time_step")
+    if time_step is not None and not time_step > 0:
+        raise ValueError(f"time_step = {time_step}: must be > 0")
+    if rtol is not None:
+        atol = np.broadcast_to(np.asarray(rtol if atol is None else atol, dtype=float), (13,))
+
+    calls = 0
+
+    def counted(*args):
+        nonlocal calls
+        calls += 1
+        return loads(*args)
+
+    state = initial
+    first = evaluate(body, counted, state.position, state.velocity, state.attitude,
+                     state.angular_velocity)
+    recorder = _Recorder()
+    recorder.add(state, first)
+    values = [event.function(state) for event in events]
+    steps = rejected = forced = 0
+    h = time_step if time_step is not None else min(first_step, max_step)
+    end_reason = TIME_LIMIT
+
+    while True:
+        remaining = time_limit - state.time
+        if remaining <= 1e-12 * max(1.0, time_limit):
+            break
+        if steps >= max_steps:
+            end_reason = MAX_STEPS
+            break
+        size = min(h, remaining)
+        result = method.step(body, counted, state, size, first)
+        if rtol is not None:
+            norm = _error_norm(result, state, rtol, atol)
+            factor = 0.9 * norm ** (-1.0 / (method.error_order + 1)) if norm > 0 else 5.0
+            if norm > 1.0 and size > min_step:
+                rejected += 1
+                h = max(min_step, size * min(1.0, max(0.2, factor)))
+                first = result.first
+                continue
+            forced += norm > 1.0
+            h = min(max_step, max(min_step, size * min(5.0, max(0.2, factor))))
+        new = result.state
+        if not new.is_finite():
+            end_reason = NON_FINITE
+            break
+        steps += 1
+        new_values = [event.function(new) for event in events]
+        fired = [i for i, ev in enumerate(events) if ev.crossed(values[i], new_values[i])]
+        if fired:
+            new, end_reason = _locate(body, counted, method, state, result.first, size,
+                                      [events[i] for i in fired])
+            last = evaluate(body, counted, new.position, new.velocity, new.attitude,
+                            new.angular_velocity)
+            recorder.add(new, last)
+            break
+        first = result.last if result.last is not None else evaluate(
+            body, counted, new.position, new.velocity, new.attitude, new.angular_velocity)
+        recorder.add(new, first)
+        state, values = new, new_values
+
+    statistics = {"steps": steps, "rejected_steps": rejected, "forced_steps": int(forced),
+                  "load_evaluations": calls}
+    return recorder.trajectory(end_reason, statistics)
+
+
+def _locate(body: RigidBody, loads: LoadFunction, method: RungeKutta, state: State,
+            first: Evaluation, size: float, events: list[Event]) -> tuple[State, str]:
+    """The earliest crossing among ``events`` inside a step of ``size`` from ``state``."""
+    before = {id(e): e.function(state) for e in events}
+    best: tuple[float, Event] | None = None
+    for event in events:
+        def g(s: float, event: Event = event) -> float:
+            if s <= 0.0:
+                return before[id(event)]
+            return event.function(method.step(body, loads, state, s, first).state)
+
+        g_end = g(size)
+        if not event.crossed(before[id(event)], g_end):
+            continue
+        # the crossing lies where g reaches zero; brentq needs a sign change
+        if g_end == 0.0:
+            t_cross = size
+        else:
+            t_cross = optimize.brentq(g, 0.0, size, xtol=max(1e-15, 1e-12 * size), rtol=1e-15)
+            # take the side of the root where the event has happened
+            if not event.crossed(before[id(event)], g(t_cross)):
+                t_cross = min(size, t_cross + max(1e-15, 1e-12 * size))
+        if best is None or t_cross < best[0]:
+            best = (t_cross, event)
+    assert best is not None
+    t_cross, event = best
+    return method.step(body, loads, state, t_cross, first).state, event.name

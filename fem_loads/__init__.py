@@ -1,0 +1,16 @@
+"""Mass properties and surface quadrature (scikit-fem), resistance laws and DAFL loads.
+
+Knows nothing of time integration.
+"""
+
+from .dafl import DAFLLoads
+from .mass import MassProperties, mass_properties, to_skfem
+from .quadrature import NORMAL_MODELS, SurfaceQuadrature, surface_quadrature
+from .resistance import NAMED_LAWS, ResistanceLaw, resistance_law
+
+__all__ = [
+    "MassProperties", "mass_properties", "to_skfem",
+    "SurfaceQuadrature", "surface_quadrature", "NORMAL_MODELS",
+    "ResistanceLaw", "NAMED_LAWS", "resistance_law",
+    "DAFLLoads",
+]

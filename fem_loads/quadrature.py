@@ -1,0 +1,161 @@
+"""Outer-surface quadrature of a projectile mesh (scikit-fem), computed once.
+
+Three normal models trade accuracy for nothing at run time (the quadrature is
+built once, so each costs the same per load evaluation):
+
+``mesh``
+    Points, normals and weights of the mesh facets as scikit-fem's
+    :class:`~skfem.FacetBasis` gives them: flat triangles for a first-order
+    mesh, curved ones for a second-order mesh.  Flat facets tilt the nose
+    normals by degrees and give the cylindrical shank normals an axial
+    component, which loads the shank with the static stress ``A sigma_0``
+    where the exact surface carries nothing (see docs/accuracy.md).
+``exact``
+    The facet quadrature is carried onto the exact surface of revolution by a
+    radial projection from the axis: points are moved onto the profile, the
+    normals are the profile's, and the weights take the Jacobian of the
+    projection, ``(r / rho) (n_mesh . e_rho) / (n_exact . e_rho)``.  The
+    facets then only partition the exact surface.  The flat tail disc is
+    stretched radially so that its area is exactly ``pi a^2``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from skfem import ElementTetP0, FacetBasis, MeshTet1, MeshTet2
+
+from mesh.geometry import ProjectileMesh
+from mesh.profile import Profile
+
+__all__ = ["SurfaceQuadrature", "surface_quadrature", "NORMAL_MODELS"]
+
+NORMAL_MODELS = ("mesh", "exact")
+
+
+@dataclass(frozen=True)
+class SurfaceQuadrature:
+    """Quadrature of the outer surface in the body frame about the centre of mass.
+
+    Attributes
+    ----------
+    points : ndarray, shape (n, 3)
+        Quadrature points ``r`` relative to the centre of mass (m); x forward.
+    normals : ndarray, shape (n, 3)
+        Outward unit normals.
+    weights : ndarray, shape (n,)
+        Area weights (m^2).
+    moment_arms : ndarray, shape (n, 3)
+        ``r x n`` for each point, cached for the moment and the normal velocity.
+    """
+
+    points: np.ndarray
+    normals: np.ndarray
+    weights: np.ndarray
+    moment_arms: np.ndarray = field(init=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "moment_arms", np.cross(self.points, self.normals))
+
+    def __len__(self) -> int:
+        return len(self.weights)
+
+    @property
+    def area(self) -> float:
+        """Total area (m^2)."""
+        return float(self.weights.sum())
+
+    def enclosed_volume(self) -> float:
+        """Volume enclosed by the surface, ``sum (r . n) w / 3`` (m^3)."""
+        return float(np.einsum("ij,ij,i->", self.points, self.normals, self.weights) / 3.0)
+
+
+def _facet_indices(m: MeshTet1 | MeshTet2, triangles: np.ndarray) -> np.ndarray:
+    """Indices in ``m.facets`` of the triangles given by their corner nodes."""
+    n = np.int64(m.p.shape[1]) if m.p.shape[1] > 0 else np.int64(1)
+
+    def key(tri: np.ndarray) -> np.ndarray:
+        tri = np.sort(tri.astype(np.int64), axis=0)
+        return (tri[0] * n + tri[1]) * n + tri[2]
+
+    facet_keys = key(m.facets)
+    order = np.argsort(facet_keys)
+    wanted = key(triangles[:, :3].T)
+    pos = np.searchsorted(facet_keys, wanted, sorter=order)
+    found = order[np.minimum(pos, len(order) - 1)]
+    if not np.array_equal(facet_keys[found], wanted):
+        raise ValueError("outer surface triangles are not facets of the volume mesh")
+    return found
+
+
+def _to_exact_surface(points: np.ndarray, normals: np.ndarray, weights: np.ndarray,
+                      profile: Profile) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Carry a facet quadrature (mesh coordinates, tip at origin) onto the exact surface."""
+    s = -points[:, 0]
+    rho = np.hypot(points[:, 1], points[:, 2])
+    e_rho = np.zeros_like(points)
+    e_rho[:, 1:] = points[:, 1:] / np.maximum(rho, np.finfo(float).tiny)[:, None]
+    n_mesh_radial = np.einsum("ij,ij->i", normals, e_rho)
+    # the flat tail: planar already; everything else is the lateral surface
+    lateral = n_mesh_radial > 1e-6 * np.abs(normals[:, 0])
+    r = profile.radius_at(s[lateral])
+    n_forward, n_radial = profile.outward_normal(s[lateral])
+    points = points.copy()
+    normals = normals.copy()
+    weights = weights.copy()
+    points[lateral, 1:] = r[:, None] * e_rho[lateral, 1:]
+    normals[lateral, 0] = n_forward
+    normals[lateral, 1:] = n_radial[:, None] * e_rho[lateral, 1:]
+    weights[lateral] *= (r / rho[lateral]) * n_mesh_radial[lateral] / n_radial
+    # the tail disc is planar, but a flat mesh bounds it by a polygon: stretch it
+    # radially onto the exact disc (uniformly; its load matters only in reverse motion)
+    tail = ~lateral
+    if tail.any():
+        stretch = np.pi * profile.radius**2 / weights[tail].sum()
+        weights[tail] *= stretch
+        points[tail, 1:] *= np.sqrt(stretch)
+    return points, normals, weights
+
+
+def surface_quadrature(mesh: ProjectileMesh, centre: np.ndarray, profile: Profile | None = None,
+                       normal_model: str = "exact", intorder: int = 2,
+                       skfem_mesh: MeshTet1 | MeshTet2 | None = None) -> SurfaceQuadrature:
+    """Quadrature points, outward normals and weights of the outer surface.
+
+    Parameters
+    ----------
+    mesh : ProjectileMesh
+        The projectile mesh (its ``outer`` triangles select the facets).
+    centre : ndarray, shape (3,)
+        Centre of mass in mesh coordinates (m); the result is relative to it.
+    profile : Profile, optional
+        The exact outer profile; required for ``normal_model="exact"``.
+    normal_model : {"exact", "mesh"}
+        See the module docstring.
+    intorder : int
+        Polynomial degree integrated exactly on each facet.
+    skfem_mesh : MeshTet1 or MeshTet2, optional
+        A scikit-fem mesh already made from ``mesh``.
+    """
+    from .mass import to_skfem
+
+    if normal_model not in NORMAL_MODELS:
+        raise ValueError(f"normal_model = {normal_model!r}: must be one of {NORMAL_MODELS}")
+    if normal_model == "exact" and profile is None:
+        raise ValueError("normal_model = 'exact' needs the profile")
+    m = to_skfem(mesh) if skfem_mesh is None else skfem_mesh
+    corners = mesh.outer[:, :3]
+    if mesh.order == 2:
+        # scikit-fem renumbers the corner nodes of a quadratic mesh first, in sorted order
+        corners = np.searchsorted(np.unique(mesh.tetra[:, :4]), corners)
+    facets = _facet_indices(m, corners)
+    fb = FacetBasis(m, ElementTetP0(), facets=facets, intorder=intorder)
+    points = fb.global_coordinates().value.reshape(3, -1).T
+    normals = fb.normals.value.reshape(3, -1).T
+    weights = fb.dx.reshape(-1)
+    normals = normals / np.linalg.norm(normals, axis=1)[:, None]
+    if normal_model == "exact":
+        points, normals, weights = _to_exact_surface(points, normals, weights, profile)
+    return SurfaceQuadrature(np.ascontiguousarray(points - centre), np.ascontiguousarray(normals),
+                             np.ascontiguousarray(weights))

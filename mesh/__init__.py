@@ -1,0 +1,13 @@
+"""Projectile geometry and meshing (gmsh, meshio). Knows nothing of forces or time."""
+
+from .geometry import BODY, COUNTERWEIGHT, OUTER, ProjectileMesh, build_mesh
+from .io import cached_mesh, read_mesh, write_mesh
+from .placement import AxisymmetricMassProperties, analytic_mass_properties, place_counterweight
+from .profile import ConeNose, Interior, OgiveNose, Profile, ProjectileGeometry
+
+__all__ = [
+    "Profile", "OgiveNose", "ConeNose", "Interior", "ProjectileGeometry",
+    "ProjectileMesh", "build_mesh", "BODY", "COUNTERWEIGHT", "OUTER",
+    "read_mesh", "write_mesh", "cached_mesh",
+    "AxisymmetricMassProperties", "analytic_mass_properties", "place_counterweight",
+]

@@ -1,0 +1,328 @@
+"""Analytic axisymmetric projectile profiles and their exact 1-D integrals.
+
+Every function here works in the *profile coordinates* of a projectile:
+``s`` is the distance from the nose tip along the axis (m, ``0 <= s <= length``)
+and ``r(s)`` is the outer radius (m).  The body frame used by the mesh and the
+loads has its x axis along the projectile axis pointing *forward* (towards the
+nose), so a point at distance ``s`` from the tip has ``x = -s`` before the
+origin is moved to the centre of mass.
+
+The 1-D integrals are the independent truth against which the finite-element
+mass properties and surface quadrature are tested.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import integrate
+
+__all__ = [
+    "OgiveNose",
+    "ConeNose",
+    "Profile",
+    "Interior",
+    "ProjectileGeometry",
+    "RevolvedMoments",
+    "revolved_moments",
+]
+
+
+@dataclass(frozen=True)
+class OgiveNose:
+    """Tangent ogive nose.
+
+    Parameters
+    ----------
+    crh : float
+        Caliber-radius-head: the ogive radius in projectile diameters (>= 0.5;
+        0.5 is a hemisphere).
+    """
+
+    crh: float
+
+    def __post_init__(self) -> None:
+        if not (self.crh >= 0.5 and math.isfinite(self.crh)):
+            raise ValueError(f"nose.crh = {self.crh}: must be a finite number >= 0.5")
+
+
+@dataclass(frozen=True)
+class ConeNose:
+    """Conical nose.
+
+    Parameters
+    ----------
+    half_angle : float
+        Cone half-angle in degrees, 0 < half_angle < 90.
+    """
+
+    half_angle: float
+
+    def __post_init__(self) -> None:
+        if not (0.0 < self.half_angle < 90.0):
+            raise ValueError(f"nose.half_angle = {self.half_angle}: must lie in (0, 90) degrees")
+
+
+@dataclass(frozen=True)
+class Profile:
+    """Outer profile: a nose, a cylindrical shank and a flat tail.
+
+    Parameters
+    ----------
+    diameter : float
+        Shank diameter (m).
+    length : float
+        Overall length from nose tip to tail (m); must exceed the nose length.
+    nose : OgiveNose or ConeNose
+        Nose shape.
+    """
+
+    diameter: float
+    length: float
+    nose: OgiveNose | ConeNose
+
+    def __post_init__(self) -> None:
+        if not (self.diameter > 0 and math.isfinite(self.diameter)):
+            raise ValueError(f"diameter = {self.diameter}: must be a finite number > 0")
+        if not (self.length > self.nose_length and math.isfinite(self.length)):
+            raise ValueError(
+                f"length = {self.length}: must exceed the nose length {self.nose_length:.6g} m"
+            )
+
+    @property
+    def radius(self) -> float:
+        """Shank radius ``a`` (m)."""
+        return 0.5 * self.diameter
+
+    @property
+    def ogive_radius(self) -> float:
+        """Ogive radius ``R = crh * diameter`` (m); only for ogive noses."""
+        return self.nose.crh * self.diameter
+
+    @property
+    def nose_length(self) -> float:
+        """Axial length of the nose (m)."""
+        a = self.radius
+        if isinstance(self.nose, OgiveNose):
+            big_r = self.ogive_radius
+            return math.sqrt(big_r**2 - (big_r - a) ** 2)
+        return a / math.tan(math.radians(self.nose.half_angle))
+
+    def radius_at(self, s: np.ndarray | float) -> np.ndarray:
+        """Outer radius ``r(s)`` (m) at distance ``s`` from the tip (m)."""
+        s = np.clip(np.asarray(s, dtype=float), 0.0, self.length)
+        a, ln = self.radius, self.nose_length
+        if isinstance(self.nose, OgiveNose):
+            big_r = self.ogive_radius
+            nose = np.sqrt(np.maximum(big_r**2 - (ln - s) ** 2, 0.0)) - (big_r - a)
+        else:
+            nose = s * math.tan(math.radians(self.nose.half_angle))
+        return np.where(s < ln, np.maximum(nose, 0.0), a)
+
+    def slope_at(self, s: np.ndarray | float) -> np.ndarray:
+        """``dr/ds`` of the outer profile (zero on the shank)."""
+        s = np.clip(np.asarray(s, dtype=float), 0.0, self.length)
+        ln = self.nose_length
+        if isinstance(self.nose, OgiveNose):
+            big_r = self.ogive_radius
+            u = ln - s
+            nose = u / np.sqrt(np.maximum(big_r**2 - u**2, 1e-300))
+        else:
+            nose = np.full_like(s, math.tan(math.radians(self.nose.half_angle)))
+        return np.where(s < ln, nose, 0.0)
+
+    def outward_normal(self, s: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+        """Exact outward normal of the lateral surface at ``s``.
+
+        Returns
+        -------
+        n_forward, n_radial : ndarray
+            Components along the forward axis (``+x``, towards the tip) and
+            along the outward radial direction.  ``n_forward = sin(slope angle)``
+            is positive on the nose and zero on the shank.
+        """
+        slope = self.slope_at(s)
+        scale = 1.0 / np.sqrt(1.0 + slope**2)
+        return slope * scale, scale
+
+    def nose_factor(self) -> float:
+        """Frictionless nose shape factor ``N`` of the cavity-expansion axial force.
+
+        ``N = (8 psi - 1) / (24 psi^2)`` for a tangent ogive of CRH ``psi`` and
+        ``sin^2(half-angle)`` for a cone (brief section 5).
+        """
+        if isinstance(self.nose, OgiveNose):
+            psi = self.nose.crh
+            return (8.0 * psi - 1.0) / (24.0 * psi**2)
+        return math.sin(math.radians(self.nose.half_angle)) ** 2
+
+    def lateral_area(self, s0: float = 0.0, s1: float | None = None) -> float:
+        """Area (m^2) of the lateral surface between ``s0`` and ``s1``."""
+        s1 = self.length if s1 is None else s1
+        points = [p for p in (self.nose_length,) if s0 < p < s1]
+        value, _ = integrate.quad(
+            lambda s: 2 * math.pi * float(self.radius_at(s)) * math.sqrt(1 + float(self.slope_at(s)) ** 2),
+            s0, s1, points=points or None, epsabs=0.0, epsrel=1e-12, limit=200,
+        )
+        return value
+
+    def surface_area(self) -> float:
+        """Total outer area (m^2): lateral surface plus the flat tail disc."""
+        return self.lateral_area() + math.pi * self.radius**2
+
+
+@dataclass(frozen=True)
+class Interior:
+    """A hollow interior: a cavity a wall thickness inside the outer profile.
+
+    The cavity radius is ``r(s) - wall_thickness`` (brief section 4) and the
+    cavity ends ``tail_thickness`` before the tail.
+
+    Parameters
+    ----------
+    wall_thickness : float
+        Radial wall thickness (m), ``0 < wall_thickness < radius``.
+    tail_thickness : float
+        Thickness of the tail plate (m).
+    """
+
+    wall_thickness: float
+    tail_thickness: float
+
+
+@dataclass(frozen=True)
+class ProjectileGeometry:
+    """Geometry of a projectile: outer profile, optional cavity and counterweight.
+
+    Parameters
+    ----------
+    profile : Profile
+        Outer profile.
+    interior : Interior or None
+        Cavity; ``None`` for a solid projectile.
+    counterweight : tuple of float or None
+        ``(start, end)``: distances from the nose tip (m) of the two
+        cross-sections between which the counterweight fills the cavity.
+        The rest of the cavity is empty.
+    """
+
+    profile: Profile
+    interior: Interior | None = None
+    counterweight: tuple[float, float] | None = None
+
+    def __post_init__(self) -> None:
+        if self.interior is None:
+            if self.counterweight is not None:
+                raise ValueError("counterweight: needs an interior (a cavity to fill)")
+            return
+        t, tail = self.interior.wall_thickness, self.interior.tail_thickness
+        a = self.profile.radius
+        if not (0.0 < t < a):
+            raise ValueError(f"interior.wall_thickness = {t}: must lie in (0, {a:.6g}) m")
+        lo, hi = self.cavity_start, self.profile.length
+        if not (0.0 < tail < hi - lo):
+            raise ValueError(
+                f"interior.tail_thickness = {tail}: must lie in (0, {hi - lo:.6g}) m"
+            )
+        if self.counterweight is not None:
+            x1, x2 = self.counterweight
+            if not (self.cavity_start <= x1 < x2 <= self.cavity_end):
+                raise ValueError(
+                    f"counterweight = ({x1}, {x2}): need {self.cavity_start:.6g} <= start < end"
+                    f" <= {self.cavity_end:.6g} m (the cavity)"
+                )
+
+    @property
+    def cavity_start(self) -> float:
+        """Distance from the tip (m) of the cavity apex, where ``r(s) = wall_thickness``."""
+        if self.interior is None:
+            raise ValueError("no interior")
+        t = self.interior.wall_thickness
+        p = self.profile
+        a, ln = p.radius, p.nose_length
+        if isinstance(p.nose, OgiveNose):
+            big_r = p.ogive_radius
+            return ln - math.sqrt(big_r**2 - (t + big_r - a) ** 2)
+        return t / math.tan(math.radians(p.nose.half_angle))
+
+    @property
+    def cavity_end(self) -> float:
+        """Distance from the tip (m) of the cavity's flat end."""
+        if self.interior is None:
+            raise ValueError("no interior")
+        return self.profile.length - self.interior.tail_thickness
+
+    def cavity_radius_at(self, s: np.ndarray | float) -> np.ndarray:
+        """Cavity radius (m) at ``s``; zero outside the cavity."""
+        if self.interior is None:
+            return np.zeros_like(np.asarray(s, dtype=float))
+        s = np.asarray(s, dtype=float)
+        inside = (s >= self.cavity_start) & (s <= self.cavity_end)
+        return np.where(inside, np.maximum(self.profile.radius_at(s) - self.interior.wall_thickness, 0.0), 0.0)
+
+
+@dataclass(frozen=True)
+class RevolvedMoments:
+    """Per-unit-density moments of a solid of revolution about the nose tip.
+
+    Attributes
+    ----------
+    volume : float
+        ``int pi r^2 ds`` (m^3).
+    first_moment : float
+        ``int pi r^2 s ds`` (m^4).
+    axial_second_moment : float
+        ``int pi r^4 / 2 ds`` (m^5): axial moment of inertia per unit density.
+    transverse_second_moment : float
+        ``int (pi r^4 / 4 + pi r^2 s^2) ds`` (m^5): transverse moment of
+        inertia per unit density about an axis through the tip.
+    """
+
+    volume: float
+    first_moment: float
+    axial_second_moment: float
+    transverse_second_moment: float
+
+    def __add__(self, other: RevolvedMoments) -> RevolvedMoments:
+        return RevolvedMoments(*(a + b for a, b in zip(self.astuple(), other.astuple())))
+
+    def __sub__(self, other: RevolvedMoments) -> RevolvedMoments:
+        return RevolvedMoments(*(a - b for a, b in zip(self.astuple(), other.astuple())))
+
+    def __mul__(self, density: float) -> RevolvedMoments:
+        return RevolvedMoments(*(density * a for a in self.astuple()))
+
+    __rmul__ = __mul__
+
+    def astuple(self) -> tuple[float, float, float, float]:
+        return (self.volume, self.first_moment, self.axial_second_moment, self.transverse_second_moment)
+
+
+def revolved_moments(radius, s0: float, s1: float, breakpoints=()) -> RevolvedMoments:
+    """Moments of the solid of revolution of ``radius(s)`` for ``s0 <= s <= s1``.
+
+    Parameters
+    ----------
+    radius : callable
+        ``radius(s) -> r`` (m).
+    s0, s1 : float
+        Axial limits (m from the tip).
+    breakpoints : sequence of float
+        Points where ``radius`` has a kink, passed to the quadrature.
+    """
+    if s1 <= s0:
+        return RevolvedMoments(0.0, 0.0, 0.0, 0.0)
+    points = [p for p in breakpoints if s0 < p < s1] or None
+    integrands = (
+        lambda s: math.pi * float(radius(s)) ** 2,
+        lambda s: math.pi * float(radius(s)) ** 2 * s,
+        lambda s: 0.5 * math.pi * float(radius(s)) ** 4,
+        lambda s: 0.25 * math.pi * float(radius(s)) ** 4 + math.pi * float(radius(s)) ** 2 * s * s,
+    )
+    values = [
+        integrate.quad(f, s0, s1, points=points, epsabs=0.0, epsrel=1e-13, limit=200)[0]
+        for f in integrands
+    ]
+    return RevolvedMoments(*values)
