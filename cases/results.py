@@ -15,6 +15,8 @@ from .runner import RunResult
 
 __all__ = ["history_table", "summary", "write_outputs", "atomic_write_text", "HISTORY_UNITS"]
 
+ATTACK_ANGLE_SPEED_FRACTION = 0.1
+
 HISTORY_UNITS = {
     "time": "s",
     "position_x": "m", "position_y": "m", "position_z": "m",
@@ -89,11 +91,21 @@ def history_table(result: RunResult) -> pd.DataFrame:
 
 
 def summary(result: RunResult, history: pd.DataFrame | None = None) -> dict:
-    """The run's headline numbers (SI units, angles in degrees)."""
+    """The run's headline numbers (SI units, angles in degrees).
+
+    ``depth`` is the largest depth of the nose tip below the surface,
+    ``path_length`` the distance travelled by the centre of mass,
+    ``max_attack_angle`` the largest total attack angle while the speed is at
+    least :data:`ATTACK_ANGLE_SPEED_FRACTION` of the impact speed, and
+    ``axis_angle_change`` the change of the axis angle in the vertical plane.
+    """
     h = history_table(result) if history is None else history
     mass = result.prepared.mass
     stats = result.trajectory.statistics
     first, last = h.iloc[0], h.iloc[-1]
+    # near rest the velocity direction turns freely and the attack angle loses
+    # its meaning: the maximum is taken while the speed is >= 10 % of the impact speed
+    moving = h["speed"] >= ATTACK_ANGLE_SPEED_FRACTION * first["speed"]
     return {
         "scene": result.scene.name,
         "depth": float(h["tip_depth"].max()),
@@ -102,7 +114,7 @@ def summary(result: RunResult, history: pd.DataFrame | None = None) -> dict:
         "final_time": float(last["time"]),
         "final_speed": float(last["speed"]),
         "final_position": [float(last[f"position_{c}"]) for c in "xyz"],
-        "max_attack_angle": float(h["total_attack_angle"].max()),
+        "max_attack_angle": float(h["total_attack_angle"][moving].max()),
         "final_attack_angle": float(last["attack_angle"]),
         "axis_angle_change": float(last["axis_angle"] - first["axis_angle"]),
         "wall_time": result.wall_time,

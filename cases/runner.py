@@ -28,6 +28,7 @@ from mesh import (BODY, COUNTERWEIGHT, ConeNose, Interior, OgiveNose, Profile, P
 from .schema import LawSpec, Numerics, Projectile, Scene
 
 __all__ = ["PreparedProjectile", "prepare_projectile", "resolve_law", "initial_state", "run_scene",
+           "scene_loads", "projectile_geometry",
            "RunResult", "STOPPED", "EXITED", "DEFAULT_BODY_DENSITY"]
 
 STOPPED, EXITED = "stopped", "exited"
@@ -152,14 +153,28 @@ class RunResult:
     integration_time: float
 
 
-def run_scene(scene: Scene) -> RunResult:
-    """Run one scene end to end."""
+def scene_loads(scene: Scene, prepared: PreparedProjectile) -> DAFLLoads:
+    """The DAFL load function of a scene."""
+    return DAFLLoads(prepared.quadrature, resolve_law(scene.target.law),
+                     scene.numerics.normal_velocity_guard)
+
+
+def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
+    """Run one scene end to end.
+
+    Parameters
+    ----------
+    scene : Scene
+        The validated scene.
+    initial : State, optional
+        Start from this state instead of the scene's impact conditions.
+    """
     start = time.perf_counter()
     prepared = prepare_projectile(scene)
     numerics = scene.numerics
-    loads = DAFLLoads(prepared.quadrature, resolve_law(scene.target.law), numerics.normal_velocity_guard)
+    loads = scene_loads(scene, prepared)
     body = RigidBody(prepared.mass.mass, prepared.mass.inertia)
-    state = initial_state(scene, prepared)
+    state = initial_state(scene, prepared) if initial is None else initial
     events = [
         Event(STOPPED, lambda st: st.speed - numerics.stop_speed, direction=-1),
         # every surface point back above the surface after having been inside

@@ -151,8 +151,8 @@ def surface_quadrature(mesh: ProjectileMesh, centre: np.ndarray, profile: Profil
         corners = np.searchsorted(np.unique(mesh.tetra[:, :4]), corners)
     facets = _facet_indices(m, corners)
     fb = FacetBasis(m, ElementTetP0(), facets=facets, intorder=intorder)
-    points = fb.global_coordinates().value.reshape(3, -1).T
-    normals = fb.normals.value.reshape(3, -1).T
+    points = np.asarray(fb.global_coordinates()).reshape(3, -1).T
+    normals = np.asarray(fb.normals).reshape(3, -1).T
     weights = fb.dx.reshape(-1)
     normals = normals / np.linalg.norm(normals, axis=1)[:, None]
     if normal_model == "exact":

@@ -1,0 +1,38 @@
+"""Shared fixtures: a private mesh cache and the paper's projectiles."""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+from mesh import Interior, OgiveNose, Profile, ProjectileGeometry, place_counterweight
+
+STEEL, TUNGSTEN = 7850.0, 18000.0
+
+
+@pytest.fixture(autouse=True, scope="session")
+def private_mesh_cache(tmp_path_factory):
+    """Keep the tests' meshes out of the user's cache (and start from an empty one)."""
+    folder = tmp_path_factory.mktemp("mesh-cache")
+    old = os.environ.get("PENETRATE_CACHE_DIR")
+    os.environ["PENETRATE_CACHE_DIR"] = str(folder)
+    yield folder
+    if old is None:
+        os.environ.pop("PENETRATE_CACHE_DIR", None)
+    else:
+        os.environ["PENETRATE_CACHE_DIR"] = old
+
+
+@pytest.fixture(scope="session")
+def paper_profile() -> Profile:
+    """The paper's 155 mm, CRH 5, 6-calibre projectile."""
+    return Profile(0.155, 0.93, OgiveNose(5.0))
+
+
+@pytest.fixture(scope="session")
+def projectile3(paper_profile) -> ProjectileGeometry:
+    """Projectile #3 (Lc/L = 56.36 %) with the brief's stand-in interior."""
+    interior = Interior(0.01, 0.02)
+    span = place_counterweight(paper_profile, interior, STEEL, TUNGSTEN, 75.67, 0.5636 * 0.93)
+    return ProjectileGeometry(paper_profile, interior, span)
