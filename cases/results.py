@@ -128,6 +128,7 @@ def summary(result: RunResult, history: pd.DataFrame | None = None) -> dict:
         "steps": stats.get("steps"),
         "rejected_steps": stats.get("rejected_steps"),
         "forced_steps": stats.get("forced_steps"),
+        "energy_rejections": stats.get("energy_rejections"),
         "load_evaluations": stats.get("load_evaluations"),
     }
 

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dynamics import METHODS, Event, RigidBody, State, Trajectory, simulate
+from dynamics import METHODS, Event, RigidBody, SpeedBelow, State, Trajectory, simulate
 from fem_loads import (DAFLLoads, MassProperties, ResistanceLaw, SurfaceQuadrature, mass_properties,
                        resistance_law, surface_quadrature, to_skfem)
 from mesh import (BODY, COUNTERWEIGHT, ConeNose, Interior, OgiveNose, Profile, ProjectileGeometry,
@@ -176,7 +176,7 @@ def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
     body = RigidBody(prepared.mass.mass, prepared.mass.inertia)
     state = initial_state(scene, prepared) if initial is None else initial
     events = [
-        Event(STOPPED, lambda st: st.speed - numerics.stop_speed, direction=-1),
+        SpeedBelow(STOPPED, numerics.stop_speed),
         # every surface point back above the surface after having been inside
         Event(EXITED, lambda st: loads.lowest_height(st.position, st.rotation), direction=1),
     ]
@@ -187,9 +187,11 @@ def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
         scales = np.array([length] * 3 + [speed] * 3 + [1.0] * 3 + [speed / length] * 3 + [length])
         trajectory = simulate(body, loads, state, method, time_limit=numerics.time_limit,
                               rtol=numerics.rtol, atol=numerics.rtol * scales,
-                              first_step=1e-3 * length / speed, events=events)
+                              first_step=1e-3 * length / speed, events=events,
+                              dissipative=numerics.energy_guard)
     else:
         trajectory = simulate(body, loads, state, method, time_limit=numerics.time_limit,
-                              time_step=numerics.time_step, events=events)
+                              time_step=numerics.time_step, events=events,
+                              dissipative=numerics.energy_guard)
     end = time.perf_counter()
     return RunResult(scene, prepared, trajectory, end - start, end - integrate_start)

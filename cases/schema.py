@@ -201,6 +201,7 @@ class Numerics(_Strict):
                                description="the run ends when the speed falls below this")
     normal_velocity_guard: float = _field(1e-9, ge=0.0, le=1e-3,
                                           description="relative guard on Vn = 0")
+    energy_guard: bool = _field(True, description="retake shorter any step that gains kinetic energy")
 
 
 class Outputs(_Strict):

@@ -20,7 +20,7 @@ from scipy import optimize
 from .integrators import Evaluation, RungeKutta, StepResult, evaluate
 from .rigid_body import LoadFunction, RigidBody, State
 
-__all__ = ["Event", "Trajectory", "simulate", "TIME_LIMIT", "NON_FINITE", "MAX_STEPS"]
+__all__ = ["Event", "SpeedBelow", "Trajectory", "simulate", "TIME_LIMIT", "NON_FINITE", "MAX_STEPS"]
 
 TIME_LIMIT, NON_FINITE, MAX_STEPS = "time_limit", "non_finite", "max_steps"
 
@@ -43,10 +43,38 @@ class Event:
     function: Callable[[State], float]
     direction: int = 0
 
-    def crossed(self, before: float, after: float) -> bool:
-        if self.direction >= 0 and before < 0.0 <= after:
+    def fired(self, before: State, after: State, g_before: float, g_after: float) -> bool:
+        """Whether the event happens within the step from ``before`` to ``after``."""
+        if self.direction >= 0 and g_before < 0.0 <= g_after:
             return True
-        return self.direction <= 0 and before > 0.0 >= after
+        return self.direction <= 0 and g_before > 0.0 >= g_after
+
+    def locator(self, before: State) -> Callable[[State], float]:
+        """A function of the state whose sign changes at the event inside the step."""
+        return self.function
+
+
+class SpeedBelow(Event):
+    """The speed falls below ``threshold`` (m/s).
+
+    A step may also carry the velocity through zero and out again without
+    ending below the threshold (a discrete overshoot of a body brought to
+    rest); such a reversal fires too.  Inside the step the event is located on
+    the velocity component along the velocity at the start of the step, which
+    passes through the threshold in both cases.
+    """
+
+    def __init__(self, name: str, threshold: float) -> None:
+        super().__init__(name, lambda state: state.speed - threshold, -1)
+        object.__setattr__(self, "threshold", threshold)
+
+    def fired(self, before: State, after: State, g_before: float, g_after: float) -> bool:
+        reversed_ = float(before.velocity @ after.velocity) <= 0.0
+        return g_before > 0.0 and (g_after <= 0.0 or reversed_)
+
+    def locator(self, before: State) -> Callable[[State], float]:
+        heading = before.velocity / before.speed
+        return lambda state: float(state.velocity @ heading) - self.threshold
 
 
 @dataclass
@@ -133,7 +161,8 @@ def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: Runge
              time_limit: float, time_step: float | None = None, rtol: float | None = None,
              atol: np.ndarray | float | None = None, first_step: float = 1e-6,
              min_step: float = 1e-10, max_step: float = math.inf,
-             events: Sequence[Event] = (), max_steps: int = 5_000_000) -> Trajectory:
+             events: Sequence[Event] = (), max_steps: int = 5_000_000,
+             dissipative: bool = False) -> Trajectory:
     """Integrate the motion of ``body`` under ``loads`` from ``initial``.
 
     Parameters
@@ -163,6 +192,13 @@ def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: Runge
         Terminal events, checked after every step.
     max_steps : int
         Safety limit on the number of steps.
+    dissipative : bool
+        The loads can only remove energy (``F.V + M.omega <= 0``), so a step
+        whose kinetic energy ends above its start (by more than round-off) is
+        a numerical artefact: an explicit step across a jump of the load
+        overshoots, and repeated overshoots (chatter) can pump energy in.
+        Such a step is retaken at half the size, down to ``min_step``; the
+        retakes are counted in ``statistics["energy_rejections"]``.
     """
     if (time_step is None) == (rtol is None):
         raise ValueError("give exactly one of time_step (fixed step) and rtol (error control)")
@@ -186,7 +222,7 @@ def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: Runge
     recorder = _Recorder()
     recorder.add(state, first)
     values = [event.function(state) for event in events]
-    steps = rejected = forced = 0
+    steps = rejected = forced = energy_rejections = 0
     h = time_step if time_step is not None else min(first_step, max_step)
     end_reason = TIME_LIMIT
 
@@ -213,12 +249,20 @@ def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: Runge
         if not new.is_finite():
             end_reason = NON_FINITE
             break
+        if dissipative and size > min_step:
+            before, after = body.kinetic_energy(state), body.kinetic_energy(new)
+            if after > before * (1.0 + 1e-12):
+                energy_rejections += 1
+                h = max(min_step, 0.5 * size)
+                first = result.first
+                continue
+            if time_step is not None:
+                h = time_step
         steps += 1
         new_values = [event.function(new) for event in events]
-        fired = [i for i, ev in enumerate(events) if ev.crossed(values[i], new_values[i])]
+        fired = [ev for ev, g0, g1 in zip(events, values, new_values) if ev.fired(state, new, g0, g1)]
         if fired:
-            new, end_reason = _locate(body, counted, method, state, result.first, size,
-                                      [events[i] for i in fired])
+            new, end_reason = _locate(body, counted, method, state, result.first, size, fired)
             last = evaluate(body, counted, new.position, new.velocity, new.attitude,
                             new.angular_velocity)
             recorder.add(new, last)
@@ -229,32 +273,34 @@ def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: Runge
         state, values = new, new_values
 
     statistics = {"steps": steps, "rejected_steps": rejected, "forced_steps": int(forced),
-                  "load_evaluations": calls}
+                  "energy_rejections": energy_rejections, "load_evaluations": calls}
     return recorder.trajectory(end_reason, statistics)
 
 
 def _locate(body: RigidBody, loads: LoadFunction, method: RungeKutta, state: State,
             first: Evaluation, size: float, events: list[Event]) -> tuple[State, str]:
-    """The earliest crossing among ``events`` inside a step of ``size`` from ``state``."""
-    before = {id(e): e.function(state) for e in events}
+    """The earliest of ``events`` inside a step of ``size`` from ``state``.
+
+    Each event's locator changes sign inside the step; Brent's method finds
+    the root on re-taken partial steps, and the end state is taken just past
+    it, on the side where the event has happened.
+    """
     best: tuple[float, Event] | None = None
+    tolerance = max(1e-15, 1e-12 * size)
     for event in events:
-        def g(s: float, event: Event = event) -> float:
-            if s <= 0.0:
-                return before[id(event)]
-            return event.function(method.step(body, loads, state, s, first).state)
+        locator = event.locator(state)
+        g_start = locator(state)
+
+        def g(s: float, locator=locator, g_start=g_start) -> float:
+            return g_start if s <= 0.0 else locator(method.step(body, loads, state, s, first).state)
 
         g_end = g(size)
-        if not event.crossed(before[id(event)], g_end):
-            continue
-        # the crossing lies where g reaches zero; brentq needs a sign change
-        if g_end == 0.0:
-            t_cross = size
+        if g_end == 0.0 or (g_start > 0) == (g_end > 0):
+            t_cross = size  # no sign change to refine: the event is at the end of the step
         else:
-            t_cross = optimize.brentq(g, 0.0, size, xtol=max(1e-15, 1e-12 * size), rtol=1e-15)
-            # take the side of the root where the event has happened
-            if not event.crossed(before[id(event)], g(t_cross)):
-                t_cross = min(size, t_cross + max(1e-15, 1e-12 * size))
+            t_cross = optimize.brentq(g, 0.0, size, xtol=tolerance, rtol=1e-15)
+            if (g(t_cross) > 0) == (g_start > 0):
+                t_cross = min(size, t_cross + tolerance)
         if best is None or t_cross < best[0]:
             best = (t_cross, event)
     assert best is not None

@@ -1,0 +1,59 @@
+"""The penetrate command as a user runs it."""
+
+import json
+import subprocess
+import sys
+
+import pandas as pd
+import pytest
+
+from cases import scene_path
+from cases.results import HISTORY_UNITS
+
+FAST = ["--set", "numerics.mesh_size=0.03"]
+REQUIRED = {"depth", "path_length", "end_reason", "final_speed", "max_attack_angle", "axis_angle_change",
+            "wall_time"}
+
+
+def penetrate(*args):
+    return subprocess.run([sys.executable, "-m", "cases.cli", *args], capture_output=True, text=True, timeout=300)
+
+
+def test_run_json_and_outputs(tmp_path):
+    out = tmp_path / "run"
+    done = penetrate("run", str(scene_path("forrestal_luk_test5")), *FAST, "--json", "--out", str(out))
+    assert done.returncode == 0, done.stderr
+    record = json.loads(done.stdout)
+    assert REQUIRED <= record.keys() and record["end_reason"] == "stopped"
+    assert 4.5 < record["path_length"] < 5.5 and record["depth"] <= record["path_length"]
+    written = json.loads((out / "summary.json").read_text())
+    assert written["depth"] == record["depth"]
+    assert written["scene_resolved"]["numerics"]["mesh_size"] == 0.03
+    history = pd.read_csv(out / "history.csv")
+    assert list(history.columns) == list(HISTORY_UNITS)
+    assert history["time"].is_monotonic_increasing and history["tip_depth"].max() == pytest.approx(record["depth"])
+    assert sorted(p.name for p in out.iterdir()) == ["history.csv", "summary.json"]
+
+
+def test_run_human_summary():
+    done = penetrate("run", str(scene_path("forrestal_luk_test2")), *FAST)
+    assert done.returncode == 0, done.stderr
+    assert "depth" in done.stdout and "stopped" in done.stdout
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--set", "impact.attack_angle=95"], "impact.attack_angle = 95: must be <= 90"),
+    (["--set", "impact.speed"], "--set 'impact.speed': expected KEY=VALUE"),
+    (["--set", "numerics.bogus=1"], "numerics.bogus: unknown key"),
+])
+def test_bad_input_is_one_line_and_exit_2(args, message, tmp_path):
+    done = penetrate("run", str(scene_path("forrestal_luk_test2")), *args, "--out", str(tmp_path / "o"))
+    assert done.returncode == 2
+    assert message in done.stderr and "Traceback" not in done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists()
+
+
+def test_missing_scene_file(tmp_path):
+    done = penetrate("run", str(tmp_path / "nope.toml"))
+    assert done.returncode == 2 and "cannot read the scene file" in done.stderr

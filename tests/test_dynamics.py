@@ -1,0 +1,136 @@
+"""Integrators and events, each problem paired with its exact solution."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from dynamics import NON_FINITE, RK4, TIME_LIMIT, DormandPrince54, Event, RigidBody, SpeedBelow, State, simulate
+from dynamics.quaternion import exp_map, from_rotation_matrix, multiply, rotation_matrix
+
+I_AXIAL, I_TRANSVERSE = 0.25, 2.3
+BODY = RigidBody(75.0, np.diag([I_AXIAL, I_TRANSVERSE, I_TRANSVERSE]))
+NO_LOAD = lambda x, v, r, w: (np.zeros(3), np.zeros(3))  # noqa: E731
+
+
+def _spinning_start():
+    r0 = Rotation.from_rotvec([0.3, -0.5, 0.2]).as_matrix()
+    return State(0.0, np.zeros(3), np.array([1.0, 2.0, 3.0]), from_rotation_matrix(r0),
+                 np.array([40.0, 3.0, -2.0]))
+
+
+def _torque_free_exact(start: State, t: float) -> np.ndarray:
+    """R(t) = exp(t L/I_t) R0 exp(t lambda e_x), lambda = w_x (1 - I_a/I_t), axisymmetric body."""
+    r0 = rotation_matrix(start.attitude)
+    w = start.angular_velocity
+    momentum_world = r0 @ (BODY.inertia @ w)
+    lam = w[0] * (1 - I_AXIAL / I_TRANSVERSE)
+    return (Rotation.from_rotvec(t * momentum_world / I_TRANSVERSE).as_matrix() @ r0
+            @ Rotation.from_rotvec([t * lam, 0, 0]).as_matrix())
+
+
+def _attitude_error(h: float, method=RK4, **kw) -> float:
+    start = _spinning_start()
+    tr = simulate(BODY, NO_LOAD, start, method(), time_limit=0.5, time_step=h, **kw)
+    return float(np.abs(rotation_matrix(tr.attitude[-1]) - _torque_free_exact(start, 0.5)).max())
+
+
+def test_rk4_attitude_converges_at_fourth_order():
+    errors = [_attitude_error(h) for h in (4e-3, 2e-3, 1e-3)]
+    rates = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert np.all((rates > 3.7) & (rates < 4.3)), rates
+
+
+def test_dopri54_meets_its_tolerance_on_the_free_top():
+    start = _spinning_start()
+    for rtol in (1e-6, 1e-9):
+        tr = simulate(BODY, NO_LOAD, start, DormandPrince54(), time_limit=0.5, rtol=rtol)
+        error = np.abs(rotation_matrix(tr.attitude[-1]) - _torque_free_exact(start, 0.5)).max()
+        assert error < 100 * rtol
+        assert tr.time[-1] == pytest.approx(0.5, abs=1e-15)
+
+
+def test_unit_quaternion_and_momentum_over_a_long_run():
+    """5 s of a fast spin (10^4 steps): |q| stays 1; the momentum drift is RK4's O(h^4)."""
+    start = _spinning_start()
+    drifts = []
+    for h in (1e-3, 5e-4):
+        tr = simulate(BODY, NO_LOAD, start, RK4(), time_limit=5.0, time_step=h)
+        assert np.abs(np.linalg.norm(tr.attitude, axis=1) - 1).max() < 1e-12
+        momentum = np.array([rotation_matrix(q) @ (BODY.inertia @ w)
+                             for q, w in zip(tr.attitude, tr.angular_velocity)])
+        drifts.append(np.abs(momentum - momentum[0]).max())
+    assert 3.7 < math.log2(drifts[0] / drifts[1]) < 4.3
+
+
+def test_constant_force_parabola_and_located_stop():
+    """Constant braking force: v = v0 - (F/m) t, exact for RK4; the stop is located to round-off."""
+    v0, brake, stop = 300.0, 2.0e5, 0.5
+    direction = np.array([0.6, 0.0, -0.8])
+    force = -brake * direction
+    loads = lambda x, v, r, w: (force, np.zeros(3))  # noqa: E731
+    start = State(0.0, np.zeros(3), v0 * direction, np.array([1.0, 0, 0, 0]), np.zeros(3))
+    stopped = SpeedBelow("stopped", stop)
+    # a 7e-4 s step changes the velocity by 1.9 m/s: the speed passes through zero
+    # and out again inside one step, and the reversal must still end the run
+    tr = simulate(BODY, loads, start, RK4(), time_limit=1.0, time_step=7e-4, events=[stopped])
+    t_stop = (v0 - stop) * BODY.mass / brake
+    assert tr.end_reason == "stopped"
+    assert tr.time[-1] == pytest.approx(t_stop, rel=1e-12)
+    expected = v0 * t_stop - 0.5 * brake / BODY.mass * t_stop**2
+    assert tr.path_length[-1] == pytest.approx(expected, rel=1e-10)
+    np.testing.assert_allclose(tr.position[-1], expected * direction, rtol=1e-10)
+    assert np.all(np.diff(tr.time) > 0) and tr.time[-2] < t_stop
+
+
+def test_rising_event_is_located():
+    """A body thrown upward at 30 m/s under 9.81 m/s^2 reaches Z = 20 m at t = (30 - sqrt(900 - 392.4))/9.81."""
+    g = np.array([0.0, 0.0, -9.81 * BODY.mass])
+    start = State(0.0, np.zeros(3), np.array([0.0, 0.0, 30.0]), np.array([1.0, 0, 0, 0]), np.zeros(3))
+    height = Event("height", lambda s: s.position[2] - 20.0, direction=1)
+    tr = simulate(BODY, lambda x, v, r, w: (g, np.zeros(3)), start, RK4(), time_limit=5.0,
+                  time_step=0.1, events=[height])
+    assert tr.end_reason == "height"
+    assert tr.time[-1] == pytest.approx((30 - math.sqrt(900 - 392.4)) / 9.81, rel=1e-12)
+
+
+def test_time_limit_is_hit_exactly():
+    tr = simulate(BODY, NO_LOAD, _spinning_start(), RK4(), time_limit=0.01, time_step=3e-3)
+    assert tr.end_reason == TIME_LIMIT and tr.time[-1] == pytest.approx(0.01, abs=1e-15)
+    assert len(tr.time) == 5  # 0, 3, 6, 9, 10 ms
+
+
+def test_non_finite_load_ends_the_run_and_keeps_the_history():
+    calls = {"n": 0}
+
+    def failing(x, v, r, w):
+        calls["n"] += 1
+        return (np.full(3, np.nan) if calls["n"] > 9 else np.zeros(3)), np.zeros(3)
+
+    tr = simulate(BODY, failing, _spinning_start(), RK4(), time_limit=1.0, time_step=1e-3)
+    assert tr.end_reason == NON_FINITE
+    assert len(tr.time) == 3 and np.isfinite(tr.position).all()
+
+
+def test_bad_integrator_settings():
+    with pytest.raises(ValueError, match="exactly one"):
+        simulate(BODY, NO_LOAD, _spinning_start(), RK4(), time_limit=1.0)
+    with pytest.raises(ValueError, match="no error estimate"):
+        simulate(BODY, NO_LOAD, _spinning_start(), RK4(), time_limit=1.0, rtol=1e-6)
+
+
+def test_quaternion_helpers_agree_with_scipy():
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        v = rng.normal(size=3)
+        q = exp_map(v)
+        expected = Rotation.from_rotvec(v).as_matrix()
+        np.testing.assert_allclose(rotation_matrix(q), expected, atol=1e-14)
+        np.testing.assert_allclose(rotation_matrix(from_rotation_matrix(expected)), expected, atol=1e-14)
+        w = rng.normal(size=3)
+        np.testing.assert_allclose(rotation_matrix(multiply(exp_map(v), exp_map(w))),
+                                   expected @ Rotation.from_rotvec(w).as_matrix(), atol=1e-13)
+    assert np.allclose(exp_map(np.array([1e-12, 0, 0])), [1, 5e-13, 0, 0])
+    assert math.isclose(np.linalg.norm(exp_map(np.array([3.0, 4.0, 0.0]))), 1.0)
+
