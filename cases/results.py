@@ -11,6 +11,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from dynamics.quaternion import rotation_matrix
+
 from .runner import RunResult
 
 __all__ = ["history_table", "summary", "write_outputs", "atomic_write_text", "HISTORY_UNITS"]
@@ -31,16 +33,6 @@ HISTORY_UNITS = {
 }
 
 
-def _rotations(attitude: np.ndarray) -> np.ndarray:
-    """Body-to-world rotation matrices of an (n, 4) array of unit quaternions."""
-    w, x, y, z = attitude.T
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], axis=-1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], axis=-1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=-1),
-    ], axis=1)
-
-
 def _plane_angle(vectors: np.ndarray) -> np.ndarray:
     """Angle (deg) in the vertical plane from the inward normal -Z towards +X."""
     return np.degrees(np.arctan2(vectors[:, 0], -vectors[:, 2]))
@@ -57,7 +49,7 @@ def history_table(result: RunResult) -> pd.DataFrame:
     vanishes.
     """
     tr = result.trajectory
-    rotation = _rotations(tr.attitude)
+    rotation = np.array([rotation_matrix(q) for q in tr.attitude])
     axis = rotation[:, :, 0]
     tip = tr.position + rotation @ result.prepared.tip
     speed = np.linalg.norm(tr.velocity, axis=1)

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dynamics import METHODS, Event, RigidBody, SpeedBelow, State, Trajectory, simulate
+from dynamics.quaternion import from_rotation_matrix
 from fem_loads import (DAFLLoads, MassProperties, ResistanceLaw, SurfaceQuadrature, mass_properties,
                        resistance_law, surface_quadrature, to_skfem)
 from mesh import (BODY, COUNTERWEIGHT, ConeNose, Interior, OgiveNose, Profile, ProjectileGeometry,
@@ -124,8 +125,6 @@ def initial_attitude(oblique_angle: float, attack_angle: float, yaw_angle: float
 
 def initial_state(scene: Scene, prepared: PreparedProjectile) -> State:
     """The tip touches the surface at the origin; at grazing incidence the lowest point does."""
-    from dynamics.quaternion import from_rotation_matrix
-
     impact = scene.impact
     rotation = initial_attitude(impact.oblique_angle, impact.attack_angle, impact.yaw_angle)
     beta = math.radians(impact.oblique_angle)

@@ -15,7 +15,7 @@ from cases import history_table, load_scene, run_scene, scene_path, summary
 from cases.reference import axial_depth_1d, embedded_axial_force
 from cases.runner import resolve_law
 from fem_loads import DAFLLoads, mass_properties, resistance_law, surface_quadrature
-from mesh import (BODY, COUNTERWEIGHT, ConeNose, Interior, OgiveNose, Profile, ProjectileGeometry,
+from mesh import (BODY, COUNTERWEIGHT, Interior, OgiveNose, Profile, ProjectileGeometry,
                   analytic_mass_properties, build_mesh, place_counterweight)
 
 

@@ -63,13 +63,13 @@ def from_rotation_matrix(matrix: np.ndarray) -> np.ndarray:
                       (m[1, 0] - m[0, 1]) / (4 * w)])
     else:
         i = k - 1
-        j, l = (i + 1) % 3, (i + 2) % 3
-        r = math.sqrt(1.0 + m[i, i] - m[j, j] - m[l, l])
+        j, n = (i + 1) % 3, (i + 2) % 3
+        r = math.sqrt(1.0 + m[i, i] - m[j, j] - m[n, n])
         v = np.zeros(3)
         v[i] = 0.5 * r
         v[j] = (m[j, i] + m[i, j]) / (2 * r)
-        v[l] = (m[l, i] + m[i, l]) / (2 * r)
-        w = (m[l, j] - m[j, l]) / (2 * r)
+        v[n] = (m[n, i] + m[i, n]) / (2 * r)
+        w = (m[n, j] - m[j, n]) / (2 * r)
         q = np.array([w, *v])
     q = normalize(q)
     return q if q[0] >= 0 else -q

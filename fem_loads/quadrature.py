@@ -29,6 +29,8 @@ from skfem import ElementTetP0, FacetBasis, MeshTet1, MeshTet2
 from mesh.geometry import ProjectileMesh
 from mesh.profile import Profile
 
+from .mass import to_skfem
+
 __all__ = ["SurfaceQuadrature", "surface_quadrature", "NORMAL_MODELS"]
 
 NORMAL_MODELS = ("mesh", "exact")
@@ -138,8 +140,6 @@ def surface_quadrature(mesh: ProjectileMesh, centre: np.ndarray, profile: Profil
     skfem_mesh : MeshTet1 or MeshTet2, optional
         A scikit-fem mesh already made from ``mesh``.
     """
-    from .mass import to_skfem
-
     if normal_model not in NORMAL_MODELS:
         raise ValueError(f"normal_model = {normal_model!r}: must be one of {NORMAL_MODELS}")
     if normal_model == "exact" and profile is None:

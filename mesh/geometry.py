@@ -184,16 +184,16 @@ def _mesh_quarter(geometry: ProjectileGeometry, size: float, order: int) -> Proj
         tet_cols = _edge_reorder(tet_type, TET_EDGES if order == 2 else ())
         tri_cols = _edge_reorder(tri_type, TRI_EDGES if order == 2 else ())
 
-        def elements(dim: int, tags: list[int], etype: int, cols: np.ndarray) -> np.ndarray:
+        def elements(tags: list[int], etype: int, cols: np.ndarray) -> np.ndarray:
             blocks = []
             for tag in tags:
                 _, nodes = gmsh.model.mesh.getElementsByType(etype, tag)
                 blocks.append(index[nodes.astype(np.int64)].reshape(-1, len(cols))[:, cols])
             return np.concatenate(blocks) if blocks else np.zeros((0, len(cols)), dtype=np.int64)
 
-        body = elements(3, body_vols, tet_type, tet_cols)
-        weight = elements(3, weight_vols, tet_type, tet_cols)
-        outer = elements(2, outer_surfaces, tri_type, tri_cols)
+        body = elements(body_vols, tet_type, tet_cols)
+        weight = elements(weight_vols, tet_type, tet_cols)
+        outer = elements(outer_surfaces, tri_type, tri_cols)
     finally:
         gmsh.finalize()
 
