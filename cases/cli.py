@@ -49,6 +49,109 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _sweep(args: argparse.Namespace) -> int:
+    from .sweep import RunStore, Sweep, grid, parse_grid, run_sweep
+
+    parameters = dict(parse_grid(text) for text in args.grid)
+    sweep = Sweep.from_file(args.scene, args.set, grid(parameters) if parameters else ())
+    table = run_sweep(sweep, RunStore(args.store), workers=args.workers, scheduler=args.scheduler,
+                      progress=not args.no_progress)
+    if args.out:
+        from .results import atomic_write_text
+        from pathlib import Path
+
+        atomic_write_text(Path(args.out), table.to_csv(index=False))
+    shown = [c for c in (*parameters, "end_reason", "depth", "path_length", "max_attack_angle",
+                         "axis_angle_change", "final_speed", "error") if c in table]
+    if args.json:
+        print(table.to_json(orient="records"))
+    else:
+        print(table[shown].to_string(index=False))
+    failed = int(table["error"].notna().sum()) if "error" in table else 0
+    return 1 if failed else 0
+
+
+def _study_inputs(args: argparse.Namespace):
+    from .sweep import RunStore, Sweep
+
+    return Sweep.from_file(args.scene, args.set), RunStore(args.store)
+
+
+def _critical(args: argparse.Namespace) -> int:
+    from .studies import find_critical_velocity
+    from .sweep import parse_grid
+
+    sweep, store = _study_inputs(args)
+    _, speeds = parse_grid(f"impact.speed={args.speeds}")
+    search = find_critical_velocity(sweep, store, speeds, args.resolution, args.workers, args.scheduler,
+                                    progress=not args.no_progress)
+    if args.json:
+        print(json.dumps(search.as_dict()))
+    else:
+        for row in search.indicator:
+            print(f"{row['speed']:8.1f} m/s   max attack angle {row['max_attack_angle']:8.3f} deg"
+                  f"   axis angle change {row['axis_angle_change']:9.3f} deg   {row['end_reason']}")
+        if search.critical_velocity is None:
+            print(search.message)
+        else:
+            low, high = search.bracket
+            print(f"critical impact velocity {search.critical_velocity:.1f} m/s (between {low:g} and {high:g} m/s)")
+    return 0 if search.critical_velocity is not None else 1
+
+
+def _convergent(args: argparse.Namespace) -> int:
+    from .studies import measure_convergent_velocity
+
+    sweep, store = _study_inputs(args)
+    result = measure_convergent_velocity(sweep, store, args.threshold, workers=args.workers,
+                                         scheduler=args.scheduler, progress=not args.no_progress)
+    if args.json:
+        print(json.dumps(result.as_dict()))
+    else:
+        for run in result.runs:
+            converged = run["convergence_speed"]
+            print(f"{run['speed']:8.1f} m/s   {'unstable' if run['unstable'] else 'stable  '}"
+                  f"   max attack angle {run['max_attack_angle']:7.3f} deg   attack angle below"
+                  f" {args.threshold} deg at " + (f"{converged:.1f} m/s" if converged is not None else "never"))
+        if result.message:
+            print(result.message)
+        if result.characteristic_convergent_velocity is not None:
+            print(f"characteristic convergent velocity {result.characteristic_convergent_velocity:.1f} m/s")
+    return 0 if result.characteristic_convergent_velocity is not None else 1
+
+
+def _add_study_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("scene", help="a scene TOML file")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="override a scene key by its dotted path (repeatable)")
+    parser.add_argument("--store", default="runs/store", metavar="DIR",
+                        help="where finished runs are kept and found again (default runs/store)")
+    parser.add_argument("--workers", type=_positive_int, metavar="N", help="local processes (default: every core)")
+    parser.add_argument("--scheduler", metavar="ADDRESS", help="run on this Dask distributed scheduler")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("--json", action="store_true", help="print the result as one JSON object")
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r}: must be a whole number >= 1")
+    return value
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not (value > 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"{text!r}: must be a finite number > 0")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="penetrate",
@@ -62,6 +165,36 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--out", metavar="DIR", help="write summary.json and history.csv here")
     run.add_argument("--json", action="store_true", help="print the summary as one JSON object")
     run.set_defaults(handler=_run)
+
+    sweep = commands.add_parser("sweep", help="run variations of a scene in parallel (resumable)")
+    sweep.add_argument("scene", help="the base scene TOML file")
+    sweep.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                       help="override a key of the base scene (repeatable)")
+    sweep.add_argument("--grid", action="append", default=[], metavar="KEY=VALUES",
+                       help="vary a key over V1,V2,... or START:STOP:STEP (inclusive); several --grid"
+                            " options make a cartesian product")
+    sweep.add_argument("--store", default="runs/store", metavar="DIR",
+                       help="where finished runs are kept and found again (default runs/store)")
+    sweep.add_argument("--out", metavar="FILE", help="write the results table as CSV")
+    sweep.add_argument("--workers", type=_positive_int, metavar="N", help="local processes (default: every core)")
+    sweep.add_argument("--scheduler", metavar="ADDRESS", help="run on this Dask distributed scheduler")
+    sweep.add_argument("--no-progress", action="store_true", help="no progress bar")
+    sweep.add_argument("--json", action="store_true", help="print the table as JSON records")
+    sweep.set_defaults(handler=_sweep)
+
+    critical = commands.add_parser("critical", help="find the critical impact velocity of a scene's disturbance")
+    _add_study_options(critical)
+    critical.add_argument("--speeds", default="200:1600:100", metavar="START:STOP:STEP",
+                          help="the coarse scan of impact speeds, m/s (default 200:1600:100)")
+    critical.add_argument("--resolution", type=_positive_float, default=5.0, metavar="M/S",
+                          help="bisect until the bracket is this narrow (default 5 m/s)")
+    critical.set_defaults(handler=_critical)
+
+    convergent = commands.add_parser("convergent", help="measure the characteristic convergent velocity")
+    _add_study_options(convergent)
+    convergent.add_argument("--threshold", type=_positive_float, default=0.1, metavar="DEG",
+                            help="the attack angle counts as converged below this (default 0.1 deg)")
+    convergent.set_defaults(handler=_convergent)
     return parser
 
 

@@ -34,8 +34,8 @@ HISTORY_UNITS = {
 
 
 def _plane_angle(vectors: np.ndarray) -> np.ndarray:
-    """Angle (deg) in the vertical plane from the inward normal -Z towards +X."""
-    return np.degrees(np.arctan2(vectors[:, 0], -vectors[:, 2]))
+    """Angle (deg) in the vertical plane from the inward normal -Z towards +X, unwrapped along the run."""
+    return np.degrees(np.unwrap(np.arctan2(vectors[:, 0], -vectors[:, 2])))
 
 
 def history_table(result: RunResult) -> pd.DataFrame:

@@ -1,0 +1,286 @@
+"""Sweeps: many variations of a scene, run in parallel, stored run by run, resumable.
+
+Every run is stored under :func:`~cases.scene.scene_key` of its fully resolved
+scene: ``<store>/<key>.json`` (the summary, the scene and the varied keys, or
+the error of a failed run) and ``<store>/<key>.csv.gz`` (the thinned time
+history).  Files are written atomically by the process that drives the sweep,
+so a sweep killed at any moment leaves each run either complete or absent,
+and running it again skips what is done.  Failed runs are recorded with their
+error, do not stop the others, and are tried again by the next run of the sweep.
+
+Workers are a local process pool (every core by default) or, with
+``scheduler``, an existing Dask distributed cluster; both return the same
+table, ordered as the variations were given.
+"""
+
+from __future__ import annotations
+
+import gzip
+import io
+import itertools
+import json
+import os
+from collections.abc import Iterable, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
+from multiprocessing import get_context
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from .scene import SceneError, apply_overrides, parse_override, read_toml, scene_from_dict, scene_key
+from .schema import Scene
+
+__all__ = ["Variation", "grid", "parse_grid", "RunStore", "Sweep", "run_sweep", "MAX_HISTORY_ROWS"]
+
+MAX_HISTORY_ROWS = 4000  # stored histories are thinned to about this many rows
+
+
+@dataclass(frozen=True)
+class Variation:
+    """One run of a sweep: the base scene with ``values`` set (dotted key -> value)."""
+
+    values: dict[str, Any]
+
+    def overrides(self) -> list[str]:
+        return [f"{key}={_toml_value(value)}" for key, value in self.values.items()]
+
+
+def _toml_value(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return json.dumps(value)
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    return repr(value)
+
+
+def grid(parameters: dict[str, Sequence[Any]]) -> list[Variation]:
+    """The cartesian product of value lists, the last key varying fastest."""
+    keys = list(parameters)
+    return [Variation(dict(zip(keys, combo))) for combo in itertools.product(*parameters.values())]
+
+
+def parse_grid(text: str) -> tuple[str, list[Any]]:
+    """``key=v1,v2,...`` or ``key=start:stop:step`` (inclusive stop) -> (key, values)."""
+    key, raw = text.split("=", 1) if "=" in text else (text, "")
+    if not raw.strip():
+        raise SceneError(f"--grid {text!r}: expected KEY=V1,V2,... or KEY=START:STOP:STEP")
+    parts = raw.split(":")
+    if len(parts) == 3:
+        try:
+            start, stop, step = (float(p) for p in parts)
+        except ValueError:
+            raise SceneError(f"--grid {text!r}: START:STOP:STEP must be numbers") from None
+        if not step > 0 or stop < start:
+            raise SceneError(f"--grid {text!r}: need STEP > 0 and STOP >= START")
+        count = int(round((stop - start) / step)) + 1
+        values = [start + i * step for i in range(count)]
+        if all(float(v).is_integer() for v in (start, step)):
+            values = [int(round(v)) for v in values]
+        return key.strip(), values
+    return key.strip(), [parse_override(f"{key}={item}")[1] for item in raw.split(",")]
+
+
+class RunStore:
+    """A folder of finished runs keyed by their resolved scene."""
+
+    def __init__(self, root: str | os.PathLike) -> None:
+        self.root = Path(root)
+        self.root.mkdir(parents=True, exist_ok=True)
+
+    def record_path(self, key: str) -> Path:
+        return self.root / f"{key}.json"
+
+    def history_path(self, key: str) -> Path:
+        return self.root / f"{key}.csv.gz"
+
+    def load(self, key: str) -> dict | None:
+        """The stored record of a run, or None."""
+        try:
+            return json.loads(self.record_path(key).read_text())
+        except (OSError, ValueError):
+            return None
+
+    def finished(self, key: str) -> bool:
+        record = self.load(key)
+        return record is not None and "error" not in record
+
+    def history(self, key: str) -> pd.DataFrame:
+        """The stored (thinned) time history of a finished run."""
+        return pd.read_csv(self.history_path(key))
+
+    def save(self, key: str, record: dict, history_csv: bytes | None) -> None:
+        """Store a run: the history first, then the record that marks it finished."""
+        if history_csv is not None:
+            _atomic_write_bytes(self.history_path(key), history_csv)
+        _atomic_write_bytes(self.record_path(key), (json.dumps(record, indent=1) + "\n").encode())
+
+
+def _atomic_write_bytes(path: Path, data: bytes) -> None:
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    with open(tmp, "wb") as f:
+        f.write(data)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+
+
+def simulate_record(scene_json: str) -> tuple[dict, bytes | None]:
+    """Run one resolved scene (a worker's job): its summary and gzipped CSV history, or the error."""
+    from .results import _json_safe, history_table, summary
+    from .runner import run_scene
+
+    scene = Scene.model_validate_json(scene_json)
+    try:
+        result = run_scene(scene)
+        history = history_table(result)
+        record = _json_safe(summary(result, history))
+    except Exception as exc:  # recorded, so that one failure does not stop the sweep
+        return {"error": f"{type(exc).__name__}: {exc}"}, None
+    every = max(1, len(history) // MAX_HISTORY_ROWS)
+    kept = history.iloc[::every]
+    if kept.index[-1] != history.index[-1]:
+        kept = pd.concat([kept, history.iloc[[-1]]])
+    buffer = io.BytesIO()
+    with gzip.GzipFile(fileobj=buffer, mode="wb", mtime=0) as gz:
+        gz.write(kept.to_csv(index=False, float_format="%.10g").encode())
+    return record, buffer.getvalue()
+
+
+@dataclass
+class Sweep:
+    """Variations of a base scene.
+
+    Parameters
+    ----------
+    base : dict
+        The base scene as nested dictionaries (before validation).
+    variations : list of Variation
+        What each run changes.
+    source : str
+        Where the base came from, for error messages.
+    """
+
+    base: dict
+    variations: list[Variation]
+    source: str = "scene"
+    scenes: list[Scene] = field(init=False)
+
+    def __post_init__(self) -> None:
+        # validate everything before anything runs: a typo fails the sweep at once
+        self.scenes = [scene_from_dict(apply_overrides(self.base, v.overrides()), self.source)
+                       for v in self.variations]
+
+    @classmethod
+    def from_file(cls, path: str | os.PathLike, overrides: Iterable[str] = (),
+                  variations: Sequence[Variation] = ()) -> Sweep:
+        base = apply_overrides(read_toml(path), list(overrides))
+        return cls(base, list(variations) or [Variation({})], str(path))
+
+    def keys(self) -> list[str]:
+        return [scene_key(s) for s in self.scenes]
+
+
+def _premesh(scenes: Sequence[Scene]) -> None:
+    """Mesh each distinct projectile once, before the workers start."""
+    from .runner import projectile_geometry
+    from mesh import cached_mesh
+
+    seen = set()
+    for scene in scenes:
+        n = scene.numerics
+        token = (scene.projectile.model_dump_json(), n.mesh_size, n.geometry_order)
+        if token not in seen:
+            seen.add(token)
+            try:
+                geometry, _ = projectile_geometry(scene.projectile)
+                cached_mesh(geometry, n.mesh_size, n.geometry_order)
+            except Exception:  # noqa: BLE001 - the run itself will fail and record why
+                continue
+
+
+def run_sweep(sweep: Sweep, store: RunStore, *, workers: int | None = None, scheduler: str | None = None,
+              progress: bool = True) -> pd.DataFrame:
+    """Run every variation not yet in ``store``; return the table of all of them.
+
+    Parameters
+    ----------
+    sweep : Sweep
+        The runs.
+    store : RunStore
+        Where finished runs are kept (and found again).
+    workers : int, optional
+        Local processes (default: every core).
+    scheduler : str, optional
+        Address of a Dask distributed scheduler to run on instead.
+    progress : bool
+        Show a progress bar (runs done, failed, time left) on stderr.
+    """
+    keys = sweep.keys()
+    todo: dict[str, Scene] = {}
+    for key, scene in zip(keys, sweep.scenes):
+        if not store.finished(key):
+            todo[key] = scene
+    if todo:
+        _run_missing(todo, store, workers, scheduler, progress, total=len(set(keys)))
+    return results_table(sweep, store)
+
+
+def _run_missing(todo: dict[str, Scene], store: RunStore, workers: int | None, scheduler: str | None,
+                 progress: bool, total: int) -> None:
+    from tqdm import tqdm
+
+    jobs = {key: scene.model_dump_json() for key, scene in todo.items()}
+    bar = tqdm(total=total, initial=total - len(jobs), disable=not progress, unit="run",
+               desc="sweep", dynamic_ncols=True)
+    failed = 0
+
+    def finish(key: str, record: dict, history: bytes | None) -> None:
+        nonlocal failed
+        store.save(key, record, history)
+        failed += "error" in record
+        bar.set_postfix(failed=failed, refresh=False)
+        bar.update(1)
+
+    try:
+        if scheduler:
+            from distributed import Client
+            from distributed import as_completed as dask_completed
+
+            with Client(scheduler) as client:
+                futures = {client.submit(simulate_record, text, pure=False): key for key, text in jobs.items()}
+                for future in dask_completed(futures):
+                    finish(futures[future], *future.result())
+        else:
+            _premesh(list(todo.values()))
+            count = workers or os.cpu_count() or 1
+            if count == 1:
+                for key, text in jobs.items():
+                    finish(key, *simulate_record(text))
+            else:
+                with ProcessPoolExecutor(count, mp_context=get_context("spawn")) as pool:
+                    futures = {pool.submit(simulate_record, text): key for key, text in jobs.items()}
+                    for future in as_completed(futures):
+                        finish(futures[future], *future.result())
+    finally:
+        bar.close()
+
+
+def results_table(sweep: Sweep, store: RunStore) -> pd.DataFrame:
+    """One row per variation: the varied keys, the run key and the stored summary (or error)."""
+    rows = []
+    for variation, key in zip(sweep.variations, sweep.keys()):
+        record = store.load(key) or {"error": "not run"}
+        row = dict(variation.values)
+        row["key"] = key
+        for name, value in record.items():
+            if name not in ("scene_resolved", "history_units"):
+                row[name] = json.dumps(value) if isinstance(value, (list, dict)) else value
+        rows.append(row)
+    table = pd.DataFrame(rows)
+    volatile = [c for c in ("wall_time", "integration_time") if c in table]
+    return table[[c for c in table.columns if c not in volatile] + volatile]
+

@@ -1,0 +1,125 @@
+"""Sweeps: grids, the run store, failures, interruption and resumption, Dask."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pandas as pd
+import pytest
+
+from cases import SceneError, scene_path
+from cases.sweep import RunStore, Sweep, grid, parse_grid, run_sweep
+
+# short runs of projectile #3: coarse mesh, 4 ms of penetration
+QUICK = ["numerics.mesh_size=0.03", "numerics.time_step=2e-5", "numerics.time_limit=0.004"]
+VOLATILE = ["wall_time", "integration_time"]
+
+
+def _sweep(speeds=(1000, 1100, 1200), extra=()):
+    return Sweep.from_file(scene_path("paper_p3"), QUICK + list(extra), grid({"impact.speed": list(speeds)}))
+
+
+def _stable(table: pd.DataFrame) -> pd.DataFrame:
+    return table.drop(columns=[c for c in VOLATILE if c in table]).reset_index(drop=True)
+
+
+@pytest.mark.parametrize("text, key, values", [
+    ("impact.speed=1000:1200:100", "impact.speed", [1000, 1100, 1200]),
+    ("impact.attack_angle=0.5:1.5:0.5", "impact.attack_angle", [0.5, 1.0, 1.5]),
+    ("target.law=soil,softer_soil", "target.law", ["soil", "softer_soil"]),
+    ("impact.oblique_angle=10,20.5", "impact.oblique_angle", [10, 20.5]),
+])
+def test_parse_grid(text, key, values):
+    assert parse_grid(text) == (key, values)
+
+
+@pytest.mark.parametrize("bad", ["impact.speed", "impact.speed=", "impact.speed=3:1:1", "impact.speed=a:b:c"])
+def test_parse_grid_errors(bad):
+    with pytest.raises(SceneError, match="--grid"):
+        parse_grid(bad)
+
+
+def test_grid_is_a_cartesian_product():
+    variations = grid({"a": [1, 2], "b": ["x", "y", "z"]})
+    assert [v.values for v in variations][:4] == [{"a": 1, "b": "x"}, {"a": 1, "b": "y"}, {"a": 1, "b": "z"},
+                                                   {"a": 2, "b": "x"}]
+    assert variations[0].overrides() == ["a=1", 'b="x"']
+
+
+def test_bad_variation_fails_before_anything_runs(tmp_path):
+    with pytest.raises(SceneError, match="impact.speed = -5"):
+        Sweep.from_file(scene_path("paper_p3"), QUICK, grid({"impact.speed": [1000, -5]}))
+    assert not list(tmp_path.iterdir())
+
+
+def test_sweep_stores_runs_and_skips_them_when_run_again(tmp_path):
+    store = RunStore(tmp_path / "store")
+    sweep = _sweep()
+    table = run_sweep(sweep, store, workers=2, progress=False)
+    assert list(table["impact.speed"]) == [1000, 1100, 1200]
+    assert table["end_reason"].eq("time_limit").all() and "error" not in table
+    records = sorted((tmp_path / "store").glob("*.json"))
+    assert len(records) == 3 and len(list((tmp_path / "store").glob("*.csv.gz"))) == 3
+    stamps = [p.stat().st_mtime_ns for p in records]
+    again = run_sweep(sweep, store, workers=2, progress=False)
+    assert [p.stat().st_mtime_ns for p in records] == stamps
+    pd.testing.assert_frame_equal(again, table)
+    history = store.history(table["key"][0])
+    assert history["time"].iloc[-1] == pytest.approx(0.004)
+
+
+def test_a_failed_run_is_recorded_and_does_not_stop_the_others(tmp_path):
+    store = RunStore(tmp_path)
+    # a centre of mass the counterweight cannot reach fails at run time, in the worker
+    sweep = Sweep.from_file(scene_path("paper_p3"), QUICK,
+                            grid({"projectile.centre_of_mass_ratio": [0.5636, 0.2]}))
+    table = run_sweep(sweep, store, workers=1, progress=False)
+    assert table["end_reason"].iloc[0] == "time_limit" and pd.isna(table["error"].iloc[0])
+    assert "centre_of_mass" in table["error"].iloc[1]
+    assert not store.finished(table["key"].iloc[1]) and store.finished(table["key"].iloc[0])
+
+
+def _cli_sweep(store, out, *extra):
+    args = [sys.executable, "-m", "cases.cli", "sweep", str(scene_path("paper_p3")), "--store", str(store),
+            "--out", str(out), "--workers", "1", "--no-progress", "--grid", "impact.speed=900:1400:100"]
+    for item in QUICK:
+        args += ["--set", item]
+    return args + list(extra)
+
+
+def test_killed_sweep_loses_nothing_and_resumes(tmp_path):
+    store, out = tmp_path / "store", tmp_path / "table.csv"
+    proc = subprocess.Popen(_cli_sweep(store, out), start_new_session=True,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.time() + 240
+    while time.time() < deadline and len(list(store.glob("*.json"))) < 2:
+        time.sleep(0.05)
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    finished = {p: p.stat().st_mtime_ns for p in store.glob("*.json")}
+    assert 2 <= len(finished) < 6 and not out.exists()
+    for path in finished:  # every stored run is complete
+        assert RunStore(store).finished(path.stem)
+    done = subprocess.run(_cli_sweep(store, out), capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    assert all(p.stat().st_mtime_ns == stamp for p, stamp in finished.items())  # reused, not rerun
+    resumed = pd.read_csv(out)
+    fresh_out = tmp_path / "fresh.csv"
+    fresh = subprocess.run(_cli_sweep(tmp_path / "fresh-store", fresh_out), capture_output=True, text=True,
+                           timeout=600)
+    assert fresh.returncode == 0, fresh.stderr
+    pd.testing.assert_frame_equal(_stable(resumed), _stable(pd.read_csv(fresh_out)), check_exact=True)
+    assert len(resumed) == 6
+
+
+def test_dask_local_cluster_gives_the_same_table(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    sweep = _sweep(speeds=(1000, 1200))
+    local = run_sweep(sweep, RunStore(tmp_path / "local"), workers=2, progress=False)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        remote = run_sweep(sweep, RunStore(tmp_path / "dask"), scheduler=cluster.scheduler_address,
+                           progress=False)
+    pd.testing.assert_frame_equal(_stable(remote), _stable(local), check_exact=True)
