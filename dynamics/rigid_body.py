@@ -7,7 +7,7 @@ from typing import Protocol
 
 import numpy as np
 
-from .quaternion import rotation_matrix
+from .quaternion import cross, rotation_matrix
 
 __all__ = ["RigidBody", "State", "LoadFunction"]
 
@@ -55,7 +55,7 @@ class RigidBody:
     def accelerations(self, force: np.ndarray, moment: np.ndarray,
                       angular_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Linear acceleration (world) and angular acceleration (body) from Newton-Euler."""
-        gyroscopic = np.cross(angular_velocity, self.inertia @ angular_velocity)
+        gyroscopic = cross(angular_velocity, self.inertia @ angular_velocity)
         return force / self.mass, self._inertia_inverse @ (moment - gyroscopic)
 
     def kinetic_energy(self, state: State) -> float:

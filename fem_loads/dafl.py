@@ -15,6 +15,8 @@ construction, so nothing is reassembled per evaluation.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .quadrature import SurfaceQuadrature
@@ -80,11 +82,13 @@ class DAFLLoads:
         angular_velocity : ndarray, shape (3,)
             Angular velocity in the body frame (rad/s).
         """
-        velocity_body = velocity @ rotation  # R^T V
-        generalised = np.concatenate([velocity_body, angular_velocity])
+        generalised = np.empty(6)
+        generalised[:3] = velocity @ rotation  # R^T V
+        generalised[3:] = angular_velocity
         normal_velocity = self._normal_arm @ generalised
-        guard = self.normal_velocity_guard * (
-            np.linalg.norm(velocity_body) + np.linalg.norm(angular_velocity) * self._max_radius)
+        speed = math.sqrt(float(velocity @ velocity))
+        spin = math.sqrt(float(angular_velocity @ angular_velocity))
+        guard = self.normal_velocity_guard * (speed + spin * self._max_radius)
         loaded = (normal_velocity > guard) & (self.heights(position, rotation) < 0.0)
         sigma = np.where(loaded, self.law.normal_stress(normal_velocity), 0.0)
         return sigma, normal_velocity
