@@ -120,6 +120,15 @@ def _convergent(args: argparse.Namespace) -> int:
     return 0 if result.characteristic_convergent_velocity is not None else 1
 
 
+def _paper(args: argparse.Namespace) -> int:
+    from .paper import reproduce
+    from .sweep import RunStore
+
+    record = reproduce(args.out, RunStore(args.store), args.workers, args.scheduler, not args.no_progress)
+    print(f"wrote {args.out}/results.md, results.json and the figures in {record['wall_time']:.0f} s")
+    return 0
+
+
 def _add_study_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scene", help="a scene TOML file")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
@@ -195,6 +204,15 @@ def build_parser() -> argparse.ArgumentParser:
     convergent.add_argument("--threshold", type=_positive_float, default=0.1, metavar="DEG",
                             help="the attack angle counts as converged below this (default 0.1 deg)")
     convergent.set_defaults(handler=_convergent)
+
+    paper = commands.add_parser("paper", help="regenerate the paper's study: tables and figures")
+    paper.add_argument("--out", default="docs/paper", metavar="DIR", help="where to write (default docs/paper)")
+    paper.add_argument("--store", default="runs/paper-store", metavar="DIR",
+                       help="where finished runs are kept and found again (default runs/paper-store)")
+    paper.add_argument("--workers", type=_positive_int, metavar="N", help="local processes (default: every core)")
+    paper.add_argument("--scheduler", metavar="ADDRESS", help="run on this Dask distributed scheduler")
+    paper.add_argument("--no-progress", action="store_true", help="no progress bar")
+    paper.set_defaults(handler=_paper)
     return parser
 
 

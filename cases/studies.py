@@ -2,15 +2,22 @@
 
 Definitions (docs/studies.md):
 
-* **Instability indicator** of a run: ``max_attack_angle``, the largest total
-  attack angle while the speed is at least 10 % of the impact speed.  Below
-  the critical impact velocity it stays near the initial disturbance; above
-  it the attack angle grows to many degrees.  The change is abrupt.
+* **Instability indicator** of a run: ``|axis_angle_change|``, how far the
+  projectile axis turns in the vertical plane over the run (deg).  Below the
+  critical impact velocity the axis turns by a few degrees; above it the
+  path turns strongly and the axis by 50 to 180 degrees.  The change is
+  abrupt for a 1-degree attack angle (the largest attack angle jumps too, from
+  about 2 to 15 degrees) and still a factor of four for 5 degrees, where the
+  largest attack angle grows smoothly with speed and would not show it.
 * **Critical impact velocity**: a coarse scan of impact speeds brackets the
   largest jump of ``log(indicator)`` between neighbouring speeds; bisection
   then halves the bracket, classing the middle speed with whichever end its
   ``log(indicator)`` lies closer to, until the bracket is no wider than the
   resolution.  The critical velocity is the middle of the final bracket.
+* **Unstable run** (to decide whether a single run can give the convergent
+  velocity): ``|axis_angle_change| >= UNSTABLE_TURN`` (30 degrees; in every
+  run of docs/paper stable runs turn by at most 13 degrees and unstable
+  ones by at least 50).
 * **Convergence speed** of a run: the speed at which the total attack angle,
   after its peak, first falls below ``threshold`` (default 0.1 degree),
   interpolated linearly between steps.  In an unstable run this is the
@@ -28,12 +35,13 @@ import pandas as pd
 
 from .sweep import RunStore, Sweep, Variation, run_sweep
 
-__all__ = ["convergence_speed", "CriticalSearch", "find_critical_velocity", "is_unstable",
+__all__ = ["convergence_speed", "CriticalSearch", "find_critical_velocity", "find_critical_velocities",
+           "is_unstable",
            "ConvergentResult", "measure_convergent_velocity",
-           "CONVERGENCE_THRESHOLD", "UNSTABLE_GROWTH"]
+           "CONVERGENCE_THRESHOLD", "UNSTABLE_TURN", "indicator"]
 
 CONVERGENCE_THRESHOLD = 0.1  # deg
-UNSTABLE_GROWTH = 4.0  # a run is unstable when its attack angle grows to this multiple of the start
+UNSTABLE_TURN = 30.0  # deg of axis turn that marks an unstable run
 
 
 def convergence_speed(history: pd.DataFrame, threshold: float = CONVERGENCE_THRESHOLD,
@@ -58,13 +66,14 @@ def convergence_speed(history: pd.DataFrame, threshold: float = CONVERGENCE_THRE
     return float(speed[i - 1] + w * (speed[i] - speed[i - 1]))
 
 
-def is_unstable(max_attack_angle: float, initial_attack_angle: float) -> bool:
-    """Whether a run went unstable: its attack angle grew past ``UNSTABLE_GROWTH`` times the start.
+def indicator(axis_angle_change: float) -> float:
+    """The instability indicator of a run: how far its axis turned (deg)."""
+    return abs(axis_angle_change)
 
-    Used only to decide whether a single run can give the convergent velocity;
-    the critical velocity itself is found from the jump between speeds.
-    """
-    return max_attack_angle > UNSTABLE_GROWTH * max(abs(initial_attack_angle), 0.25)
+
+def is_unstable(axis_angle_change: float) -> bool:
+    """Whether a run went unstable: its axis turned by at least :data:`UNSTABLE_TURN` degrees."""
+    return indicator(axis_angle_change) >= UNSTABLE_TURN
 
 
 @dataclass
@@ -93,51 +102,98 @@ def find_critical_velocity(sweep_base: Sweep, store: RunStore, speeds: Sequence[
     store : RunStore
         Run store; runs done before are reused.
     speeds : sequence of float
-        The coarse scan (m/s), ascending.
+        The coarse scan (m/s).
     resolution : float
         Width (m/s) at which bisection stops.
     """
-    base_values = dict(sweep_base.variations[0].values)
-    seen: dict[float, dict] = {}
+    return find_critical_velocities([sweep_base], store, speeds, resolution, workers, scheduler, progress)[0]
 
-    def measure(values: Sequence[float]) -> None:
-        fresh = [v for v in values if v not in seen]
-        if not fresh:
-            return
-        variations = [Variation({**base_values, "impact.speed": float(v)}) for v in fresh]
-        table = run_sweep(Sweep(sweep_base.base, variations, sweep_base.source), store,
-                          workers=workers, scheduler=scheduler, progress=progress)
-        for v, (_, row) in zip(fresh, table.iterrows()):
-            if isinstance(row.get("error"), str):
-                raise RuntimeError(f"the run at {v} m/s failed: {row['error']}")
-            seen[v] = {"speed": float(v), "max_attack_angle": float(row["max_attack_angle"]),
-                       "axis_angle_change": float(row["axis_angle_change"]),
-                       "end_reason": row["end_reason"]}
 
+def find_critical_velocities(bases: Sequence[Sweep], store: RunStore, speeds: Sequence[float],
+                             resolution: float = 5.0, workers: int | None = None,
+                             scheduler: str | None = None, progress: bool = False) -> list[CriticalSearch]:
+    """:func:`find_critical_velocity` for several scenes at once.
+
+    The searches advance in lockstep (the scans together, then one bisection
+    round for all), so every round is one parallel sweep.
+    """
     speeds = sorted(float(v) for v in speeds)
-    measure(speeds)
-    logs = [math.log(max(seen[v]["max_attack_angle"], 1e-6)) for v in speeds]
-    jumps = np.diff(logs)
-    if len(jumps) == 0 or jumps.max() < math.log(2.0):
-        return CriticalSearch(None, None, sorted(seen.values(), key=lambda r: r["speed"]),
-                              f"no abrupt growth of the attack angle between {speeds[0]:g} and {speeds[-1]:g} m/s")
-    k = int(np.argmax(jumps))
-    low, high = speeds[k], speeds[k + 1]
-    while high - low > resolution:
-        # bisect on a grid of the resolution, so runs are reused between searches
-        middle = round(0.5 * (low + high) / (0.5 * resolution)) * 0.5 * resolution
-        if not low < middle < high:
-            break
-        measure([middle])
-        log_mid = math.log(max(seen[middle]["max_attack_angle"], 1e-6))
-        log_low = math.log(max(seen[low]["max_attack_angle"], 1e-6))
-        log_high = math.log(max(seen[high]["max_attack_angle"], 1e-6))
-        if abs(log_mid - log_low) <= abs(log_mid - log_high):
-            low = middle
+    seen: list[dict[float, dict]] = [{} for _ in bases]
+
+    def measure(wanted: list[list[float]]) -> None:
+        jobs = [(i, v) for i, values in enumerate(wanted) for v in values if v not in seen[i]]
+        if not jobs:
+            return
+        variations, sources = [], []
+        for i, v in jobs:
+            base_values = dict(bases[i].variations[0].values)
+            variations.append(Variation({**base_values, "impact.speed": v}))
+            sources.append(bases[i])
+        # one sweep over every base: each variation carries its own base's overrides
+        scenes_sweep = _MultiSweep(sources, variations)
+        table = run_sweep(scenes_sweep, store, workers=workers, scheduler=scheduler, progress=progress)
+        for (i, v), (_, row) in zip(jobs, table.iterrows()):
+            if isinstance(row.get("error"), str):
+                raise RuntimeError(f"the run at {v:g} m/s failed: {row['error']}")
+            seen[i][v] = {"speed": v, "max_attack_angle": float(row["max_attack_angle"]),
+                          "axis_angle_change": float(row["axis_angle_change"]),
+                          "end_reason": row["end_reason"], "key": row["key"]}
+
+    def log_indicator(i: int, v: float) -> float:
+        return math.log(max(indicator(seen[i][v]["axis_angle_change"]), 1e-6))
+
+    measure([speeds for _ in bases])
+    brackets: list[list[float] | None] = []
+    for i in range(len(bases)):
+        jumps = np.diff([log_indicator(i, v) for v in speeds])
+        if len(jumps) == 0 or jumps.max() < math.log(2.0):
+            brackets.append(None)
         else:
-            high = middle
-    return CriticalSearch(0.5 * (low + high), [low, high], sorted(seen.values(), key=lambda r: r["speed"]),
-                          "")
+            k = int(np.argmax(jumps))
+            brackets.append([speeds[k], speeds[k + 1]])
+    grid_step = 0.5 * resolution  # bisect on a grid, so that runs are shared between searches
+
+    def middle(bracket: list[float]) -> float | None:
+        low, high = bracket
+        mid = round(0.5 * (low + high) / grid_step) * grid_step
+        return mid if high - low > resolution and low < mid < high else None
+
+    while True:
+        wanted = [[m] if b is not None and (m := middle(b)) is not None else [] for b in brackets]
+        if not any(wanted):
+            break
+        measure(wanted)
+        for i, values in enumerate(wanted):
+            if not values:
+                continue
+            mid = values[0]
+            low, high = brackets[i]
+            if abs(log_indicator(i, mid) - log_indicator(i, low)) <= abs(log_indicator(i, mid) - log_indicator(i, high)):
+                brackets[i] = [mid, high]
+            else:
+                brackets[i] = [low, mid]
+    results = []
+    for i, bracket in enumerate(brackets):
+        rows = sorted(seen[i].values(), key=lambda r: r["speed"])
+        if bracket is None:
+            message = f"no abrupt change of the axis turn between {speeds[0]:g} and {speeds[-1]:g} m/s"
+            results.append(CriticalSearch(None, None, rows, message))
+        else:
+            results.append(CriticalSearch(0.5 * sum(bracket), bracket, rows, ""))
+    return results
+
+
+class _MultiSweep(Sweep):
+    """Variations drawn from several base scenes (one base per variation)."""
+
+    def __init__(self, bases: Sequence[Sweep], variations: Sequence[Variation]) -> None:
+        from .scene import apply_overrides, scene_from_dict
+
+        self.base = {}
+        self.variations = list(variations)
+        self.source = "scenes"
+        self.scenes = [scene_from_dict(apply_overrides(b.base, v.overrides()), b.source)
+                       for b, v in zip(bases, variations)]
 
 
 @dataclass
@@ -159,14 +215,12 @@ def measure_convergent_velocity(sweep_base: Sweep, store: RunStore, threshold: f
                                 progress: bool = False) -> ConvergentResult:
     """The characteristic convergent velocity from an unstable run of the scene.
 
-    The scene runs at its own impact speed; if that run is stable (its attack
-    angle does not grow past :data:`UNSTABLE_GROWTH` times the start), the
-    speed is raised by ``raise_factor`` until a run is unstable, and the
-    message says so.
+    The scene runs at its own impact speed; if that run is stable (see
+    :func:`is_unstable`), the speed is raised by ``raise_factor`` until a run
+    is unstable, and the message says so.
     """
     base_values = dict(sweep_base.variations[0].values)
     scene = sweep_base.scenes[0]
-    initial = math.hypot(scene.impact.attack_angle, scene.impact.yaw_angle)
     speed = scene.impact.speed
     runs: list[dict] = []
     while True:
@@ -176,8 +230,9 @@ def measure_convergent_velocity(sweep_base: Sweep, store: RunStore, threshold: f
         if isinstance(row.get("error"), str):
             raise RuntimeError(f"the run at {speed:g} m/s failed: {row['error']}")
         history = store.history(row["key"])
-        unstable = is_unstable(float(row["max_attack_angle"]), initial)
+        unstable = is_unstable(float(row["axis_angle_change"]))
         runs.append({"speed": round(speed, 6), "max_attack_angle": float(row["max_attack_angle"]),
+                     "axis_angle_change": float(row["axis_angle_change"]),
                      "convergence_speed": convergence_speed(history, threshold), "unstable": unstable,
                      "end_reason": row["end_reason"]})
         if unstable:

@@ -138,6 +138,7 @@ def simulate_record(scene_json: str) -> tuple[dict, bytes | None]:
         result = run_scene(scene)
         history = history_table(result)
         record = _json_safe(summary(result, history))
+        record["scene_resolved"] = scene.model_dump(mode="json")
     except Exception as exc:  # recorded, so that one failure does not stop the sweep
         return {"error": f"{type(exc).__name__}: {exc}"}, None
     every = max(1, len(history) // MAX_HISTORY_ROWS)

@@ -1,0 +1,73 @@
+"""Characteristic speeds: definitions on exact data, and on real runs of projectile #3."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from cases import scene_path
+from cases.studies import convergence_speed, find_critical_velocity, is_unstable, measure_convergent_velocity
+from cases.sweep import RunStore, Sweep
+
+STUDY = ["numerics.mesh_size=0.02", "numerics.time_step=2e-5"]
+
+
+def test_convergence_speed_on_an_exact_history():
+    """Attack angle rises to 10 deg at 800 m/s, then falls linearly to 0 at 300 m/s."""
+    speed = np.linspace(1000.0, 0.0, 1001)
+    angle = np.where(speed > 800, 1 + 9 * (1000 - speed) / 200, np.clip(10 * (speed - 300) / 500, 0, None))
+    history = pd.DataFrame({"speed": speed, "total_attack_angle": angle})
+    for threshold in (0.1, 1.0, 5.0):
+        assert convergence_speed(history, threshold) == pytest.approx(300 + 50 * threshold, abs=1e-9)
+    assert convergence_speed(history.assign(total_attack_angle=angle + 1.0), 0.1) is None
+
+
+def test_unstable_means_a_strong_turn():
+    assert not is_unstable(13.0) and is_unstable(-52.0)
+
+
+@pytest.fixture(scope="module")
+def store(tmp_path_factory):
+    return RunStore(tmp_path_factory.mktemp("studies"))
+
+
+def test_critical_velocity_brackets_the_jump(store):
+    sweep = Sweep.from_file(scene_path("paper_p3"), STUDY)
+    search = find_critical_velocity(sweep, store, [800, 1000], resolution=50.0, workers=2)
+    low, high = search.bracket
+    assert 800 <= low < high <= 1000 and high - low <= 50
+    by_speed = {row["speed"]: row for row in search.indicator}
+    # the two ends of the final bracket sit on either side of the jump
+    assert not is_unstable(by_speed[low]["axis_angle_change"])
+    assert is_unstable(by_speed[high]["axis_angle_change"])
+    assert search.critical_velocity == pytest.approx(0.5 * (low + high))
+
+
+def test_convergent_velocity_barely_moves_with_the_threshold(store):
+    """In an unstable run the attack angle collapses: 0.05 to 1 degree moves the speed by < 2 %."""
+    sweep = Sweep.from_file(scene_path("paper_p3"), STUDY + ["impact.speed=1000"])
+    values = [measure_convergent_velocity(sweep, store, threshold, workers=1).characteristic_convergent_velocity
+              for threshold in (0.05, 0.1, 0.5, 1.0)]
+    assert all(v is not None for v in values)
+    assert (max(values) - min(values)) / min(values) < 0.02
+
+
+def test_convergent_raises_a_stable_scene_and_says_so(store):
+    sweep = Sweep.from_file(scene_path("paper_p3"), STUDY + ["impact.speed=800"])
+    result = measure_convergent_velocity(sweep, store, 0.1, raise_factor=1.25, workers=1)
+    assert not result.runs[0]["unstable"] and result.runs[-1]["unstable"]
+    assert "raised the impact speed" in result.message
+    assert result.characteristic_convergent_velocity < result.runs[-1]["speed"]
+
+
+def test_cli_convergent_json(store):
+    done = subprocess.run([sys.executable, "-m", "cases.cli", "convergent", str(scene_path("paper_p3")),
+                           "--set", "numerics.mesh_size=0.02", "--set", "numerics.time_step=2e-5",
+                           "--set", "impact.speed=1000", "--store", str(store.root), "--json", "--no-progress"],
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    record = json.loads(done.stdout)
+    assert record["characteristic_convergent_velocity"] > 0 and record["runs"][0]["unstable"]
