@@ -59,11 +59,9 @@ class Study:
 
     def runs(self, bases: Sequence[Sweep], variations: Sequence[Sequence[Variation]]) -> list[pd.DataFrame]:
         """One parallel sweep over several bases; a table per base."""
-        from .studies import _MultiSweep
-
         pairs = [(b, v) for b, vs in zip(bases, variations) for v in vs]
-        table = run_sweep(_MultiSweep([b for b, _ in pairs], [v for _, v in pairs]), self.store,
-                          workers=self.workers, scheduler=self.scheduler, progress=self.progress)
+        table = run_sweep(Sweep.combined(pairs), self.store, workers=self.workers, scheduler=self.scheduler,
+                          progress=self.progress)
         out, start = [], 0
         for vs in variations:
             out.append(table.iloc[start:start + len(vs)].reset_index(drop=True))
@@ -81,8 +79,11 @@ def _convergence_rows(study: Study, table: pd.DataFrame, varied: str) -> list[di
             rows.append({varied: row[varied], "error": row["error"]})
             continue
         history = study.history(row["key"])
+        moving = history["speed"] >= 0.1 * history["speed"].iloc[0]
+        peak = history.loc[moving, "total_attack_angle"].idxmax()
         rows.append({
             varied: row[varied],
+            "peak": (float(history["total_attack_angle"][peak]), float(history["speed"][peak])),
             "unstable": is_unstable(row["axis_angle_change"]),
             "convergence_speed": convergence_speed(history, CONVERGENCE_THRESHOLD),
             "max_attack_angle": row["max_attack_angle"],
@@ -105,6 +106,13 @@ def _fit(x: Sequence[float], y: Sequence[float]) -> dict:
     residual = y - (slope * x + intercept)
     r2 = 1 - residual @ residual / ((y - y.mean()) @ (y - y.mean()))
     return {"slope": float(slope), "intercept": float(intercept), "r2": float(r2)}
+
+
+def _interpolate(xs: Sequence[float], ys: Sequence[float | None], x: float) -> float | None:
+    points = [(a, v) for a, v in zip(xs, ys) if v is not None]
+    if not points or not points[0][0] <= x <= points[-1][0]:
+        return None
+    return float(np.interp(x, [a for a, _ in points], [v for _, v in points]))
 
 
 def _fmt(value, digits=0) -> str:
@@ -202,7 +210,7 @@ def _boundary(ratio: float):
 
     scene = load_scene(scene_path("paper_p3"), STUDY_NUMERICS + [f"projectile.centre_of_mass_ratio={ratio}"])
     prepared = prepare_projectile(scene)
-    return turn_boundary(scene_loads(scene, prepared), prepared.mass.mass)
+    return turn_boundary(scene_loads(scene, prepared), prepared.mass.mass, attack_angles=tuple(range(1, 31)))
 
 
 def _boundary_figure(study: Study, boundary, rows: list[dict], path: Path) -> None:
@@ -219,7 +227,7 @@ def _boundary_figure(study: Study, boundary, rows: list[dict], path: Path) -> No
             h = study.history(row["key"])
             ax.plot(h["total_attack_angle"], h["speed"], lw=0.8, alpha=0.7,
                     label=f"run at {row['impact.speed']:.0f} m/s")
-    ax.set(xlabel="attack angle (deg)", ylabel="speed (m/s)", xlim=(0, 21), ylim=(0, 2000),
+    ax.set(xlabel="attack angle (deg)", ylabel="speed (m/s)", xlim=(0, 31), ylim=(0, 2000),
            title="projectile #3: load-only boundaries and unstable runs")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
@@ -266,6 +274,11 @@ def reproduce(out: str | Path, store: RunStore, workers: int | None = None, sche
         for r in which:
             jobs.append((f"attack 1, oblique {angle}", r, study.base(r, f"impact.oblique_angle={angle}"),
                          grid({"impact.speed": WIDE})))
+    # an oblique angle alone (no attack angle), #3: does it disturb less than an attack angle?
+    for angle in (10, 30):
+        jobs.append((f"attack 0, oblique {angle}", 0.5636,
+                     study.base(0.5636, "impact.attack_angle=0", f"impact.oblique_angle={angle}"),
+                     grid({"impact.speed": WIDE})))
     # numerical check: #3 near its critical speed at the shipped (finer) numerics
     check_speeds = [around[p3][1], around[p3][3]]
     fine = Sweep.from_file(scene_path("paper_p3"), FINE_NUMERICS + ["projectile.centre_of_mass_ratio=0.5636"])
@@ -280,6 +293,9 @@ def reproduce(out: str | Path, store: RunStore, workers: int | None = None, sche
     convergent = {d: [characteristic(results[(d, r)]) for r in ratios] for d in disturbances}
     convergent["attack 1, oblique 20"] = [characteristic(results[("attack 1, oblique 20", 0.5636)])]
     convergent["attack 1, oblique 30"] = [characteristic(results[("attack 1, oblique 30", 0.5636)])]
+    for angle in (10, 30):
+        kind = f"attack 0, oblique {angle}"
+        convergent[kind] = [characteristic(results[(kind, 0.5636)])]
     headline = convergent["attack 1"]
     fits = {"critical": _fit(ratios, critical), "convergent": _fit(ratios, headline)}
 
@@ -382,8 +398,7 @@ def _markdown(record, results, ratios, critical, convergent, fits, searches, ine
                 cells.append(f"{row['impact.speed']:.0f} -> {_fmt(row.get('convergence_speed'))}{tag}")
             lines.append(f"| {label(r)} | " + "; ".join(cells) + " |")
         lines.append("")
-    for angle in (20, 30):
-        kind = f"attack 1, oblique {angle}"
+    for kind in ("attack 1, oblique 20", "attack 1, oblique 30", "attack 0, oblique 10", "attack 0, oblique 30"):
         cells = [f"{row['impact.speed']:.0f} -> {_fmt(row.get('convergence_speed'))}"
                  + ("" if row.get("unstable") else " (stable)") + (" (exited)" if row.get("end_reason") == "exited" else "")
                  for row in results[(kind, 0.5636)]]
@@ -400,6 +415,19 @@ def _markdown(record, results, ratios, critical, convergent, fits, searches, ine
         ratio = b.fold_speed / measured if (b.fold_speed and measured) else None
         lines.append(f"| {label(r)} | {_fmt(measured)} | {_fmt(b.fold_speed)} | {_fmt(b.fold_attack_angle, 1)} |"
                      f" {_fmt(ratio, 3)} |")
+    lines += ["", "Where the attack angle of the unstable 1-degree runs peaks, against the steady-turn boundary at"
+              " that angle (medians over the unstable runs):", "",
+              "| projectile | peak attack angle (deg) | speed at the peak (m/s) | V_turn at that angle (m/s) |"
+              " V_turn / speed at the peak |", "|---|---|---|---|---|"]
+    for r, b in zip(ratios, boundaries):
+        peaks = [row["peak"] for row in results[("attack 1", r)] if row.get("unstable")]
+        if not peaks:
+            continue
+        angle = float(np.median([p[0] for p in peaks]))
+        speed = float(np.median([p[1] for p in peaks]))
+        v_turn = _interpolate(b.attack_angles, b.steady_turn, angle)
+        lines.append(f"| {label(r)} | {angle:.1f} | {speed:.0f} | {_fmt(v_turn)} | "
+                     f"{_fmt(v_turn / speed if v_turn else None, 3)} |")
     b3 = boundaries[ratios.index(0.5636)]
     lines += ["", "Projectile #3, the boundaries against the attack angle (m/s):", "",
               "| attack angle (deg) | " + " | ".join(f"{a:g}" for a in b3.attack_angles) + " |",

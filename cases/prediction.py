@@ -36,16 +36,23 @@ from fem_loads import DAFLLoads
 __all__ = ["TurnBoundary", "pitch_moment", "turn_boundary"]
 
 DEEP = np.array([0.0, 0.0, -1000.0])  # every surface point far inside the target
+SPEEDS = np.arange(100.0, 3001.0, 25.0)  # m/s: the grid on which sign changes are sought
+MAX_PITCH_RATE = 1e4  # rad/s: a steady-turn iteration beyond this has no fixed point
 
 
 def pitch_moment(loads: DAFLLoads, mass: float, speed: float, attack: float, steady_turn: bool) -> float:
-    """``M_y`` (N m) at ``speed`` (m/s) and ``attack`` (rad), without or with the steady-turn pitch rate."""
+    """``M_y`` (N m) at ``speed`` (m/s) and ``attack`` (rad), without or with the steady-turn pitch rate.
+
+    NaN when the steady-turn pitch rate has no fixed point.
+    """
     velocity = speed * np.array([math.cos(attack), 0.0, math.sin(attack)])
     normal = np.array([-math.sin(attack), 0.0, math.cos(attack)])
     q = 0.0
     for _ in range(60 if steady_turn else 0):
         force, _ = loads(DEEP, velocity, np.eye(3), np.array([0.0, q, 0.0]))
         q_next = -float(force @ normal) / (mass * speed)
+        if not abs(q_next) < MAX_PITCH_RATE:
+            return math.nan  # no steady turn: the fixed point runs away
         if abs(q_next - q) <= 1e-12 * max(1.0, abs(q)):
             q = q_next
             break
@@ -58,7 +65,8 @@ def _crossing(loads: DAFLLoads, mass: float, attack: float, steady_turn: bool,
               speeds: np.ndarray) -> float | None:
     """The highest speed where ``M_y`` changes sign, refined by Brent's method."""
     values = np.array([pitch_moment(loads, mass, v, attack, steady_turn) for v in speeds])
-    changes = np.flatnonzero(np.sign(values[:-1]) != np.sign(values[1:]))
+    finite = np.isfinite(values[:-1]) & np.isfinite(values[1:])
+    changes = np.flatnonzero(finite & (np.sign(values[:-1]) != np.sign(values[1:])))
     if len(changes) == 0:
         return None
     i = int(changes[-1])
@@ -78,9 +86,9 @@ class TurnBoundary:
 
 
 def turn_boundary(loads: DAFLLoads, mass: float, attack_angles=tuple(range(1, 21)),
-                  speeds=np.arange(100.0, 3001.0, 25.0)) -> TurnBoundary:
+                  speeds=None) -> TurnBoundary:
     """``V0(alpha)``, ``V_turn(alpha)`` and the minimum of ``V_turn`` over ``alpha``."""
-    speeds = np.asarray(speeds, dtype=float)
+    speeds = SPEEDS if speeds is None else np.asarray(speeds, dtype=float)
     non_rotating = [_crossing(loads, mass, math.radians(a), False, speeds) for a in attack_angles]
     turning = [_crossing(loads, mass, math.radians(a), True, speeds) for a in attack_angles]
     known = [(v, a) for v, a in zip(turning, attack_angles) if v is not None]

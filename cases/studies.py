@@ -124,14 +124,9 @@ def find_critical_velocities(bases: Sequence[Sweep], store: RunStore, speeds: Se
         jobs = [(i, v) for i, values in enumerate(wanted) for v in values if v not in seen[i]]
         if not jobs:
             return
-        variations, sources = [], []
-        for i, v in jobs:
-            base_values = dict(bases[i].variations[0].values)
-            variations.append(Variation({**base_values, "impact.speed": v}))
-            sources.append(bases[i])
-        # one sweep over every base: each variation carries its own base's overrides
-        scenes_sweep = _MultiSweep(sources, variations)
-        table = run_sweep(scenes_sweep, store, workers=workers, scheduler=scheduler, progress=progress)
+        # one sweep over every base: each variation on its own base
+        parts = [(bases[i], Variation({**bases[i].variations[0].values, "impact.speed": v})) for i, v in jobs]
+        table = run_sweep(Sweep.combined(parts), store, workers=workers, scheduler=scheduler, progress=progress)
         for (i, v), (_, row) in zip(jobs, table.iterrows()):
             if isinstance(row.get("error"), str):
                 raise RuntimeError(f"the run at {v:g} m/s failed: {row['error']}")
@@ -181,19 +176,6 @@ def find_critical_velocities(bases: Sequence[Sweep], store: RunStore, speeds: Se
         else:
             results.append(CriticalSearch(0.5 * sum(bracket), bracket, rows, ""))
     return results
-
-
-class _MultiSweep(Sweep):
-    """Variations drawn from several base scenes (one base per variation)."""
-
-    def __init__(self, bases: Sequence[Sweep], variations: Sequence[Variation]) -> None:
-        from .scene import apply_overrides, scene_from_dict
-
-        self.base = {}
-        self.variations = list(variations)
-        self.source = "scenes"
-        self.scenes = [scene_from_dict(apply_overrides(b.base, v.overrides()), b.source)
-                       for b, v in zip(bases, variations)]
 
 
 @dataclass

@@ -181,6 +181,16 @@ class Sweep:
         base = apply_overrides(read_toml(path), list(overrides))
         return cls(base, list(variations) or [Variation({})], str(path))
 
+    @classmethod
+    def combined(cls, parts: Sequence[tuple[Sweep, Variation]]) -> Sweep:
+        """Variations of several base scenes as one sweep, each variation on its own base."""
+        sweep = cls.__new__(cls)
+        sweep.base, sweep.source = {}, "scenes"
+        sweep.variations = [variation for _, variation in parts]
+        sweep.scenes = [scene_from_dict(apply_overrides(base.base, variation.overrides()), base.source)
+                        for base, variation in parts]
+        return sweep
+
     def keys(self) -> list[str]:
         return [scene_key(s) for s in self.scenes]
 
