@@ -50,10 +50,17 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _sweep(args: argparse.Namespace) -> int:
-    from .sweep import RunStore, Sweep, grid, parse_grid, run_sweep
+    from .sweep import RunStore, Sweep, Variation, grid, parse_grid, read_variations, run_sweep
 
     parameters = dict(parse_grid(text) for text in args.grid)
-    sweep = Sweep.from_file(args.scene, args.set, grid(parameters) if parameters else ())
+    variations = grid(parameters) if parameters else [Variation({})]
+    if args.list:
+        # a list and a grid combine as their product
+        listed = read_variations(args.list)
+        variations = [Variation({**g.values, **v.values}) for g in variations for v in listed]
+        for v in listed:
+            parameters.update(dict.fromkeys(v.values))
+    sweep = Sweep.from_file(args.scene, args.set, variations)
     table = run_sweep(sweep, RunStore(args.store), workers=args.workers, scheduler=args.scheduler,
                       progress=not args.no_progress)
     if args.out:
@@ -182,6 +189,8 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--grid", action="append", default=[], metavar="KEY=VALUES",
                        help="vary a key over V1,V2,... or START:STOP:STEP (inclusive); several --grid"
                             " options make a cartesian product")
+    sweep.add_argument("--list", metavar="FILE",
+                       help="a TOML file of [[run]] tables of dotted keys, one run each (with --grid: their product)")
     sweep.add_argument("--store", default="runs/store", metavar="DIR",
                        help="where finished runs are kept and found again (default runs/store)")
     sweep.add_argument("--out", metavar="FILE", help="write the results table as CSV")

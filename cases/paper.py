@@ -331,6 +331,10 @@ def reproduce(out: str | Path, store: RunStore, workers: int | None = None, sche
     _history_figure(study, [(f"{row['impact.speed']:.0f} m/s", row["key"]) for row in paper_pair], lc,
                     "projectile #3 at the paper's 1100 and 1120 m/s (1 degree attack)",
                     out / "histories_p3_paper_speeds.png")
+    _history_figure(study, [(f"{row['impact.speed']:.0f} m/s", row["key"]) for row in results[("attack 5", 0.5636)]],
+                    lc, "projectile #3, 5 degrees attack", out / "histories_p3_attack5.png")
+    _history_figure(study, obl, lc, "projectile #3, 1 degree attack with 10, 20 and 30 degrees oblique",
+                    out / "histories_p3_oblique.png")
     _speeds_figure(ratios, critical, headline, fits, out / "speeds_vs_lc.png")
 
     record = {
@@ -462,5 +466,7 @@ def _markdown(record, results, ratios, critical, convergent, fits, searches, ine
     lines += ["", "![#3 at 5 degrees](angles_p3_attack5.png)", "",
               "![#3 with oblique angles](angles_p3_oblique.png)", "",
               "![#3 near critical](histories_p3_critical.png)", "",
-              "![#3 at the paper's speeds](histories_p3_paper_speeds.png)", ""]
+              "![#3 at the paper's speeds](histories_p3_paper_speeds.png)", "",
+              "![#3 at 5 degrees: histories](histories_p3_attack5.png)", "",
+              "![#3 with oblique angles: histories](histories_p3_oblique.png)", ""]
     return "\n".join(lines)

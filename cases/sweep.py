@@ -32,7 +32,7 @@ import pandas as pd
 from .scene import SceneError, apply_overrides, parse_override, read_toml, scene_from_dict, scene_key
 from .schema import Scene
 
-__all__ = ["Variation", "grid", "parse_grid", "RunStore", "Sweep", "run_sweep", "MAX_HISTORY_ROWS"]
+__all__ = ["Variation", "grid", "parse_grid", "read_variations", "RunStore", "Sweep", "run_sweep", "MAX_HISTORY_ROWS"]
 
 MAX_HISTORY_ROWS = 4000  # stored histories are thinned to about this many rows
 
@@ -82,6 +82,24 @@ def parse_grid(text: str) -> tuple[str, list[Any]]:
             values = [int(round(v)) for v in values]
         return key.strip(), values
     return key.strip(), [parse_override(f"{key}={item}")[1] for item in raw.split(",")]
+
+
+def read_variations(path: str | os.PathLike) -> list[Variation]:
+    """Variations listed in a TOML file, one ``[[run]]`` table of dotted keys each.
+
+    Example::
+
+        [[run]]
+        "impact.speed" = 1100
+        "impact.attack_angle" = 5
+    """
+    data = read_toml(path)
+    runs = data.get("run")
+    unknown = set(data) - {"run"}
+    if unknown or not isinstance(runs, list) or not all(isinstance(r, dict) and r for r in runs):
+        raise SceneError(f"{path}: expected only [[run]] tables of dotted keys, e.g."
+                         ' [[run]] "impact.speed" = 1100')
+    return [Variation(dict(run)) for run in runs]
 
 
 class RunStore:

@@ -123,3 +123,28 @@ def test_dask_local_cluster_gives_the_same_table(tmp_path):
         remote = run_sweep(sweep, RunStore(tmp_path / "dask"), scheduler=cluster.scheduler_address,
                            progress=False)
     pd.testing.assert_frame_equal(_stable(remote), _stable(local), check_exact=True)
+
+
+def test_listed_variations_combine_with_a_grid(tmp_path):
+    listing = tmp_path / "runs.toml"
+    listing.write_text('[[run]]\n"impact.speed" = 1000\n\n[[run]]\n"impact.speed" = 1100\n"impact.attack_angle" = 5.0\n')
+    args = [sys.executable, "-m", "cases.cli", "sweep", str(scene_path("paper_p3")), "--list", str(listing),
+            "--grid", "impact.oblique_angle=0,10", "--store", str(tmp_path / "s"), "--out", str(tmp_path / "t.csv"),
+            "--no-progress", "--workers", "2"]
+    for item in QUICK:
+        args += ["--set", item]
+    done = subprocess.run(args, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    table = pd.read_csv(tmp_path / "t.csv")
+    assert list(zip(table["impact.oblique_angle"], table["impact.speed"])) == [(0, 1000), (0, 1100), (10, 1000),
+                                                                               (10, 1100)]
+    assert table["impact.attack_angle"].isna().tolist() == [True, False, True, False]
+
+
+def test_bad_list_file(tmp_path):
+    from cases.sweep import read_variations
+
+    bad = tmp_path / "bad.toml"
+    bad.write_text('speed = 3\n')
+    with pytest.raises(SceneError, match=r"\[\[run\]\]"):
+        read_variations(bad)
