@@ -15,7 +15,7 @@ from dynamics.quaternion import rotation_matrix
 
 from .runner import RunResult
 
-__all__ = ["history_table", "summary", "write_outputs", "atomic_write_text", "HISTORY_UNITS"]
+__all__ = ["history_table", "summary", "write_outputs", "atomic_write_text", "atomic_write_bytes", "json_safe", "HISTORY_UNITS"]
 
 ATTACK_ANGLE_SPEED_FRACTION = 0.1
 
@@ -125,26 +125,38 @@ def summary(result: RunResult, history: pd.DataFrame | None = None) -> dict:
     }
 
 
-def atomic_write_text(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file renamed into place."""
+def atomic_write_bytes(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a synced temporary file renamed into place.
+
+    A reader (or a process killed at any moment) sees the old file or the new
+    one, never a part.
+    """
+    path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
 
 
-def _json_safe(value):
+def atomic_write_text(path: Path, text: str) -> None:
+    """:func:`atomic_write_bytes` of UTF-8 text."""
+    atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def json_safe(value):
     if isinstance(value, float) and not math.isfinite(value):
         return None
     if isinstance(value, dict):
-        return {k: _json_safe(v) for k, v in value.items()}
+        return {k: json_safe(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_json_safe(v) for v in value]
+        return [json_safe(v) for v in value]
     return value
 
 
@@ -163,5 +175,5 @@ def write_outputs(result: RunResult, out_dir: str | os.PathLike, every: int = 1,
             kept = pd.concat([kept, h.iloc[[-1]]])  # always keep the end
         paths["history"] = out / "history.csv"
         atomic_write_text(paths["history"], kept.to_csv(index=False, float_format="%.10g"))
-    atomic_write_text(paths["summary"], json.dumps(_json_safe(record), indent=2) + "\n")
+    atomic_write_text(paths["summary"], json.dumps(json_safe(record), indent=2) + "\n")
     return paths

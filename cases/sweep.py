@@ -29,6 +29,7 @@ from typing import Any
 
 import pandas as pd
 
+from .results import atomic_write_bytes
 from .scene import SceneError, apply_overrides, parse_override, read_toml, scene_from_dict, scene_key
 from .schema import Scene
 
@@ -133,29 +134,20 @@ class RunStore:
     def save(self, key: str, record: dict, history_csv: bytes | None) -> None:
         """Store a run: the history first, then the record that marks it finished."""
         if history_csv is not None:
-            _atomic_write_bytes(self.history_path(key), history_csv)
-        _atomic_write_bytes(self.record_path(key), (json.dumps(record, indent=1) + "\n").encode())
-
-
-def _atomic_write_bytes(path: Path, data: bytes) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with open(tmp, "wb") as f:
-        f.write(data)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
+            atomic_write_bytes(self.history_path(key), history_csv)
+        atomic_write_bytes(self.record_path(key), (json.dumps(record, indent=1) + "\n").encode())
 
 
 def simulate_record(scene_json: str) -> tuple[dict, bytes | None]:
     """Run one resolved scene (a worker's job): its summary and gzipped CSV history, or the error."""
-    from .results import _json_safe, history_table, summary
+    from .results import json_safe, history_table, summary
     from .runner import run_scene
 
     scene = Scene.model_validate_json(scene_json)
     try:
         result = run_scene(scene)
         history = history_table(result)
-        record = _json_safe(summary(result, history))
+        record = json_safe(summary(result, history))
         record["scene_resolved"] = scene.model_dump(mode="json")
     except Exception as exc:  # recorded, so that one failure does not stop the sweep
         return {"error": f"{type(exc).__name__}: {exc}"}, None
