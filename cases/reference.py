@@ -20,9 +20,36 @@ import numpy as np
 from scipy import integrate
 
 from fem_loads.resistance import ResistanceLaw
-from mesh.profile import Profile
+from mesh.profile import OgiveNose, Profile
 
-__all__ = ["embedded_axial_force", "closed_form_depth", "axial_depth_1d"]
+__all__ = ["embedded_axial_force", "closed_form_depth", "axial_depth_1d", "nose_factors"]
+
+
+def nose_factors(profile: Profile, friction: float = 0.0) -> tuple[float, float]:
+    """Nose factors ``(N1, N2)`` with Coulomb friction ``mu``: ``F = pi a^2 (N1 A sigma_0 + N2 B rho_0 V^2)``.
+
+    For axial motion an element of the nose slips along its meridian, so the
+    friction ``mu sigma_n`` adds ``mu sigma_n cos(slope)`` to the axial drag:
+    ``N1 = 1 + mu int 2 pi r ds / (pi a^2)`` and
+    ``N2 = N + mu int 2 pi r sin^2(slope) ds / (pi a^2)``.  Closed forms:
+
+    * tangent ogive, CRH ``psi`` (``R = 2 psi a``, nose length ``L``):
+      ``N1 = 1 + mu [4 psi^2 asin(L/R) - (2 psi - 1) sqrt(4 psi - 1)]``,
+      ``N2 = (8 psi - 1)/(24 psi^2) + mu (2/(a^2 R^2)) [L (2 L^2 - R^2)(R - a)/8
+      + R^4 asin(L/R)/8 - (R - a) L^3/3]``;
+    * cone of half-angle ``theta``: ``N1 = 1 + mu cot(theta)``,
+      ``N2 = sin^2(theta) + mu sin(theta) cos(theta)``.
+    """
+    a, ln = profile.radius, profile.nose_length
+    if isinstance(profile.nose, OgiveNose):
+        psi, big_r = profile.nose.crh, profile.ogive_radius
+        n1 = 1 + friction * (4 * psi**2 * math.asin(ln / big_r) - (2 * psi - 1) * math.sqrt(4 * psi - 1))
+        bracket = (ln * (2 * ln**2 - big_r**2) * (big_r - a) / 8 + big_r**4 * math.asin(ln / big_r) / 8
+                   - (big_r - a) * ln**3 / 3)
+        n2 = profile.nose_factor() + friction * 2 / (a**2 * big_r**2) * bracket
+        return n1, n2
+    theta = math.radians(profile.nose.half_angle)
+    return 1 + friction / math.tan(theta), math.sin(theta) ** 2 + friction * math.sin(theta) * math.cos(theta)
 
 
 def _g(profile: Profile, depth: float) -> float:
@@ -34,10 +61,13 @@ def _g(profile: Profile, depth: float) -> float:
                           limit=200)[0]
 
 
-def embedded_axial_force(profile: Profile, law: ResistanceLaw, speed: float) -> float:
-    """Axial force (N) on a fully embedded nose: ``pi a^2 (A sigma_0 + N B rho_0 V^2)``."""
-    area = math.pi * profile.radius**2
-    return area * (law.static_stress + profile.nose_factor() * law.dynamic_density * speed**2)
+def embedded_axial_force(profile: Profile, law: ResistanceLaw, speed: float, friction: float = 0.0) -> float:
+    """Axial force (N) on a fully embedded nose: ``pi a^2 (N1 A sigma_0 + N2 B rho_0 V^2)``.
+
+    Without friction ``N1 = 1`` and ``N2 = N``; see :func:`nose_factors`.
+    """
+    n1, n2 = nose_factors(profile, friction)
+    return math.pi * profile.radius**2 * (n1 * law.static_stress + n2 * law.dynamic_density * speed**2)
 
 
 def closed_form_depth(profile: Profile, law: ResistanceLaw, mass: float, speed: float) -> float:

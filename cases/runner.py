@@ -23,6 +23,7 @@ from dynamics import METHODS, Event, RigidBody, SpeedBelow, State, Trajectory, s
 from dynamics.quaternion import from_rotation_matrix
 from fem_loads import (DAFLLoads, MassProperties, ResistanceLaw, SurfaceQuadrature, mass_properties,
                        resistance_law, surface_quadrature, to_skfem)
+from fem_loads.target import FreeSurface, Friction, LayeredTarget
 from mesh import (BODY, COUNTERWEIGHT, ConeNose, Interior, OgiveNose, Profile, ProjectileGeometry,
                   cached_mesh, place_counterweight)
 
@@ -153,9 +154,34 @@ class RunResult:
 
 
 def scene_loads(scene: Scene, prepared: PreparedProjectile) -> DAFLLoads:
-    """The DAFL load function of a scene."""
-    return DAFLLoads(prepared.quadrature, resolve_law(scene.target.law),
-                     scene.numerics.normal_velocity_guard)
+    """The DAFL load function of a scene, with exactly the effects the scene asks for."""
+    target = scene.target
+    if target.layers is None:
+        law = resolve_law(target.law)
+    else:
+        law = LayeredTarget(tuple(layer.thickness for layer in target.layers[:-1]),
+                            tuple(resolve_law(layer.law) for layer in target.layers))
+    effects = scene.effects
+    friction = None
+    if effects.friction.model != "none":
+        friction = Friction(effects.friction.coefficient, effects.friction.cap)
+    free_surface = None
+    if effects.free_surface is not None:
+        free_surface = FreeSurface(effects.free_surface.depth, effects.free_surface.surface_fraction)
+    return DAFLLoads(prepared.quadrature, law, scene.numerics.normal_velocity_guard, friction=friction,
+                     separation=effects.separation, free_surface=free_surface)
+
+
+class WithGravity:
+    """A load function plus the weight ``-m g e_Z`` of the body (world frame)."""
+
+    def __init__(self, loads, mass: float, acceleration: float) -> None:
+        self.loads = loads
+        self.weight = np.array([0.0, 0.0, -mass * acceleration])
+
+    def __call__(self, position, velocity, rotation, angular_velocity):
+        force, moment = self.loads(position, velocity, rotation, angular_velocity)
+        return force + self.weight, moment
 
 
 def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
@@ -173,6 +199,10 @@ def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
     numerics = scene.numerics
     loads = scene_loads(scene, prepared)
     body = RigidBody(prepared.mass.mass, prepared.mass.inertia)
+    effects = scene.effects
+    driving = WithGravity(loads, body.mass, effects.gravity_acceleration) if effects.gravity else loads
+    # the energy guard needs loads that only dissipate: gravity and no-separation can do work
+    dissipative = numerics.energy_guard and effects.separation and not effects.gravity
     state = initial_state(scene, prepared) if initial is None else initial
     events = [
         SpeedBelow(STOPPED, numerics.stop_speed),
@@ -184,13 +214,11 @@ def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
     if method.adaptive:
         length, speed = prepared.profile.length, scene.impact.speed
         scales = np.array([length] * 3 + [speed] * 3 + [1.0] * 3 + [speed / length] * 3 + [length])
-        trajectory = simulate(body, loads, state, method, time_limit=numerics.time_limit,
+        trajectory = simulate(body, driving, state, method, time_limit=numerics.time_limit,
                               rtol=numerics.rtol, atol=numerics.rtol * scales,
-                              first_step=1e-3 * length / speed, events=events,
-                              dissipative=numerics.energy_guard)
+                              first_step=1e-3 * length / speed, events=events, dissipative=dissipative)
     else:
-        trajectory = simulate(body, loads, state, method, time_limit=numerics.time_limit,
-                              time_step=numerics.time_step, events=events,
-                              dissipative=numerics.energy_guard)
+        trajectory = simulate(body, driving, state, method, time_limit=numerics.time_limit,
+                              time_step=numerics.time_step, events=events, dissipative=dissipative)
     end = time.perf_counter()
     return RunResult(scene, prepared, trajectory, end - start, end - integrate_start)

@@ -12,7 +12,8 @@ from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, field_val
 
 from fem_loads.resistance import NAMED_LAWS
 
-__all__ = ["Scene", "Projectile", "Target", "Impact", "Numerics", "Outputs",
+__all__ = ["Scene", "Projectile", "Target", "LayerSpec", "Effects", "FrictionSpec", "FreeSurfaceSpec",
+           "Impact", "Numerics", "Outputs",
            "OgiveNoseSpec", "ConeNoseSpec", "InteriorSpec", "CounterweightSpec",
            "MassPropertiesSpec", "LawSpec"]
 
@@ -148,21 +149,82 @@ def _law_kind(value) -> str:
     return "name" if isinstance(value, str) else "coefficients"
 
 
+LawChoice = Annotated[
+    Annotated[str, Tag("name")] | Annotated[LawSpec, Tag("coefficients")],
+    Discriminator(_law_kind),
+]
+
+
+def _check_law_name(value):
+    if isinstance(value, str) and value not in NAMED_LAWS:
+        raise ValueError(f"unknown law {value!r}: must be one of {', '.join(sorted(NAMED_LAWS))}"
+                         " or a table with A, sigma_0, B and rho_0")
+    return value
+
+
+class LayerSpec(_Strict):
+    """One layer of a layered target; the last layer has no thickness (it goes on forever)."""
+
+    thickness: float | None = _field(None, unit="m", gt=0.0, le=1e4)
+    law: LawChoice = _field(description="a named law or a table of its coefficients")
+
+    _known_name = field_validator("law")(classmethod(lambda cls, value: _check_law_name(value)))
+
+
 class Target(_Strict):
-    """A homogeneous half-space below the plane ``Z = 0``."""
+    """The half-space below the plane ``Z = 0``: homogeneous (``law``) or layered (``layers``)."""
 
-    law: Annotated[
-        Annotated[str, Tag("name")] | Annotated[LawSpec, Tag("coefficients")],
-        Discriminator(_law_kind),
-    ] = _field("soil", description="a named law or a table of its coefficients")
+    law: LawChoice = _field("soil", description="a named law or a table of its coefficients")
+    layers: list[LayerSpec] | None = _field(None, description="layers from the surface down")
 
-    @field_validator("law")
-    @classmethod
-    def _known_name(cls, value):
-        if isinstance(value, str) and value not in NAMED_LAWS:
-            raise ValueError(f"unknown law {value!r}: must be one of {', '.join(sorted(NAMED_LAWS))}"
-                             " or a table with A, sigma_0, B and rho_0")
-        return value
+    _known_name = field_validator("law")(classmethod(lambda cls, value: _check_law_name(value)))
+
+    @model_validator(mode="after")
+    def _layers_consistent(self):
+        if self.layers is None:
+            return self
+        if "law" in self.model_fields_set:
+            raise ValueError("give law (homogeneous) or layers, not both")
+        if not self.layers:
+            raise ValueError("layers: give at least one layer")
+        if any(layer.thickness is None for layer in self.layers[:-1]):
+            raise ValueError("layers: every layer but the last needs a thickness (m)")
+        if self.layers[-1].thickness is not None:
+            raise ValueError("layers: the last layer goes on forever; drop its thickness")
+        return self
+
+
+class FrictionSpec(_Strict):
+    """Tangential stress opposite to the local slip."""
+
+    model: Literal["none", "coulomb", "capped"] = "none"
+    coefficient: float = _field(0.1, ge=0.0, le=5.0, description="mu")
+    cap: float | None = _field(None, unit="Pa", gt=0.0, le=1e11, description="tau_s of the capped model")
+
+    @model_validator(mode="after")
+    def _cap_for_capped(self):
+        if self.model == "capped" and self.cap is None:
+            raise ValueError("the capped model needs cap (tau_s, Pa)")
+        if self.model != "capped" and self.cap is not None:
+            raise ValueError("cap applies to the capped model only")
+        return self
+
+
+class FreeSurfaceSpec(_Strict):
+    """Linear free-surface reduction of the normal stress (docs/effects.md)."""
+
+    depth: float = _field(unit="m", gt=0.0, le=1e3, description="full resistance below this depth")
+    surface_fraction: float = _field(0.0, ge=0.0, le=1.0, description="fraction of it at the surface")
+
+
+class Effects(_Strict):
+    """Optional physical effects; each absent effect costs nothing at run time."""
+
+    friction: FrictionSpec = FrictionSpec()
+    separation: bool = _field(True, description="no stress where Vn <= 0")
+    free_surface: FreeSurfaceSpec | None = None
+    gravity: bool = False
+    gravity_acceleration: float = _field(9.80665, unit="m/s^2", ge=0.0, le=1e3)
 
 
 class Impact(_Strict):
@@ -218,6 +280,7 @@ class Scene(_Strict):
     description: str = ""
     projectile: Projectile
     target: Target = Target()
+    effects: Effects = Effects()
     impact: Impact
     numerics: Numerics
     outputs: Outputs = Outputs()

@@ -11,6 +11,12 @@ centre of mass, moving with ``u = V + omega x r``:
 The target is the half-space ``Z < 0`` of the world frame (``Z`` up).  All
 per-point work is a few matrix-vector products over arrays cached at
 construction, so nothing is reassembled per evaluation.
+
+Optional effects (:mod:`fem_loads.target`): layered targets, a free-surface
+reduction, friction ``dF = -(sigma_n n + tau t) dS`` and, for comparison,
+no separation: every embedded point stays in contact with
+``sigma_n = max(0, A sigma_0 + B rho_0 Vn |Vn|)``, so receding surfaces feel
+the static pressure less the dynamic term.  An absent effect costs nothing.
 """
 
 from __future__ import annotations
@@ -21,6 +27,7 @@ import numpy as np
 
 from .quadrature import SurfaceQuadrature
 from .resistance import ResistanceLaw
+from .target import FreeSurface, Friction, LayeredTarget
 
 __all__ = ["DAFLLoads"]
 
@@ -32,8 +39,8 @@ class DAFLLoads:
     ----------
     quadrature : SurfaceQuadrature
         Outer-surface quadrature in the body frame about the centre of mass.
-    law : ResistanceLaw
-        Normal stress as a function of the normal velocity.
+    law : ResistanceLaw or LayeredTarget
+        Normal stress as a function of the normal velocity (and, for layers, of depth).
     normal_velocity_guard : float
         Relative guard on ``Vn = 0``: a point carries stress only when
         ``Vn > guard * (|V| + |omega| r_max)``.  The stress jumps from 0 to
@@ -41,18 +48,31 @@ class DAFLLoads:
         straight along its axis ``Vn`` is zero up to round-off, and without
         the guard round-off alone would switch on a lateral load of the order
         of ``A sigma_0`` times half the shank area.
+    friction : Friction, optional
+        Tangential stress; none by default.
+    separation : bool
+        True (default): no stress where ``Vn <= 0``.  False keeps every
+        embedded point in contact, ``max(0, A sigma_0 + B rho_0 Vn |Vn|)``,
+        for comparison; the loads can then do positive work.
+    free_surface : FreeSurface, optional
+        Reduction of the normal stress near the surface; none by default.
     """
 
-    def __init__(self, quadrature: SurfaceQuadrature, law: ResistanceLaw,
-                 normal_velocity_guard: float = 1e-9) -> None:
+    def __init__(self, quadrature: SurfaceQuadrature, law: ResistanceLaw | LayeredTarget,
+                 normal_velocity_guard: float = 1e-9, *, friction: Friction | None = None,
+                 separation: bool = True, free_surface: FreeSurface | None = None) -> None:
         self.quadrature = quadrature
         self.law = law
         self.normal_velocity_guard = float(normal_velocity_guard)
+        self.friction = friction
+        self.separation = separation
+        self.free_surface = free_surface
         q = quadrature
         # [n | r x n]: one product gives Vn = n.V + (r x n).omega, and the
         # weighted stresses times it give force and moment together
         self._normal_arm = np.ascontiguousarray(np.hstack([q.normals, q.moment_arms]))
         self._points = np.ascontiguousarray(q.points)
+        self._normals = np.ascontiguousarray(q.normals)
         self._weights = np.ascontiguousarray(q.weights)
         self._max_radius = float(np.linalg.norm(q.points, axis=1).max())
 
@@ -89,8 +109,22 @@ class DAFLLoads:
         speed = math.sqrt(float(velocity @ velocity))
         spin = math.sqrt(float(angular_velocity @ angular_velocity))
         guard = self.normal_velocity_guard * (speed + spin * self._max_radius)
-        loaded = (normal_velocity > guard) & (self.heights(position, rotation) < 0.0)
-        sigma = np.where(loaded, self.law.normal_stress(normal_velocity), 0.0)
+        heights = self.heights(position, rotation)
+        if isinstance(self.law, LayeredTarget):
+            static, dynamic = self.law.coefficients(-heights)
+        else:
+            static, dynamic = self.law.static_stress, self.law.dynamic_density
+        if self.separation:
+            stress = static + dynamic * np.square(normal_velocity)
+        else:
+            # contact everywhere: receding surfaces feel the static pressure less the dynamic term
+            stress = np.maximum(static + dynamic * normal_velocity * np.abs(normal_velocity), 0.0)
+        if self.free_surface is not None:
+            stress = stress * self.free_surface.factor(-heights)
+        loaded = heights < 0.0
+        if self.separation:
+            loaded &= normal_velocity > guard
+        sigma = np.where(loaded, stress, 0.0)
         return sigma, normal_velocity
 
     def __call__(self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray,
@@ -104,6 +138,23 @@ class DAFLLoads:
         moment : ndarray, shape (3,)
             Moment about the centre of mass in the body frame (N m).
         """
-        sigma, _ = self.stress(position, velocity, rotation, angular_velocity)
+        sigma, normal_velocity = self.stress(position, velocity, rotation, angular_velocity)
         load = -(sigma * self._weights) @ self._normal_arm
+        if self.friction is not None:
+            load += self._friction_load(sigma, normal_velocity, velocity @ rotation, angular_velocity)
         return rotation @ load[:3], load[3:]
+
+    def _friction_load(self, sigma: np.ndarray, normal_velocity: np.ndarray, velocity_body: np.ndarray,
+                       angular_velocity: np.ndarray) -> np.ndarray:
+        """Force and moment (body frame) of the tangential stress, opposite to the local slip."""
+        active = np.flatnonzero(sigma)
+        points, normals = self._points[active], self._normals[active]
+        slip = velocity_body + np.cross(angular_velocity, points) - normal_velocity[active, None] * normals
+        size = np.linalg.norm(slip, axis=1)
+        moving = size > 1e-12 * (np.linalg.norm(velocity_body) + 1e-300)
+        direction = np.zeros_like(slip)
+        direction[moving] = slip[moving] / size[moving, None]
+        tau_w = self.friction.stress(sigma[active]) * self._weights[active]
+        force = -tau_w @ direction
+        moment = -tau_w @ np.cross(points, direction)
+        return np.concatenate([force, moment])
