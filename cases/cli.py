@@ -6,6 +6,7 @@ import argparse
 import json
 import os
 import sys
+from pathlib import Path
 
 __all__ = ["main"]
 
@@ -136,6 +137,28 @@ def _paper(args: argparse.Namespace) -> int:
     return 0
 
 
+def _compare(args: argparse.Namespace) -> int:
+    from .compare import compare_laws
+    from .scene import SceneError as SceneError_
+    from .sweep import RunStore
+
+    laws = [name.strip() for name in args.laws.split(",") if name.strip()]
+    if len(laws) < 1:
+        raise SceneError_("--laws: give one or more law names, e.g. soil,softer_soil")
+    try:
+        table = compare_laws(args.scene, args.set, laws, RunStore(args.store), args.out, args.workers,
+                             args.scheduler, not args.no_progress)
+    except ValueError as exc:
+        if "law =" in str(exc):
+            raise SceneError_(f"--laws: {exc}") from None
+        raise
+    if args.json:
+        print(table.to_json(orient="records"))
+    else:
+        print((Path(args.out) / "compare.md").read_text())
+    return 0
+
+
 def _add_study_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scene", help="a scene TOML file")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
@@ -213,6 +236,14 @@ def build_parser() -> argparse.ArgumentParser:
     convergent.add_argument("--threshold", type=_positive_float, default=0.1, metavar="DEG",
                             help="the attack angle counts as converged below this (default 0.1 deg)")
     convergent.set_defaults(handler=_convergent)
+
+    compare = commands.add_parser("compare", help="run a scene under several resistance laws, side by side")
+    _add_study_options(compare)
+    compare.add_argument("--laws", required=True, metavar="A,B,...",
+                         help="comma-separated law names (see docs/effects.md)")
+    compare.add_argument("--out", default="runs/compare", metavar="DIR",
+                         help="where to write compare.md, compare.csv and compare.png (default runs/compare)")
+    compare.set_defaults(handler=_compare)
 
     paper = commands.add_parser("paper", help="regenerate the paper's study: tables and figures")
     paper.add_argument("--out", default="docs/paper", metavar="DIR", help="where to write (default docs/paper)")

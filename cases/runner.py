@@ -23,11 +23,12 @@ from dynamics import METHODS, Event, RigidBody, SpeedBelow, State, Trajectory, s
 from dynamics.quaternion import from_rotation_matrix
 from fem_loads import (DAFLLoads, MassProperties, ResistanceLaw, SurfaceQuadrature, mass_properties,
                        resistance_law, surface_quadrature, to_skfem)
+from fem_loads.resistance import locking_cavity_expansion
 from fem_loads.target import FreeSurface, Friction, LayeredTarget
 from mesh import (BODY, COUNTERWEIGHT, ConeNose, Interior, OgiveNose, Profile, ProjectileGeometry,
                   cached_mesh, place_counterweight)
 
-from .schema import LawSpec, Numerics, Projectile, Scene
+from .schema import LawSpec, MaterialLawSpec, Numerics, Projectile, Scene
 
 __all__ = ["PreparedProjectile", "prepare_projectile", "resolve_law", "initial_state", "run_scene",
            "scene_loads", "projectile_geometry",
@@ -106,10 +107,12 @@ def prepare_projectile(scene: Scene) -> PreparedProjectile:
     return _prepare(scene.projectile.model_dump_json(), numerics)
 
 
-def resolve_law(law: str | LawSpec) -> ResistanceLaw:
-    """The resistance law a scene names or gives by coefficients."""
+def resolve_law(law: str | LawSpec | MaterialLawSpec) -> ResistanceLaw:
+    """The resistance law a scene names, gives by coefficients or derives from material constants."""
     if isinstance(law, str):
         return resistance_law(law)
+    if isinstance(law, MaterialLawSpec):
+        return locking_cavity_expansion(law.sigma_0, law.rho_0, law.locking_strain)
     return ResistanceLaw.from_coefficients(law.A, law.sigma_0, law.B, law.rho_0)
 
 

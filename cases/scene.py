@@ -136,7 +136,7 @@ def _field_at(loc: tuple) -> tuple[Any, list[type[BaseModel]], str]:
             typing.get_args(f.annotation) == (part,) for f in m.model_fields.values())]
         if tagged:
             models = tagged
-        elif part not in ("name", "coefficients"):
+        elif part not in ("name", "coefficients", "material"):
             path.append(part)
     return info, models, ".".join(path) or "scene"
 

@@ -145,12 +145,25 @@ class LawSpec(_Strict):
     rho_0: float = _field(unit="kg/m^3", gt=0.0, le=1e5, description="target density")
 
 
+class MaterialLawSpec(_Strict):
+    """A resistance law derived from material constants (docs/effects.md)."""
+
+    model: Literal["locking_cavity_expansion"]
+    sigma_0: float = _field(unit="Pa", gt=0.0, le=1e11, description="target strength")
+    rho_0: float = _field(unit="kg/m^3", gt=0.0, le=1e5, description="target density")
+    locking_strain: float = _field(gt=0.0, lt=1.0, description="volumetric strain eta* at locking")
+
+
 def _law_kind(value) -> str:
-    return "name" if isinstance(value, str) else "coefficients"
+    if isinstance(value, str):
+        return "name"
+    return "material" if isinstance(value, (dict, MaterialLawSpec)) and "model" in (
+        value if isinstance(value, dict) else value.model_fields_set) else "coefficients"
 
 
 LawChoice = Annotated[
-    Annotated[str, Tag("name")] | Annotated[LawSpec, Tag("coefficients")],
+    Annotated[str, Tag("name")] | Annotated[LawSpec, Tag("coefficients")]
+    | Annotated[MaterialLawSpec, Tag("material")],
     Discriminator(_law_kind),
 ]
 

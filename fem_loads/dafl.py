@@ -74,6 +74,7 @@ class DAFLLoads:
         self._points = np.ascontiguousarray(q.points)
         self._normals = np.ascontiguousarray(q.normals)
         self._weights = np.ascontiguousarray(q.weights)
+        self._radius2 = np.einsum("ij,ij->i", q.points, q.points)
         self._max_radius = float(np.linalg.norm(q.points, axis=1).max())
 
     def __len__(self) -> int:
@@ -146,15 +147,27 @@ class DAFLLoads:
 
     def _friction_load(self, sigma: np.ndarray, normal_velocity: np.ndarray, velocity_body: np.ndarray,
                        angular_velocity: np.ndarray) -> np.ndarray:
-        """Force and moment (body frame) of the tangential stress, opposite to the local slip."""
-        active = np.flatnonzero(sigma)
-        points, normals = self._points[active], self._normals[active]
-        slip = velocity_body + np.cross(angular_velocity, points) - normal_velocity[active, None] * normals
-        size = np.linalg.norm(slip, axis=1)
-        moving = size > 1e-12 * (np.linalg.norm(velocity_body) + 1e-300)
-        direction = np.zeros_like(slip)
-        direction[moving] = slip[moving] / size[moving, None]
-        tau_w = self.friction.stress(sigma[active]) * self._weights[active]
-        force = -tau_w @ direction
-        moment = -tau_w @ np.cross(points, direction)
-        return np.concatenate([force, moment])
+        """Force and moment (body frame) of the tangential stress, opposite to the local slip.
+
+        With ``c_i = tau_i w_i / |s_i|`` and the slip ``s_i = V + omega x r_i - Vn_i n_i``,
+        ``F = -sum c_i s_i`` and ``M = -sum c_i r_i x s_i`` expand into weighted sums
+        (``sum c``, ``sum c r``, ``sum c |r|^2``, ``sum c r (r . omega)``, ``sum c Vn n``,
+        ``sum c Vn r x n``): matrix-vector products over cached arrays, no per-point
+        cross products.  ``|s|^2 = |u|^2 - Vn^2`` with
+        ``|u|^2 = |V|^2 + 2 r . (V x omega) + |omega|^2 |r|^2 - (omega . r)^2``.
+        """
+        v, w = velocity_body, angular_velocity
+        points = self._points
+        r_dot_w = points @ w
+        speed2 = (float(v @ v) + 2.0 * (points @ np.cross(v, w)) + float(w @ w) * self._radius2
+                  - r_dot_w**2 - normal_velocity**2)
+        slip = np.sqrt(np.maximum(speed2, 0.0))
+        moving = slip > 1e-12 * (math.sqrt(float(v @ v)) + 1e-300)
+        c = np.where(moving, self.friction.stress(sigma) * self._weights / np.where(moving, slip, 1.0), 0.0)
+        c_vn = c * normal_velocity
+        sum_c = float(c.sum())
+        sum_cr = c @ points
+        force = v * sum_c + np.cross(w, sum_cr) - c_vn @ self._normals
+        moment = (np.cross(sum_cr, v) + w * float(c @ self._radius2) - (c * r_dot_w) @ points
+                  - c_vn @ self._normal_arm[:, 3:])
+        return -np.concatenate([force, moment])

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["ResistanceLaw", "NAMED_LAWS", "resistance_law"]
+__all__ = ["ResistanceLaw", "NAMED_LAWS", "resistance_law", "register_law", "locking_cavity_expansion"]
 
 
 @dataclass(frozen=True)
@@ -45,6 +45,36 @@ class ResistanceLaw:
         return self.static_stress + self.dynamic_density * np.square(normal_velocity)
 
 
+def locking_cavity_expansion(sigma_0: float, rho_0: float, locking_strain: float,
+                             name: str = "locking cavity expansion") -> ResistanceLaw:
+    """Spherical cavity expansion in an elastic-plastic-locking soil (rigid-locking limit).
+
+    A cavity expands at speed ``V`` into a Tresca soil of strength ``sigma_0``
+    and density ``rho_0`` that locks at the volumetric strain ``eta*``: between
+    the cavity ``a`` and a plastic front ``b`` the soil is locked
+    (incompressible at ``rho* = rho_0 / (1 - eta*)``), so mass conservation
+    fixes ``(a/b)^3 = eta*``; ahead of the front the soil is at rest with the
+    elastic-limit stress ``2 sigma_0 / 3`` (elastic strains neglected).
+    Integrating the radial momentum equation with ``v = V a^2/r^2`` across the
+    locked region and adding the momentum jump ``rho_0 c v_b`` at the front
+    (``c = V eta*^(-1/3)``, ``v_b = V eta*^(2/3)``) gives
+    ``sigma_r(a) = A sigma_0 + B rho_0 V^2`` with
+
+    * ``A = (2/3)(1 - ln eta*)`` (brief section 2), and
+    * ``B = [3/2 - 2 eta*^(1/3) + eta*^(4/3)/2] / (1 - eta*) + eta*^(1/3)``.
+
+    The brief's dynamic-cavity-expansion rows (which also use the elastic
+    modulus ``E``) have ``B`` about 9 % higher (docs/effects.md).
+    """
+    if not (0.0 < locking_strain < 1.0):
+        raise ValueError(f"locking_strain = {locking_strain}: must lie in (0, 1)")
+    eta = locking_strain
+    cube = eta ** (1.0 / 3.0)
+    a = 2.0 / 3.0 * (1.0 - math.log(eta))
+    b = (1.5 - 2.0 * cube + 0.5 * eta * cube) / (1.0 - eta) + cube
+    return ResistanceLaw.from_coefficients(a, sigma_0, b, rho_0, name)
+
+
 NAMED_LAWS: dict[str, ResistanceLaw] = {
     # brief section 2: Forrestal and Luk's soil, the paper's default
     "soil": ResistanceLaw.from_coefficients(1.718, 10e6, 1.227, 1860.0, "soil"),
@@ -52,6 +82,13 @@ NAMED_LAWS: dict[str, ResistanceLaw] = {
     "soil_dynamic_cavity_expansion": ResistanceLaw(20.268e6, 2239.1, "soil_dynamic_cavity_expansion"),
     "softer_soil": ResistanceLaw(13.521e6, 1925.6, "softer_soil"),
 }
+
+
+def register_law(name: str, law: ResistanceLaw) -> None:
+    """Add a law to the registry under ``name`` (scenes can then name it)."""
+    if not name or not name.replace("_", "").isalnum():
+        raise ValueError(f"law name {name!r}: use letters, digits and underscores")
+    NAMED_LAWS[name] = law
 
 
 def resistance_law(name: str) -> ResistanceLaw:

@@ -150,3 +150,40 @@ def test_layers_pick_the_law_by_depth():
                                         resistance_law("soil_dynamic_cavity_expansion")))
     static, _ = target.coefficients(np.array([0.5, 1.5, 2.9, 3.1, 100.0]))
     np.testing.assert_allclose(static, [17.18e6, 13.521e6, 13.521e6, 20.268e6, 20.268e6])
+
+
+def _friction_by_points(loads, position, velocity, rotation, omega):
+    """The friction load point by point, straight from its definition (reference for the fast sums)."""
+    sigma, vn = loads.stress(position, velocity, rotation, omega)
+    q = loads.quadrature
+    v_body = rotation.T @ velocity
+    force, moment = np.zeros(3), np.zeros(3)
+    for i in np.flatnonzero(sigma):
+        u = v_body + np.cross(omega, q.points[i])
+        slip = u - vn[i] * q.normals[i]
+        t = slip / np.linalg.norm(slip)
+        f = -loads.friction.stress(sigma[i]) * q.weights[i] * t
+        force += f
+        moment += np.cross(q.points[i], f)
+    return rotation @ force, moment
+
+
+@pytest.mark.parametrize("cap", [None, 5e6])
+def test_fast_friction_sums_equal_the_pointwise_definition(cap):
+    profile = PROFILES["paper CRH 5"]
+    mesh = cached_mesh(ProjectileGeometry(profile), 0.03, 2)
+    quadrature = surface_quadrature(mesh, mass_properties(mesh, {BODY: 1.0}).centre, profile, "exact")
+    with_friction = DAFLLoads(quadrature, SOIL, friction=Friction(0.2, cap))
+    without = DAFLLoads(quadrature, SOIL)
+    rng = np.random.default_rng(7)
+    for _ in range(5):
+        rotation, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        rotation *= np.sign(np.linalg.det(rotation))
+        args = (np.array([0.0, 0.0, rng.uniform(-0.8, 0.2)]), rng.normal(size=3) * 300, rotation,
+                rng.normal(size=3) * 40)
+        force, moment = with_friction(*args)
+        base_force, base_moment = without(*args)
+        ref_force, ref_moment = _friction_by_points(with_friction, *args)
+        scale = np.abs(ref_force).max() + 1.0
+        np.testing.assert_allclose(force - base_force, ref_force, atol=1e-9 * scale)
+        np.testing.assert_allclose(moment - base_moment, ref_moment, atol=1e-9 * scale)

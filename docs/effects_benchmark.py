@@ -1,0 +1,70 @@
+"""Measure what each optional effect costs (docs/effects.md).
+
+Run: ``.venv/bin/python docs/effects_benchmark.py`` (about a minute).  Prints, for the
+Forrestal-Luk projectile at the default 10 mm mesh (30 720 surface points):
+
+* the median time of one load evaluation (15 repeats of 200 calls) at a state
+  with the nose and 1 m of shank in the target, 3 degrees of attack and a pitch rate;
+* the integration time of test 5 (median of 3 runs).
+"""
+
+from __future__ import annotations
+
+import statistics
+import timeit
+
+import numpy as np
+
+from cases import load_scene, run_scene, scene_path
+from cases.runner import WithGravity, initial_state, prepare_projectile, resolve_law, scene_loads
+from dynamics.quaternion import rotation_matrix
+from fem_loads import DAFLLoads
+
+EFFECTS = {
+    "all effects off (scene defaults)": [],
+    "Coulomb friction": ["effects.friction.model=coulomb"],
+    "capped friction": ['effects.friction={model = "capped", coefficient = 0.1, cap = 10e6}'],
+    "free surface": ["effects.free_surface.depth=0.5"],
+    "no separation": ["effects.separation=false"],
+    "gravity": ["effects.gravity=true"],
+}
+
+
+def load_timing(loads, args) -> float:
+    times = timeit.repeat(lambda: loads(*args), number=200, repeat=15)
+    return statistics.median(times) / 200 * 1e6
+
+
+def main() -> None:
+    scene = load_scene(scene_path("forrestal_luk_test5"))
+    prepared = prepare_projectile(scene)
+    state = initial_state(scene, prepared)
+    rotation = rotation_matrix(state.attitude)
+    position = state.position + np.array([0.0, 0.0, -(0.16 + 1.0)])
+    args = (position, state.velocity, rotation, np.array([0.0, 2.0, 0.0]))
+    bare = DAFLLoads(prepared.quadrature, resolve_law(scene.target.law))
+    print(f"| configuration | one load evaluation (us, median) | test 5 integration (s, median of 3) |")
+    print("|---|---|---|")
+    print(f"| bare core (DAFLLoads with the law only) | {load_timing(bare, args):.0f} | - |")
+    layers = load_scene(scene_path("forrestal_luk_test5"))
+    for name, overrides in EFFECTS.items():
+        s = load_scene(scene_path("forrestal_luk_test5"), overrides)
+        loads = scene_loads(s, prepared)
+        if s.effects.gravity:
+            loads = WithGravity(loads, prepared.mass.mass, s.effects.gravity_acceleration)
+        per_call = load_timing(loads, args)
+        runs = [run_scene(s).integration_time for _ in range(3)]
+        print(f"| {name} | {per_call:.0f} | {statistics.median(runs):.2f} |")
+    data = layers.model_dump()
+    from cases.scene import scene_from_dict
+
+    del data["target"]["law"]
+    data["target"]["layers"] = [{"thickness": 2.0, "law": "soil"}, {"law": "softer_soil"}]
+    s = scene_from_dict(data)
+    per_call = load_timing(scene_loads(s, prepared), args)
+    runs = [run_scene(s).integration_time for _ in range(3)]
+    print(f"| two layers | {per_call:.0f} | {statistics.median(runs):.2f} |")
+
+
+if __name__ == "__main__":
+    main()
