@@ -20,7 +20,7 @@ import numpy as np
 from scipy import integrate
 
 from fem_loads.resistance import ResistanceLaw
-from mesh.profile import OgiveNose, Profile
+from mesh.profile import ConeNose, OgiveNose, Profile
 
 __all__ = ["embedded_axial_force", "closed_form_depth", "axial_depth_1d", "nose_factors"]
 
@@ -48,8 +48,19 @@ def nose_factors(profile: Profile, friction: float = 0.0) -> tuple[float, float]
                    - (big_r - a) * ln**3 / 3)
         n2 = profile.nose_factor() + friction * 2 / (a**2 * big_r**2) * bracket
         return n1, n2
-    theta = math.radians(profile.nose.half_angle)
-    return 1 + friction / math.tan(theta), math.sin(theta) ** 2 + friction * math.sin(theta) * math.cos(theta)
+    if isinstance(profile.nose, ConeNose):
+        theta = math.radians(profile.nose.half_angle)
+        return 1 + friction / math.tan(theta), math.sin(theta) ** 2 + friction * math.sin(theta) * math.cos(theta)
+    # other noses: the same integrals, by quadrature (a flat front face does not slip axially)
+    def sin2(s: float) -> float:
+        slope = float(profile.slope_at(s))
+        return slope**2 / (1 + slope**2)
+
+    area = math.pi * a**2
+    side = integrate.quad(lambda s: 2 * math.pi * float(profile.radius_at(s)), 0, ln, epsrel=1e-12, limit=200)[0]
+    dyn = integrate.quad(lambda s: 2 * math.pi * float(profile.radius_at(s)) * sin2(s), 0, ln, epsrel=1e-12,
+                         limit=200)[0]
+    return 1 + friction * side / area, profile.nose_factor() + friction * dyn / area
 
 
 def _g(profile: Profile, depth: float) -> float:
@@ -57,8 +68,9 @@ def _g(profile: Profile, depth: float) -> float:
         slope = float(profile.slope_at(s))
         return 2 * math.pi * float(profile.radius_at(s)) * slope**3 / (1 + slope**2)
 
-    return integrate.quad(integrand, 0.0, min(depth, profile.nose_length), epsabs=0, epsrel=1e-13,
-                          limit=200)[0]
+    # a flat front face (blunt nose) meets the target head on: sin(slope) = 1 there
+    return math.pi * profile.tip_radius**2 + integrate.quad(
+        integrand, 0.0, min(depth, profile.nose_length), epsabs=0, epsrel=1e-13, limit=200)[0]
 
 
 def embedded_axial_force(profile: Profile, law: ResistanceLaw, speed: float, friction: float = 0.0) -> float:

@@ -27,6 +27,7 @@ from fem_loads.resistance import locking_cavity_expansion
 from fem_loads.target import FreeSurface, Friction, LayeredTarget
 from mesh import (BODY, COUNTERWEIGHT, ConeNose, Interior, OgiveNose, Profile, ProjectileGeometry,
                   cached_mesh, place_counterweight)
+from mesh.profile import BluntOgiveNose, SecantOgiveNose
 
 from .schema import LawSpec, MaterialLawSpec, Numerics, Projectile, Scene
 
@@ -57,10 +58,25 @@ class PreparedProjectile:
         return -self.mass.centre
 
 
+def nose_of(spec) -> OgiveNose | ConeNose | SecantOgiveNose | BluntOgiveNose:
+    """The mesh-room nose of a scene's nose table."""
+    match spec.shape:
+        case "ogive":
+            return OgiveNose(spec.crh)
+        case "cone":
+            return ConeNose(spec.half_angle)
+        case "secant_ogive":
+            return SecantOgiveNose(spec.crh, spec.length)
+        case "hemisphere":
+            return OgiveNose(0.5)
+        case "blunt":
+            return BluntOgiveNose(spec.crh, spec.flat_radius)
+    raise ValueError(f"nose.shape = {spec.shape!r}: unknown")
+
+
 def projectile_geometry(spec: Projectile) -> tuple[ProjectileGeometry, dict[int, float]]:
     """The geometry and region densities a projectile spec describes (before any mass scaling)."""
-    nose = OgiveNose(spec.nose.crh) if spec.nose.shape == "ogive" else ConeNose(spec.nose.half_angle)
-    profile = Profile(spec.diameter, spec.length, nose)
+    profile = Profile(spec.diameter, spec.length, nose_of(spec.nose))
     body_density = spec.body_density or DEFAULT_BODY_DENSITY
     if spec.interior is None:
         return ProjectileGeometry(profile), {BODY: body_density}

@@ -43,7 +43,30 @@ class ConeNoseSpec(_Strict):
     half_angle: float = _field(unit="deg", gt=0.0, lt=90.0, description="cone half-angle")
 
 
-NoseSpec = Annotated[OgiveNoseSpec | ConeNoseSpec, Field(discriminator="shape")]
+class SecantOgiveNoseSpec(_Strict):
+    """Secant ogive: an arc of ``crh`` diameters through the tip and the shoulder."""
+
+    shape: Literal["secant_ogive"]
+    crh: float = _field(unit="calibres", gt=0.0, le=100.0, description="ogive radius in diameters")
+    length: float = _field(unit="calibres", gt=0.0, le=50.0, description="nose length in diameters")
+
+
+class HemisphereNoseSpec(_Strict):
+    """Hemispherical nose (a tangent ogive of CRH 0.5)."""
+
+    shape: Literal["hemisphere"]
+
+
+class BluntNoseSpec(_Strict):
+    """Flat-tipped nose: a tangent ogive of ``crh`` truncated by a flat face of radius ``flat_radius``."""
+
+    shape: Literal["blunt"]
+    crh: float = _field(unit="calibres", ge=0.5, le=100.0)
+    flat_radius: float = _field(unit="m", gt=0.0, le=5.0, description="radius of the flat front face")
+
+
+NoseSpec = Annotated[OgiveNoseSpec | ConeNoseSpec | SecantOgiveNoseSpec | HemisphereNoseSpec | BluntNoseSpec,
+                     Field(discriminator="shape")]
 
 
 class InteriorSpec(_Strict):

@@ -15,8 +15,9 @@ built once, so each costs the same per load evaluation):
     radial projection from the axis: points are moved onto the profile, the
     normals are the profile's, and the weights take the Jacobian of the
     projection, ``(r / rho) (n_mesh . e_rho) / (n_exact . e_rho)``.  The
-    facets then only partition the exact surface.  The flat tail disc is
-    stretched radially so that its area is exactly ``pi a^2``.
+    facets then only partition the exact surface.  The flat tail disc (and
+    the flat front face of a blunt nose) are stretched radially to their
+    exact areas.
 """
 
 from __future__ import annotations
@@ -110,13 +111,14 @@ def _to_exact_surface(points: np.ndarray, normals: np.ndarray, weights: np.ndarr
     normals[lateral, 0] = n_forward
     normals[lateral, 1:] = n_radial[:, None] * e_rho[lateral, 1:]
     weights[lateral] *= (r / rho[lateral]) * n_mesh_radial[lateral] / n_radial
-    # the tail disc is planar, but a flat mesh bounds it by a polygon: stretch it
-    # radially onto the exact disc (uniformly; its load matters only in reverse motion)
-    tail = ~lateral
-    if tail.any():
-        stretch = np.pi * profile.radius**2 / weights[tail].sum()
-        weights[tail] *= stretch
-        points[tail, 1:] *= np.sqrt(stretch)
+    # the tail disc (and a flat front face) are planar, but a flat mesh bounds them by a
+    # polygon: stretch each radially onto its exact disc (uniformly)
+    for disc, radius in ((~lateral & (normals[:, 0] < 0), profile.radius),
+                         (~lateral & (normals[:, 0] > 0), profile.tip_radius)):
+        if disc.any() and radius > 0:
+            stretch = np.pi * radius**2 / weights[disc].sum()
+            weights[disc] *= stretch
+            points[disc, 1:] *= np.sqrt(stretch)
     return points, normals, weights
 
 

@@ -3,10 +3,10 @@
 from .geometry import BODY, COUNTERWEIGHT, OUTER, ProjectileMesh, build_mesh
 from .io import cached_mesh, read_mesh, write_mesh
 from .placement import AxisymmetricMassProperties, analytic_mass_properties, place_counterweight
-from .profile import ConeNose, Interior, OgiveNose, Profile, ProjectileGeometry
+from .profile import BluntOgiveNose, ConeNose, Interior, OgiveNose, Profile, ProjectileGeometry, SecantOgiveNose
 
 __all__ = [
-    "Profile", "OgiveNose", "ConeNose", "Interior", "ProjectileGeometry",
+    "Profile", "OgiveNose", "ConeNose", "SecantOgiveNose", "BluntOgiveNose", "Interior", "ProjectileGeometry",
     "ProjectileMesh", "build_mesh", "BODY", "COUNTERWEIGHT", "OUTER",
     "read_mesh", "write_mesh", "cached_mesh",
     "AxisymmetricMassProperties", "analytic_mass_properties", "place_counterweight",

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .profile import OgiveNose, ProjectileGeometry
+from .profile import ProjectileGeometry
 
 __all__ = ["ProjectileMesh", "build_mesh", "BODY", "COUNTERWEIGHT", "OUTER"]
 
@@ -82,34 +82,37 @@ def _profile_faces(occ, geometry: ProjectileGeometry) -> tuple[list[int], list[i
     p = geometry.profile
     a, ln, length = p.radius, p.nose_length, p.length
 
-    def nose_curve(tip_x: float, drop: float, shoulder_x: float) -> tuple[int, int, int]:
+    arc = p.arc()
+
+    def nose_curve(tip_x: float, tip_r: float, drop: float) -> tuple[int, int, int]:
         """Nose curve of the profile lowered radially by ``drop``; returns (curve, tip pt, shoulder pt)."""
-        tip = occ.addPoint(tip_x, 0.0, 0.0)
-        shoulder = occ.addPoint(shoulder_x, a - drop, 0.0)
-        if isinstance(p.nose, OgiveNose):
-            centre = occ.addPoint(-ln, a - p.ogive_radius - drop, 0.0)
+        tip = occ.addPoint(tip_x, tip_r, 0.0)
+        shoulder = occ.addPoint(-ln, a - drop, 0.0)
+        if arc is not None:
+            s_c, r_c, _ = arc
+            centre = occ.addPoint(-s_c, r_c - drop, 0.0)
             curve = occ.addCircleArc(tip, centre, shoulder)
             occ.remove([(0, centre)])
         else:
             curve = occ.addLine(tip, shoulder)
         return curve, tip, shoulder
 
-    def closed_face(tip_x: float, drop: float, end_x: float) -> int:
-        curve, tip, shoulder = nose_curve(tip_x, drop, -ln)
+    def closed_face(tip_x: float, tip_r: float, drop: float, end_x: float) -> int:
+        curve, tip, shoulder = nose_curve(tip_x, tip_r, drop)
         corner = occ.addPoint(end_x, a - drop, 0.0)
         axis_end = occ.addPoint(end_x, 0.0, 0.0)
-        loop = occ.addCurveLoop([
-            curve,
-            occ.addLine(shoulder, corner),
-            occ.addLine(corner, axis_end),
-            occ.addLine(axis_end, tip),
-        ])
-        return occ.addPlaneSurface([loop])
+        curves = [curve, occ.addLine(shoulder, corner), occ.addLine(corner, axis_end)]
+        if tip_r > 0.0:  # a flat front face
+            axis_tip = occ.addPoint(tip_x, 0.0, 0.0)
+            curves += [occ.addLine(axis_end, axis_tip), occ.addLine(axis_tip, tip)]
+        else:
+            curves.append(occ.addLine(axis_end, tip))
+        return occ.addPlaneSurface([occ.addCurveLoop(curves)])
 
-    outer = closed_face(0.0, 0.0, -length)
+    outer = closed_face(0.0, p.tip_radius, 0.0, -length)
     if geometry.interior is None:
         return [outer], []
-    cavity = closed_face(-geometry.cavity_start, geometry.interior.wall_thickness, -geometry.cavity_end)
+    cavity = closed_face(-geometry.cavity_start, 0.0, geometry.interior.wall_thickness, -geometry.cavity_end)
     if geometry.counterweight is None:
         body, _ = occ.cut([(2, outer)], [(2, cavity)])
         return [t for _, t in body], []
@@ -158,7 +161,7 @@ def _mesh_quarter(geometry: ProjectileGeometry, size: float, order: int) -> Proj
             xmin, ymin, zmin, xmax, ymax, zmax = gmsh.model.getBoundingBox(2, abs(tag))
             # OpenCASCADE pads bounding boxes by its tolerance (~1e-7 m)
             on_plane = (ymax - ymin) < 1e-3 * a or (zmax - zmin) < 1e-3 * a
-            if not on_plane and max(ymax, zmax) > a - 0.5 * inner:
+            if not on_plane and (geometry.interior is None or max(ymax, zmax) > a - 0.5 * inner):
                 outer_surfaces.append(abs(tag))
         gmsh.model.addPhysicalGroup(3, body_vols, BODY, name="body")
         if weight_vols:
@@ -229,11 +232,13 @@ def _orient_outward(points: np.ndarray, tris: np.ndarray, geometry: ProjectileGe
     p = points[tris[:, :3]]
     normal = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
     centroid = p.mean(axis=1)
-    # a point on the axis at the same station lies inside the convex cross-section
-    inside = np.column_stack([centroid[:, 0], np.zeros(len(tris)), np.zeros(len(tris))])
-    tail = np.isclose(centroid[:, 0], -geometry.profile.length)
-    inside[tail, 0] += 0.5 * geometry.profile.radius  # the tail disc: look forward instead
-    flipped = np.einsum("ij,ij->i", normal, centroid - inside) < 0
+    # outward: radial on the lateral surface, backward on the tail disc, forward on a flat front face
+    outward = np.column_stack([np.zeros(len(tris)), centroid[:, 1], centroid[:, 2]])
+    scale = geometry.profile.length
+    outward[np.abs(centroid[:, 0] + scale) < 1e-9 * scale] = (-1.0, 0.0, 0.0)
+    if geometry.profile.tip_radius > 0:
+        outward[np.abs(centroid[:, 0]) < 1e-9 * scale] = (1.0, 0.0, 0.0)
+    flipped = np.einsum("ij,ij->i", normal, outward) < 0
     tris = tris.copy()
     tris[flipped] = _permute(tris[flipped], (0, 2, 1), TRI_EDGES)
     return tris

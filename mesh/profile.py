@@ -22,6 +22,8 @@ from scipy import integrate
 __all__ = [
     "OgiveNose",
     "ConeNose",
+    "SecantOgiveNose",
+    "BluntOgiveNose",
     "Profile",
     "Interior",
     "ProjectileGeometry",
@@ -66,6 +68,42 @@ class ConeNose:
 
 
 @dataclass(frozen=True)
+class SecantOgiveNose:
+    """Secant ogive: a circle arc of radius ``crh`` diameters through the tip and the shoulder.
+
+    Parameters
+    ----------
+    crh : float
+        Ogive radius in diameters; at least the tangent ogive's for this length
+        (equality gives the tangent ogive).
+    length : float
+        Nose length in diameters.
+    """
+
+    crh: float
+    length: float
+
+
+@dataclass(frozen=True)
+class BluntOgiveNose:
+    """Flat-tipped (truncated) tangent ogive: the ogive of ``crh`` cut by a flat face.
+
+    Parameters
+    ----------
+    crh : float
+        Ogive radius in diameters (>= 0.5).
+    flat_radius : float
+        Radius (m) of the flat front face, smaller than the shank radius.
+    """
+
+    crh: float
+    flat_radius: float
+
+
+Nose = OgiveNose | ConeNose | SecantOgiveNose | BluntOgiveNose
+
+
+@dataclass(frozen=True)
 class Profile:
     """Outer profile: a nose, a cylindrical shank and a flat tail.
 
@@ -75,17 +113,31 @@ class Profile:
         Shank diameter (m).
     length : float
         Overall length from nose tip to tail (m); must exceed the nose length.
-    nose : OgiveNose or ConeNose
-        Nose shape.
+    nose : OgiveNose, ConeNose, SecantOgiveNose or BluntOgiveNose
+        Nose shape.  Every nose but the cone is a circle arc (:meth:`arc`).
     """
 
     diameter: float
     length: float
-    nose: OgiveNose | ConeNose
+    nose: Nose
 
     def __post_init__(self) -> None:
         if not (self.diameter > 0 and math.isfinite(self.diameter)):
             raise ValueError(f"diameter = {self.diameter}: must be a finite number > 0")
+        a = self.radius
+        if isinstance(self.nose, SecantOgiveNose):
+            ln = self.nose.length * self.diameter
+            tangent = (ln**2 + a**2) / (2 * a) / self.diameter
+            if not (self.nose.length > 0 and math.isfinite(self.nose.length)):
+                raise ValueError(f"nose.length = {self.nose.length}: must be a finite number > 0 (calibres)")
+            if not (self.nose.crh >= tangent * (1 - 1e-12) and math.isfinite(self.nose.crh)):
+                raise ValueError(f"nose.crh = {self.nose.crh}: a secant ogive of length {self.nose.length} calibres"
+                                 f" needs crh >= {tangent:.6g} (the tangent ogive's)")
+        if isinstance(self.nose, BluntOgiveNose):
+            if not (self.nose.crh >= 0.5 and math.isfinite(self.nose.crh)):
+                raise ValueError(f"nose.crh = {self.nose.crh}: must be a finite number >= 0.5")
+            if not (0.0 < self.nose.flat_radius < a):
+                raise ValueError(f"nose.flat_radius = {self.nose.flat_radius}: must lie in (0, {a:.6g}) m")
         if not (self.length > self.nose_length and math.isfinite(self.length)):
             raise ValueError(
                 f"length = {self.length}: must exceed the nose length {self.nose_length:.6g} m"
@@ -101,36 +153,65 @@ class Profile:
         """Ogive radius ``R = crh * diameter`` (m); only for ogive noses."""
         return self.nose.crh * self.diameter
 
+    def arc(self) -> tuple[float, float, float] | None:
+        """``(s_c, r_c, R)``: centre and radius of the nose arc in profile coordinates, or None (cone).
+
+        The nose is ``r(s) = r_c + sqrt(R^2 - (s - s_c)^2)`` for ``0 <= s <= nose_length``.
+        """
+        a, d = self.radius, self.diameter
+        nose = self.nose
+        if isinstance(nose, ConeNose):
+            return None
+        if isinstance(nose, SecantOgiveNose):
+            big_r, ln = nose.crh * d, nose.length * d
+            chord = math.hypot(ln, a)
+            h = math.sqrt(max(big_r**2 - 0.25 * chord**2, 0.0))
+            return 0.5 * ln + h * a / chord, 0.5 * a - h * ln / chord, big_r
+        big_r = nose.crh * d
+        full = math.sqrt(big_r**2 - (big_r - a) ** 2)  # the tangent ogive's length
+        if isinstance(nose, BluntOgiveNose):
+            cut = full - math.sqrt(big_r**2 - (nose.flat_radius + big_r - a) ** 2)
+            return full - cut, a - big_r, big_r
+        return full, a - big_r, big_r
+
+    @property
+    def tip_radius(self) -> float:
+        """Radius (m) of the flat front face (zero for pointed noses)."""
+        return self.nose.flat_radius if isinstance(self.nose, BluntOgiveNose) else 0.0
+
     @property
     def nose_length(self) -> float:
         """Axial length of the nose (m)."""
-        a = self.radius
-        if isinstance(self.nose, OgiveNose):
-            big_r = self.ogive_radius
-            return math.sqrt(big_r**2 - (big_r - a) ** 2)
-        return a / math.tan(math.radians(self.nose.half_angle))
+        nose = self.nose
+        if isinstance(nose, ConeNose):
+            return self.radius / math.tan(math.radians(nose.half_angle))
+        if isinstance(nose, SecantOgiveNose):
+            return nose.length * self.diameter
+        return self.arc()[0]  # a tangent ogive meets the shank at the top of its arc
 
     def radius_at(self, s: np.ndarray | float) -> np.ndarray:
         """Outer radius ``r(s)`` (m) at distance ``s`` from the tip (m)."""
         s = np.clip(np.asarray(s, dtype=float), 0.0, self.length)
         a, ln = self.radius, self.nose_length
-        if isinstance(self.nose, OgiveNose):
-            big_r = self.ogive_radius
-            nose = np.sqrt(np.maximum(big_r**2 - (ln - s) ** 2, 0.0)) - (big_r - a)
-        else:
+        arc = self.arc()
+        if arc is None:
             nose = s * math.tan(math.radians(self.nose.half_angle))
+        else:
+            s_c, r_c, big_r = arc
+            nose = r_c + np.sqrt(np.maximum(big_r**2 - (s - s_c) ** 2, 0.0))
         return np.where(s < ln, np.maximum(nose, 0.0), a)
 
     def slope_at(self, s: np.ndarray | float) -> np.ndarray:
         """``dr/ds`` of the outer profile (zero on the shank)."""
         s = np.clip(np.asarray(s, dtype=float), 0.0, self.length)
         ln = self.nose_length
-        if isinstance(self.nose, OgiveNose):
-            big_r = self.ogive_radius
-            u = ln - s
-            nose = u / np.sqrt(np.maximum(big_r**2 - u**2, 1e-300))
-        else:
+        arc = self.arc()
+        if arc is None:
             nose = np.full_like(s, math.tan(math.radians(self.nose.half_angle)))
+        else:
+            s_c, _, big_r = arc
+            u = s_c - s
+            nose = u / np.sqrt(np.maximum(big_r**2 - u**2, 1e-300))
         return np.where(s < ln, nose, 0.0)
 
     def outward_normal(self, s: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
@@ -151,12 +232,22 @@ class Profile:
         """Frictionless nose shape factor ``N`` of the cavity-expansion axial force.
 
         ``N = (8 psi - 1) / (24 psi^2)`` for a tangent ogive of CRH ``psi`` and
-        ``sin^2(half-angle)`` for a cone (brief section 5).
+        ``sin^2(half-angle)`` for a cone (brief section 5); for the other noses
+        ``N = [pi r_tip^2 + int 2 pi r r' sin^2(slope) ds] / (pi a^2)``, integrated
+        to 1e-12.
         """
         if isinstance(self.nose, OgiveNose):
             psi = self.nose.crh
             return (8.0 * psi - 1.0) / (24.0 * psi**2)
-        return math.sin(math.radians(self.nose.half_angle)) ** 2
+        if isinstance(self.nose, ConeNose):
+            return math.sin(math.radians(self.nose.half_angle)) ** 2
+
+        def integrand(s: float) -> float:
+            slope = float(self.slope_at(s))
+            return 2 * math.pi * float(self.radius_at(s)) * slope**3 / (1 + slope**2)
+
+        lateral = integrate.quad(integrand, 0.0, self.nose_length, epsabs=0.0, epsrel=1e-12, limit=200)[0]
+        return (math.pi * self.tip_radius**2 + lateral) / (math.pi * self.radius**2)
 
     def lateral_area(self, s0: float = 0.0, s1: float | None = None) -> float:
         """Area (m^2) of the lateral surface between ``s0`` and ``s1``."""
@@ -169,8 +260,8 @@ class Profile:
         return value
 
     def surface_area(self) -> float:
-        """Total outer area (m^2): lateral surface plus the flat tail disc."""
-        return self.lateral_area() + math.pi * self.radius**2
+        """Total outer area (m^2): lateral surface, flat tail disc and flat front face."""
+        return self.lateral_area() + math.pi * (self.radius**2 + self.tip_radius**2)
 
 
 @dataclass(frozen=True)
@@ -213,6 +304,8 @@ class ProjectileGeometry:
     counterweight: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
+        if self.interior is not None and self.profile.tip_radius > 0:
+            raise ValueError("interior: a flat-tipped (blunt) nose with a cavity is not supported")
         if self.interior is None:
             if self.counterweight is not None:
                 raise ValueError("counterweight: needs an interior (a cavity to fill)")
@@ -241,10 +334,10 @@ class ProjectileGeometry:
             raise ValueError("no interior")
         t = self.interior.wall_thickness
         p = self.profile
-        a, ln = p.radius, p.nose_length
-        if isinstance(p.nose, OgiveNose):
-            big_r = p.ogive_radius
-            return ln - math.sqrt(big_r**2 - (t + big_r - a) ** 2)
+        arc = p.arc()
+        if arc is not None:
+            s_c, r_c, big_r = arc
+            return s_c - math.sqrt(big_r**2 - (t - r_c) ** 2)
         return t / math.tan(math.radians(p.nose.half_angle))
 
     @property
