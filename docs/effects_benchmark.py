@@ -43,7 +43,7 @@ def main() -> None:
     position = state.position + np.array([0.0, 0.0, -(0.16 + 1.0)])
     args = (position, state.velocity, rotation, np.array([0.0, 2.0, 0.0]))
     bare = DAFLLoads(prepared.quadrature, resolve_law(scene.target.law))
-    print(f"| configuration | one load evaluation (us, median) | test 5 integration (s, median of 3) |")
+    print("| configuration | one load evaluation (us, median) | test 5 integration (s, median of 3) |")
     print("|---|---|---|")
     print(f"| bare core (DAFLLoads with the law only) | {load_timing(bare, args):.0f} | - |")
     layers = load_scene(scene_path("forrestal_luk_test5"))
