@@ -129,9 +129,14 @@ def _convergent(args: argparse.Namespace) -> int:
 
 
 def _paper(args: argparse.Namespace) -> int:
-    from .paper import reproduce
+    from .paper import reproduce, reproduce_variants
     from .sweep import RunStore
 
+    if args.variants:
+        record = reproduce_variants(args.out, RunStore(args.store), args.workers, args.scheduler,
+                                    not args.no_progress)
+        print(f"wrote {args.out}/variants.md, variants.json and variants.png in {record['wall_time']:.0f} s")
+        return 0
     record = reproduce(args.out, RunStore(args.store), args.workers, args.scheduler, not args.no_progress)
     print(f"wrote {args.out}/results.md, results.json and the figures in {record['wall_time']:.0f} s")
     return 0
@@ -252,6 +257,8 @@ def build_parser() -> argparse.ArgumentParser:
     paper.add_argument("--workers", type=_positive_int, metavar="N", help="local processes (default: every core)")
     paper.add_argument("--scheduler", metavar="ADDRESS", help="run on this Dask distributed scheduler")
     paper.add_argument("--no-progress", action="store_true", help="no progress bar")
+    paper.add_argument("--variants", action="store_true",
+                       help="the paper's variants instead: friction, conical nose, other soil laws")
     paper.set_defaults(handler=_paper)
     return parser
 
