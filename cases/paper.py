@@ -108,6 +108,15 @@ def _fit(x: Sequence[float], y: Sequence[float]) -> dict:
     return {"slope": float(slope), "intercept": float(intercept), "r2": float(r2)}
 
 
+def _cell(row: dict) -> str:
+    """``impact -> convergent`` for a Table-4 cell, marking stable, exited and failed runs."""
+    if "error" in row:
+        return f"{row['impact.speed']:.0f} -> failed ({row['error'].split(':')[0]})"
+    return (f"{row['impact.speed']:.0f} -> {_fmt(row.get('convergence_speed'))}"
+            + ("" if row.get("unstable") else " (stable)")
+            + (" (exited)" if row.get("end_reason") == "exited" else ""))
+
+
 def _interpolate(xs: Sequence[float], ys: Sequence[float | None], x: float) -> float | None:
     points = [(a, v) for a, v in zip(xs, ys) if v is not None]
     if not points or not points[0][0] <= x <= points[-1][0]:
@@ -394,18 +403,11 @@ def _markdown(record, results, ratios, critical, convergent, fits, searches, ine
         lines += [f"### {kind} deg" if "oblique" not in kind else f"### {kind} deg", "",
                   "| projectile | " + " | ".join(["impact (m/s) -> convergent (m/s)"]) + " |", "|---|---|"]
         for r in ratios:
-            cells = []
-            for row in results[(kind, r)]:
-                tag = "" if row.get("unstable") else " (stable)"
-                if row.get("end_reason") == "exited":
-                    tag += " (exited)"
-                cells.append(f"{row['impact.speed']:.0f} -> {_fmt(row.get('convergence_speed'))}{tag}")
+            cells = [_cell(row) for row in results[(kind, r)]]
             lines.append(f"| {label(r)} | " + "; ".join(cells) + " |")
         lines.append("")
     for kind in ("attack 1, oblique 20", "attack 1, oblique 30", "attack 0, oblique 10", "attack 0, oblique 30"):
-        cells = [f"{row['impact.speed']:.0f} -> {_fmt(row.get('convergence_speed'))}"
-                 + ("" if row.get("unstable") else " (stable)") + (" (exited)" if row.get("end_reason") == "exited" else "")
-                 for row in results[(kind, 0.5636)]]
+        cells = [_cell(row) for row in results[(kind, 0.5636)]]
         lines += [f"Projectile #3, {kind} deg: " + "; ".join(cells) + f". Characteristic: "
                   f"{_fmt(convergent[kind][0])} m/s.", ""]
 
@@ -485,6 +487,12 @@ VARIANTS = {
 VARIANT_SPEEDS = list(range(200, 2001, 200))
 
 
+def _path_at(table: pd.DataFrame, speed: float) -> float | None:
+    row = table.loc[table["impact.speed"] == speed].iloc[0]
+    failed = isinstance(row.get("error"), str)
+    return None if failed else float(row["path_length"])
+
+
 def reproduce_variants(out: str | Path, store: RunStore, workers: int | None = None, scheduler: str | None = None,
                        progress: bool = True) -> dict:
     """The paper's variants (friction, conical nose, other soils): convergent velocities for the family.
@@ -503,8 +511,8 @@ def reproduce_variants(out: str | Path, store: RunStore, workers: int | None = N
     results = {(name, r): _convergence_rows(study, table, "impact.speed")
                for (name, r, _, _), table in zip(jobs, tables)}
     characteristic_by = {name: [characteristic(results[(name, r)]) for r in ratios] for name in VARIANTS}
-    depth_at = {name: [float(table.loc[table["impact.speed"] == 400, "path_length"].iloc[0])
-                       for (n, _, _, _), table in zip(jobs, tables) if n == name] for name in VARIANTS}
+    depth_at = {name: [_path_at(table, 400) for (n, _, _, _), table in zip(jobs, tables) if n == name]
+                for name in VARIANTS}
 
     plt = _plt()
     fig, ax = plt.subplots(figsize=(7.5, 5))
@@ -537,15 +545,12 @@ def reproduce_variants(out: str | Path, store: RunStore, workers: int | None = N
               "## Distance travelled at 400 m/s (m), stable runs", "",
               "| variant | " + " | ".join(label(r) for r in ratios) + " |", "|---|" + "---|" * len(ratios)]
     for name, values in depth_at.items():
-        lines.append(f"| {name} | " + " | ".join(f"{v:.2f}" for v in values) + " |")
+        lines.append(f"| {name} | " + " | ".join(_fmt(v, 2) for v in values) + " |")
     lines += ["", "## Convergent velocity against impact velocity", ""]
     for name in VARIANTS:
         lines += [f"### {name}", "", "| projectile | impact (m/s) -> convergent (m/s) |", "|---|---|"]
         for r in ratios:
-            cells = [f"{row['impact.speed']:.0f} -> {_fmt(row.get('convergence_speed'))}"
-                     + ("" if row.get("unstable") else " (stable)")
-                     + (" (exited)" if row.get("end_reason") == "exited" else "")
-                     for row in results[(name, r)]]
+            cells = [_cell(row) for row in results[(name, r)]]
             lines.append(f"| {label(r)} | " + "; ".join(cells) + " |")
         lines.append("")
     record = {"ratios": ratios, "characteristic_convergent_velocity": characteristic_by, "fits": fits,
