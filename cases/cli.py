@@ -164,6 +164,32 @@ def _compare(args: argparse.Namespace) -> int:
     return 0
 
 
+def _accuracy(args: argparse.Namespace) -> int:
+    from .accuracy import accuracy_study
+    from .scene import SceneError as SceneError_
+    from .sweep import RunStore
+
+    def numbers(text: str) -> list[float]:
+        try:
+            values = [float(v) for v in text.split(",")]
+        except ValueError:
+            values = []
+        if not values or not all(v > 0 and v < float("inf") for v in values):
+            raise SceneError_(f"{text!r}: expected comma-separated numbers > 0")
+        return values
+
+    table, reference = accuracy_study(args.scene, args.set, RunStore(args.store), args.out,
+                                      numbers(args.sizes), numbers(args.steps), numbers(args.rtols),
+                                      args.workers, args.scheduler, not args.no_progress)
+    if args.json:
+        print(json.dumps({"reference": {k: (None if isinstance(v, float) and v != v else v)
+                                        for k, v in reference.items()},
+                          "settings": json.loads(table.to_json(orient="records"))}))
+    else:
+        print((Path(args.out) / "accuracy.md").read_text())
+    return 0
+
+
 def _add_study_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scene", help="a scene TOML file")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
@@ -249,6 +275,18 @@ def build_parser() -> argparse.ArgumentParser:
     compare.add_argument("--out", default="runs/compare", metavar="DIR",
                          help="where to write compare.md, compare.csv and compare.png (default runs/compare)")
     compare.set_defaults(handler=_compare)
+
+    accuracy = commands.add_parser("accuracy", help="what accuracy costs in time, for a scene")
+    _add_study_options(accuracy)
+    accuracy.add_argument("--sizes", default="0.04,0.02,0.01,0.005", metavar="M,M,...",
+                          help="mesh sizes of the mesh axis (default 0.04,0.02,0.01,0.005 m)")
+    accuracy.add_argument("--steps", default="8e-5,4e-5,2e-5,1e-5,5e-6", metavar="S,S,...",
+                          help="RK4 steps of the time axis (default 8e-5,...,5e-6 s)")
+    accuracy.add_argument("--rtols", default="1e-4,1e-6", metavar="R,R,...",
+                          help="Dormand-Prince tolerances of the time axis (default 1e-4,1e-6)")
+    accuracy.add_argument("--out", default="runs/accuracy", metavar="DIR",
+                          help="where to write accuracy.md, .csv and .png (default runs/accuracy)")
+    accuracy.set_defaults(handler=_accuracy)
 
     paper = commands.add_parser("paper", help="regenerate the paper's study: tables and figures")
     paper.add_argument("--out", default="docs/paper", metavar="DIR", help="where to write (default docs/paper)")

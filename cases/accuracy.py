@@ -1,0 +1,167 @@
+"""What accuracy costs in time: ``penetrate accuracy``.
+
+A scene runs over a grid of discretisation settings, each against a reference:
+
+* **mesh axis**: mesh size x geometry order (flat or quadratic) x normal model
+  (``mesh`` or ``exact``), at the finest time setting;
+* **time axis**: RK4 steps and Dormand-Prince tolerances, at the finest mesh setting.
+
+The reference is the independent 1-D integration with exact nose entry for a
+normal impact without disturbance or effects (its depth is exact to 1e-12);
+otherwise the finest setting, with a Richardson estimate of its own error from
+the two finest steps.  For every setting the table gives the relative depth
+error, the error of the final axis angle (deg), for unstable scenes the error of
+the convergence speed, the integration time and the wall time, and marks the
+Pareto front: the settings that no other setting beats in both depth error and
+integration time.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .results import atomic_write_text
+from .studies import convergence_speed, is_unstable
+from .sweep import RunStore, Sweep, Variation, run_sweep
+
+__all__ = ["accuracy_study", "DEFAULT_SIZES", "DEFAULT_STEPS", "DEFAULT_RTOLS"]
+
+DEFAULT_SIZES = (0.04, 0.02, 0.01, 0.005)
+DEFAULT_STEPS = (8e-5, 4e-5, 2e-5, 1e-5, 5e-6)
+DEFAULT_RTOLS = (1e-4, 1e-6)
+
+
+def _is_plain_normal_impact(scene) -> bool:
+    impact, effects = scene.impact, scene.effects
+    return (impact.oblique_angle == 0 and impact.attack_angle == 0 and impact.yaw_angle == 0
+            and not any(impact.angular_velocity) and scene.target.layers is None
+            and effects.friction.model == "none" and effects.separation and effects.free_surface is None
+            and not effects.gravity)
+
+
+def _settings(sizes: Sequence[float], steps: Sequence[float], rtols: Sequence[float]) -> list[dict]:
+    finest_step, finest_size = min(steps), min(sizes)
+    settings = []
+    for size in sizes:
+        for order in (1, 2):
+            for normals in ("mesh", "exact"):
+                settings.append({"axis": "mesh", "numerics.mesh_size": size, "numerics.geometry_order": order,
+                                 "numerics.normals": normals, "numerics.integrator": "rk4",
+                                 "numerics.time_step": finest_step})
+    for step in steps:
+        settings.append({"axis": "time", "numerics.mesh_size": finest_size, "numerics.geometry_order": 2,
+                         "numerics.normals": "exact", "numerics.integrator": "rk4", "numerics.time_step": step})
+    for rtol in rtols:
+        settings.append({"axis": "time", "numerics.mesh_size": finest_size, "numerics.geometry_order": 2,
+                         "numerics.normals": "exact", "numerics.integrator": "dopri54", "numerics.rtol": rtol})
+    return settings
+
+
+def accuracy_study(scene: str | os.PathLike, overrides: list[str], store: RunStore, out: str | os.PathLike,
+                   sizes: Sequence[float] = DEFAULT_SIZES, steps: Sequence[float] = DEFAULT_STEPS,
+                   rtols: Sequence[float] = DEFAULT_RTOLS, workers: int | None = None,
+                   scheduler: str | None = None, progress: bool = True) -> tuple[pd.DataFrame, dict]:
+    """Run the grid, compare with the reference, write ``accuracy.md``, ``.csv`` and ``.png`` into ``out``."""
+    settings = _settings(sizes, steps, rtols)
+    variations = [Variation({k: v for k, v in s.items() if k != "axis"}) for s in settings]
+    sweep = Sweep.from_file(scene, overrides, variations)
+    table = run_sweep(sweep, store, workers=workers, scheduler=scheduler, progress=progress)
+    table.insert(0, "axis", [s["axis"] for s in settings])
+    if "error" in table and table["error"].notna().any():
+        failed = table[table["error"].notna()]
+        raise RuntimeError(f"{len(failed)} accuracy runs failed, e.g. {failed['error'].iloc[0]}")
+    base = sweep.scenes[0]
+    unstable = is_unstable(float(table["axis_angle_change"].iloc[-1]))
+    table["convergence_speed"] = [convergence_speed(store.history(k)) if unstable else np.nan
+                                  for k in table["key"]]
+
+    finest = table[(table["axis"] == "time") & (table["numerics.integrator"] == "rk4")]
+    finest = finest.sort_values("numerics.time_step")
+    reference: dict = {}
+    if _is_plain_normal_impact(base):
+        from .reference import axial_depth_1d
+        from .runner import prepare_projectile, resolve_law
+
+        prepared = prepare_projectile(sweep.scenes[0])
+        depth, _ = axial_depth_1d(prepared.profile, resolve_law(base.target.law), prepared.mass.mass,
+                                  base.impact.speed, base.numerics.stop_speed)
+        reference = {"kind": "1-D integration with exact nose entry (exact)", "depth": depth,
+                     "axis_angle_change": 0.0, "convergence_speed": np.nan, "depth_uncertainty": 0.0}
+    else:
+        q = finest["depth"].to_numpy()
+        reference = {"kind": "finest setting", "depth": float(q[0]),
+                     "axis_angle_change": float(finest["axis_angle_change"].iloc[0]),
+                     "convergence_speed": float(finest["convergence_speed"].iloc[0])}
+        if len(q) >= 3 and q[1] != q[2]:
+            ratio = (q[2] - q[1]) / (q[1] - q[0]) if q[1] != q[0] else math.inf
+            order = math.log2(abs(ratio)) if ratio not in (0, math.inf) and abs(ratio) > 1 else 1.0
+            reference["richardson_order"] = order
+            reference["depth_uncertainty"] = abs(q[1] - q[0]) / (2**order - 1)
+        else:
+            reference["depth_uncertainty"] = float("nan")
+    table["depth_error"] = (table["depth"] - reference["depth"]).abs() / reference["depth"]
+    table["axis_angle_error"] = (table["axis_angle_change"] - reference["axis_angle_change"]).abs()
+    table["convergence_speed_error"] = (table["convergence_speed"] - reference["convergence_speed"]).abs()
+    is_ref = (table["key"] == finest["key"].iloc[0]) & (reference["kind"] == "finest setting")
+    table.loc[is_ref, ["depth_error", "axis_angle_error", "convergence_speed_error"]] = np.nan
+    table["pareto"] = _pareto(table["depth_error"].to_numpy(), table["integration_time"].to_numpy())
+    _write(table, reference, base, Path(out))
+    return table, reference
+
+
+def _pareto(error: np.ndarray, cost: np.ndarray) -> np.ndarray:
+    """True where no other setting is both at least as accurate and at least as cheap (and better in one)."""
+    front = np.zeros(len(error), dtype=bool)
+    for i in range(len(error)):
+        if not np.isfinite(error[i]):
+            continue
+        dominated = ((error <= error[i]) & (cost <= cost[i]) & ((error < error[i]) | (cost < cost[i])))
+        front[i] = not dominated.any()
+    return front
+
+
+def _label(row: pd.Series) -> str:
+    if row["numerics.integrator"] == "dopri54":
+        return f"{row['numerics.mesh_size'] * 1e3:g} mm P{int(row['numerics.geometry_order'])} {row['numerics.normals']}, dopri rtol {row['numerics.rtol']:g}"
+    return (f"{row['numerics.mesh_size'] * 1e3:g} mm P{int(row['numerics.geometry_order'])} {row['numerics.normals']},"
+            f" rk4 {row['numerics.time_step']:g} s")
+
+
+def _write(table: pd.DataFrame, reference: dict, scene, out: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(out / "accuracy.csv", table.to_csv(index=False))
+    lines = [f"# Accuracy against time: {scene.name or 'scene'}", "",
+             f"Reference: {reference['kind']}, depth {reference['depth']:.6f} m"
+             + (f" (Richardson estimate of its own error {reference['depth_uncertainty']:.2g} m)"
+                if reference.get("depth_uncertainty") else "") + ".", "",
+             "| axis | setting | surface points | steps | depth (m) | depth error | axis angle error (deg) |"
+             " convergence speed error (m/s) | integration (s) | wall (s) | Pareto |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for _, row in table.iterrows():
+        lines.append(f"| {row['axis']} | {_label(row)} | {row['surface_points']} | {row['steps']} | {row['depth']:.6f} |"
+                     f" {row['depth_error']:.2e} | {row['axis_angle_error']:.2e} | {row['convergence_speed_error']:.2g} |"
+                     f" {row['integration_time']:.2f} | {row['wall_time']:.2f} | {'yes' if row['pareto'] else ''} |")
+    lines += ["", "![depth error against integration time](accuracy.png)", ""]
+    atomic_write_text(out / "accuracy.md", "\n".join(lines))
+    fig, ax = plt.subplots(figsize=(8, 5.5))
+    for (axis, integrator), group in table.groupby(["axis", "numerics.integrator"]):
+        ax.loglog(group["integration_time"], group["depth_error"], "o", label=f"{axis} axis, {integrator}")
+    front = table[table["pareto"]].sort_values("integration_time")
+    ax.loglog(front["integration_time"], front["depth_error"], "k--", lw=1, label="Pareto front")
+    ax.set(xlabel="integration time (s)", ylabel="relative depth error", title=f"{scene.name}: accuracy against time")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out / "accuracy.png", dpi=110)
+    plt.close(fig)
