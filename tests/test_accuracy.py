@@ -1,0 +1,29 @@
+"""The accuracy study on a tiny grid: references, errors and the Pareto front."""
+
+import numpy as np
+
+from cases import scene_path
+from cases.accuracy import _pareto, accuracy_study
+from cases.sweep import RunStore
+
+
+def test_pareto_front():
+    error = np.array([1e-2, 1e-3, 1e-3, 1e-4, np.nan])
+    cost = np.array([1.0, 2.0, 3.0, 10.0, 0.1])
+    assert _pareto(error, cost).tolist() == [True, True, False, True, False]
+
+
+def test_normal_impact_uses_the_exact_reference(tmp_path):
+    table, reference = accuracy_study(scene_path("forrestal_luk_test2"), [], RunStore(tmp_path / "s"),
+                                      tmp_path / "out", sizes=(0.04, 0.02), steps=(8e-5, 4e-5), rtols=(1e-4,),
+                                      workers=2, progress=False)
+    assert reference["kind"].startswith("1-D integration")
+    assert len(table) == 2 * 2 * 2 + 2 + 1
+    # exact normals beat flat mesh normals on flat facets; refinement helps the exact model
+    by = table.set_index(["numerics.mesh_size", "numerics.geometry_order", "numerics.normals",
+                          "numerics.integrator", "numerics.time_step"])["depth_error"]
+    by = by[~by.index.duplicated()]  # the finest mesh at the finest step is on both axes
+    assert by[(0.02, 1, "exact", "rk4", 4e-5)] < 0.1 * by[(0.02, 1, "mesh", "rk4", 4e-5)]
+    assert by[(0.02, 2, "exact", "rk4", 4e-5)] < by[(0.04, 2, "exact", "rk4", 4e-5)]
+    assert table["pareto"].any()
+    assert {p.name for p in (tmp_path / "out").iterdir()} == {"accuracy.md", "accuracy.csv", "accuracy.png"}
