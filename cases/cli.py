@@ -66,7 +66,6 @@ def _sweep(args: argparse.Namespace) -> int:
                       progress=not args.no_progress)
     if args.out:
         from .results import atomic_write_text
-        from pathlib import Path
 
         atomic_write_text(Path(args.out), table.to_csv(index=False))
     shown = [c for c in (*parameters, "end_reason", "depth", "path_length", "max_attack_angle",

@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 
 from . import scene_path
-from .results import atomic_write_text
+from .results import atomic_write_text, attack_angle_peak
 from .studies import (CONVERGENCE_THRESHOLD, convergence_speed, find_critical_velocities, is_unstable)
 from .sweep import RunStore, Sweep, Variation, grid, run_sweep
 
@@ -79,11 +79,10 @@ def _convergence_rows(study: Study, table: pd.DataFrame, varied: str) -> list[di
             rows.append({varied: row[varied], "error": row["error"]})
             continue
         history = study.history(row["key"])
-        moving = history["speed"] >= 0.1 * history["speed"].iloc[0]
-        peak = history.loc[moving, "total_attack_angle"].idxmax()
+        peak = attack_angle_peak(history)
         rows.append({
             varied: row[varied],
-            "peak": (float(history["total_attack_angle"][peak]), float(history["speed"][peak])),
+            "peak": (float(history["total_attack_angle"].iloc[peak]), float(history["speed"].iloc[peak])),
             "unstable": is_unstable(row["axis_angle_change"]),
             "convergence_speed": convergence_speed(history, CONVERGENCE_THRESHOLD),
             "max_attack_angle": row["max_attack_angle"],

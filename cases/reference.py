@@ -18,6 +18,7 @@ import math
 
 import numpy as np
 from scipy import integrate
+from scipy.interpolate import BarycentricInterpolator
 
 from fem_loads.resistance import ResistanceLaw
 from mesh.profile import ConeNose, OgiveNose, Profile
@@ -111,8 +112,6 @@ def axial_depth_1d(profile: Profile, law: ResistanceLaw, mass: float, speed: flo
     # G is smooth on the nose: tabulate it once on Chebyshev points for a fast, exact-to-rtol integrand
     nodes = 0.5 * ln * (1 - np.cos(np.linspace(0, math.pi, 401)))
     g_nodes = np.array([_g(profile, p) for p in nodes])
-    from scipy.interpolate import BarycentricInterpolator
-
     g_interp = BarycentricInterpolator(nodes, g_nodes)
 
     def rate(t: float, y: np.ndarray) -> list[float]:

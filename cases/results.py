@@ -15,7 +15,7 @@ from dynamics.quaternion import rotation_matrix
 
 from .runner import RunResult
 
-__all__ = ["history_table", "summary", "write_outputs", "atomic_write_text", "atomic_write_bytes", "json_safe", "HISTORY_UNITS"]
+__all__ = ["history_table", "summary", "write_outputs", "atomic_write_text", "atomic_write_bytes", "json_safe", "attack_angle_peak", "HISTORY_UNITS"]
 
 ATTACK_ANGLE_SPEED_FRACTION = 0.1
 
@@ -31,6 +31,15 @@ HISTORY_UNITS = {
     "moment_x": "N m", "moment_y": "N m", "moment_z": "N m",
     "resistance_centre_from_tip": "m",
 }
+
+
+def attack_angle_peak(history: pd.DataFrame) -> int:
+    """Row (position) of the largest total attack angle while the speed is at least
+    :data:`ATTACK_ANGLE_SPEED_FRACTION` of the impact speed (near rest the angle means nothing)."""
+    speed = history["speed"].to_numpy()
+    angle = history["total_attack_angle"].to_numpy()
+    moving = np.flatnonzero(speed >= ATTACK_ANGLE_SPEED_FRACTION * speed[0])
+    return int(moving[np.argmax(angle[moving])])
 
 
 def _plane_angle(vectors: np.ndarray) -> np.ndarray:
@@ -95,9 +104,6 @@ def summary(result: RunResult, history: pd.DataFrame | None = None) -> dict:
     mass = result.prepared.mass
     stats = result.trajectory.statistics
     first, last = h.iloc[0], h.iloc[-1]
-    # near rest the velocity direction turns freely and the attack angle loses
-    # its meaning: the maximum is taken while the speed is >= 10 % of the impact speed
-    moving = h["speed"] >= ATTACK_ANGLE_SPEED_FRACTION * first["speed"]
     return {
         "scene": result.scene.name,
         "depth": float(h["tip_depth"].max()),
@@ -106,7 +112,7 @@ def summary(result: RunResult, history: pd.DataFrame | None = None) -> dict:
         "final_time": float(last["time"]),
         "final_speed": float(last["speed"]),
         "final_position": [float(last[f"position_{c}"]) for c in "xyz"],
-        "max_attack_angle": float(h["total_attack_angle"][moving].max()),
+        "max_attack_angle": float(h["total_attack_angle"].iloc[attack_angle_peak(h)]),
         "final_attack_angle": float(last["attack_angle"]),
         "axis_angle_change": float(last["axis_angle"] - first["axis_angle"]),
         "wall_time": result.wall_time,

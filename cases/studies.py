@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from .results import attack_angle_peak
 from .sweep import RunStore, Sweep, Variation, run_sweep
 
 __all__ = ["convergence_speed", "CriticalSearch", "find_critical_velocity", "find_critical_velocities",
@@ -44,17 +45,15 @@ CONVERGENCE_THRESHOLD = 0.1  # deg
 UNSTABLE_TURN = 30.0  # deg of axis turn that marks an unstable run
 
 
-def convergence_speed(history: pd.DataFrame, threshold: float = CONVERGENCE_THRESHOLD,
-                      moving_fraction: float = 0.1) -> float | None:
+def convergence_speed(history: pd.DataFrame, threshold: float = CONVERGENCE_THRESHOLD) -> float | None:
     """Speed (m/s) at which the attack angle, after its peak, first falls below ``threshold`` (deg).
 
-    The peak is sought while the speed is at least ``moving_fraction`` of the
-    impact speed.  None if the angle never falls below the threshold.
+    The peak is :func:`~cases.results.attack_angle_peak` (sought while the speed is
+    at least 10 % of the impact speed).  None if the angle never falls below the threshold.
     """
     speed = history["speed"].to_numpy()
     angle = history["total_attack_angle"].to_numpy()
-    moving = np.flatnonzero(speed >= moving_fraction * speed[0])
-    peak = int(moving[np.argmax(angle[moving])])
+    peak = attack_angle_peak(history)
     below = np.flatnonzero(angle[peak:] < threshold)
     if len(below) == 0:
         return None

@@ -9,7 +9,7 @@ profile, independently of any mesh.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 from scipy import optimize
 
@@ -155,7 +155,3 @@ def place_counterweight(
     start = optimize.brentq(centre_error, lo, start_max, xtol=1e-13, rtol=1e-14)
     return start, end_for(start)
 
-
-def with_counterweight(geometry: ProjectileGeometry, start: float, end: float) -> ProjectileGeometry:
-    """Return ``geometry`` with its counterweight between ``start`` and ``end``."""
-    return replace(geometry, counterweight=(start, end))
