@@ -13,11 +13,19 @@ velocity, the axis angle ``phi = beta + alpha`` and the attack angle
 from __future__ import annotations
 
 import functools
+import hashlib
+import importlib.metadata
+import json
 import math
+import os
+import tempfile
 import time
+import zipfile
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from dynamics import METHODS, Event, RigidBody, SpeedBelow, State, Trajectory, simulate
 from dynamics.quaternion import from_rotation_matrix
@@ -27,6 +35,7 @@ from fem_loads.resistance import locking_cavity_expansion
 from fem_loads.target import FreeSurface, Friction, LayeredTarget
 from mesh import (BODY, COUNTERWEIGHT, ConeNose, Interior, OgiveNose, Profile, ProjectileGeometry,
                   cached_mesh, place_counterweight)
+from mesh.io import MESH_FORMAT_VERSION, cache_dir
 from mesh.profile import BluntOgiveNose, SecantOgiveNose
 
 from .schema import LawSpec, MaterialLawSpec, Numerics, Projectile, Scene
@@ -92,11 +101,56 @@ def projectile_geometry(spec: Projectile) -> tuple[ProjectileGeometry, dict[int,
     return ProjectileGeometry(profile, interior, span), {BODY: body_density, COUNTERWEIGHT: weight.density}
 
 
+# bump when the mass properties or the surface quadrature computed from a mesh change
+PREPARED_FORMAT_VERSION = 1
+
+
+def _prepared_path(spec_json: str, numerics_json: str) -> Path:
+    """Cache file of a projectile's mass properties and quadrature (beside the meshes)."""
+    record = {"projectile": spec_json, "numerics": numerics_json, "format": PREPARED_FORMAT_VERSION,
+              "mesh_format": MESH_FORMAT_VERSION, "gmsh": importlib.metadata.version("gmsh"),
+              "scikit-fem": importlib.metadata.version("scikit-fem")}
+    key = hashlib.sha256(json.dumps(record, sort_keys=True).encode()).hexdigest()[:24]
+    return cache_dir() / f"prepared-{key}.npz"
+
+
+def _load_prepared(path: Path, geometry: ProjectileGeometry) -> PreparedProjectile | None:
+    try:
+        with np.load(path) as data:
+            mass = MassProperties(float(data["mass"]), data["centre"], data["inertia"], float(data["volume"]))
+            quadrature = SurfaceQuadrature(data["points"], data["normals"], data["weights"])
+            return PreparedProjectile(geometry, mass, quadrature, int(data["n_tetra"]))
+    except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile):
+        path.unlink(missing_ok=True)  # absent, or a corrupt entry: compute again
+        return None
+
+
+def _save_prepared(path: Path, prepared: PreparedProjectile) -> None:
+    """Write atomically: a concurrent reader sees the whole file or none."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    m, q = prepared.mass, prepared.quadrature
+    with tempfile.NamedTemporaryFile(dir=path.parent, suffix=".npz.tmp", delete=False) as tmp:
+        np.savez(tmp, mass=m.mass, centre=m.centre, inertia=m.inertia, volume=m.volume, points=q.points,
+                 normals=q.normals, weights=q.weights, n_tetra=prepared.n_tetra)
+    os.replace(tmp.name, path)
+
+
 @functools.lru_cache(maxsize=16)
 def _prepare(spec_json: str, numerics_json: str) -> PreparedProjectile:
     spec = Projectile.model_validate_json(spec_json)
     numerics = Numerics.model_validate_json(numerics_json)
     geometry, densities = projectile_geometry(spec)
+    path = _prepared_path(spec_json, numerics_json)
+    if path.exists() and (prepared := _load_prepared(path, geometry)) is not None:
+        return prepared
+    prepared = _compute_prepared(spec, numerics, geometry, densities)
+    _save_prepared(path, prepared)
+    return prepared
+
+
+def _compute_prepared(spec: Projectile, numerics: Numerics, geometry: ProjectileGeometry,
+                      densities: dict[int, float]) -> PreparedProjectile:
+    """Mesh, scikit-fem mass properties and outer-surface quadrature."""
     mesh = cached_mesh(geometry, numerics.mesh_size, numerics.geometry_order)
     fem_mesh = to_skfem(mesh)
     if spec.mass_properties is not None:
@@ -117,7 +171,13 @@ def _prepare(spec_json: str, numerics_json: str) -> PreparedProjectile:
 
 
 def prepare_projectile(scene: Scene) -> PreparedProjectile:
-    """Mesh (through the disk cache), mass properties and surface quadrature of a scene's projectile."""
+    """Mesh, mass properties and surface quadrature of a scene's projectile.
+
+    Computed once per process (memory) and once per machine: the mesh and the
+    prepared arrays are kept in the disk cache (``$PENETRATE_CACHE_DIR``), so
+    a later run of the same projectile and numerics reads them back without
+    meshing, assembling or importing gmsh and scikit-fem.
+    """
     mesh_fields = {"mesh_size", "geometry_order", "normals", "quadrature_order"}
     numerics = scene.numerics.model_dump_json(include=mesh_fields)
     return _prepare(scene.projectile.model_dump_json(), numerics)
@@ -230,6 +290,18 @@ def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
     ]
     method = METHODS[numerics.integrator]()
     integrate_start = time.perf_counter()
+    # one BLAS thread: the products over ~1e4 points gain nothing from threads, and threads that
+    # wait for a busy core (a sweep runs one process per core) cost up to 50x; one thread also
+    # fixes the summation order, so results do not depend on the machine's core count
+    with threadpool_limits(limits=1, user_api="blas"):
+        trajectory = _integrate(scene, prepared, body, driving, state, method, events, dissipative)
+    end = time.perf_counter()
+    return RunResult(scene, prepared, trajectory, end - start, end - integrate_start)
+
+
+def _integrate(scene: Scene, prepared: PreparedProjectile, body: RigidBody, driving, state: State, method,
+               events: list[Event], dissipative: bool) -> Trajectory:
+    numerics = scene.numerics
     if method.adaptive:
         length, speed = prepared.profile.length, scene.impact.speed
         scales = np.array([length] * 3 + [speed] * 3 + [1.0] * 3 + [speed / length] * 3 + [length])
@@ -239,5 +311,4 @@ def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
     else:
         trajectory = simulate(body, driving, state, method, time_limit=numerics.time_limit,
                               time_step=numerics.time_step, events=events, dissipative=dissipative)
-    end = time.perf_counter()
-    return RunResult(scene, prepared, trajectory, end - start, end - integrate_start)
+    return trajectory

@@ -69,20 +69,44 @@ class DAFLLoads:
         self.free_surface = free_surface
         q = quadrature
         # [n | r x n]: one product gives Vn = n.V + (r x n).omega, and the
-        # weighted stresses times it give force and moment together
+        # weighted stresses times it give force and moment together.  Stored
+        # transposed, (6, n): a row-combining product over contiguous rows is
+        # about twice as fast as the (n, 6) matrix-vector product for n ~ 1e4.
         self._normal_arm = np.ascontiguousarray(np.hstack([q.normals, q.moment_arms]))
+        self._normal_arm_t = np.ascontiguousarray(self._normal_arm.T)
         self._points = np.ascontiguousarray(q.points)
+        self._points_t = np.ascontiguousarray(q.points.T)
         self._normals = np.ascontiguousarray(q.normals)
         self._weights = np.ascontiguousarray(q.weights)
         self._radius2 = np.einsum("ij,ij->i", q.points, q.points)
-        self._max_radius = float(np.linalg.norm(q.points, axis=1).max())
+        self._max_radius = float(np.sqrt(self._radius2.max()))
+        # the plain case (one law, separation, no free surface): the law folded into the
+        # weights, and work buffers reused by every call, so that an evaluation makes one
+        # pass over the cached arrays and a few in-place passes over n numbers
+        self._plain = isinstance(law, ResistanceLaw) and separation and free_surface is None
+        if self._plain:
+            self._static_weights = law.static_stress * self._weights
+            self._dynamic_weights = law.dynamic_density * self._weights
+        n = len(self._weights)
+        self._generalised = np.empty(6)
+        self._stress_buffer = np.empty(n)
+        self._unloaded = np.empty(n, dtype=bool)
+        self._outside = np.empty(n, dtype=bool)
 
     def __len__(self) -> int:
         return len(self._weights)
 
     def heights(self, position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
         """World height ``Z`` (m) of every quadrature point; negative inside the target."""
-        return position[2] + self._points @ rotation[2]
+        return position[2] + rotation[2] @ self._points_t
+
+    def fully_embedded(self, position: np.ndarray) -> bool:
+        """Whether every quadrature point is inside the target, from the bounding sphere alone."""
+        return position[2] + self._max_radius < 0.0
+
+    def fully_outside(self, position: np.ndarray) -> bool:
+        """Whether no quadrature point can be inside the target (bounding sphere)."""
+        return position[2] - self._max_radius >= 0.0
 
     def lowest_height(self, position: np.ndarray, rotation: np.ndarray) -> float:
         """Height of the lowest surface point (m); negative once any point is inside."""
@@ -106,7 +130,7 @@ class DAFLLoads:
         generalised = np.empty(6)
         generalised[:3] = velocity @ rotation  # R^T V
         generalised[3:] = angular_velocity
-        normal_velocity = self._normal_arm @ generalised
+        normal_velocity = generalised @ self._normal_arm_t
         speed = math.sqrt(float(velocity @ velocity))
         spin = math.sqrt(float(angular_velocity @ angular_velocity))
         guard = self.normal_velocity_guard * (speed + spin * self._max_radius)
@@ -139,11 +163,42 @@ class DAFLLoads:
         moment : ndarray, shape (3,)
             Moment about the centre of mass in the body frame (N m).
         """
+        if self._plain and self.friction is None:
+            load = self._plain_load(position, velocity, rotation, angular_velocity)
+            return rotation @ load[:3], load[3:]
         sigma, normal_velocity = self.stress(position, velocity, rotation, angular_velocity)
-        load = -(sigma * self._weights) @ self._normal_arm
+        load = -(self._normal_arm_t @ (sigma * self._weights))
         if self.friction is not None:
             load += self._friction_load(sigma, normal_velocity, velocity @ rotation, angular_velocity)
         return rotation @ load[:3], load[3:]
+
+    def _plain_load(self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray,
+                    angular_velocity: np.ndarray) -> np.ndarray:
+        """Force and moment (body frame) of one law with separation: the hot path.
+
+        The same sums as :meth:`stress` then ``-sum sigma w [n | r x n]``, with
+        ``A sigma_0 w`` and ``B rho_0 w`` cached, in-place passes into reused
+        buffers, and the heights skipped while the bounding sphere is wholly in
+        (or out of) the target.
+        """
+        if self.fully_outside(position):
+            return np.zeros(6)
+        generalised = self._generalised
+        generalised[:3] = velocity @ rotation  # R^T V
+        generalised[3:] = angular_velocity
+        normal_velocity = generalised @ self._normal_arm_t
+        speed = math.sqrt(float(velocity @ velocity))
+        spin = math.sqrt(float(angular_velocity @ angular_velocity))
+        guard = self.normal_velocity_guard * (speed + spin * self._max_radius)
+        stress = self._stress_buffer
+        np.multiply(normal_velocity, normal_velocity, out=stress)
+        stress *= self._dynamic_weights
+        stress += self._static_weights
+        unloaded = np.less_equal(normal_velocity, guard, out=self._unloaded)
+        if not self.fully_embedded(position):
+            unloaded |= np.greater_equal(self.heights(position, rotation), 0.0, out=self._outside)
+        np.copyto(stress, 0.0, where=unloaded)
+        return -(self._normal_arm_t @ stress)
 
     def _friction_load(self, sigma: np.ndarray, normal_velocity: np.ndarray, velocity_body: np.ndarray,
                        angular_velocity: np.ndarray) -> np.ndarray:

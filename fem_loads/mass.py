@@ -5,7 +5,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from skfem import Basis, ElementTetP0, Functional, MeshTet1, MeshTet2
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # scikit-fem is imported where it is used: a run from cached data never needs it
+    from skfem import MeshTet1, MeshTet2
 
 from mesh.geometry import ProjectileMesh
 
@@ -63,6 +66,8 @@ class MassProperties:
 
 
 def to_skfem(mesh: ProjectileMesh) -> MeshTet1 | MeshTet2:
+    from skfem import MeshTet1, MeshTet2
+
     """The scikit-fem mesh of a :class:`ProjectileMesh` (corner order kept)."""
     if mesh.order == 1:
         return MeshTet1(np.ascontiguousarray(mesh.points.T), np.ascontiguousarray(mesh.tetra.T))
@@ -94,6 +99,8 @@ def mass_properties(mesh: ProjectileMesh, densities: dict[int, float],
     missing = set(np.unique(mesh.tetra_region).tolist()) - set(densities)
     if missing:
         raise ValueError(f"densities: no density given for region(s) {sorted(missing)}")
+    from skfem import Basis, ElementTetP0, Functional
+
     m = to_skfem(mesh) if skfem_mesh is None else skfem_mesh
     # degree-2 integrands on a quadratic map need a higher rule: x^2 detJ has degree 2*2 + 3
     basis = Basis(m, ElementTetP0(), intorder=2 if mesh.order == 1 else 7)

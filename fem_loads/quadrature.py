@@ -25,12 +25,15 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from skfem import ElementTetP0, FacetBasis, MeshTet1, MeshTet2
+from typing import TYPE_CHECKING
 
 from mesh.geometry import ProjectileMesh
 from mesh.profile import Profile
 
 from .mass import to_skfem
+
+if TYPE_CHECKING:  # scikit-fem is imported where it is used
+    from skfem import MeshTet1, MeshTet2
 
 __all__ = ["SurfaceQuadrature", "surface_quadrature", "NORMAL_MODELS"]
 
@@ -152,6 +155,8 @@ def surface_quadrature(mesh: ProjectileMesh, centre: np.ndarray, profile: Profil
         # scikit-fem renumbers the corner nodes of a quadratic mesh first, in sorted order
         corners = np.searchsorted(np.unique(mesh.tetra[:, :4]), corners)
     facets = _facet_indices(m, corners)
+    from skfem import ElementTetP0, FacetBasis
+
     fb = FacetBasis(m, ElementTetP0(), facets=facets, intorder=intorder)
     points = np.asarray(fb.global_coordinates()).reshape(3, -1).T
     normals = np.asarray(fb.normals).reshape(3, -1).T

@@ -9,12 +9,12 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import importlib.metadata
 import json
 import os
 import tempfile
 from pathlib import Path
 
-import meshio
 import numpy as np
 
 from .geometry import OUTER, ProjectileMesh, build_mesh
@@ -32,6 +32,8 @@ def write_mesh(mesh: ProjectileMesh, path: str | os.PathLike) -> None:
     """Write a mesh atomically (to a temporary file renamed into place)."""
     path = Path(path)
     tet_type, tri_type = _CELL_TYPES[mesh.order]
+    import meshio  # imported where used: a run from cached data never needs it
+
     out = meshio.Mesh(
         mesh.points,
         [(tet_type, mesh.tetra), (tri_type, mesh.outer)],
@@ -51,6 +53,8 @@ def write_mesh(mesh: ProjectileMesh, path: str | os.PathLike) -> None:
 
 def read_mesh(path: str | os.PathLike) -> ProjectileMesh:
     """Read a mesh written by :func:`write_mesh`."""
+    import meshio
+
     m = meshio.read(path)
     for order, (tet_type, tri_type) in _CELL_TYPES.items():
         if tet_type in m.cells_dict:
@@ -73,14 +77,12 @@ def cache_dir() -> Path:
 
 def mesh_key(geometry: ProjectileGeometry, size: float, order: int) -> str:
     """A digest of everything that determines a mesh."""
-    import gmsh
-
     record = {
         "geometry": dataclasses.asdict(geometry),
         "nose": type(geometry.profile.nose).__name__,
         "size": size,
         "order": order,
-        "gmsh": gmsh.__version__,
+        "gmsh": importlib.metadata.version("gmsh"),  # without importing gmsh (slow)
         "format": MESH_FORMAT_VERSION,
     }
     text = json.dumps(record, sort_keys=True, default=repr)

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from scipy import optimize
 
 from .profile import Interior, Profile, ProjectileGeometry, RevolvedMoments, revolved_moments
 
@@ -110,6 +109,8 @@ def place_counterweight(
     ValueError
         If no placement inside the cavity gives that mass and centre.
     """
+    from scipy import optimize  # imported where used (slow to import)
+
     shell_geometry = ProjectileGeometry(profile, interior)
     shell, _ = region_moments(shell_geometry)
     lo, hi = shell_geometry.cavity_start, shell_geometry.cavity_end

@@ -17,7 +17,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import integrate
 
 __all__ = [
     "OgiveNose",
@@ -246,12 +245,16 @@ class Profile:
             slope = float(self.slope_at(s))
             return 2 * math.pi * float(self.radius_at(s)) * slope**3 / (1 + slope**2)
 
+        from scipy import integrate  # imported where used (slow to import)
+
         lateral = integrate.quad(integrand, 0.0, self.nose_length, epsabs=0.0, epsrel=1e-12, limit=200)[0]
         return (math.pi * self.tip_radius**2 + lateral) / (math.pi * self.radius**2)
 
     def lateral_area(self, s0: float = 0.0, s1: float | None = None) -> float:
         """Area (m^2) of the lateral surface between ``s0`` and ``s1``."""
         s1 = self.length if s1 is None else s1
+        from scipy import integrate
+
         points = [p for p in (self.nose_length,) if s0 < p < s1]
         value, _ = integrate.quad(
             lambda s: 2 * math.pi * float(self.radius_at(s)) * math.sqrt(1 + float(self.slope_at(s)) ** 2),
@@ -407,6 +410,8 @@ def revolved_moments(radius, s0: float, s1: float, breakpoints=()) -> RevolvedMo
     """
     if s1 <= s0:
         return RevolvedMoments(0.0, 0.0, 0.0, 0.0)
+    from scipy import integrate
+
     points = [p for p in breakpoints if s0 < p < s1] or None
     integrands = (
         lambda s: math.pi * float(radius(s)) ** 2,

@@ -134,3 +134,33 @@ def test_quaternion_helpers_agree_with_scipy():
     assert np.allclose(exp_map(np.array([1e-12, 0, 0])), [1, 5e-13, 0, 0])
     assert math.isclose(np.linalg.norm(exp_map(np.array([3.0, 4.0, 0.0]))), 1.0)
 
+
+
+@pytest.mark.parametrize(("function", "a", "b"), [
+    (math.cos, 0.0, 3.0),                               # smooth: pi/2
+    (lambda x: x**3 - 2.0 * x - 5.0, 2.0, 3.0),         # Newton's cubic
+    (lambda x: math.exp(x) - 1e6, 0.0, 30.0),           # very convex: regula falsi stalls without Illinois
+    (lambda x: -1.0 if x < 0.3 else 1.0, 0.0, 1.0),     # a jump: only bisection converges
+])
+def test_find_root_agrees_with_brentq(function, a, b):
+    from scipy.optimize import brentq
+
+    from dynamics.simulate import find_root
+
+    calls = 0
+
+    def counted(x):
+        nonlocal calls
+        calls += 1
+        return function(x)
+
+    root = find_root(counted, a, b, function(a), function(b), xtol=1e-13)
+    assert root == pytest.approx(brentq(function, a, b, xtol=1e-14), abs=2e-13)
+    assert calls <= 2 * math.ceil(math.log2((b - a) / 1e-13)) + 2  # never much worse than bisection
+
+
+def test_find_root_needs_a_sign_change():
+    from dynamics.simulate import find_root
+
+    with pytest.raises(ValueError, match="no sign change"):
+        find_root(math.cos, 0.0, 1.0, 1.0, math.cos(1.0), 1e-12)
