@@ -30,11 +30,12 @@ from .results import atomic_write_text
 from .studies import convergence_speed, is_unstable
 from .sweep import RunStore, Sweep, Variation, run_sweep
 
-__all__ = ["accuracy_study", "DEFAULT_SIZES", "DEFAULT_STEPS", "DEFAULT_RTOLS"]
+__all__ = ["accuracy_study", "DEFAULT_SIZES", "DEFAULT_STEPS", "DEFAULT_RTOLS", "DEFAULT_QUADRATURE_ORDERS"]
 
 DEFAULT_SIZES = (0.04, 0.02, 0.01, 0.005)
 DEFAULT_STEPS = (8e-5, 4e-5, 2e-5, 1e-5, 5e-6)
 DEFAULT_RTOLS = (1e-4, 1e-6)
+DEFAULT_QUADRATURE_ORDERS = (4, 6)
 
 
 def _is_plain_normal_impact(scene) -> bool:
@@ -45,30 +46,55 @@ def _is_plain_normal_impact(scene) -> bool:
             and not effects.gravity)
 
 
-def _settings(sizes: Sequence[float], steps: Sequence[float], rtols: Sequence[float]) -> list[dict]:
+def _settings(sizes: Sequence[float], steps: Sequence[float], rtols: Sequence[float],
+              quadrature_orders: Sequence[int] = DEFAULT_QUADRATURE_ORDERS) -> list[dict]:
+    """The grid: four axes through the finest setting, each refining one thing, plus the product.
+
+    ``mesh``: size x geometry order x normal model at the finest step; ``quadrature``:
+    size x quadrature order (second-order geometry, exact normals) at the finest step;
+    ``time``: the step (and adaptive tolerances) on the finest mesh; ``combined``: size x
+    step with the default geometry, where a user's cheapest setting for an accuracy lies.
+    A setting already on an earlier axis is not repeated.
+    """
     finest_step, finest_size = min(steps), min(sizes)
-    settings = []
+    default = {"numerics.geometry_order": 2, "numerics.normals": "exact", "numerics.quadrature_order": 2}
+    rk4 = {"numerics.integrator": "rk4"}
+    candidates = []
     for size in sizes:
         for order in (1, 2):
             for normals in ("mesh", "exact"):
-                settings.append({"axis": "mesh", "numerics.mesh_size": size, "numerics.geometry_order": order,
-                                 "numerics.normals": normals, "numerics.integrator": "rk4",
-                                 "numerics.time_step": finest_step})
+                candidates.append(("mesh", {"numerics.mesh_size": size, "numerics.geometry_order": order,
+                                            "numerics.normals": normals, "numerics.quadrature_order": 2,
+                                            **rk4, "numerics.time_step": finest_step}))
+    for size in sizes:
+        for quadrature in quadrature_orders:
+            candidates.append(("quadrature", {"numerics.mesh_size": size, **default,
+                                              "numerics.quadrature_order": quadrature,
+                                              **rk4, "numerics.time_step": finest_step}))
     for step in steps:
-        settings.append({"axis": "time", "numerics.mesh_size": finest_size, "numerics.geometry_order": 2,
-                         "numerics.normals": "exact", "numerics.integrator": "rk4", "numerics.time_step": step})
+        candidates.append(("time", {"numerics.mesh_size": finest_size, **default, **rk4, "numerics.time_step": step}))
     for rtol in rtols:
-        settings.append({"axis": "time", "numerics.mesh_size": finest_size, "numerics.geometry_order": 2,
-                         "numerics.normals": "exact", "numerics.integrator": "dopri54", "numerics.rtol": rtol})
+        candidates.append(("time", {"numerics.mesh_size": finest_size, **default, "numerics.integrator": "dopri54",
+                                    "numerics.rtol": rtol}))
+    for size in sizes:
+        for step in steps:
+            candidates.append(("combined", {"numerics.mesh_size": size, **default, **rk4, "numerics.time_step": step}))
+    settings, seen = [], set()
+    for axis, values in candidates:
+        token = tuple(sorted(values.items()))
+        if token not in seen:
+            seen.add(token)
+            settings.append({"axis": axis, **values})
     return settings
 
 
 def accuracy_study(scene: str | os.PathLike, overrides: list[str], store: RunStore, out: str | os.PathLike,
                    sizes: Sequence[float] = DEFAULT_SIZES, steps: Sequence[float] = DEFAULT_STEPS,
                    rtols: Sequence[float] = DEFAULT_RTOLS, workers: int | None = None,
-                   scheduler: str | None = None, progress: bool = True) -> tuple[pd.DataFrame, dict]:
+                   scheduler: str | None = None, progress: bool = True,
+                   quadrature_orders: Sequence[int] = DEFAULT_QUADRATURE_ORDERS) -> tuple[pd.DataFrame, dict]:
     """Run the grid, compare with the reference, write ``accuracy.md``, ``.csv`` and ``.png`` into ``out``."""
-    settings = _settings(sizes, steps, rtols)
+    settings = _settings(sizes, steps, rtols, quadrature_orders)
     variations = [Variation({k: v for k, v in s.items() if k != "axis"}) for s in settings]
     sweep = Sweep.from_file(scene, overrides, variations)
     table = run_sweep(sweep, store, workers=workers, scheduler=scheduler, progress=progress)
@@ -128,10 +154,12 @@ def _pareto(error: np.ndarray, cost: np.ndarray) -> np.ndarray:
 
 
 def _label(row: pd.Series) -> str:
+    quadrature = int(row["numerics.quadrature_order"])
+    geometry = (f"{row['numerics.mesh_size'] * 1e3:g} mm P{int(row['numerics.geometry_order'])} {row['numerics.normals']}"
+                + (f" q{quadrature}" if quadrature != 2 else ""))
     if row["numerics.integrator"] == "dopri54":
-        return f"{row['numerics.mesh_size'] * 1e3:g} mm P{int(row['numerics.geometry_order'])} {row['numerics.normals']}, dopri rtol {row['numerics.rtol']:g}"
-    return (f"{row['numerics.mesh_size'] * 1e3:g} mm P{int(row['numerics.geometry_order'])} {row['numerics.normals']},"
-            f" rk4 {row['numerics.time_step']:g} s")
+        return f"{geometry}, dopri rtol {row['numerics.rtol']:g}"
+    return f"{geometry}, rk4 {row['numerics.time_step']:g} s"
 
 
 def _write(table: pd.DataFrame, reference: dict, scene, out: Path) -> None:

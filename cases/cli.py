@@ -177,9 +177,13 @@ def _accuracy(args: argparse.Namespace) -> int:
             raise SceneError_(f"{text!r}: expected comma-separated numbers > 0")
         return values
 
+    orders = numbers(args.quadrature_orders)
+    if not all(q == int(q) and 1 <= q <= 10 for q in orders):
+        raise SceneError_(f"--quadrature-orders {args.quadrature_orders!r}: expected integers from 1 to 10")
     table, reference = accuracy_study(args.scene, args.set, RunStore(args.store), args.out,
                                       numbers(args.sizes), numbers(args.steps), numbers(args.rtols),
-                                      args.workers, args.scheduler, not args.no_progress)
+                                      args.workers, args.scheduler, not args.no_progress,
+                                      [int(q) for q in orders])
     if args.json:
         print(json.dumps({"reference": {k: (None if isinstance(v, float) and v != v else v)
                                         for k, v in reference.items()},
@@ -283,6 +287,8 @@ def build_parser() -> argparse.ArgumentParser:
                           help="RK4 steps of the time axis (default 8e-5,...,5e-6 s)")
     accuracy.add_argument("--rtols", default="1e-4,1e-6", metavar="R,R,...",
                           help="Dormand-Prince tolerances of the time axis (default 1e-4,1e-6)")
+    accuracy.add_argument("--quadrature-orders", default="4,6", metavar="Q,Q,...",
+                          help="facet quadrature degrees beside the default 2, on the mesh-size axis (default 4,6)")
     accuracy.add_argument("--out", default="runs/accuracy", metavar="DIR",
                           help="where to write accuracy.md, .csv and .png (default runs/accuracy)")
     accuracy.set_defaults(handler=_accuracy)

@@ -205,22 +205,24 @@ class Sweep:
         return [scene_key(s) for s in self.scenes]
 
 
-def _premesh(scenes: Sequence[Scene]) -> None:
-    """Mesh each distinct projectile once, before the workers start."""
-    from .runner import projectile_geometry
-    from mesh import cached_mesh
+def prepare_record(scene_json: str) -> None:
+    """Prepare a scene's projectile into the disk cache (a worker's job); errors surface in its runs."""
+    from .runner import prepare_projectile
 
-    seen = set()
+    try:
+        prepare_projectile(Scene.model_validate_json(scene_json))
+    except Exception:  # noqa: BLE001 - the runs of this projectile will fail and record why
+        pass
+
+
+def _distinct_projectiles(scenes: Sequence[Scene]) -> list[str]:
+    """One scene (as JSON) per distinct projectile and mesh setting."""
+    seen: dict[tuple, str] = {}
     for scene in scenes:
         n = scene.numerics
-        token = (scene.projectile.model_dump_json(), n.mesh_size, n.geometry_order)
-        if token not in seen:
-            seen.add(token)
-            try:
-                geometry, _ = projectile_geometry(scene.projectile)
-                cached_mesh(geometry, n.mesh_size, n.geometry_order)
-            except Exception:  # noqa: BLE001 - the run itself will fail and record why
-                continue
+        token = (scene.projectile.model_dump_json(), n.mesh_size, n.geometry_order, n.normals, n.quadrature_order)
+        seen.setdefault(token, scene.model_dump_json())
+    return list(seen.values())
 
 
 def run_sweep(sweep: Sweep, store: RunStore, *, workers: int | None = None, scheduler: str | None = None,
@@ -276,13 +278,17 @@ def _run_missing(todo: dict[str, Scene], store: RunStore, workers: int | None, s
                 for future in dask_completed(futures):
                     finish(futures[future], *future.result())
         else:
-            _premesh(list(todo.values()))
             count = workers or os.cpu_count() or 1
             if count == 1:
                 for key, text in jobs.items():
                     finish(key, *simulate_record(text))
             else:
                 with ProcessPoolExecutor(count, mp_context=get_context("spawn")) as pool:
+                    # mesh and prepare each projectile once, in parallel, into the disk cache,
+                    # before the runs that read it
+                    for done in [pool.submit(prepare_record, text)
+                                 for text in _distinct_projectiles(list(todo.values()))]:
+                        done.result()
                     futures = {pool.submit(simulate_record, text): key for key, text in jobs.items()}
                     for future in as_completed(futures):
                         finish(futures[future], *future.result())

@@ -14,10 +14,11 @@ Concrete methods differ only in their tableau, as in scipy's ``integrate._ivp``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
-from .quaternion import exp_map, multiply, normalize, right_jacobian_inverse, rotation_matrix
+from .quaternion import compose, normalize, right_jacobian_inverse, rotation_matrix
 from .rigid_body import LoadFunction, RigidBody, State
 
 __all__ = ["RungeKutta", "RK4", "DormandPrince54", "Evaluation", "StepResult", "METHODS"]
@@ -28,9 +29,12 @@ POSITION, VELOCITY, ROTATION, ANGULAR_VELOCITY, PATH = (
 N_INCREMENTS = 13
 
 
-@dataclass(frozen=True)
-class Evaluation:
-    """Loads and accelerations at one state (one call of the load function)."""
+class Evaluation(NamedTuple):
+    """Loads and accelerations at one state (one call of the load function).
+
+    A named tuple: several are made per step, and a frozen dataclass costs
+    three times as much to build.
+    """
 
     acceleration: np.ndarray  # world frame (m/s^2)
     angular_acceleration: np.ndarray  # body frame (rad/s^2)
@@ -121,7 +125,7 @@ class RungeKutta:
         for i in range(self.stages):
             z = h * (self.A[i, :i] @ k[:i]) if i else np.zeros(N_INCREMENTS)
             x, v, u, w = x0 + z[POSITION], v0 + z[VELOCITY], z[ROTATION], w0 + z[ANGULAR_VELOCITY]
-            q = multiply(q0, exp_map(u)) if i else q0
+            q = compose(q0, u) if i else q0
             if i == 0 and first is not None:
                 e = first
             else:
@@ -137,7 +141,7 @@ class RungeKutta:
             time=state.time + h,
             position=x0 + z[POSITION],
             velocity=v0 + z[VELOCITY],
-            attitude=normalize(multiply(q0, exp_map(z[ROTATION]))),
+            attitude=normalize(compose(q0, z[ROTATION])),
             angular_velocity=w0 + z[ANGULAR_VELOCITY],
             path_length=state.path_length + float(z[PATH][0]),
         )

@@ -3,6 +3,10 @@
 ``rotation_matrix(q)`` maps body coordinates to world coordinates; attitude
 kinematics with the body-frame angular velocity ``omega`` read
 ``dq/dt = q * (0, omega) / 2``.
+
+The functions work on 3- and 4-vectors, called several times per stage of
+every step: they unpack to Python floats (``tolist``) and build one array at
+the end, which costs about a quarter of the equivalent numpy expressions.
 """
 
 from __future__ import annotations
@@ -11,21 +15,21 @@ import math
 
 import numpy as np
 
-__all__ = ["multiply", "exp_map", "rotation_matrix", "from_rotation_matrix",
+__all__ = ["multiply", "exp_map", "compose", "rotation_matrix", "from_rotation_matrix",
            "right_jacobian_inverse", "normalize", "cross"]
 
 
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Cross product of two 3-vectors (``np.cross`` costs ~20 us of overhead per call)."""
-    a0, a1, a2 = a
-    b0, b1, b2 = b
+    a0, a1, a2 = a.tolist()
+    b0, b1, b2 = b.tolist()
     return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
 def multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Hamilton product ``p * q``."""
-    pw, px, py, pz = p
-    qw, qx, qy, qz = q
+    pw, px, py, pz = p.tolist()
+    qw, qx, qy, qz = q.tolist()
     return np.array([
         pw * qw - px * qx - py * qy - pz * qz,
         pw * qx + px * qw + py * qz - pz * qy,
@@ -34,13 +38,31 @@ def multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     ])
 
 
-def exp_map(rotation_vector: np.ndarray) -> np.ndarray:
-    """Unit quaternion of the rotation by ``|v|`` radians about ``v``."""
-    angle = math.sqrt(float(rotation_vector @ rotation_vector))
+def _exp(rotation_vector: np.ndarray) -> tuple[float, float, float, float]:
+    vx, vy, vz = rotation_vector.tolist()
+    angle2 = vx * vx + vy * vy + vz * vz
+    angle = math.sqrt(angle2)
     half = 0.5 * angle
     # sin(half)/angle, with its series near zero so that the map stays smooth
-    scale = math.sin(half) / angle if angle > 1e-8 else 0.5 - angle * angle / 48.0
-    return np.array([math.cos(half), *(scale * rotation_vector)])
+    scale = math.sin(half) / angle if angle > 1e-8 else 0.5 - angle2 / 48.0
+    return math.cos(half), scale * vx, scale * vy, scale * vz
+
+
+def exp_map(rotation_vector: np.ndarray) -> np.ndarray:
+    """Unit quaternion of the rotation by ``|v|`` radians about ``v``."""
+    return np.array(_exp(rotation_vector))
+
+
+def compose(q: np.ndarray, rotation_vector: np.ndarray) -> np.ndarray:
+    """``q * exp_map(rotation_vector)`` in one call (the attitude inside a Runge-Kutta step)."""
+    ew, ex, ey, ez = _exp(rotation_vector)
+    pw, px, py, pz = q.tolist()
+    return np.array([
+        pw * ew - px * ex - py * ey - pz * ez,
+        pw * ex + px * ew + py * ez - pz * ey,
+        pw * ey - px * ez + py * ew + pz * ex,
+        pw * ez + px * ey - py * ex + pz * ew,
+    ])
 
 
 def normalize(q: np.ndarray) -> np.ndarray:
@@ -50,12 +72,12 @@ def normalize(q: np.ndarray) -> np.ndarray:
 
 def rotation_matrix(q: np.ndarray) -> np.ndarray:
     """Body-to-world rotation matrix of a unit quaternion."""
-    w, x, y, z = q
+    w, x, y, z = q.tolist()
     return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-    ])
+        1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
+        2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
+        2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y),
+    ]).reshape(3, 3)
 
 
 def from_rotation_matrix(matrix: np.ndarray) -> np.ndarray:
@@ -89,11 +111,14 @@ def right_jacobian_inverse(u: np.ndarray, omega: np.ndarray) -> np.ndarray:
     ``omega + u x omega / 2 + c(|u|) u x (u x omega)`` with
     ``c(t) = (1 - (t/2) cot(t/2)) / t^2``.
     """
-    angle2 = float(u @ u)
+    ux, uy, uz = u.tolist()
+    wx, wy, wz = omega.tolist()
+    angle2 = ux * ux + uy * uy + uz * uz
     if angle2 < 1e-6:
         c = 1.0 / 12.0 + angle2 / 720.0 + angle2 * angle2 / 30240.0
     else:
         angle = math.sqrt(angle2)
         c = (1.0 - 0.5 * angle / math.tan(0.5 * angle)) / angle2
-    u_omega = cross(u, omega)
-    return omega + 0.5 * u_omega + c * cross(u, u_omega)
+    ax, ay, az = uy * wz - uz * wy, uz * wx - ux * wz, ux * wy - uy * wx  # u x omega
+    bx, by, bz = uy * az - uz * ay, uz * ax - ux * az, ux * ay - uy * ax  # u x (u x omega)
+    return np.array([wx + 0.5 * ax + c * bx, wy + 0.5 * ay + c * by, wz + 0.5 * az + c * bz])

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -101,5 +102,5 @@ class State:
         return float(np.sqrt(self.velocity @ self.velocity))
 
     def is_finite(self) -> bool:
-        return bool(np.isfinite(self.position).all() and np.isfinite(self.velocity).all()
-                    and np.isfinite(self.attitude).all() and np.isfinite(self.angular_velocity).all())
+        return all(map(math.isfinite, [*self.position.tolist(), *self.velocity.tolist(),
+                                       *self.attitude.tolist(), *self.angular_velocity.tolist()]))

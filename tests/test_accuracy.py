@@ -16,9 +16,16 @@ def test_pareto_front():
 def test_normal_impact_uses_the_exact_reference(tmp_path):
     table, reference = accuracy_study(scene_path("forrestal_luk_test2"), [], RunStore(tmp_path / "s"),
                                       tmp_path / "out", sizes=(0.04, 0.02), steps=(8e-5, 4e-5), rtols=(1e-4,),
-                                      workers=2, progress=False)
+                                      workers=2, progress=False, quadrature_orders=(4,))
     assert reference["kind"].startswith("1-D integration")
-    assert len(table) == 2 * 2 * 2 + 2 + 1
+    # mesh axis 2 sizes x 2 orders x 2 normal models, quadrature axis 2 sizes x 1 order, time axis
+    # one more step and one tolerance, combined axis the one size x step pair not yet run
+    assert list(table["axis"].value_counts().sort_index().items()) == [
+        ("combined", 1), ("mesh", 8), ("quadrature", 2), ("time", 2)]
+    quadrature = table[table["axis"] == "quadrature"].set_index("numerics.mesh_size")["depth_error"]
+    mesh_q2 = table[(table["axis"] == "mesh") & (table["numerics.geometry_order"] == 2)
+                    & (table["numerics.normals"] == "exact")].set_index("numerics.mesh_size")["depth_error"]
+    assert quadrature[0.02] < mesh_q2[0.02]  # more points per facet: smaller error at the same mesh
     # exact normals beat flat mesh normals on flat facets; refinement helps the exact model
     by = table.set_index(["numerics.mesh_size", "numerics.geometry_order", "numerics.normals",
                           "numerics.integrator", "numerics.time_step"])["depth_error"]

@@ -1,0 +1,190 @@
+"""Performance benchmarks (pytest-benchmark), outside the default test run.
+
+Run them with ``./dev bench`` (``pytest tests/benchmarks --benchmark-only``);
+the default ``pytest`` run skips them (``--benchmark-skip`` in pyproject.toml).
+docs/performance.md quotes their medians and spreads.
+
+* the DAFL load evaluation per surface point, against a compiled lower bound:
+  a plain C loop over the same arrays (built here with the system C compiler,
+  called once per 100 evaluations so that the ctypes call does not count);
+* integrator steps per second (RK4-MK with a free load, and with the DAFL load);
+* one full run of ``cases/forrestal_luk_test2.toml`` at its shipped settings
+  (in process, and as a ``penetrate run`` process);
+* the 72-run sweep of the 155 mm family (6 speeds x 4 projectiles x 3 disturbances).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import shutil
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cases import load_scene, run_scene, scene_path
+from cases.runner import prepare_projectile, scene_loads
+from cases.sweep import RunStore, Sweep, Variation, grid, read_variations, run_sweep
+from dynamics import RK4, RigidBody, State, simulate
+from dynamics.quaternion import from_rotation_matrix, rotation_matrix
+
+ROOT = Path(__file__).resolve().parents[2]
+FAMILY_RATIOS = "0.4448,0.5042,0.5636,0.6230"  # the paper's projectiles #1-#4 (Lc/L)
+FAMILY_SPEEDS = "700:1200:100"  # m/s
+
+C_LOOP = r"""
+/* The DAFL load of one law with separation: the same arrays as fem_loads.DAFLLoads. */
+void dafl(long n, const double *normal_arm /* 6 x n */, const double *points /* 3 x n */,
+          const double *static_w, const double *dynamic_w, const double *g /* R^T V, omega */,
+          const double *rz /* third row of R */, double z, double guard, double *out, long repeat) {
+    for (long r = 0; r < repeat; ++r) {
+        double acc[6] = {0, 0, 0, 0, 0, 0};
+        for (long i = 0; i < n; ++i) {
+            double height = z + rz[0] * points[i] + rz[1] * points[n + i] + rz[2] * points[2 * n + i];
+            double vn = 0.0;
+            for (int k = 0; k < 6; ++k) vn += normal_arm[k * n + i] * g[k];
+            if (height < 0.0 && vn > guard) {
+                double s = static_w[i] + dynamic_w[i] * vn * vn;
+                for (int k = 0; k < 6; ++k) acc[k] -= s * normal_arm[k * n + i];
+            }
+        }
+        for (int k = 0; k < 6; ++k) out[k] = acc[k];
+    }
+}
+"""
+
+
+def _c_kernel(tmp_path: Path):
+    compiler = shutil.which("cc") or shutil.which("gcc")
+    if compiler is None:
+        pytest.skip("no C compiler for the compiled lower bound")
+    source, library = tmp_path / "dafl.c", tmp_path / "libdafl.so"
+    source.write_text(C_LOOP)
+    subprocess.run([compiler, "-O3", "-march=native", "-shared", "-fPIC", "-o", str(library), str(source)],
+                   check=True)
+    lib = ctypes.CDLL(str(library))
+    pointer = ctypes.POINTER(ctypes.c_double)
+    lib.dafl.argtypes = [ctypes.c_long, pointer, pointer, pointer, pointer, pointer, pointer,
+                         ctypes.c_double, ctypes.c_double, pointer, ctypes.c_long]
+    return lib, pointer
+
+
+def _state(depth: float):
+    """An embedded state of projectile #3 at 800 m/s with a 1-degree attack angle and a pitch rate."""
+    rotation = rotation_matrix(np.array([np.cos(np.radians(0.5)), 0.0, np.sin(np.radians(0.5)), 0.0]))
+    velocity = rotation @ np.array([800.0, 10.0, 0.0])
+    return np.array([0.0, 0.0, depth]), velocity, rotation, np.array([0.0, 0.5, 2.0])
+
+
+@pytest.mark.parametrize("depth", [-3.0, -0.3], ids=["embedded", "entering"])
+@pytest.mark.parametrize("mesh_size", [0.04, 0.02, 0.01, 0.005])
+def test_load_evaluation(benchmark, tmp_path, mesh_size, depth):
+    scene = load_scene(scene_path("paper_p3"), [f"numerics.mesh_size={mesh_size}"])
+    loads = scene_loads(scene, prepare_projectile(scene))
+    position, velocity, rotation, spin = _state(depth)
+    lib, pointer = _c_kernel(tmp_path)
+    n = len(loads)
+    g = np.concatenate([velocity @ rotation, spin])
+    guard = loads.normal_velocity_guard * (np.linalg.norm(velocity) + np.linalg.norm(spin) * loads._max_radius)
+    out = np.zeros(6)
+    arrays = [np.ascontiguousarray(a) for a in (loads._normal_arm_t, loads._points_t, loads._static_weights,
+                                                loads._dynamic_weights, g, rotation[2])]
+
+    def compiled(repeat: int) -> np.ndarray:
+        lib.dafl(n, *(a.ctypes.data_as(pointer) for a in arrays), position[2], guard,
+                 out.ctypes.data_as(pointer), repeat)
+        return out
+
+    force, moment = loads(position, velocity, rotation, spin)
+    np.testing.assert_allclose(np.concatenate([rotation.T @ force, moment]), compiled(1),
+                               rtol=1e-9, atol=1e-9 * np.abs(compiled(1)).max())
+    repeats = 100
+    samples = []
+    for _ in range(15):
+        start = time.perf_counter()
+        compiled(repeats)
+        samples.append((time.perf_counter() - start) / repeats)
+    lower_bound = statistics.median(samples)
+    benchmark(loads, position, velocity, rotation, spin)
+    median = benchmark.stats.stats.median
+    benchmark.extra_info.update(points=n, ns_per_point=median / n * 1e9,
+                                compiled_lower_bound_us=lower_bound * 1e6, ratio_to_compiled=median / lower_bound)
+
+
+def test_integrator_steps_free_load(benchmark):
+    """RK4-MK steps per second with a load that costs nothing: the integrator's own overhead."""
+    body = RigidBody(75.0, np.diag([0.25, 2.28, 2.28]))
+    zero = np.zeros(3)
+
+    def loads(position, velocity, rotation, angular_velocity):
+        return zero, zero
+
+    start = State(0.0, np.zeros(3), np.array([800.0, 0.0, 0.0]), from_rotation_matrix(np.eye(3)),
+                  np.array([0.0, 0.5, 2.0]))
+    steps = 2000
+    trajectory = benchmark(simulate, body, loads, start, RK4(), time_limit=steps * 1e-5, time_step=1e-5)
+    assert trajectory.statistics["steps"] == steps
+    benchmark.extra_info.update(steps=steps, steps_per_second=steps / benchmark.stats.stats.median)
+
+
+@pytest.mark.parametrize("mesh_size", [0.04, 0.02, 0.01])
+def test_integrator_steps_dafl(benchmark, mesh_size):
+    """Steps per second of #3 at 900 m/s (a whole run to rest), against the surface points."""
+    scene = load_scene(scene_path("paper_p3"), [f"numerics.mesh_size={mesh_size}", "numerics.time_step=2e-5",
+                                                "impact.speed=900"])
+    run_scene(scene)  # prepare (mesh, mass properties, quadrature) outside the timing
+    result = benchmark.pedantic(run_scene, args=(scene,), rounds=3, iterations=1)
+    steps = result.trajectory.statistics["steps"]
+    benchmark.extra_info.update(points=len(result.prepared.quadrature), steps=steps,
+                                steps_per_second=steps / benchmark.stats.stats.median,
+                                evaluations=result.trajectory.statistics["load_evaluations"])
+
+
+def test_one_run_in_process(benchmark):
+    """``cases/forrestal_luk_test2.toml`` at its shipped settings, prepared data cached."""
+    scene = load_scene(scene_path("forrestal_luk_test2"))
+    run_scene(scene)
+    result = benchmark.pedantic(run_scene, args=(scene,), rounds=7, iterations=1)
+    benchmark.extra_info.update(points=len(result.prepared.quadrature), steps=result.trajectory.statistics["steps"])
+
+
+def test_one_run_process(benchmark):
+    """``penetrate run cases/forrestal_luk_test2.toml``: the whole command, interpreter start included."""
+    command = [str(Path(sys.executable).parent / "penetrate"), "run", str(scene_path("forrestal_luk_test2")), "--json"]
+    subprocess.run(command, check=True, capture_output=True)  # fill the disk cache
+    benchmark.pedantic(subprocess.run, args=(command,), kwargs={"check": True, "capture_output": True},
+                       rounds=7, iterations=1)
+
+
+@pytest.mark.parametrize("cache", ["warm", "cold"])
+def test_sweep_72_runs(benchmark, tmp_path, monkeypatch, cache):
+    """The 155 mm family: 6 speeds x 4 projectiles x 3 disturbances on every core, into an empty store.
+
+    ``warm``: meshes and prepared projectiles already in the disk cache (a user's second
+    sweep of the same family); ``cold``: an empty cache, so the sweep meshes four projectiles.
+    """
+    variations = [
+        Variation({**g.values, **v.values})
+        for g in grid({"projectile.centre_of_mass_ratio": [float(x) for x in FAMILY_RATIOS.split(",")],
+                       "impact.speed": [700.0, 800.0, 900.0, 1000.0, 1100.0, 1200.0]})
+        for v in read_variations(ROOT / "docs" / "performance" / "disturbances.toml")
+    ]
+    assert len(variations) == 72
+    sweep = Sweep.from_file(scene_path("paper_p3"), [], variations)
+    rounds = iter(range(100))
+
+    def setup():
+        round_ = next(rounds)
+        if cache == "cold":
+            monkeypatch.setenv("PENETRATE_CACHE_DIR", str(tmp_path / f"cache-{round_}"))
+        return (sweep, RunStore(tmp_path / f"store-{round_}")), {"progress": False}
+
+    if cache == "warm":
+        run_sweep(sweep, RunStore(tmp_path / "fill"), progress=False)
+    table = benchmark.pedantic(run_sweep, setup=setup, rounds=3, iterations=1)
+    assert len(table) == 72 and ("error" not in table or table["error"].isna().all())
+    benchmark.extra_info.update(runs=72, steps_total=int(table["steps"].sum()))
