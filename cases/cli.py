@@ -6,6 +6,7 @@ import argparse
 import json
 import os
 import sys
+import warnings
 from pathlib import Path
 
 __all__ = ["main"]
@@ -221,8 +222,31 @@ def _positive_float(text: str) -> float:
     return value
 
 
+def _out_folder(text: str) -> str:
+    """``--out DIR``: refused at once when it names a file, not after the run."""
+    if Path(text).exists() and not Path(text).is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r}: is a file; give a folder (it is made when missing)")
+    return text
+
+
+def _out_file(text: str) -> str:
+    """``--out FILE``: refused at once when it names a folder."""
+    if Path(text).is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r}: is a folder; give a file name")
+    return text
+
+
+class _Parser(argparse.ArgumentParser):
+    """Usage errors in one line, like every other error (subcommands inherit this class)."""
+
+    def error(self, message: str):
+        from .scene import one_line
+
+        self.exit(2, f"{self.prog}: error: {one_line(message)} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="penetrate",
         description="Rigid projectile penetration with the differential area force law.")
     parser.add_argument("--debug", action="store_true", help="show tracebacks of failures")
@@ -231,7 +255,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("scene", help="a scene TOML file")
     run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scene key by its dotted path, e.g. impact.speed=1120 (repeatable)")
-    run.add_argument("--out", metavar="DIR", help="write summary.json and history.csv here")
+    run.add_argument("--out", type=_out_folder, metavar="DIR", help="write summary.json and history.csv here")
     run.add_argument("--json", action="store_true", help="print the summary as one JSON object")
     run.set_defaults(handler=_run)
 
@@ -246,7 +270,7 @@ def build_parser() -> argparse.ArgumentParser:
                        help="a TOML file of [[run]] tables of dotted keys, one run each (with --grid: their product)")
     sweep.add_argument("--store", default="runs/store", metavar="DIR",
                        help="where finished runs are kept and found again (default runs/store)")
-    sweep.add_argument("--out", metavar="FILE", help="write the results table as CSV")
+    sweep.add_argument("--out", type=_out_file, metavar="FILE", help="write the results table as CSV")
     sweep.add_argument("--workers", type=_positive_int, metavar="N", help="local processes (default: every core)")
     sweep.add_argument("--scheduler", metavar="ADDRESS", help="run on this Dask distributed scheduler")
     sweep.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -271,7 +295,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_study_options(compare)
     compare.add_argument("--laws", required=True, metavar="A,B,...",
                          help="comma-separated law names (see docs/effects.md)")
-    compare.add_argument("--out", default="runs/compare", metavar="DIR",
+    compare.add_argument("--out", default="runs/compare", type=_out_folder, metavar="DIR",
                          help="where to write compare.md, compare.csv and compare.png (default runs/compare)")
     compare.set_defaults(handler=_compare)
 
@@ -283,12 +307,13 @@ def build_parser() -> argparse.ArgumentParser:
                           help="RK4 steps of the time axis (default 8e-5,...,5e-6 s)")
     accuracy.add_argument("--rtols", default="1e-4,1e-6", metavar="R,R,...",
                           help="Dormand-Prince tolerances of the time axis (default 1e-4,1e-6)")
-    accuracy.add_argument("--out", default="runs/accuracy", metavar="DIR",
+    accuracy.add_argument("--out", default="runs/accuracy", type=_out_folder, metavar="DIR",
                           help="where to write accuracy.md, .csv and .png (default runs/accuracy)")
     accuracy.set_defaults(handler=_accuracy)
 
     paper = commands.add_parser("paper", help="regenerate the paper's study: tables and figures")
-    paper.add_argument("--out", default="docs/paper", metavar="DIR", help="where to write (default docs/paper)")
+    paper.add_argument("--out", default="docs/paper", type=_out_folder, metavar="DIR",
+                       help="where to write (default docs/paper)")
     paper.add_argument("--store", default="runs/paper-store", metavar="DIR",
                        help="where finished runs are kept and found again (default runs/paper-store)")
     paper.add_argument("--workers", type=_positive_int, metavar="N", help="local processes (default: every core)")
@@ -301,22 +326,34 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from .scene import SceneError
+    """Run the command; every failure ends in one line on stderr and a non-zero exit code.
+
+    2: bad input (scene, options); 1: a run or study that failed; 130: interrupted.
+    """
+    from .scene import SceneError, one_line
 
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return args.handler(args)
+        with warnings.catch_warnings():
+            if not args.debug:
+                # numpy's floating-point warnings of a diverging run would spill over several lines;
+                # the run's end reason (non_finite) or its error says what happened
+                warnings.filterwarnings("ignore", category=RuntimeWarning)
+            return args.handler(args)
     except SceneError as exc:
-        print(f"penetrate: error: {exc}", file=sys.stderr)
+        print(f"penetrate: error: {one_line(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("penetrate: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader of our output went away (e.g. `| head`): nothing left to say
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
     except Exception as exc:  # one line for the user; --debug shows the traceback
         if args.debug:
             raise
-        print(f"penetrate: error: {type(exc).__name__}: {exc}", file=sys.stderr)
+        print(f"penetrate: error: {type(exc).__name__}: {one_line(exc)}", file=sys.stderr)
         return 1
 
 
