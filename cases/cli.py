@@ -190,6 +190,50 @@ def _accuracy(args: argparse.Namespace) -> int:
     return 0
 
 
+def _render(args: argparse.Namespace) -> int:
+    from .render import INSTANT_NAMES, render_all
+    from .runner import run_scene
+    from .scene import SceneError as SceneError_
+    from .scene import load_scene
+
+    try:
+        width, height = (int(v) for v in args.size.lower().split("x"))
+    except ValueError:
+        width = height = 0
+    if not (64 <= width <= 8192 and 64 <= height <= 8192):
+        raise SceneError_(f"--size {args.size!r}: expected WIDTHxHEIGHT in pixels, each 64..8192")
+    try:
+        steps = None if args.steps == "all" else _positive_int(args.steps)
+    except argparse.ArgumentTypeError as exc:
+        raise SceneError_(f"--steps {exc}") from None
+    times = [t.strip() for t in args.times.split(",") if t.strip()] if args.times else None
+    for text in times or ():
+        try:
+            float(text)
+        except ValueError:
+            if text not in INSTANT_NAMES:
+                raise SceneError_(f"--times {text!r}: expected a time in seconds or one of"
+                                  f" {', '.join(INSTANT_NAMES)}") from None
+    scene = load_scene(args.scene, args.set)
+    result = run_scene(scene)
+    try:
+        record = render_all(result, args.out, times, animation=args.animation, paraview=args.paraview,
+                            frames=args.frames, steps=steps, station=args.station, size=(width, height))
+    except ValueError as exc:
+        if str(exc).startswith(("--times", "station")):
+            raise SceneError_(str(exc)) from None
+        raise
+    if args.json:
+        print(json.dumps(record))
+    else:
+        for item in record["instants"]:
+            print(f"instant        {item['label'] or 'chosen'} at t = {item['time'] * 1e3:.3f} ms")
+        for path in record["files"]:
+            print(f"written        {path}")
+        print("seconds        " + ", ".join(f"{k} {v:.2f}" for k, v in record["seconds"].items()))
+    return 0
+
+
 def _add_study_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scene", help="a scene TOML file")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
@@ -322,6 +366,28 @@ def build_parser() -> argparse.ArgumentParser:
     paper.add_argument("--variants", action="store_true",
                        help="the paper's variants instead: friction, conical nose, other soil laws")
     paper.set_defaults(handler=_paper)
+
+    render = commands.add_parser("render", help="off-screen images, an animation and ParaView files of the"
+                                                " resistance field")
+    render.add_argument("scene", help="a scene TOML file")
+    render.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="override a scene key by its dotted path (repeatable)")
+    render.add_argument("--times", metavar="T,...",
+                        help="instants: times in seconds or embedded, peak, converged, end"
+                             " (default: those four)")
+    render.add_argument("--out", default="runs/render", metavar="DIR", help="where to write (default runs/render)")
+    render.add_argument("--animation", action="store_true", help="also write animation.gif")
+    render.add_argument("--frames", type=_positive_int, default=60, metavar="N",
+                        help="frames of the animation, evenly spaced in time (default 60)")
+    render.add_argument("--paraview", action="store_true",
+                        help="also write paraview/run.pvd: the surface field over time and the path")
+    render.add_argument("--steps", default="100", metavar="N|all",
+                        help="steps in the ParaView output, evenly spaced in time, or all (default 100)")
+    render.add_argument("--station", type=_positive_float, metavar="M",
+                        help="distance behind the tip of the polar plot's ring (default: one calibre behind the nose)")
+    render.add_argument("--size", default="1280x640", metavar="WxH", help="image size in pixels (default 1280x640)")
+    render.add_argument("--json", action="store_true", help="print the written files and timings as JSON")
+    render.set_defaults(handler=_render)
     return parser
 
 
