@@ -81,6 +81,12 @@ _BACKGROUND = "white"
 _SPLIT6 = np.array([[0, 3, 5], [3, 1, 4], [5, 4, 2], [3, 4, 5]])
 
 
+def _space_titles(plotter) -> None:
+    """Lift the colour bars' titles clear of their top labels."""
+    for bar in plotter.scalar_bars.values():
+        bar.SetVerticalTitleSeparation(12)
+
+
 def _pyvista():
     """pyvista, set to draw off-screen (imported on first use: the ParaView writer needs no OpenGL)."""
     import pyvista as pv
@@ -446,6 +452,12 @@ class _SidePanel:
             self.figure.tight_layout(pad=0.6)
         self._evaluator = evaluator
         self._t = t
+        # blitting: the axes, ticks and histories are drawn once; a frame redraws only the markers
+        self._moving = [self._axis_line, *self._cursors, self._speed_dot, self._angle_dot]
+        for artist in self._moving:
+            artist.set_animated(True)
+        self.canvas.draw()
+        self._background = self.canvas.copy_from_bbox(self.figure.bbox)
 
     def draw(self, index: int) -> np.ndarray:
         ev = self._evaluator
@@ -458,7 +470,9 @@ class _SidePanel:
             cursor.set_xdata([t, t])
         self._speed_dot.set_data([t], [h["speed"].iloc[index]])
         self._angle_dot.set_data([t], [h["attack_angle"].iloc[index]])
-        self.canvas.draw()
+        self.canvas.restore_region(self._background)
+        for artist in self._moving:
+            artist.axes.draw_artist(artist)
         return np.asarray(self.canvas.buffer_rgba())[:, :, :3].copy()
 
     def close(self) -> None:
@@ -557,6 +571,7 @@ class FrameRenderer:
                                  " the centre of mass", position="lower_left", font_size=8, color="black")
             camera = plotter.camera
             camera.parallel_projection = True
+        _space_titles(plotter)
         self.scalar_bars = {name: self.actors[name].mapper.lookup_table for name in self.fields}
 
     # -- frames --------------------------------------------------------------------------------
@@ -690,8 +705,11 @@ def render_snapshots(evaluator: FieldEvaluator, out_dir: str | os.PathLike,
     return paths
 
 
-def _label_anchor(fld: SurfaceField, positions: np.ndarray, length: float) -> np.ndarray:
-    """Where the time label of a body goes: 1.2 L off the path, across the velocity, away from the path's middle."""
+def _label_anchor(fld: SurfaceField, positions: np.ndarray, length: float) -> tuple[np.ndarray, str]:
+    """Where the time label of a body goes: 1.2 L off the path, across the velocity, away from the path's middle.
+
+    Returns the anchor and the horizontal justification that keeps the text clear of the body.
+    """
     v = fld.velocity[[0, 2]]
     across = np.array([-v[1], v[0]]) if np.linalg.norm(v) > 0 else np.array([1.0, 0.0])
     across /= np.linalg.norm(across)
@@ -699,9 +717,9 @@ def _label_anchor(fld: SurfaceField, positions: np.ndarray, length: float) -> np
     if across @ away < 0 or (abs(across @ away) < 1e-9 and across[0] < 0):
         across = -across
     anchor = fld.position.copy()
-    anchor[[0, 2]] += 1.2 * length * across
+    anchor[[0, 2]] += 1.0 * length * across
     anchor[1] -= 2 * length  # in front of the bodies and the path
-    return anchor
+    return anchor, ("right" if across[0] < -0.2 else "left" if across[0] > 0.2 else "center")
 
 
 def render_trajectory(evaluator: FieldEvaluator, path: str | os.PathLike, count: int = 8,
@@ -724,38 +742,52 @@ def render_trajectory(evaluator: FieldEvaluator, path: str | os.PathLike, count:
     length = ev.length
     x_lo, x_hi = positions[:, 0].min() - 1.5 * length, positions[:, 0].max() + 1.5 * length
     z_lo = min(positions[:, 2].min(), 0.0) - 1.5 * length
-    z_hi = 1.5 * length
+    z_hi = max(positions[:, 2].max(), 0.0) + 2.5 * length
+    # the scene in the left 86 % of the view, the colour bar right of it
+    aspect = size[0] / size[1]
+    usable = 0.86
+    half_height = 0.5 * max(z_hi - z_lo, (x_hi - x_lo) / (usable * aspect))
+    half_width = half_height * aspect
+    centre = np.array([0.5 * (x_lo + x_hi) + (1 - usable) * half_width, 0.0, 0.5 * (z_lo + z_hi)])
+    left, right = centre[0] - half_width - length, centre[0] + half_width + length
+    bottom = centre[2] - half_height - length
     plotter = pv.Plotter(off_screen=True, window_size=size)
     try:
         plotter.set_background(_BACKGROUND)
-        soil = pv.Plane(center=(0.5 * (x_lo + x_hi), 2 * length, 0.5 * z_lo), direction=(0, -1, 0),
-                        i_size=-z_lo, j_size=x_hi - x_lo)
+        soil = pv.Plane(center=(0.5 * (left + right), 2 * length, 0.5 * bottom), direction=(0, -1, 0),
+                        i_size=-bottom, j_size=right - left)
         plotter.add_mesh(soil, color=_SOIL, lighting=False)
-        plotter.add_mesh(pv.Line((x_lo, 0.0, 0.0), (x_hi, 0.0, 0.0)), color="saddlebrown", line_width=3)
-        plotter.add_mesh(pv.lines_from_points(positions), color="black", line_width=1.5)
+        plotter.add_mesh(pv.Line((left, 0.0, 0.0), (right, 0.0, 0.0)), color="saddlebrown", line_width=3)
+        plotter.add_mesh(pv.lines_from_points(positions), color="black", line_width=2)
         faces = np.hstack([np.full((len(ev.surface.triangles), 1), 3), ev.surface.triangles]).ravel()
         for f in fields:
             body = pv.PolyData(ev.world_points(f.index), faces)
             body.cell_data["sigma_n"] = ev.cell_values(f.sigma_n) * 1e-6
             plotter.add_mesh(body, scalars="sigma_n", cmap=STRESS_CMAP, n_colors=N_COLOURS, clim=clim,
                              scalar_bar_args={"title": "sigma_n (MPa)", "color": "black", "fmt": "%.4g",
-                                              "vertical": True, "position_x": 0.9, "position_y": 0.2,
-                                              "width": 0.05, "height": 0.6})
-        labels = [f"{f.time * 1e3:.1f} ms, {f.speed:.0f} m/s" for f in fields]
-        anchors = np.array([_label_anchor(f, positions, length) for f in fields])
-        plotter.add_point_labels(anchors, labels, font_size=11, point_size=1, shape=None, text_color="black",
-                                 show_points=False, always_visible=True)
+                                              "vertical": True, "position_x": 0.9, "position_y": 0.15,
+                                              "width": 0.04, "height": 0.6, "title_font_size": 14,
+                                              "label_font_size": 12})
+        placed = [_label_anchor(f, positions, length) for f in fields]
+        for side in ("left", "center", "right"):
+            chosen = [k for k, (_, j) in enumerate(placed) if j == side]
+            if chosen:
+                plotter.add_point_labels(np.array([placed[k][0] for k in chosen]),
+                                         [f"{fields[k].time * 1e3:.1f} ms, {fields[k].speed:.0f} m/s" for k in chosen],
+                                         font_size=11, point_size=1, shape=None, text_color="black",
+                                         show_points=False, always_visible=True, justification_horizontal=side,
+                                         justification_vertical="center")
+        _space_titles(plotter)
         scene = ev.result.scene
         plotter.add_text(f"{scene.name or 'run'}: impact {scene.impact.speed:g} m/s, attack "
                          f"{scene.impact.attack_angle:g} deg, oblique {scene.impact.oblique_angle:g} deg; "
                          f"end: {ev.result.trajectory.end_reason}", position="upper_edge", font_size=10,
                          color="black")
         plotter.camera.parallel_projection = True
-        plotter.camera.focal_point = (0.5 * (x_lo + x_hi), 0.0, 0.5 * (z_lo + z_hi))
-        plotter.camera.position = (0.5 * (x_lo + x_hi), -100 * (x_hi - x_lo), 0.5 * (z_lo + z_hi))
+        plotter.camera.focal_point = centre
+        plotter.camera.position = centre - np.array([0.0, 100 * (x_hi - x_lo), 0.0])
         plotter.camera.up = (0.0, 0.0, 1.0)
-        aspect = size[0] / size[1]
-        plotter.camera.parallel_scale = 0.5 * max(z_hi - z_lo, (x_hi - x_lo) / aspect * 1.15) * 1.05
+        plotter.camera.parallel_scale = half_height
         plotter.reset_camera_clipping_range()
         plotter.render()
         image = np.asarray(plotter.screenshot(None, return_img=True))[:, :, :3]

@@ -242,6 +242,15 @@ def test_paraview_files_reopen_with_the_same_values(unstable, tmp_path):
     assert times == [ev.result.trajectory.time[r] for r in written["rows"]]
     assert times[0] == 0.0 and times[-1] == ev.result.trajectory.time[-1]
     assert all((tmp_path / d.get("file")).exists() for d in sets)
+    # what ParaView does with the index: one multiblock (surface, path) per time
+    import pyvista as pv
+
+    reader = pv.get_reader(str(written["index"]))
+    assert reader.time_values == pytest.approx(times, rel=0, abs=0)
+    reader.set_active_time_value(times[3])
+    surface, line = reader.read()
+    np.testing.assert_array_equal(surface.cell_data["sigma_n"], ev.cell_values(ev.at(written["rows"][3]).sigma_n))
+    np.testing.assert_array_equal(line.point_data["speed"], ev.history["speed"].to_numpy())
     path = meshio.read(tmp_path / "trajectory.vtu")
     np.testing.assert_array_equal(path.points, ev.result.trajectory.position)
     assert len(path.cells_dict["line"]) == len(ev) - 1
@@ -262,7 +271,7 @@ def test_animation_gif(unstable, tmp_path):
 
 
 def test_fifty_frames_keep_memory_flat(unstable):
-    """Fifty frames in one renderer, and ten renderers opened and closed, leave the resident memory flat.
+    """Fifty frames in one renderer, and six renderers opened and closed, leave the resident memory flat.
 
     A 480 x 240 frame is 0.35 MB; keeping every frame would add 17 MB, a leaked plotter (OpenGL
     context and buffers) several MB per cycle.  Measured: under 1 MB for both.  The bound, 5 MB,
@@ -280,14 +289,14 @@ def test_fifty_frames_keep_memory_flat(unstable):
         gc.collect()
         grown = rss_bytes() - before
     assert grown < 5e6, f"{grown / 1e6:.1f} MB over 50 frames"
-    for k in range(12):
+    for k in range(8):
         with FrameRenderer(ev, (240, 120)) as renderer:
             renderer.render(int(rows[k]))
         gc.collect()
         if k == 1:
             before = rss_bytes()
     grown = rss_bytes() - before
-    assert grown < 5e6, f"{grown / 1e6:.1f} MB over 10 renderers"
+    assert grown < 5e6, f"{grown / 1e6:.1f} MB over 6 renderers"
 
 
 def test_ring_stress_on_the_nose_is_the_closed_form_and_the_shank_windward(axial, unstable):
