@@ -65,7 +65,8 @@ from .schema import Numerics  # noqa: E402
 
 __all__ = ["SurfaceMesh", "surface_mesh", "SurfaceField", "FieldEvaluator", "key_instants", "resolve_instants",
            "FrameRenderer", "render_snapshots", "render_trajectory", "render_animation", "write_paraview",
-           "png_bytes", "INSTANT_NAMES", "STRESS_CMAP", "PARAVIEW_INDEX"]
+           "render_all", "png_bytes", "rss_bytes", "INSTANT_NAMES", "STRESS_CMAP", "PARAVIEW_INDEX",
+           "TRAJECTORY_FIELDS"]
 
 INSTANT_NAMES = ("embedded", "peak", "converged", "end")
 INSTANT_LABELS = {"embedded": "nose embedded", "peak": "peak attack angle", "converged": "converged",
@@ -307,10 +308,25 @@ def key_instants(evaluator: FieldEvaluator, threshold: float | None = None, uniq
     """The rows of the default instants, in time order.
 
     ``embedded``: the first step with the whole nose below the surface (absent if it never is);
-    ``peak``: the peak attack angle (:func:`~cases.results.attack_angle_peak`); ``converged``:
-    the first step after the peak with the attack angle below ``threshold`` (the rule of
-    :func:`~cases.studies.convergence_speed`; absent if it never falls below); ``end``: the last
-    step.  With ``unique``, instants that fall on the same step keep only the first name.
+    ``peak``: the peak attack angle (:func:`~cases.results.attack_angle_peak`; absent if the
+    attack angle stays below ``threshold``, as in purely axial motion); ``converged``: the first
+    step after the peak with the total attack angle below ``threshold`` (the rule of
+    :func:`~cases.studies.convergence_speed`; absent if it never falls below, or if the peak is
+    absent: nothing converged); ``end``: the last step.
+
+    Parameters
+    ----------
+    evaluator : FieldEvaluator
+        The run.
+    threshold : float, optional
+        Convergence threshold (deg); :data:`~cases.studies.CONVERGENCE_THRESHOLD` by default.
+    unique : bool
+        Instants that fall on the same step keep only the first name.
+
+    Returns
+    -------
+    dict
+        Name to trajectory row, in time order.
     """
     from .studies import CONVERGENCE_THRESHOLD
 
@@ -320,11 +336,13 @@ def key_instants(evaluator: FieldEvaluator, threshold: float | None = None, uniq
     embedded = _nose_embedded_index(evaluator)
     if embedded is not None:
         rows["embedded"] = embedded
+    angle = history["total_attack_angle"].to_numpy()
     peak = attack_angle_peak(history)
-    rows["peak"] = peak
-    below = np.flatnonzero(history["total_attack_angle"].to_numpy()[peak:] < threshold)
-    if len(below):
-        rows["converged"] = peak + int(below[0])
+    if angle[peak] >= threshold:
+        rows["peak"] = peak
+        below = np.flatnonzero(angle[peak:] < threshold)
+        if len(below):
+            rows["converged"] = peak + int(below[0])
     rows["end"] = len(history) - 1
     ordered = dict(sorted(rows.items(), key=lambda item: item[1]))
     if not unique:
@@ -349,6 +367,7 @@ def resolve_instants(evaluator: FieldEvaluator, spec: Sequence[str] | None) -> l
     if not spec:
         return [(INSTANT_LABELS[name], row) for name, row in key_instants(evaluator).items()]
     known = key_instants(evaluator, unique=False)
+    known.setdefault("peak", attack_angle_peak(evaluator.history))  # asked for by name: even a small one
     times = evaluator.result.trajectory.time
     out = []
     for item in spec:
@@ -515,6 +534,8 @@ class FrameRenderer:
         self.fixed_clim = {"sigma_n": clim, "tau": tau_clim}
         self.plotter = None
         self.panel = None
+        self.last_field: SurfaceField | None = None
+        self.last_clim: dict[str, tuple[float, float]] = {}
         try:
             self._build(pv, lighting)
             if side_panel:
@@ -631,7 +652,7 @@ class FrameRenderer:
         return float(self.evaluator.result.trajectory.position[:, 1].max() - fld.position[1])
 
     def render(self, index: int, label: str = "") -> np.ndarray:
-        """The RGB frame (height x width x 3, uint8) of trajectory row ``index``."""
+        """The RGB frame (height x width x 3, uint8) of trajectory row ``index``, titled with ``label``."""
         self.last_clim = self._update(index, label)
         self.plotter.render()
         view = self.plotter.screenshot(None, return_img=True)
@@ -679,34 +700,50 @@ class FrameRenderer:
 # ---------------------------------------------------------------------------------------------
 
 
-def _slug(label: str, index: int, time_s: float) -> str:
-    name = label.replace(" ", "_") if label else f"t{time_s * 1e3:.3f}ms"
-    return f"{name}"
+def _file_label(label: str, time_s: float) -> str:
+    """``nose_embedded`` for a named instant, ``t2.000ms`` for a chosen time."""
+    return label.replace(" ", "_") if label else f"t{time_s * 1e3:.3f}ms"
 
 
 def render_snapshots(evaluator: FieldEvaluator, out_dir: str | os.PathLike,
                      instants: Sequence[tuple[str, int]], size: tuple[int, int] = (1280, 640)) -> list[Path]:
-    """PNG images of the field at the given instants (label, row): ``field_<label>.png``.
+    """PNG images of the field at the given instants: ``field_<label>.png`` (``field_t<ms>ms.png`` unlabelled).
 
     Each image: the projectile in close-up coloured by ``sigma_n`` (and ``tau`` below it with
     friction), its colour bar in MPa spanning the instant's min..max, the velocity direction
     (black arrow from the tip), the target (a tan backdrop below the surface line ``Z = 0``), the
-    path of the centre of mass, a title (time, speed, attack angle, tip depth), and a side panel with the path in the
-    target and the speed and attack-angle histories at that instant.
+    path of the centre of mass, a title (time, speed, attack angle, tip depth), and a side panel
+    with the path in the target and the speed and attack-angle histories at that instant.
+
+    Parameters
+    ----------
+    evaluator : FieldEvaluator
+        The run's field.
+    out_dir : path
+        Folder to write into (made if missing).
+    instants : sequence of (str, int)
+        Label and trajectory row of each image (:func:`resolve_instants`).
+    size : (int, int)
+        Width and height in pixels.
+
+    Returns
+    -------
+    list of Path
+        The written images, in the order of ``instants``.
     """
     out = Path(out_dir)
     paths = []
     with FrameRenderer(evaluator, size) as renderer:
         for label, row in instants:
             image = renderer.render(row, label)
-            path = out / f"field_{_slug(label, row, evaluator.result.trajectory.time[row])}.png"
+            path = out / f"field_{_file_label(label, evaluator.result.trajectory.time[row])}.png"
             atomic_write_bytes(path, png_bytes(image))
             paths.append(path)
     return paths
 
 
 def _label_anchor(fld: SurfaceField, positions: np.ndarray, length: float) -> tuple[np.ndarray, str]:
-    """Where the time label of a body goes: 1.2 L off the path, across the velocity, away from the path's middle.
+    """Where the time label of a body goes: 1 L off the path, across the velocity, away from the path's middle.
 
     Returns the anchor and the horizontal justification that keeps the text clear of the body.
     """
@@ -728,7 +765,24 @@ def render_trajectory(evaluator: FieldEvaluator, path: str | os.PathLike, count:
 
     The instants are evenly spaced in path length.  The bodies are drawn to scale at their true
     positions and attitudes, coloured by ``sigma_n`` on one colour bar (MPa) spanning all of them;
-    each is labelled with its time.  The target is the tan region below the surface line ``Z = 0``.
+    each is labelled with its time and speed.  The target is the tan region below the surface
+    line ``Z = 0``.
+
+    Parameters
+    ----------
+    evaluator : FieldEvaluator
+        The run's field.
+    path : path
+        The PNG file to write.
+    count : int
+        Bodies drawn.
+    size : (int, int)
+        Width and height in pixels.
+
+    Returns
+    -------
+    Path
+        ``path``.
     """
     pv = _pyvista()
     ev = evaluator
@@ -754,11 +808,14 @@ def render_trajectory(evaluator: FieldEvaluator, path: str | os.PathLike, count:
     plotter = pv.Plotter(off_screen=True, window_size=size)
     try:
         plotter.set_background(_BACKGROUND)
-        soil = pv.Plane(center=(0.5 * (left + right), 2 * length, 0.5 * bottom), direction=(0, -1, 0),
+        behind = positions[:, 1].max() + 2 * length
+        soil = pv.Plane(center=(0.5 * (left + right), behind, 0.5 * bottom), direction=(0, -1, 0),
                         i_size=-bottom, j_size=right - left)
         plotter.add_mesh(soil, color=_SOIL, lighting=False)
-        plotter.add_mesh(pv.Line((left, 0.0, 0.0), (right, 0.0, 0.0)), color="saddlebrown", line_width=3)
-        plotter.add_mesh(pv.lines_from_points(positions), color="black", line_width=2)
+        plotter.add_mesh(pv.Line((left, behind - 0.01 * length, 0.0), (right, behind - 0.01 * length, 0.0)),
+                         color="saddlebrown", line_width=3)
+        if len(positions) > 1:
+            plotter.add_mesh(pv.lines_from_points(positions), color="black", line_width=2)
         faces = np.hstack([np.full((len(ev.surface.triangles), 1), 3), ev.surface.triangles]).ravel()
         for f in fields:
             body = pv.PolyData(ev.world_points(f.index), faces)
@@ -932,7 +989,33 @@ def write_paraview(evaluator: FieldEvaluator, out_dir: str | os.PathLike, steps:
 def render_all(result: RunResult, out_dir: str | os.PathLike, times: Iterable[str] | None = None, *,
                animation: bool = False, paraview: bool = False, frames: int = 60, steps: int | None = 100,
                station: float | None = None, size: tuple[int, int] = (1280, 640)) -> dict:
-    """Everything ``penetrate render`` writes; returns the written paths and the wall times (s)."""
+    """Everything ``penetrate render`` writes.
+
+    Parameters
+    ----------
+    result : RunResult
+        The run.
+    out_dir : path
+        Folder to write into.
+    times : iterable of str, optional
+        Instants by name or time in seconds (:func:`resolve_instants`); the default instants if None.
+    animation, paraview : bool
+        Also write ``animation.gif`` and ``paraview/run.pvd`` with its files.
+    frames : int
+        Frames of the animation.
+    steps : int or None
+        Steps of the ParaView output (None: every recorded step).
+    station : float, optional
+        Distance behind the tip (m) of the polar plot's ring.
+    size : (int, int)
+        Size of the field images in pixels.
+
+    Returns
+    -------
+    dict
+        ``instants`` (label, row, time), ``files`` (written paths), ``seconds`` (wall time of each
+        part and ``total``) and, with ``paraview``, ``paraview_steps``.
+    """
     from .fields import plot_histories, plot_polar
 
     out = Path(out_dir)
@@ -972,5 +1055,3 @@ def rss_bytes() -> int:
     with open("/proc/self/statm") as f:
         return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
 
-
-__all__ += ["render_all", "rss_bytes", "TRAJECTORY_FIELDS"]

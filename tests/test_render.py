@@ -93,6 +93,9 @@ def test_the_drawn_field_is_the_integrated_field(unstable):
     tri = ev.surface.points[ev.surface.triangles]
     drawn = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum()
     assert drawn == pytest.approx(q.area, rel=0.01)
+    # outward orientation (ParaView's normals): the divergence theorem gives the enclosed volume
+    volume = np.einsum("ij,ij->", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])) / 6.0
+    assert volume == pytest.approx(q.enclosed_volume(), rel=0.01)
     # the tip of the drawn body is the projectile's tip, at its world position
     tips = ev.world_points(rows["peak"])
     assert np.min(np.linalg.norm(tips - ev.tip(rows["peak"]), axis=1)) < 1e-9
@@ -118,6 +121,12 @@ def test_default_instants(unstable):
     for bad in (["soon"], ["1.0"]):
         with pytest.raises(ValueError, match="--times"):
             resolve_instants(ev, bad)
+
+
+def test_axial_motion_has_no_peak_or_convergence_by_default(axial):
+    assert list(key_instants(axial)) == ["embedded", "end"]
+    with pytest.raises(ValueError, match="no such instant"):
+        resolve_instants(axial, ["converged"])
 
 
 def test_nose_tip_hottest_in_axial_motion(axial):
