@@ -6,6 +6,7 @@ import argparse
 import json
 import os
 import sys
+import warnings
 from pathlib import Path
 
 __all__ = ["main"]
@@ -193,6 +194,50 @@ def _accuracy(args: argparse.Namespace) -> int:
     return 0
 
 
+def _render(args: argparse.Namespace) -> int:
+    from .render import INSTANT_NAMES, render_all
+    from .runner import run_scene
+    from .scene import SceneError as SceneError_
+    from .scene import load_scene
+
+    try:
+        width, height = (int(v) for v in args.size.lower().split("x"))
+    except ValueError:
+        width = height = 0
+    if not (64 <= width <= 8192 and 64 <= height <= 8192):
+        raise SceneError_(f"--size {args.size!r}: expected WIDTHxHEIGHT in pixels, each 64..8192")
+    try:
+        steps = None if args.steps == "all" else _positive_int(args.steps)
+    except argparse.ArgumentTypeError as exc:
+        raise SceneError_(f"--steps {exc}") from None
+    times = [t.strip() for t in args.times.split(",") if t.strip()] if args.times else None
+    for text in times or ():
+        try:
+            float(text)
+        except ValueError:
+            if text not in INSTANT_NAMES:
+                raise SceneError_(f"--times {text!r}: expected a time in seconds or one of"
+                                  f" {', '.join(INSTANT_NAMES)}") from None
+    scene = load_scene(args.scene, args.set)
+    result = run_scene(scene)
+    try:
+        record = render_all(result, args.out, times, animation=args.animation, paraview=args.paraview,
+                            frames=args.frames, steps=steps, station=args.station, size=(width, height))
+    except ValueError as exc:
+        if str(exc).startswith(("--times", "station")):
+            raise SceneError_(str(exc)) from None
+        raise
+    if args.json:
+        print(json.dumps(record))
+    else:
+        for item in record["instants"]:
+            print(f"instant        {item['label'] or 'chosen'} at t = {item['time'] * 1e3:.3f} ms")
+        for path in record["files"]:
+            print(f"written        {path}")
+        print("seconds        " + ", ".join(f"{k} {v:.2f}" for k, v in record["seconds"].items()))
+    return 0
+
+
 def _add_study_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scene", help="a scene TOML file")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
@@ -225,8 +270,31 @@ def _positive_float(text: str) -> float:
     return value
 
 
+def _out_folder(text: str) -> str:
+    """``--out DIR``: refused at once when it names a file, not after the run."""
+    if Path(text).exists() and not Path(text).is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r}: is a file; give a folder (it is made when missing)")
+    return text
+
+
+def _out_file(text: str) -> str:
+    """``--out FILE``: refused at once when it names a folder."""
+    if Path(text).is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r}: is a folder; give a file name")
+    return text
+
+
+class _Parser(argparse.ArgumentParser):
+    """Usage errors in one line, like every other error (subcommands inherit this class)."""
+
+    def error(self, message: str):
+        from .scene import one_line
+
+        self.exit(2, f"{self.prog}: error: {one_line(message)} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="penetrate",
         description="Rigid projectile penetration with the differential area force law.")
     parser.add_argument("--debug", action="store_true", help="show tracebacks of failures")
@@ -235,7 +303,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("scene", help="a scene TOML file")
     run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scene key by its dotted path, e.g. impact.speed=1120 (repeatable)")
-    run.add_argument("--out", metavar="DIR", help="write summary.json and history.csv here")
+    run.add_argument("--out", type=_out_folder, metavar="DIR", help="write summary.json and history.csv here")
     run.add_argument("--json", action="store_true", help="print the summary as one JSON object")
     run.set_defaults(handler=_run)
 
@@ -250,7 +318,7 @@ def build_parser() -> argparse.ArgumentParser:
                        help="a TOML file of [[run]] tables of dotted keys, one run each (with --grid: their product)")
     sweep.add_argument("--store", default="runs/store", metavar="DIR",
                        help="where finished runs are kept and found again (default runs/store)")
-    sweep.add_argument("--out", metavar="FILE", help="write the results table as CSV")
+    sweep.add_argument("--out", type=_out_file, metavar="FILE", help="write the results table as CSV")
     sweep.add_argument("--workers", type=_positive_int, metavar="N", help="local processes (default: every core)")
     sweep.add_argument("--scheduler", metavar="ADDRESS", help="run on this Dask distributed scheduler")
     sweep.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -275,7 +343,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_study_options(compare)
     compare.add_argument("--laws", required=True, metavar="A,B,...",
                          help="comma-separated law names (see docs/effects.md)")
-    compare.add_argument("--out", default="runs/compare", metavar="DIR",
+    compare.add_argument("--out", default="runs/compare", type=_out_folder, metavar="DIR",
                          help="where to write compare.md, compare.csv and compare.png (default runs/compare)")
     compare.set_defaults(handler=_compare)
 
@@ -289,12 +357,13 @@ def build_parser() -> argparse.ArgumentParser:
                           help="Dormand-Prince tolerances of the time axis (default 1e-4,1e-6)")
     accuracy.add_argument("--quadrature-orders", default="4,6", metavar="Q,Q,...",
                           help="facet quadrature degrees beside the default 2, on the mesh-size axis (default 4,6)")
-    accuracy.add_argument("--out", default="runs/accuracy", metavar="DIR",
+    accuracy.add_argument("--out", default="runs/accuracy", type=_out_folder, metavar="DIR",
                           help="where to write accuracy.md, .csv and .png (default runs/accuracy)")
     accuracy.set_defaults(handler=_accuracy)
 
     paper = commands.add_parser("paper", help="regenerate the paper's study: tables and figures")
-    paper.add_argument("--out", default="docs/paper", metavar="DIR", help="where to write (default docs/paper)")
+    paper.add_argument("--out", default="docs/paper", type=_out_folder, metavar="DIR",
+                       help="where to write (default docs/paper)")
     paper.add_argument("--store", default="runs/paper-store", metavar="DIR",
                        help="where finished runs are kept and found again (default runs/paper-store)")
     paper.add_argument("--workers", type=_positive_int, metavar="N", help="local processes (default: every core)")
@@ -303,26 +372,60 @@ def build_parser() -> argparse.ArgumentParser:
     paper.add_argument("--variants", action="store_true",
                        help="the paper's variants instead: friction, conical nose, other soil laws")
     paper.set_defaults(handler=_paper)
+
+    render = commands.add_parser("render", help="off-screen images, an animation and ParaView files of the"
+                                                " resistance field")
+    render.add_argument("scene", help="a scene TOML file")
+    render.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="override a scene key by its dotted path (repeatable)")
+    render.add_argument("--times", metavar="T,...",
+                        help="instants: times in seconds or embedded, peak, converged, end"
+                             " (default: those four)")
+    render.add_argument("--out", default="runs/render", metavar="DIR", help="where to write (default runs/render)")
+    render.add_argument("--animation", action="store_true", help="also write animation.gif")
+    render.add_argument("--frames", type=_positive_int, default=60, metavar="N",
+                        help="frames of the animation, evenly spaced in time (default 60)")
+    render.add_argument("--paraview", action="store_true",
+                        help="also write paraview/run.pvd: the surface field over time and the path")
+    render.add_argument("--steps", default="100", metavar="N|all",
+                        help="steps in the ParaView output, evenly spaced in time, or all (default 100)")
+    render.add_argument("--station", type=_positive_float, metavar="M",
+                        help="distance behind the tip of the polar plot's ring (default: one calibre behind the nose)")
+    render.add_argument("--size", default="1280x640", metavar="WxH", help="image size in pixels (default 1280x640)")
+    render.add_argument("--json", action="store_true", help="print the written files and timings as JSON")
+    render.set_defaults(handler=_render)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    from .scene import SceneError
+    """Run the command; every failure ends in one line on stderr and a non-zero exit code.
+
+    2: bad input (scene, options); 1: a run or study that failed; 130: interrupted.
+    """
+    from .scene import SceneError, one_line
 
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return args.handler(args)
+        with warnings.catch_warnings():
+            if not args.debug:
+                # numpy's floating-point warnings of a diverging run would spill over several lines;
+                # the run's end reason (non_finite) or its error says what happened
+                warnings.filterwarnings("ignore", category=RuntimeWarning)
+            return args.handler(args)
     except SceneError as exc:
-        print(f"penetrate: error: {exc}", file=sys.stderr)
+        print(f"penetrate: error: {one_line(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("penetrate: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader of our output went away (e.g. `| head`): nothing left to say
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
     except Exception as exc:  # one line for the user; --debug shows the traceback
         if args.debug:
             raise
-        print(f"penetrate: error: {type(exc).__name__}: {exc}", file=sys.stderr)
+        print(f"penetrate: error: {type(exc).__name__}: {one_line(exc)}", file=sys.stderr)
         return 1
 
 

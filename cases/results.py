@@ -131,11 +131,27 @@ def summary(result: RunResult, history: pd.DataFrame | None = None) -> dict:
     }
 
 
+def _umask() -> int:
+    """The process's umask, read without changing it where the system tells it (Linux)."""
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 def atomic_write_bytes(path: Path, data: bytes) -> None:
     """Write ``data`` to ``path`` through a synced temporary file renamed into place.
 
     A reader (or a process killed at any moment) sees the old file or the new
-    one, never a part.
+    one, never a part; a kill can leave a hidden ``.NAME.*.tmp`` file beside it,
+    never a partial file under the final name.  The file gets the usual
+    permissions (``0666`` less the umask), not the temporary file's ``0600``.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -144,11 +160,22 @@ def atomic_write_bytes(path: Path, data: bytes) -> None:
         with os.fdopen(fd, "wb") as f:
             f.write(data)
             f.flush()
+            os.fchmod(f.fileno(), 0o666 & ~_umask())
             os.fsync(f.fileno())
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+    try:  # make the rename itself durable
+        directory = os.open(path.parent, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(directory)
+    except OSError:
+        pass
+    finally:
+        os.close(directory)
 
 
 def atomic_write_text(path: Path, text: str) -> None:
@@ -168,18 +195,30 @@ def json_safe(value):
 
 def write_outputs(result: RunResult, out_dir: str | os.PathLike, every: int = 1,
                   history: pd.DataFrame | None = None) -> dict[str, Path]:
-    """Write ``summary.json`` (with the resolved scene) and ``history.csv`` into ``out_dir``."""
+    """Write ``summary.json`` (with the resolved scene) and ``history.csv`` into ``out_dir``.
+
+    Each file is written atomically, and ``summary.json`` last: a run killed at
+    any moment leaves each file complete or absent, and a ``summary.json``
+    always belongs with the ``history.csv`` beside it.  A previous run's
+    ``summary.json`` in ``out_dir`` is removed first (and its ``history.csv``
+    when this run writes none), so files of two runs never mix.  Non-finite
+    numbers are written as JSON ``null`` and as empty CSV cells.
+    """
     out = Path(out_dir)
     h = history_table(result) if history is None else history
     record = summary(result, h)
     record["scene_resolved"] = result.scene.model_dump(mode="json")
     record["history_units"] = HISTORY_UNITS
+    text = json.dumps(json_safe(record), indent=2, allow_nan=False) + "\n"
     paths = {"summary": out / "summary.json"}
+    (out / "summary.json").unlink(missing_ok=True)
     if result.scene.outputs.history:
         kept = h.iloc[::every]
         if kept.index[-1] != h.index[-1]:
             kept = pd.concat([kept, h.iloc[[-1]]])  # always keep the end
         paths["history"] = out / "history.csv"
         atomic_write_text(paths["history"], kept.to_csv(index=False, float_format="%.10g"))
-    atomic_write_text(paths["summary"], json.dumps(json_safe(record), indent=2) + "\n")
+    else:
+        (out / "history.csv").unlink(missing_ok=True)
+    atomic_write_text(paths["summary"], text)
     return paths

@@ -20,49 +20,86 @@ from typing import Any
 import annotated_types
 from pydantic import BaseModel, ValidationError
 
-from .schema import Scene
+from .schema import LawSpec, MaterialLawSpec, Scene
 
 __all__ = ["SceneError", "load_scene", "scene_from_dict", "apply_overrides", "parse_override",
-           "scene_key", "read_toml"]
+           "scene_key", "read_toml", "one_line", "MAX_SCENE_BYTES"]
+
+MAX_SCENE_BYTES = 1 << 20  # a scene is a few hundred bytes; anything past 1 MiB is not one
+
+
+def one_line(text: str) -> str:
+    """``text`` with every control character (newline, escape, ...) shown as an escape, so it prints as one line."""
+    return "".join(ch if ch.isprintable() or ch == " " else ascii(ch)[1:-1] for ch in str(text))
 
 
 class SceneError(ValueError):
     """A scene that cannot be used; the message is one line meant for the user."""
 
+    def __init__(self, message: str) -> None:
+        super().__init__(one_line(message))
+
+
+def _quoted(text: str, limit: int = 80) -> str:
+    """``repr`` of a user's text, shortened to ``limit`` characters."""
+    return repr(text) if len(text) <= limit else repr(text[: limit - 3]) + "..."
+
 
 def read_toml(path: str | Path) -> dict[str, Any]:
-    """Read a TOML file, turning every failure into a :class:`SceneError`."""
+    """Read a TOML file, turning every failure into a :class:`SceneError`.
+
+    Only data is read: TOML has no expressions, and nothing read is ever evaluated.
+    """
     path = Path(path)
     try:
-        text = path.read_bytes().decode("utf-8")
+        with open(path, "rb") as f:  # bounded: /dev/zero or a huge file is refused, not read to the end
+            raw = f.read(MAX_SCENE_BYTES + 1)
+        text = raw.decode("utf-8")
     except (OSError, UnicodeDecodeError) as exc:
-        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else type(exc).__name__
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else "not UTF-8 text"
         raise SceneError(f"{path}: cannot read the scene file ({reason})") from None
+    if len(raw) > MAX_SCENE_BYTES:
+        raise SceneError(f"{path}: cannot read the scene file (larger than {MAX_SCENE_BYTES} bytes)")
+    return _toml(text, f"{path}: not valid TOML")
+
+
+def _toml(text: str, what: str) -> dict[str, Any]:
+    """``tomllib.loads`` with its other failures (nesting, 4300-digit integers) as :class:`SceneError`."""
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"{path}: not valid TOML ({exc})") from None
+        raise SceneError(f"{what} ({exc})") from None
+    except RecursionError:
+        raise SceneError(f"{what} (arrays or tables nested too deeply)") from None
+    except ValueError as exc:  # e.g. an integer of more than 4300 digits
+        raise SceneError(f"{what} ({exc})") from None
 
 
 def parse_override(text: str) -> tuple[list[str], Any]:
     """Split ``key.path=value``; the value is read as a TOML value, else as a string."""
     if "=" not in text:
-        raise SceneError(f"--set {text!r}: expected KEY=VALUE, e.g. impact.speed=1120")
+        raise SceneError(f"--set {_quoted(text)}: expected KEY=VALUE, e.g. impact.speed=1120")
     key, raw = text.split("=", 1)
     path = key.strip().split(".")
     if not all(part.strip() and part.replace("_", "").isalnum() for part in path):
-        raise SceneError(f"--set {text!r}: the key must be a dotted path of names, e.g. impact.speed")
+        raise SceneError(f"--set {_quoted(text)}: the key must be a dotted path of names, e.g. impact.speed")
     raw = raw.strip()
     try:
         value = tomllib.loads(f"value = {raw}")["value"]
     except tomllib.TOMLDecodeError:
         value = raw  # a bare word such as softer_soil
+    except (RecursionError, ValueError):
+        raise SceneError(f"--set {_quoted(text)}: the value is not readable (arrays nested too deeply,"
+                         " or an integer of more than 4300 digits)") from None
     return [part.strip() for part in path], value
 
 
 def apply_overrides(data: dict[str, Any], overrides: list[str]) -> dict[str, Any]:
     """A copy of ``data`` with each ``key.path=value`` of ``overrides`` set."""
-    data = copy.deepcopy(data)
+    try:
+        data = copy.deepcopy(data)
+    except RecursionError:
+        raise SceneError("scene: arrays or tables nested too deeply") from None
     for text in overrides:
         path, value = parse_override(text)
         node = data
@@ -70,7 +107,7 @@ def apply_overrides(data: dict[str, Any], overrides: list[str]) -> dict[str, Any
             child = node.setdefault(part, {})
             if not isinstance(child, dict):
                 where = ".".join(path[: depth + 1])
-                raise SceneError(f"--set {text!r}: {where} is a value, not a table")
+                raise SceneError(f"--set {_quoted(text)}: {where} is a value, not a table")
             node = child
         node[path[-1]] = value
     return data
@@ -81,7 +118,13 @@ def scene_from_dict(data: dict[str, Any], source: str = "scene") -> Scene:
     try:
         return Scene.model_validate(data)
     except ValidationError as exc:
-        raise SceneError(f"{source}: " + _explain(exc)) from None
+        try:
+            explained = _explain(exc)
+        except RecursionError:
+            explained = "arrays or tables nested too deeply"
+        raise SceneError(f"{source}: " + explained) from None
+    except RecursionError:
+        raise SceneError(f"{source}: arrays or tables nested too deeply") from None
 
 
 def load_scene(path: str | Path, overrides: list[str] | None = None) -> Scene:
@@ -112,6 +155,9 @@ def _models_in(annotation: Any) -> list[type[BaseModel]]:
     return []
 
 
+_LAW_TAGS = {"coefficients": LawSpec, "material": MaterialLawSpec}  # the tags of schema.LawChoice
+
+
 def _field_at(loc: tuple) -> tuple[Any, list[type[BaseModel]], str]:
     """The FieldInfo at an error location, the models in play there, and the dotted path.
 
@@ -136,8 +182,10 @@ def _field_at(loc: tuple) -> tuple[Any, list[type[BaseModel]], str]:
             typing.get_args(f.annotation) == (part,) for f in m.model_fields.values())]
         if tagged:
             models = tagged
+        elif part in _LAW_TAGS and _LAW_TAGS[part] in models:
+            models = [_LAW_TAGS[part]]
         elif part not in ("name", "coefficients", "material"):
-            path.append(part)
+            path.append(part if part.isidentifier() else _quoted(part, 40))  # an unknown key, as written
     return info, models, ".".join(path) or "scene"
 
 
@@ -174,7 +222,10 @@ def _explain_one(error: dict) -> str:
     ctx = error.get("ctx", {})
     given = error.get("input")
     if kind == "extra_forbidden":
-        parent_models = _field_at(loc[:-1])[1]
+        _, parent_models, parent = _field_at(loc[:-1])
+        key = str(loc[-1])
+        # the key as written, even when it spells a union tag such as "name"
+        name = ".".join(([] if parent == "scene" else [parent]) + [key if key.isidentifier() else _quoted(key, 40)])
         allowed = sorted({k for m in parent_models for k in m.model_fields})
         return f"{name}: unknown key (allowed here: {', '.join(allowed)})"
     if kind == "missing":
@@ -191,6 +242,8 @@ def _explain_one(error: dict) -> str:
         rule = error["msg"][0].lower() + error["msg"][1:]
     allowed = _allowed_range(info, name)
     suffix = f" (allowed: {allowed})" if allowed and kind not in ("value_error",) else ""
+    if kind == "value_error" and not loc:
+        return rule  # a rule across sections names its fields itself
     if kind == "value_error" or isinstance(given, dict):
         return f"{name}: {rule}{suffix}"
     return f"{name} = {_show(given)}: {rule}{suffix}"

@@ -6,9 +6,11 @@ angles, which are in degrees where the name ends in ``angle``.
 
 from __future__ import annotations
 
+import math
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, field_validator, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Discriminator, Field, Tag, field_validator, model_validator
+from pydantic_core import PydanticCustomError
 
 from fem_loads.resistance import NAMED_LAWS
 
@@ -18,10 +20,34 @@ __all__ = ["Scene", "Projectile", "Target", "LayerSpec", "Effects", "FrictionSpe
            "MassPropertiesSpec", "LawSpec"]
 
 
+MAX_STEPS = 5_000_000  # dynamics.simulate's max_steps: a fixed-step run never takes more
+MAX_MESH_CELLS = 2e6  # cells of mesh_size^3 in the projectile's bounding cylinder (about 1e7 tetrahedra)
+
+
 def _field(default=..., *, unit: str = "", description: str = "", **limits):
     """A field with its unit recorded for error messages."""
     extra = {"unit": unit} if unit else None
     return Field(default, description=description, json_schema_extra=extra, **limits)
+
+
+def _not_boolean(value):
+    """``true`` is not a number (pydantic would read it as 1)."""
+    if isinstance(value, bool):
+        raise PydanticCustomError("number_type", "input should be a number, not true or false")
+    return value
+
+
+def _one_line(value):
+    """Labels print as one line: no newlines, tabs, escapes or other control characters."""
+    if isinstance(value, str) and not value.isprintable():
+        raise PydanticCustomError("text_type", "input should be one line of printable text"
+                                  " (no newlines, tabs or control characters)")
+    return value
+
+
+Number = Annotated[float, BeforeValidator(_not_boolean)]
+Whole = Annotated[int, BeforeValidator(_not_boolean)]
+Label = Annotated[str, BeforeValidator(_one_line)]
 
 
 class _Strict(BaseModel):
@@ -32,7 +58,7 @@ class OgiveNoseSpec(_Strict):
     """Tangent ogive nose."""
 
     shape: Literal["ogive"]
-    crh: float = _field(unit="calibres", ge=0.5, le=100.0,
+    crh: Number = _field(unit="calibres", ge=0.5, le=100.0,
                         description="caliber-radius-head: ogive radius in diameters")
 
 
@@ -40,15 +66,15 @@ class ConeNoseSpec(_Strict):
     """Conical nose."""
 
     shape: Literal["cone"]
-    half_angle: float = _field(unit="deg", gt=0.0, lt=90.0, description="cone half-angle")
+    half_angle: Number = _field(unit="deg", gt=0.0, lt=90.0, description="cone half-angle")
 
 
 class SecantOgiveNoseSpec(_Strict):
     """Secant ogive: an arc of ``crh`` diameters through the tip and the shoulder."""
 
     shape: Literal["secant_ogive"]
-    crh: float = _field(unit="calibres", gt=0.0, le=100.0, description="ogive radius in diameters")
-    length: float = _field(unit="calibres", gt=0.0, le=50.0, description="nose length in diameters")
+    crh: Number = _field(unit="calibres", gt=0.0, le=100.0, description="ogive radius in diameters")
+    length: Number = _field(unit="calibres", gt=0.0, le=50.0, description="nose length in diameters")
 
 
 class HemisphereNoseSpec(_Strict):
@@ -61,8 +87,8 @@ class BluntNoseSpec(_Strict):
     """Flat-tipped nose: a tangent ogive of ``crh`` truncated by a flat face of radius ``flat_radius``."""
 
     shape: Literal["blunt"]
-    crh: float = _field(unit="calibres", ge=0.5, le=100.0)
-    flat_radius: float = _field(unit="m", gt=0.0, le=5.0, description="radius of the flat front face")
+    crh: Number = _field(unit="calibres", ge=0.5, le=100.0)
+    flat_radius: Number = _field(unit="m", gt=0.0, le=5.0, description="radius of the flat front face")
 
 
 NoseSpec = Annotated[OgiveNoseSpec | ConeNoseSpec | SecantOgiveNoseSpec | HemisphereNoseSpec | BluntNoseSpec,
@@ -72,8 +98,8 @@ NoseSpec = Annotated[OgiveNoseSpec | ConeNoseSpec | SecantOgiveNoseSpec | Hemisp
 class InteriorSpec(_Strict):
     """A cavity a wall thickness inside the outer profile."""
 
-    wall_thickness: float = _field(unit="m", gt=0.0, le=10.0, description="radial wall thickness")
-    tail_thickness: float = _field(unit="m", gt=0.0, le=100.0, description="tail plate thickness")
+    wall_thickness: Number = _field(unit="m", gt=0.0, le=10.0, description="radial wall thickness")
+    tail_thickness: Number = _field(unit="m", gt=0.0, le=100.0, description="tail plate thickness")
 
 
 class CounterweightSpec(_Strict):
@@ -83,9 +109,9 @@ class CounterweightSpec(_Strict):
     projectile's ``mass`` and centre of mass place it.
     """
 
-    density: float = _field(18000.0, unit="kg/m^3", gt=0.0, le=1e5)
-    start: float | None = _field(None, unit="m", ge=0.0, le=100.0, description="from the nose tip")
-    end: float | None = _field(None, unit="m", gt=0.0, le=100.0, description="from the nose tip")
+    density: Number = _field(18000.0, unit="kg/m^3", gt=0.0, le=1e5)
+    start: Number | None = _field(None, unit="m", ge=0.0, le=100.0, description="from the nose tip")
+    end: Number | None = _field(None, unit="m", gt=0.0, le=100.0, description="from the nose tip")
 
     @model_validator(mode="after")
     def _both_or_neither(self):
@@ -99,29 +125,29 @@ class CounterweightSpec(_Strict):
 class MassPropertiesSpec(_Strict):
     """Mass properties given directly instead of integrated over the mesh."""
 
-    mass: float = _field(unit="kg", gt=0.0, le=1e6)
-    centre_of_mass: float = _field(unit="m", gt=0.0, le=100.0, description="from the nose tip")
-    axial_inertia: float = _field(unit="kg m^2", gt=0.0, le=1e9)
-    transverse_inertia: float = _field(unit="kg m^2", gt=0.0, le=1e9)
+    mass: Number = _field(unit="kg", gt=0.0, le=1e6)
+    centre_of_mass: Number = _field(unit="m", gt=0.0, le=100.0, description="from the nose tip")
+    axial_inertia: Number = _field(unit="kg m^2", gt=0.0, le=1e9)
+    transverse_inertia: Number = _field(unit="kg m^2", gt=0.0, le=1e9)
 
 
 class Projectile(_Strict):
     """An axisymmetric projectile: nose, cylindrical shank and flat tail."""
 
-    name: str = ""
-    diameter: float = _field(unit="m", gt=0.0, le=10.0)
-    length: float = _field(unit="m", gt=0.0, le=100.0, description="nose tip to tail")
+    name: Label = ""
+    diameter: Number = _field(unit="m", gt=0.0, le=10.0)
+    length: Number = _field(unit="m", gt=0.0, le=100.0, description="nose tip to tail")
     nose: NoseSpec
-    body_density: float | None = _field(None, unit="kg/m^3", gt=0.0, le=1e5)
-    mass: float | None = _field(None, unit="kg", gt=0.0, le=1e6)
-    centre_of_mass: float | None = _field(None, unit="m", gt=0.0, le=100.0,
+    body_density: Number | None = _field(None, unit="kg/m^3", gt=0.0, le=1e5)
+    mass: Number | None = _field(None, unit="kg", gt=0.0, le=1e6)
+    centre_of_mass: Number | None = _field(None, unit="m", gt=0.0, le=100.0,
                                           description="target centre of mass, from the nose tip")
-    centre_of_mass_ratio: float | None = _field(None, unit="Lc/L", gt=0.0, lt=1.0,
+    centre_of_mass_ratio: Number | None = _field(None, unit="Lc/L", gt=0.0, lt=1.0,
                                                 description="target centre of mass over length")
     interior: InteriorSpec | None = None
     counterweight: CounterweightSpec | None = None
     mass_properties: MassPropertiesSpec | None = None
-    transverse_inertia_scale: float = _field(1.0, unit="", gt=0.0, le=100.0,
+    transverse_inertia_scale: Number = _field(1.0, unit="", gt=0.0, le=100.0,
                                              description="factor on both transverse moments of inertia")
 
     @model_validator(mode="after")
@@ -162,19 +188,19 @@ class Projectile(_Strict):
 class LawSpec(_Strict):
     """A resistance law ``sigma_n = A sigma_0 + B rho_0 Vn^2`` by its coefficients."""
 
-    A: float = _field(ge=0.0, le=1e3, description="static coefficient")
-    sigma_0: float = _field(unit="Pa", gt=0.0, le=1e11, description="target strength")
-    B: float = _field(ge=0.0, le=1e3, description="dynamic coefficient")
-    rho_0: float = _field(unit="kg/m^3", gt=0.0, le=1e5, description="target density")
+    A: Number = _field(ge=0.0, le=1e3, description="static coefficient")
+    sigma_0: Number = _field(unit="Pa", gt=0.0, le=1e11, description="target strength")
+    B: Number = _field(ge=0.0, le=1e3, description="dynamic coefficient")
+    rho_0: Number = _field(unit="kg/m^3", gt=0.0, le=1e5, description="target density")
 
 
 class MaterialLawSpec(_Strict):
     """A resistance law derived from material constants (docs/effects.md)."""
 
     model: Literal["locking_cavity_expansion"]
-    sigma_0: float = _field(unit="Pa", gt=0.0, le=1e11, description="target strength")
-    rho_0: float = _field(unit="kg/m^3", gt=0.0, le=1e5, description="target density")
-    locking_strain: float = _field(gt=0.0, lt=1.0, description="volumetric strain eta* at locking")
+    sigma_0: Number = _field(unit="Pa", gt=0.0, le=1e11, description="target strength")
+    rho_0: Number = _field(unit="kg/m^3", gt=0.0, le=1e5, description="target density")
+    locking_strain: Number = _field(gt=0.0, lt=1.0, description="volumetric strain eta* at locking")
 
 
 def _law_kind(value) -> str:
@@ -201,7 +227,7 @@ def _check_law_name(value):
 class LayerSpec(_Strict):
     """One layer of a layered target; the last layer has no thickness (it goes on forever)."""
 
-    thickness: float | None = _field(None, unit="m", gt=0.0, le=1e4)
+    thickness: Number | None = _field(None, unit="m", gt=0.0, le=1e4)
     law: LawChoice = _field(description="a named law or a table of its coefficients")
 
     _known_name = field_validator("law")(classmethod(lambda cls, value: _check_law_name(value)))
@@ -234,8 +260,8 @@ class FrictionSpec(_Strict):
     """Tangential stress opposite to the local slip."""
 
     model: Literal["none", "coulomb", "capped"] = "none"
-    coefficient: float = _field(0.1, ge=0.0, le=5.0, description="mu")
-    cap: float | None = _field(None, unit="Pa", gt=0.0, le=1e11, description="tau_s of the capped model")
+    coefficient: Number = _field(0.1, ge=0.0, le=5.0, description="mu")
+    cap: Number | None = _field(None, unit="Pa", gt=0.0, le=1e11, description="tau_s of the capped model")
 
     @model_validator(mode="after")
     def _cap_for_capped(self):
@@ -249,8 +275,8 @@ class FrictionSpec(_Strict):
 class FreeSurfaceSpec(_Strict):
     """Linear free-surface reduction of the normal stress (docs/effects.md)."""
 
-    depth: float = _field(unit="m", gt=0.0, le=1e3, description="full resistance below this depth")
-    surface_fraction: float = _field(0.0, ge=0.0, le=1.0, description="fraction of it at the surface")
+    depth: Number = _field(unit="m", gt=0.0, le=1e3, description="full resistance below this depth")
+    surface_fraction: Number = _field(0.0, ge=0.0, le=1.0, description="fraction of it at the surface")
 
 
 class Effects(_Strict):
@@ -260,20 +286,20 @@ class Effects(_Strict):
     separation: bool = _field(True, description="no stress where Vn <= 0")
     free_surface: FreeSurfaceSpec | None = None
     gravity: bool = False
-    gravity_acceleration: float = _field(9.80665, unit="m/s^2", ge=0.0, le=1e3)
+    gravity_acceleration: Number = _field(9.80665, unit="m/s^2", ge=0.0, le=1e3)
 
 
 class Impact(_Strict):
     """Initial conditions; the tip (or, at grazing incidence, the lowest point) touches the surface."""
 
-    speed: float = _field(unit="m/s", gt=0.0, le=1e4)
-    oblique_angle: float = _field(0.0, unit="deg", gt=-90.0, lt=90.0,
+    speed: Number = _field(unit="m/s", gt=0.0, le=1e4)
+    oblique_angle: Number = _field(0.0, unit="deg", gt=-90.0, lt=90.0,
                                   description="velocity from the target normal")
-    attack_angle: float = _field(0.0, unit="deg", ge=-90.0, le=90.0,
+    attack_angle: Number = _field(0.0, unit="deg", ge=-90.0, le=90.0,
                                  description="axis from the velocity, in the vertical plane")
-    yaw_angle: float = _field(0.0, unit="deg", gt=-90.0, lt=90.0,
+    yaw_angle: Number = _field(0.0, unit="deg", gt=-90.0, lt=90.0,
                               description="axis out of the vertical plane")
-    angular_velocity: tuple[float, float, float] = _field(
+    angular_velocity: tuple[Number, Number, Number] = _field(
         (0.0, 0.0, 0.0), unit="rad/s",
         description="body frame: x along the axis, y normal to the vertical plane")
 
@@ -287,36 +313,55 @@ class Impact(_Strict):
 class Numerics(_Strict):
     """Discretisation and integration settings."""
 
-    mesh_size: float = _field(unit="m", gt=0.0, le=10.0, description="target element size")
-    geometry_order: Literal[1, 2] = 2
+    mesh_size: Number = _field(unit="m", gt=0.0, le=10.0, description="target element size")
+    geometry_order: Annotated[Literal[1, 2], BeforeValidator(_not_boolean)] = 2
     normals: Literal["exact", "mesh"] = "exact"
-    quadrature_order: int = _field(2, ge=1, le=10, description="degree exact on each facet")
+    quadrature_order: Whole = _field(2, ge=1, le=10, description="degree exact on each facet")
     integrator: Literal["rk4", "dopri54"] = "rk4"
-    time_step: float = _field(2e-5, unit="s", gt=0.0, le=1e-2, description="fixed step (rk4)")
-    rtol: float = _field(1e-6, gt=0.0, lt=1.0, description="relative tolerance (dopri54)")
-    time_limit: float = _field(1.0, unit="s", gt=0.0, le=100.0)
-    stop_speed: float = _field(0.5, unit="m/s", gt=0.0, le=1e3,
+    time_step: Number = _field(2e-5, unit="s", gt=0.0, le=1e-2, description="fixed step (rk4)")
+    rtol: Number = _field(1e-6, gt=0.0, lt=1.0, description="relative tolerance (dopri54)")
+    time_limit: Number = _field(1.0, unit="s", gt=0.0, le=100.0)
+    stop_speed: Number = _field(0.5, unit="m/s", gt=0.0, le=1e3,
                                description="the run ends when the speed falls below this")
-    normal_velocity_guard: float = _field(1e-9, ge=0.0, le=1e-3,
+    normal_velocity_guard: Number = _field(1e-9, ge=0.0, le=1e-3,
                                           description="relative guard on Vn = 0")
     energy_guard: bool = _field(True, description="retake shorter any step that gains kinetic energy")
+
+    @model_validator(mode="after")
+    def _reachable_time_limit(self):
+        if self.integrator == "rk4" and self.time_limit / self.time_step > MAX_STEPS:
+            raise ValueError(f"time_step = {self.time_step:g}: {self.time_limit / self.time_step:.3g} steps to reach"
+                             f" time_limit = {self.time_limit:g} s (allowed: time_limit / time_step <= {MAX_STEPS:g};"
+                             " shorten time_limit or lengthen time_step)")
+        return self
 
 
 class Outputs(_Strict):
     """What a run writes with --out."""
 
     history: bool = True
-    history_every: int = _field(1, ge=1, le=1_000_000, description="keep every n-th step")
+    history_every: Whole = _field(1, ge=1, le=1_000_000, description="keep every n-th step")
 
 
 class Scene(_Strict):
     """A complete scene: projectile, target, impact, numerics and outputs."""
 
-    name: str = ""
-    description: str = ""
+    name: Label = ""
+    description: Label = ""
     projectile: Projectile
     target: Target = Target()
     effects: Effects = Effects()
     impact: Impact
     numerics: Numerics
     outputs: Outputs = Outputs()
+
+    @model_validator(mode="after")
+    def _meshable(self):
+        # a guard against typos (1e-5 for 1e-2) that would mesh forever: the studies' finest mesh has ~1e5 cells
+        p, size = self.projectile, self.numerics.mesh_size
+        finest = (0.25 * math.pi * p.diameter ** 2 * p.length / MAX_MESH_CELLS) ** (1 / 3)
+        if size < finest:
+            raise ValueError(f"numerics.mesh_size = {size:g}: too fine for this projectile (allowed: numerics.mesh_size"
+                             f" >= {finest:.3g} m, at most {MAX_MESH_CELLS:g} cells of mesh_size^3 in"
+                             " pi/4 diameter^2 length)")
+        return self

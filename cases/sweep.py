@@ -19,6 +19,7 @@ import gzip
 import io
 import itertools
 import json
+import math
 import os
 from collections.abc import Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -30,13 +31,14 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from .results import atomic_write_bytes
+from .results import atomic_write_bytes, json_safe
 from .scene import SceneError, apply_overrides, parse_override, read_toml, scene_from_dict, scene_key
 from .schema import Scene
 
 __all__ = ["Variation", "grid", "parse_grid", "read_variations", "RunStore", "Sweep", "run_sweep", "MAX_HISTORY_ROWS"]
 
 MAX_HISTORY_ROWS = 4000  # stored histories are thinned to about this many rows
+MAX_GRID_VALUES = 100_000  # values of one START:STOP:STEP range
 
 
 @dataclass(frozen=True)
@@ -76,8 +78,13 @@ def parse_grid(text: str) -> tuple[str, list[Any]]:
             start, stop, step = (float(p) for p in parts)
         except ValueError:
             raise SceneError(f"--grid {text!r}: START:STOP:STEP must be numbers") from None
+        if not all(math.isfinite(v) for v in (start, stop, step)):
+            raise SceneError(f"--grid {text!r}: START:STOP:STEP must be finite numbers")
         if not step > 0 or stop < start:
             raise SceneError(f"--grid {text!r}: need STEP > 0 and STOP >= START")
+        if (stop - start) / step >= MAX_GRID_VALUES:
+            raise SceneError(f"--grid {text!r}: more than {MAX_GRID_VALUES} values (allowed: (STOP - START) / STEP"
+                             f" < {MAX_GRID_VALUES})")
         count = int(round((stop - start) / step)) + 1
         values = [start + i * step for i in range(count)]
         if all(float(v).is_integer() for v in (start, step)):
@@ -104,18 +111,27 @@ def read_variations(path: str | os.PathLike) -> list[Variation]:
     return [Variation(dict(run)) for run in runs]
 
 
+def _file_name(key: str) -> str:
+    """A run key as a file name inside the store: never a path (keys are scene digests, see scene_key)."""
+    if not key or key.startswith(".") or any(c in key for c in "/\\\0") or not key.isprintable():
+        raise ValueError(f"run key {key!r}: must be a plain file name inside the store")
+    return key
+
+
 class RunStore:
     """A folder of finished runs keyed by their resolved scene."""
 
     def __init__(self, root: str | os.PathLike) -> None:
+        # made when the first run is saved: a command that fails on bad input leaves nothing behind
         self.root = Path(root)
-        self.root.mkdir(parents=True, exist_ok=True)
+        if self.root.exists() and not self.root.is_dir():
+            raise SceneError(f"{self.root}: the run store must be a folder, and this is a file")
 
     def record_path(self, key: str) -> Path:
-        return self.root / f"{key}.json"
+        return self.root / f"{_file_name(key)}.json"
 
     def history_path(self, key: str) -> Path:
-        return self.root / f"{key}.csv.gz"
+        return self.root / f"{_file_name(key)}.csv.gz"
 
     def load(self, key: str) -> dict | None:
         """The stored record of a run, or None."""
@@ -136,7 +152,8 @@ class RunStore:
         """Store a run: the history first, then the record that marks it finished."""
         if history_csv is not None:
             atomic_write_bytes(self.history_path(key), history_csv)
-        atomic_write_bytes(self.record_path(key), (json.dumps(record, indent=1) + "\n").encode())
+        text = json.dumps(json_safe(record), indent=1, allow_nan=False) + "\n"  # null, never NaN
+        atomic_write_bytes(self.record_path(key), text.encode())
 
 
 def simulate_record(scene_json: str) -> tuple[dict, bytes | None]:

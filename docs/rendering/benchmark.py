@@ -1,0 +1,88 @@
+"""Measure what rendering costs (docs/rendering.md).
+
+Run: ``.venv/bin/python docs/rendering/benchmark.py`` (about a minute and a half on 2 cores).
+Projectile #3 at 1120 m/s with the shipped numerics (10 mm mesh, RK4 at 10 us).  Prints:
+
+* the run and the set-up of the field evaluator (mesh from the cache, loads);
+* one frame at 1280 x 640 (the ``penetrate render`` snapshot size), and the parts of it spent
+  in the field evaluation and the matplotlib side panel (the rest is the 3-D view: render and
+  read-back): medians of 50 frames after 5 warm-up frames;
+* the resident memory before and after those 50 frames (``/proc/self/statm``);
+* the four snapshots, the trajectory view, the 60-frame GIF at 960 x 480 and 100 ParaView steps
+  (wall time and bytes).
+"""
+
+from __future__ import annotations
+
+import gc
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from cases import load_scene, run_scene, scene_path
+from cases.render import (FieldEvaluator, FrameRenderer, render_animation, render_snapshots, render_trajectory,
+                          resolve_instants, rss_bytes, write_paraview)
+
+
+def main() -> None:
+    scene = load_scene(scene_path("paper_p3"), ["impact.speed=1120"])
+    start = time.perf_counter()
+    result = run_scene(scene)
+    run_seconds = time.perf_counter() - start
+    start = time.perf_counter()
+    evaluator = FieldEvaluator(result)
+    setup_seconds = time.perf_counter() - start
+    print(f"run {run_seconds:.1f} s ({len(evaluator)} steps), field evaluator {setup_seconds:.2f} s, "
+          f"{evaluator.surface.n_facets} facets, {len(evaluator.surface.triangles)} drawn triangles")
+
+    rows = np.linspace(0, len(evaluator) - 1, 55).astype(int)
+    timings: dict[str, list[float]] = {"whole frame": [], "field evaluation": [], "side panel": []}
+    with FrameRenderer(evaluator, (1280, 640)) as renderer:
+        for row in rows[:5]:
+            renderer.render(int(row))
+        gc.collect()
+        before = rss_bytes()
+        for row in rows[5:]:
+            t0 = time.perf_counter()
+            renderer.render(int(row))
+            t1 = time.perf_counter()
+            evaluator.at(int(row))
+            t2 = time.perf_counter()
+            renderer.panel.draw(int(row))
+            t3 = time.perf_counter()
+            timings["whole frame"].append(t1 - t0)
+            timings["field evaluation"].append(t2 - t1)
+            timings["side panel"].append(t3 - t2)
+        gc.collect()
+        after = rss_bytes()
+    medians = {name: statistics.median(values) for name, values in timings.items()}
+    medians["3-D view (the rest)"] = medians["whole frame"] - medians["field evaluation"] - medians["side panel"]
+    print("per frame (median of 50, 1280 x 640): " + ", ".join(
+        f"{name} {value * 1e3:.0f} ms" for name, value in medians.items()))
+    print(f"resident memory: {before / 1e6:.0f} MB before, {after / 1e6:.0f} MB after 50 frames "
+          f"({(after - before) / 1e6:+.2f} MB)")
+
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp)
+        instants = resolve_instants(evaluator, None)
+        t0 = time.perf_counter()
+        paths = render_snapshots(evaluator, out, instants)
+        t1 = time.perf_counter()
+        render_trajectory(evaluator, out / "trajectory.png")
+        t2 = time.perf_counter()
+        movie = render_animation(evaluator, out / "animation.gif", frames=60)
+        t3 = time.perf_counter()
+        written = write_paraview(evaluator, out / "paraview", steps=100)
+        t4 = time.perf_counter()
+        size = sum(p.stat().st_size for p in (out / "paraview").rglob("*") if p.is_file())
+        print(f"4 snapshots {t1 - t0:.1f} s ({sum(p.stat().st_size for p in paths) / 1e3:.0f} kB), "
+              f"trajectory view {t2 - t1:.1f} s, animation {movie['frames']} frames {t3 - t2:.1f} s "
+              f"({movie['seconds_per_frame']:.2f} s per frame, {movie['bytes'] / 1e6:.2f} MB), "
+              f"ParaView {len(written['surfaces'])} steps {t4 - t3:.1f} s ({size / 1e6:.0f} MB)")
+
+
+if __name__ == "__main__":
+    main()
