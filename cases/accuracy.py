@@ -95,6 +95,8 @@ def accuracy_study(scene: str | os.PathLike, overrides: list[str], store: RunSto
                    quadrature_orders: Sequence[int] = DEFAULT_QUADRATURE_ORDERS) -> tuple[pd.DataFrame, dict]:
     """Run the grid, compare with the reference, write ``accuracy.md``, ``.csv`` and ``.png`` into ``out``."""
     settings = _settings(sizes, steps, rtols, quadrature_orders)
+    # the scene's own numerics as they are, to show where they sit against the front
+    settings.append({"axis": "scene"})
     variations = [Variation({k: v for k, v in s.items() if k != "axis"}) for s in settings]
     sweep = Sweep.from_file(scene, overrides, variations)
     table = run_sweep(sweep, store, workers=workers, scheduler=scheduler, progress=progress)
@@ -103,6 +105,13 @@ def accuracy_study(scene: str | os.PathLike, overrides: list[str], store: RunSto
         failed = table[table["error"].notna()]
         raise RuntimeError(f"{len(failed)} accuracy runs failed, e.g. {failed['error'].iloc[0]}")
     base = sweep.scenes[0]
+    own = table["axis"] == "scene"
+    for name in ("mesh_size", "geometry_order", "normals", "quadrature_order", "integrator", "time_step", "rtol"):
+        column = f"numerics.{name}"
+        if column not in table:
+            table[column] = np.nan
+        table[column] = table[column].astype(object)
+        table.loc[own, column] = getattr(sweep.scenes[-1].numerics, name)
     finest = table[(table["axis"] == "time") & (table["numerics.integrator"] == "rk4")]
     finest = finest.sort_values("numerics.time_step")
     # the scene counts as unstable when its most accurate run is

@@ -19,9 +19,10 @@ def test_normal_impact_uses_the_exact_reference(tmp_path):
                                       workers=2, progress=False, quadrature_orders=(4,))
     assert reference["kind"].startswith("1-D integration")
     # mesh axis 2 sizes x 2 orders x 2 normal models, quadrature axis 2 sizes x 1 order, time axis
-    # one more step and one tolerance, combined axis the one size x step pair not yet run
+    # one more step and one tolerance, combined axis the one size x step pair not yet run, and the
+    # scene as it is
     assert list(table["axis"].value_counts().sort_index().items()) == [
-        ("combined", 1), ("mesh", 8), ("quadrature", 2), ("time", 2)]
+        ("combined", 1), ("mesh", 8), ("quadrature", 2), ("scene", 1), ("time", 2)]
     quadrature = table[table["axis"] == "quadrature"].set_index("numerics.mesh_size")["depth_error"]
     mesh_q2 = table[(table["axis"] == "mesh") & (table["numerics.geometry_order"] == 2)
                     & (table["numerics.normals"] == "exact")].set_index("numerics.mesh_size")["depth_error"]
