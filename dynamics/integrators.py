@@ -13,6 +13,7 @@ Concrete methods differ only in their tableau, as in scipy's ``integrate._ivp``.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -120,22 +121,29 @@ class RungeKutta:
              first: Evaluation | None = None) -> StepResult:
         """Advance ``state`` by ``h`` seconds."""
         x0, v0, q0, w0 = state.position, state.velocity, state.attitude, state.angular_velocity
+        # the increments' start (x0, v0, 0, omega0, 0): one add per stage gives every stage state
+        start = np.zeros(N_INCREMENTS)
+        start[POSITION], start[VELOCITY], start[ANGULAR_VELOCITY] = x0, v0, w0
         k = np.empty((self.stages, N_INCREMENTS))
         evaluations: list[Evaluation] = []
         for i in range(self.stages):
-            z = h * (self.A[i, :i] @ k[:i]) if i else np.zeros(N_INCREMENTS)
-            x, v, u, w = x0 + z[POSITION], v0 + z[VELOCITY], z[ROTATION], w0 + z[ANGULAR_VELOCITY]
-            q = compose(q0, u) if i else q0
-            if i == 0 and first is not None:
-                e = first
+            if i:
+                z = start + (h * self.A[i, :i]) @ k[:i]
+                x, v, u, w = z[POSITION], z[VELOCITY], z[ROTATION], z[ANGULAR_VELOCITY]
+                e = evaluate(body, loads, x, v, compose(q0, u), w)
+                rate = right_jacobian_inverse(u, w)
             else:
-                e = evaluate(body, loads, x, v, q, w)
+                x, v, w = x0, v0, w0
+                e = first if first is not None else evaluate(body, loads, x, v, q0, w)
+                rate = w
             evaluations.append(e)
-            k[i, POSITION] = v
-            k[i, VELOCITY] = e.acceleration
-            k[i, ROTATION] = right_jacobian_inverse(u, w) if i else w
-            k[i, ANGULAR_VELOCITY] = e.angular_acceleration
-            k[i, PATH] = np.sqrt(v @ v)
+            row = k[i]
+            row[POSITION] = v
+            row[VELOCITY] = e.acceleration
+            row[ROTATION] = rate
+            row[ANGULAR_VELOCITY] = e.angular_acceleration
+            vx, vy, vz = v.tolist()
+            row[12] = math.sqrt(vx * vx + vy * vy + vz * vz)
         z = h * (self.b @ k)
         new = State(
             time=state.time + h,
@@ -143,7 +151,7 @@ class RungeKutta:
             velocity=v0 + z[VELOCITY],
             attitude=normalize(compose(q0, z[ROTATION])),
             angular_velocity=w0 + z[ANGULAR_VELOCITY],
-            path_length=state.path_length + float(z[PATH][0]),
+            path_length=state.path_length + float(z[12]),
         )
         error = h * (self.b_error @ k) if self.b_error is not None else None
         return StepResult(new, error, evaluations[0], evaluations[-1] if self.fsal else None)

@@ -27,6 +27,7 @@ import numpy as np
 import pytest
 
 from cases import load_scene, run_scene, scene_path
+from cases.paper import STUDY_NUMERICS
 from cases.runner import prepare_projectile, scene_loads
 from cases.sweep import RunStore, Sweep, Variation, grid, read_variations, run_sweep
 from dynamics import RK4, RigidBody, State, simulate
@@ -160,12 +161,14 @@ def test_one_run_process(benchmark):
                        rounds=7, iterations=1)
 
 
-@pytest.mark.parametrize("cache", ["warm", "cold"])
-def test_sweep_72_runs(benchmark, tmp_path, monkeypatch, cache):
+@pytest.mark.parametrize(("numerics", "cache"), [("study", "warm"), ("study", "cold"), ("shipped", "warm")])
+def test_sweep_72_runs(benchmark, tmp_path, monkeypatch, numerics, cache):
     """The 155 mm family: 6 speeds x 4 projectiles x 3 disturbances on every core, into an empty store.
 
-    ``warm``: meshes and prepared projectiles already in the disk cache (a user's second
-    sweep of the same family); ``cold``: an empty cache, so the sweep meshes four projectiles.
+    ``study``: the numerics of ``penetrate paper`` (20 mm, 2e-5 s; cases.paper.STUDY_NUMERICS);
+    ``shipped``: the scene files' own (10 mm, 2e-5 s).  ``warm``: meshes and prepared
+    projectiles already in the disk cache (a user's second sweep of the same family);
+    ``cold``: an empty cache, so the sweep meshes four projectiles.
     """
     variations = [
         Variation({**g.values, **v.values})
@@ -174,7 +177,7 @@ def test_sweep_72_runs(benchmark, tmp_path, monkeypatch, cache):
         for v in read_variations(ROOT / "docs" / "performance" / "disturbances.toml")
     ]
     assert len(variations) == 72
-    sweep = Sweep.from_file(scene_path("paper_p3"), [], variations)
+    sweep = Sweep.from_file(scene_path("paper_p3"), STUDY_NUMERICS if numerics == "study" else [], variations)
     rounds = iter(range(100))
 
     def setup():
@@ -187,4 +190,5 @@ def test_sweep_72_runs(benchmark, tmp_path, monkeypatch, cache):
         run_sweep(sweep, RunStore(tmp_path / "fill"), progress=False)
     table = benchmark.pedantic(run_sweep, setup=setup, rounds=3, iterations=1)
     assert len(table) == 72 and ("error" not in table or table["error"].isna().all())
-    benchmark.extra_info.update(runs=72, steps_total=int(table["steps"].sum()))
+    benchmark.extra_info.update(runs=72, steps_total=int(table["steps"].sum()),
+                                points=int(table["surface_points"].iloc[0]))
