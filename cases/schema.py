@@ -268,7 +268,7 @@ class FrictionSpec(_Strict):
         if self.model == "capped" and self.cap is None:
             raise ValueError("the capped model needs cap (tau_s, Pa)")
         if self.model != "capped" and self.cap is not None:
-            raise ValueError("cap applies to the capped model only")
+            raise ValueError("cap applies to the capped model only: drop cap or give model = \"capped\"")
         return self
 
 
