@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import ast
 import csv
+import gzip
 import json
 import math
 import os
@@ -273,6 +274,9 @@ def test_run_store_files_are_named_by_digest_only(tmp_path):
     run_sweep(sweep, store, workers=1, progress=False)
     names = sorted(p.name for p in tmp_path.rglob("*") if p.is_file())
     assert len(names) == 4 and all(re.fullmatch(r"[0-9a-f]{24}\.(json|csv\.gz)", n) for n in names), names
+    for path in (tmp_path / "store").glob("*.csv.gz"):  # undefined cells empty, as in history.csv
+        text = gzip.decompress(path.read_bytes()).decode()
+        assert not re.search(r"(?i)\b(nan|inf)\b", text) and ",\n" in text
     for key in ["../x", "/etc/passwd", "a/b", "a\\b", ".hidden", "", "a\x00b", "a\nb"]:
         with pytest.raises(ValueError, match="plain file name"):
             store.record_path(key)
