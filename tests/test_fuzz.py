@@ -467,7 +467,7 @@ def _bad_scene_files(folder: Path) -> dict[str, Path]:
     }
     files["binary"].write_bytes(b"\xff\xfe\x00\x01garbage")
     files["not-toml"].write_text("[impact\nspeed = ")
-    files["bad-field"].write_text(good.replace("speed = 280.0", "speed = -280.0"))
+    files["bad-field"].write_text(good.replace("attack_angle = 0.0", "attack_angle = 120.0"))  # no noise sets it
     files["unknown-key"].write_text(good + "\n[colour]\nred = 1\n")
     files["nested"].write_text("x = " + "[" * 3000 + "]" * 3000)
     return files
@@ -486,12 +486,11 @@ BAD_WHOLE = BAD_NUMBER + ["2.5", "1" * 5000]  # for int options
 @st.composite
 def bad_command_lines(draw, files):
     """A command line with at least one bad input (the last word wins where options repeat)."""
-    command = draw(st.sampled_from(["run", "sweep", "critical", "convergent", "compare", "accuracy"]))
+    command = draw(st.sampled_from(["run", "sweep", "critical", "convergent", "compare", "accuracy", "render"]))
     # the studies set some keys themselves: a bad value there would be overridden, not rejected
     overridden = {"critical": ("impact.speed",), "convergent": ("impact.speed",), "compare": ("target.law",),
                   "accuracy": ("numerics.",)}.get(command, ())
-    kinds = [k for k in files if not (k == "bad-field" and overridden)]
-    scene_kind = draw(st.sampled_from([*kinds, "good", "good"]))
+    scene_kind = draw(st.sampled_from([*files, "good", "good"]))
     scene = GOOD if scene_kind == "good" else str(files[scene_kind])
     args = [command, scene]
     noise = st.one_of(
@@ -514,7 +513,11 @@ def bad_command_lines(draw, files):
         poisons += [("--laws", v) for v in [",", "clay", "soil,clay"]]
     if command == "accuracy":
         poisons += [("--sizes", v) for v in BAD_NUMBER[:6]]
-    if command != "run":
+    if command == "render":
+        poisons += [("--size", v) for v in ["0x0", "abc", "64x", "100000x100000", "640x480x2", ""]]
+        poisons += [("--steps", v) for v in ["0", "-1", "x", ""]] + [("--times", v) for v in ["x", "peak,xyz"]]
+        poisons += [("--frames", v) for v in BAD_WHOLE] + [("--station", v) for v in BAD_NUMBER]
+    elif command != "run":
         poisons += [("--workers", v) for v in BAD_WHOLE]
     if scene_kind == "good" or draw(st.booleans()):
         args += list(draw(st.sampled_from(poisons)))
@@ -552,7 +555,7 @@ def _listing(folder: Path) -> set[str]:
 EXTRA = {"run": ["--out", "outputs"], "sweep": ["--out", "outputs/table.csv", "--store", "store", "--no-progress"],
          "critical": ["--store", "store", "--no-progress"], "convergent": ["--store", "store", "--no-progress"],
          "compare": ["--out", "outputs", "--store", "store", "--no-progress"],
-         "accuracy": ["--out", "outputs", "--store", "store", "--no-progress"]}
+         "accuracy": ["--out", "outputs", "--store", "store", "--no-progress"], "render": ["--out", "outputs"]}
 
 
 @fuzz(250)
@@ -571,6 +574,7 @@ def test_command_line_bad_input(cli_files, tmp_path_factory, data):
     assert _listing(work) == before, (args, _listing(work) - before)  # no --out, no store, nothing
     message = lines[0].split(": error: ", 1)[1]
     OUTCOMES["command line (bad input)"][f"exit {code}"] += 1
+    assert code == 2, (args, stderr)  # bad input, found before anything runs
     if code == 2 and not message.startswith(("argument ", "unrecognized", "the following", "invalid choice")):
         sources = sorted((a for a in args if message.startswith(f"{a}: ")), key=len)  # the scene or a --list
         check_error(message, sources[-1] if sources else None)
