@@ -20,6 +20,8 @@ from typing import Any
 import annotated_types
 from pydantic import BaseModel, ValidationError
 
+from fem_loads.resistance import NAMED_LAWS
+
 from .schema import LawSpec, MaterialLawSpec, Scene
 
 __all__ = ["SceneError", "load_scene", "scene_from_dict", "apply_overrides", "parse_override",
@@ -107,7 +109,8 @@ def apply_overrides(data: dict[str, Any], overrides: list[str]) -> dict[str, Any
             child = node.setdefault(part, {})
             if not isinstance(child, dict):
                 where = ".".join(path[: depth + 1])
-                raise SceneError(f"--set {_quoted(text)}: {where} is a value, not a table")
+                raise SceneError(f"--set {_quoted(text)}: {where} is a value, not a table"
+                                 f" (the key must stop at {where})")
             node = child
         node[path[-1]] = value
     return data
@@ -149,6 +152,8 @@ def _models_in(annotation: Any) -> list[type[BaseModel]]:
     if origin is typing.Annotated:
         return _models_in(typing.get_args(annotation)[0])
     if origin in (typing.Union, types.UnionType):
+        return [m for arg in typing.get_args(annotation) for m in _models_in(arg)]
+    if origin in (list, tuple):
         return [m for arg in typing.get_args(annotation) for m in _models_in(arg)]
     if isinstance(annotation, type) and issubclass(annotation, BaseModel):
         return [annotation]
@@ -230,6 +235,18 @@ def _explain_one(error: dict) -> str:
         return f"{name}: unknown key (allowed here: {', '.join(allowed)})"
     if kind == "missing":
         return f"{name}: missing (required)"
+    if kind in ("union_tag_not_found", "union_tag_invalid"):
+        tags = ", ".join(_tags(_field_at(loc)[1]))
+        if kind == "union_tag_not_found":
+            return f"{name}: needs shape (allowed: shape = {tags})"
+        return f"{name}.shape = {_show(ctx.get('tag'))}: unknown shape (allowed: {tags})"
+    if kind in ("model_type", "model_attributes_type", "dict_type"):
+        if loc and loc[-1] in _LAW_TAGS:
+            return (f"{name} = {_show(given)}: must be a law (allowed: a name, {', '.join(sorted(NAMED_LAWS))};"
+                    " a table of A, sigma_0, B, rho_0; or a table of model, sigma_0, rho_0, locking_strain)")
+        models = _field_at(loc)[1]
+        keys = ", ".join(sorted({k for m in models for k in m.model_fields}))
+        return f"{name} = {_show(given)}: must be a table (allowed: a table of {keys})"
     bounds = {"greater_than": "> {gt}", "greater_than_equal": ">= {ge}",
               "less_than": "< {lt}", "less_than_equal": "<= {le}"}
     if kind in bounds:
@@ -247,6 +264,12 @@ def _explain_one(error: dict) -> str:
     if kind == "value_error" or isinstance(given, dict):
         return f"{name}: {rule}{suffix}"
     return f"{name} = {_show(given)}: {rule}{suffix}"
+
+
+def _tags(models: list[type[BaseModel]]) -> list[str]:
+    """The ``shape`` values the models of a tagged union accept, quoted."""
+    return [repr(arg) for m in models if "shape" in m.model_fields
+            for arg in typing.get_args(m.model_fields["shape"].annotation)]
 
 
 def _explain(exc: ValidationError) -> str:

@@ -177,6 +177,24 @@ class Projectile(_Strict):
             raise ValueError("give mass or body_density, not both")
         return self
 
+    @model_validator(mode="after")
+    def _buildable(self):
+        """The mesh room's own checks of the shape (nose shorter than the body, cavity inside the wall, ...),
+        made here so that they fail before any meshing, naming the field."""
+        from mesh import Interior, Profile, ProjectileGeometry
+
+        from .runner import nose_of
+
+        profile = Profile(self.diameter, self.length, nose_of(self.nose))
+        interior = None
+        if self.interior is not None:
+            interior = Interior(self.interior.wall_thickness, self.interior.tail_thickness)
+        span = None
+        if self.counterweight is not None and self.counterweight.start is not None:
+            span = (self.counterweight.start, self.counterweight.end)
+        ProjectileGeometry(profile, interior, span)
+        return self
+
     @property
     def centre_target(self) -> float | None:
         """Target centre of mass from the tip (m), if any."""
@@ -268,7 +286,7 @@ class FrictionSpec(_Strict):
         if self.model == "capped" and self.cap is None:
             raise ValueError("the capped model needs cap (tau_s, Pa)")
         if self.model != "capped" and self.cap is not None:
-            raise ValueError("cap applies to the capped model only")
+            raise ValueError("cap applies to the capped model only: drop cap or give model = \"capped\"")
         return self
 
 

@@ -21,6 +21,7 @@ import itertools
 import json
 import math
 import os
+import re
 from collections.abc import Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
@@ -184,7 +185,11 @@ def _csv_bytes(table: pd.DataFrame) -> bytes:
     buffer = io.StringIO()
     np.savetxt(buffer, table.to_numpy(dtype=float), fmt="%.10g", delimiter=",", header=",".join(table.columns),
                comments="")
-    return buffer.getvalue().encode()
+    # undefined cells (e.g. resistance_centre_from_tip) empty, as pandas writes them: never "nan" in an output
+    return _NON_FINITE_CELL.sub("", buffer.getvalue()).encode()
+
+
+_NON_FINITE_CELL = re.compile(r"(?m)(?<![^,\n])-?(?:nan|inf)(?=,|$)")
 
 
 @dataclass

@@ -41,7 +41,7 @@ def test_paper_family_scenes_place_their_counterweight(number, ratio):
     ("numerics.integrator=euler", "numerics.integrator = 'euler': input should be 'rk4' or 'dopri54'"),
     ("target.law=clay", "target.law: unknown law 'clay': must be one of softer_soil, soil,"),
     ("target.law={A=1,B=1,sigma_0=-1,rho_0=1}", "target.law.sigma_0 = -1: must be > 0"),
-    ("projectile.nose.shape=sphere", "projectile.nose: input tag 'sphere'"),
+    ("projectile.nose.shape=sphere", "projectile.nose.shape = 'sphere': unknown shape (allowed: 'ogive', 'cone',"),
     ("impact.speed='fast'", "impact.speed = 'fast': input should be a valid number"),
     ("projectile.body_density=7850", "give mass or body_density, not both"),
     ("projectile.centre_of_mass=0.5", "centre_of_mass places a counterweight"),

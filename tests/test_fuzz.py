@@ -1,0 +1,663 @@
+"""Fuzzing the scene loader and the command line with hypothesis (docs/robustness.md).
+
+Every input must end in a valid scene (every number finite and inside the schema's stated range)
+or in a :class:`SceneError` of one line that names the field and says what is allowed; no other
+exception may escape.  The command ends in exit code 0 or in one line on stderr with a non-zero
+code, and creates nothing when it fails on bad input.
+
+``PENETRATE_FUZZ_SCALE=N`` multiplies the number of examples (the default run takes about 30 s);
+the outcome counts are printed at the end of the module (``pytest -s`` or in the terminal summary).
+"""
+
+from __future__ import annotations
+
+import collections
+import contextlib
+import datetime
+import io
+import json
+import math
+import os
+import re
+import subprocess
+import sys
+import typing
+from pathlib import Path
+from unittest import mock
+
+import annotated_types
+import pandas as pd
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from pydantic import BaseModel
+
+from cases import SHIPPED_SCENES, scene_path
+from cases.cli import main
+from cases.results import HISTORY_UNITS
+from cases.scene import SceneError, load_scene, read_toml, scene_from_dict
+from cases.schema import Scene
+
+SCALE = float(os.environ.get("PENETRATE_FUZZ_SCALE", "1"))
+OUTCOMES: dict[str, collections.Counter] = collections.defaultdict(collections.Counter)
+
+
+def fuzz(examples: int):
+    return settings(max_examples=max(1, round(examples * SCALE)), deadline=None,
+                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much,
+                                           HealthCheck.data_too_large, HealthCheck.large_base_example])
+
+
+@pytest.fixture(scope="module", autouse=True)
+def report_outcomes(request):
+    """Print how many cases each property tried and how they ended."""
+    yield
+    lines = [f"fuzz {name}: {sum(c.values())} cases: " + ", ".join(f"{k} {v}" for k, v in sorted(c.items()))
+             for name, c in OUTCOMES.items()]
+    reporter = request.config.pluginmanager.get_plugin("terminalreporter")
+    capture = request.config.pluginmanager.get_plugin("capturemanager")
+    if reporter is None or capture is None or not lines:
+        return
+    with capture.global_and_fixture_disabled():
+        reporter.write_line("")
+        for line in lines:
+            reporter.write_line(line)
+
+
+# ---------------------------------------------------------------------------
+# the schema, walked
+
+
+def _models(annotation) -> list[type[BaseModel]]:
+    origin, args = typing.get_origin(annotation), typing.get_args(annotation)
+    if origin is typing.Annotated:
+        return _models(args[0])
+    if args and origin is not typing.Literal:
+        return [m for a in args for m in _models(a)]
+    return [annotation] if isinstance(annotation, type) and issubclass(annotation, BaseModel) else []
+
+
+def _schema_paths(models=(Scene,), prefix=()) -> dict[tuple, object]:
+    """Every field path of the schema (through unions and lists, whose index is 0) -> its FieldInfo."""
+    paths = {}
+    for model in models:
+        for name, info in model.model_fields.items():
+            path = prefix + (name,)
+            paths.setdefault(path, info)
+            inner = _models(info.annotation)
+            if inner:
+                listed = typing.get_origin(info.annotation) is list or any(
+                    typing.get_origin(a) is list for a in typing.get_args(info.annotation))
+                paths.update(_schema_paths(inner, path + ((0,) if listed else ())))
+    return paths
+
+
+SCHEMA = _schema_paths()
+NUMERIC = {p: i for p, i in SCHEMA.items() if any(isinstance(m, (annotated_types.Gt, annotated_types.Ge,
+                                                                   annotated_types.Lt, annotated_types.Le))
+                                                  for m in i.metadata)}
+TOP_LEVEL = set(Scene.model_fields)
+BASES = {name: read_toml(scene_path(name)) for name in SHIPPED_SCENES}
+GOOD = str(scene_path("forrestal_luk_test2"))
+
+
+def _bounds(info) -> tuple[float, bool, float, bool]:
+    lo, lo_open, hi, hi_open = -math.inf, False, math.inf, False
+    for m in info.metadata:
+        if isinstance(m, annotated_types.Gt):
+            lo, lo_open = m.gt, True
+        elif isinstance(m, annotated_types.Ge):
+            lo = m.ge
+        elif isinstance(m, annotated_types.Lt):
+            hi, hi_open = m.lt, True
+        elif isinstance(m, annotated_types.Le):
+            hi = m.le
+    return lo, lo_open, hi, hi_open
+
+
+def check_scene(scene: Scene) -> None:
+    """Every number of a valid scene is finite, not a boolean, and inside its field's range."""
+
+    def walk(model: BaseModel, where: str) -> None:
+        for name, info in type(model).model_fields.items():
+            value = getattr(model, name)
+            here = f"{where}.{name}" if where else name
+            lo, lo_open, hi, hi_open = _bounds(info)
+            for item in (value if isinstance(value, (tuple, list)) else [value]):
+                if isinstance(item, BaseModel):
+                    walk(item, here)
+                elif isinstance(item, (int, float)) and not isinstance(item, bool):
+                    assert math.isfinite(item), here
+                    if value is not None and not isinstance(value, (tuple, list)):
+                        assert (lo < item if lo_open else lo <= item), (here, item)
+                        assert (item < hi if hi_open else item <= hi), (here, item)
+            if isinstance(value, float) or (isinstance(value, tuple) and value and isinstance(value[0], float)):
+                assert not isinstance(value, bool)
+
+    walk(scene, "")
+    assert max(abs(w) for w in scene.impact.angular_velocity) <= 1e5
+    json.dumps(scene.model_dump(mode="json"), allow_nan=False)
+
+
+_NAME = r"(?:[^\W\d]\w*|\d+|'(?:[^'\\]|\\.)*'|\"(?:[^\"\\]|\\.)*\")"
+FIELD = re.compile(rf"^{_NAME}(?:\.{_NAME})*(?: = |: )")
+SAYS_WHAT_IS_ALLOWED = ("allowed", "must", "should", "missing (required)", "give ", "need", "expected",
+                        "not both", "drop ", "nested too deeply", "not valid TOML", "cannot read the scene file",
+                        "not readable")
+
+
+def check_error(message: str, source: str | None = None) -> str:
+    """One line that names the field (a dotted path, or the --set option) and says what is allowed."""
+    assert message.isprintable() and "Traceback" not in message, message
+    assert any(word in message for word in SAYS_WHAT_IS_ALLOWED), message
+    if message.startswith("--"):  # an option: --set, --grid, --laws, ...
+        return "option"
+    if source is not None:
+        assert message.startswith(f"{source}: "), message
+        message = message[len(source) + 2:]
+    if message.startswith(("not valid TOML", "cannot read the scene file", "arrays or tables nested")):
+        return "file"
+    assert FIELD.match(message), message
+    head = message.split(".")[0].split(" ")[0].split(":")[0]
+    assert head in TOP_LEVEL or "unknown key" in message or head.startswith(("'", '"')), message
+    return "field"
+
+
+def outcome(name: str, load, source: str | Path) -> None:
+    """Call ``load``; a Scene is checked, a SceneError is checked, anything else fails the test."""
+    try:
+        scene = load()
+    except SceneError as exc:
+        kind = check_error(str(exc), str(source))
+        OUTCOMES[name][f"SceneError ({kind})"] += 1
+        return
+    check_scene(scene)
+    OUTCOMES[name]["valid"] += 1
+
+
+# ---------------------------------------------------------------------------
+# strategies
+
+SPECIAL = [0, 0.0, -0.0, -1, 1, -1e-300, 1e-300, 5e-324, 1e308, -1e308, 1.7976931348623157e308,
+           math.nan, math.inf, -math.inf, 2 ** 63, -(2 ** 63), 10 ** 30, 10 ** 400, 90, -90, 90.0000001,
+           -90.0000001, 360, 1e4, 1e-9, 0.5, 2]
+WORDS = ["", " ", "nan", "inf", "-inf", "1e3", "true", "soil", "softer_soil", "clay", "ogive", "cone",
+         "hemisphere", "rk4", "dopri54", "euler", "exact", "mesh", "coulomb", "capped",
+         "__import__('os').system('touch PWNED')", "../../etc/passwd", "/tmp/x", "a\nb", "\x1b[31mred", "\x00",
+         "é", "💥", "x" * 300]
+scalars = st.one_of(
+    st.sampled_from(SPECIAL),
+    st.floats(),
+    st.integers(),
+    st.booleans(),
+    st.sampled_from(WORDS),
+    st.text(max_size=12),
+    st.dates(), st.times(), st.datetimes(),
+)
+values = st.recursive(scalars, lambda inner: st.one_of(st.lists(inner, max_size=4),
+                                                       st.dictionaries(st.text(max_size=8), inner, max_size=3)),
+                      max_leaves=8)
+keys = st.one_of(st.sampled_from(sorted({p[-1] for p in SCHEMA if isinstance(p[-1], str)})), st.text(max_size=10))
+
+
+@st.composite
+def in_range(draw, path):
+    """A number at, just inside or just outside a numeric field's range, or anywhere in it."""
+    lo, lo_open, hi, hi_open = _bounds(NUMERIC[path])
+    lo_f = -1e308 if lo == -math.inf else lo
+    hi_f = 1e308 if hi == math.inf else hi
+    choice = draw(st.integers(0, 4))
+    if choice == 0:
+        return draw(st.floats(lo_f, hi_f, exclude_min=lo_open, exclude_max=hi_open, allow_nan=False))
+    if choice == 1:
+        return draw(st.sampled_from([lo_f, hi_f]))
+    if choice == 2:
+        return draw(st.sampled_from([math.nextafter(lo_f, -math.inf), math.nextafter(hi_f, math.inf)]))
+    if choice == 3:
+        return draw(st.integers(int(max(lo_f, -1e6)), int(min(hi_f, 1e6))))
+    return draw(st.sampled_from(SPECIAL))
+
+
+def _existing_paths(data, prefix=()):
+    for key, value in (data.items() if isinstance(data, dict) else enumerate(data)):
+        yield prefix + (key,)
+        if isinstance(value, (dict, list)):
+            yield from _existing_paths(value, prefix + (key,))
+
+
+def _set(data, path, value):
+    node = data
+    for depth, part in enumerate(path[:-1]):
+        if isinstance(node, list):
+            if not (isinstance(part, int) and part < len(node)):
+                return
+            if not isinstance(node[part], (dict, list)):
+                node[part] = {}
+            node = node[part]
+            continue
+        if not isinstance(node.get(part), (dict, list)):
+            node[part] = [{}] if isinstance(path[depth + 1], int) else {}
+        node = node[part]
+    last = path[-1]
+    if isinstance(node, list):
+        if isinstance(last, int) and last < len(node):
+            node[last] = value
+    else:
+        node[last] = value
+
+
+def _delete(data, path):
+    node = data
+    for part in path[:-1]:
+        try:
+            node = node[part]
+        except (KeyError, IndexError, TypeError):
+            return
+    if isinstance(node, dict):
+        node.pop(path[-1], None)
+    elif isinstance(node, list) and isinstance(path[-1], int) and path[-1] < len(node):
+        del node[path[-1]]
+
+
+@st.composite
+def mutated_scenes(draw):
+    """A shipped scene with one to four leaves replaced, deleted, or unknown keys added."""
+    data = json.loads(json.dumps(BASES[draw(st.sampled_from(SHIPPED_SCENES))], default=str))
+    for _ in range(draw(st.integers(1, 4))):
+        paths = sorted(set(_existing_paths(data)) | set(SCHEMA), key=repr)
+        path = draw(st.sampled_from(paths))
+        action = draw(st.sampled_from(["value", "value", "range", "range", "delete", "unknown", "table"]))
+        if action == "range" and path in NUMERIC:
+            _set(data, path, draw(in_range(path)))
+        elif action == "delete":
+            _delete(data, path)
+        elif action == "unknown":
+            _set(data, path[:-1] + (draw(keys),), draw(values))
+        elif action == "table":
+            _set(data, path, draw(st.sampled_from([{}, [], "", 0, None, True])))
+        else:
+            _set(data, path, draw(values))
+    return data
+
+
+def _toml_value(value) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        return "nan" if value != value else ("inf" if value == math.inf else "-inf" if value == -math.inf
+                                             else repr(value))
+    if isinstance(value, str):
+        return json.dumps(value, ensure_ascii=False).replace("\x7f", "\\u007f")
+    if isinstance(value, (datetime.date, datetime.time)):
+        return value.isoformat()
+    if isinstance(value, list):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{_toml_value(str(k))} = {_toml_value(v)}" for k, v in value.items()) + "}"
+    raise TypeError(type(value))
+
+
+def to_toml(data: dict) -> str:
+    return "".join(f"{_toml_value(str(k))} = {_toml_value(v)}\n" for k, v in data.items() if v is not None)
+
+
+def _strip_none(value):
+    if isinstance(value, dict):
+        return {k: _strip_none(v) for k, v in value.items() if v is not None}
+    if isinstance(value, list):
+        return [_strip_none(v) for v in value if v is not None]
+    return value
+
+
+# ---------------------------------------------------------------------------
+# (a) mutated scenes, as dictionaries and as TOML files
+
+
+@fuzz(500)
+@given(mutated_scenes())
+def test_mutated_scenes_validate_or_explain(data):
+    outcome("mutated scene (dict)", lambda: scene_from_dict(data), "scene")
+
+
+@pytest.fixture(scope="module")
+def scratch(tmp_path_factory):
+    return tmp_path_factory.mktemp("fuzz")
+
+
+@fuzz(300)
+@given(mutated_scenes())
+def test_mutated_scene_files_validate_or_explain(scratch, data):
+    path = scratch / "mutated.toml"
+    path.write_text(to_toml(_strip_none(data)), encoding="utf-8")
+    outcome("mutated scene (TOML file)", lambda: load_scene(path), path)
+
+
+# ---------------------------------------------------------------------------
+# (b) garbage: random bytes, random text, random TOML documents, shipped files with random edits
+
+
+@fuzz(200)
+@given(st.one_of(st.binary(max_size=300), st.text(max_size=300).map(lambda t: t.encode("utf-8", "surrogatepass"))))
+def test_random_bytes_and_text(scratch, raw):
+    path = scratch / "garbage.toml"
+    path.write_bytes(raw)
+    outcome("random bytes and text", lambda: load_scene(path), path)
+
+
+@fuzz(200)
+@given(st.dictionaries(keys, values, max_size=6))
+def test_random_toml_documents(scratch, data):
+    path = scratch / "random.toml"
+    path.write_text(to_toml(_strip_none(data)), encoding="utf-8")
+    outcome("random TOML documents", lambda: load_scene(path), path)
+
+
+@st.composite
+def edited_text(draw):
+    """A shipped scene file with random characters deleted, inserted or replaced."""
+    text = scene_path(draw(st.sampled_from(SHIPPED_SCENES))).read_text()
+    for _ in range(draw(st.integers(1, 5))):
+        start = draw(st.integers(0, len(text)))
+        end = draw(st.integers(start, min(len(text), start + 12)))
+        insert = draw(st.one_of(st.text(max_size=6), st.sampled_from(["[", "]", "=", "\n", "\"", "{", ".",
+                                                                         "nan", "-", "1e999", "\\", "#", "'''"])))
+        text = text[:start] + insert + text[end:]
+    return text
+
+
+@fuzz(300)
+@given(edited_text())
+def test_edited_scene_files(scratch, text):
+    path = scratch / "edited.toml"
+    path.write_bytes(text.encode("utf-8", "surrogatepass"))
+    outcome("edited scene files", lambda: load_scene(path), path)
+
+
+@pytest.mark.parametrize("text", [
+    "x = " + "[" * 5000 + "]" * 5000,
+    "x = " + "{a=" * 2000 + "1" + "}" * 2000,
+    "[projectile]\ndiameter = " + "9" * 5000,
+    "x = 1\n" * 10,  # a duplicate key
+    "\ufeffname = 'bom'",
+    "",
+])
+def test_pathological_files(scratch, text):
+    path = scratch / "pathological.toml"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(SceneError) as info:
+        load_scene(path)
+    check_error(str(info.value), str(path))
+
+
+def test_unreadable_files(scratch):
+    for path in [scratch / "missing.toml", scratch, Path("/dev/zero")]:
+        with pytest.raises(SceneError, match="cannot read the scene file") as info:
+            load_scene(path)
+        check_error(str(info.value), str(path))
+    big = scratch / "big.toml"
+    big.write_bytes(b"# " + b"x" * (1 << 20) + b"\n")
+    with pytest.raises(SceneError, match="larger than"):
+        load_scene(big)
+    if os.geteuid() != 0:  # root reads anything
+        locked = scratch / "locked.toml"
+        locked.write_text(scene_path("forrestal_luk_test2").read_text())
+        locked.chmod(0)
+        with pytest.raises(SceneError, match="Permission denied"):
+            load_scene(locked)
+
+
+# ---------------------------------------------------------------------------
+# (c) malformed --set strings
+
+IDENT = st.text("abcdefghijklmnopqrstuvwxyz_0123456789", min_size=0, max_size=8)
+set_keys = st.one_of(
+    st.sampled_from([".".join(str(p) for p in path) for path in SCHEMA]),
+    st.lists(IDENT, min_size=1, max_size=4).map(".".join),
+    st.text(max_size=20),
+    st.sampled_from(["", ".", "..", "a..b", ".a", "a.", " impact . speed ", "impact.speed.x", "impact.0",
+                     "x" * 5000, "é.ü", "impact\nspeed", "impact.speed="]),
+)
+set_values = st.one_of(
+    values.map(_toml_value),
+    st.text(max_size=20),
+    st.sampled_from(["", "=", "[", "{", "]", "1e999", "nan", "-inf", "\"unterminated", "'x'", "[1,,2]", "{a=}",
+                     "1" * 5000, "[" * 3000, "{a=" * 1000, "softer_soil", "0x10", "1_000", "1979-05-27",
+                     "__import__('os').system('touch PWNED')"]),
+)
+overrides = st.one_of(
+    st.text(max_size=40),
+    st.sampled_from(sorted(NUMERIC, key=repr)).flatmap(
+        lambda path: in_range(path).map(lambda v: ".".join(map(str, path)) + "=" + _toml_value(v))),
+    st.builds(lambda k, sep, v: f"{k}{sep}{v}", set_keys, st.sampled_from(["=", " = ", "==", ""]), set_values),
+)
+
+
+@fuzz(400)
+@given(st.lists(overrides, min_size=1, max_size=3))
+def test_malformed_overrides(items):
+    outcome("--set strings", lambda: load_scene(GOOD, items), GOOD)
+
+
+def test_no_expression_in_a_scene_is_evaluated(scratch, monkeypatch):
+    monkeypatch.chdir(scratch)
+    assert not Path("PWNED").exists()
+    assert "PWNED" in " ".join(WORDS)  # the fuzzers above feed this expression everywhere
+    with pytest.raises(SceneError, match="impact.speed = .*input should be a valid number"):
+        load_scene(scene_path("forrestal_luk_test2"), ["impact.speed=__import__('os').system('touch PWNED')"])
+    assert not Path("PWNED").exists()
+
+
+# ---------------------------------------------------------------------------
+# the command line, in-process, with bad input of every kind
+
+
+def _bad_scene_files(folder: Path) -> dict[str, Path]:
+    folder.mkdir(exist_ok=True)
+    good = scene_path("forrestal_luk_test2").read_text()
+    files = {
+        "missing": folder / "missing.toml",
+        "folder": folder,
+        "binary": folder / "binary.toml",
+        "not-toml": folder / "not-toml.toml",
+        "bad-field": folder / "bad-field.toml",
+        "unknown-key": folder / "unknown-key.toml",
+        "nested": folder / "nested.toml",
+    }
+    files["binary"].write_bytes(b"\xff\xfe\x00\x01garbage")
+    files["not-toml"].write_text("[impact\nspeed = ")
+    files["bad-field"].write_text(good.replace("attack_angle = 0.0", "attack_angle = 120.0"))  # no noise sets it
+    files["unknown-key"].write_text(good + "\n[colour]\nred = 1\n")
+    files["nested"].write_text("x = " + "[" * 3000 + "]" * 3000)
+    return files
+
+
+BAD_SET = ["impact.speed", "=3", "impact..speed=1", "impact.speed=-1", "impact.speed=nan", "impact.speed=true",
+           "impact.attack_angle=91", "numerics.mesh_size=0", "numerics.mesh_size=1e-300", "impact.colour=1",
+           "impact.speed=" + "1" * 5000, "target.law=clay", "projectile.nose.shape=sphere",
+           "projectile.name=\"a\\nb\"", "numerics.time_step=1e-300", "x=" + "[" * 3000]
+BAD_GRID = ["impact.speed", "impact.speed=", "impact.speed=3:1:1", "impact.speed=a:b:c", "impact.speed=0:inf:1",
+            "impact.speed=nan:nan:1", "impact.speed=1:1e308:1e-300", "impact.speed=-5,10", "impact.bogus=1,2"]
+BAD_NUMBER = ["0", "-1", "nan", "inf", "x", "", "1e999", "-1e-300"]  # for float and int options
+BAD_WHOLE = BAD_NUMBER + ["2.5", "1" * 5000]  # for int options
+
+
+@st.composite
+def bad_command_lines(draw, files):
+    """A command line with at least one bad input (the last word wins where options repeat)."""
+    command = draw(st.sampled_from(["run", "sweep", "critical", "convergent", "compare", "accuracy", "render"]))
+    # the studies set some keys themselves: a bad value there would be overridden, not rejected
+    overridden = {"critical": ("impact.speed",), "convergent": ("impact.speed",), "compare": ("target.law",),
+                  "accuracy": ("numerics.",)}.get(command, ())
+    scene_kind = draw(st.sampled_from([*files, "good", "good"]))
+    scene = GOOD if scene_kind == "good" else str(files[scene_kind])
+    args = [command, scene]
+    noise = st.one_of(
+        st.tuples(st.just("--set"), set_values.map(lambda v: f"impact.speed={v}")),
+        st.tuples(st.just("--set"), st.sampled_from(["numerics.mesh_size=0.04", "numerics.time_limit=0.002"])),
+        st.tuples(st.just("--json")),
+        st.tuples(st.text(max_size=10).filter(lambda t: not t.startswith("-"))),
+    )
+    for option in draw(st.lists(noise, max_size=3)):
+        args += list(option)
+    poisons = [("--set", v) for v in BAD_SET if not v.startswith(overridden or "\0")]
+    if command == "sweep":
+        poisons += [("--grid", v) for v in BAD_GRID]
+        poisons += [("--list", str(files["not-toml"])), ("--list", str(files["missing"]))]
+    if command == "critical":
+        poisons += [("--speeds", v) for v in BAD_GRID[2:7]] + [("--resolution", v) for v in BAD_NUMBER]
+    if command == "convergent":
+        poisons += [("--threshold", v) for v in BAD_NUMBER]
+    if command == "compare":
+        poisons += [("--laws", v) for v in [",", "clay", "soil,clay"]]
+    if command == "accuracy":
+        poisons += [("--sizes", v) for v in BAD_NUMBER[:6]]
+    if command == "render":
+        poisons += [("--size", v) for v in ["0x0", "abc", "64x", "100000x100000", "640x480x2", ""]]
+        poisons += [("--steps", v) for v in ["0", "-1", "x", ""]] + [("--times", v) for v in ["x", "peak,xyz"]]
+        poisons += [("--frames", v) for v in BAD_WHOLE] + [("--station", v) for v in BAD_NUMBER]
+    elif command != "run":
+        poisons += [("--workers", v) for v in BAD_WHOLE]
+    if scene_kind == "good" or draw(st.booleans()):
+        args += list(draw(st.sampled_from(poisons)))
+    if command == "compare" and "--laws" not in args:
+        args += ["--laws", "soil"]
+    return args
+
+
+@pytest.fixture(scope="module")
+def cli_files(tmp_path_factory):
+    return _bad_scene_files(tmp_path_factory.mktemp("cli") / "scenes")
+
+
+def call(args: list[str], cwd: Path) -> tuple[int, str, str]:
+    """``penetrate ARGS`` in-process: exit code, stdout, stderr."""
+    out, err = io.StringIO(), io.StringIO()
+    old = os.getcwd()
+    os.chdir(cwd)
+    try:
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            try:
+                code = main(args)
+            except SystemExit as exc:  # argparse
+                code = exc.code
+    finally:
+        os.chdir(old)
+    return code, out.getvalue(), err.getvalue()
+
+
+def _listing(folder: Path) -> set[str]:
+    return {str(p.relative_to(folder)) for p in folder.rglob("*")}
+
+
+# where each command would write: nothing may appear there
+EXTRA = {"run": ["--out", "outputs"], "sweep": ["--out", "outputs/table.csv", "--store", "store", "--no-progress"],
+         "critical": ["--store", "store", "--no-progress"], "convergent": ["--store", "store", "--no-progress"],
+         "compare": ["--out", "outputs", "--store", "store", "--no-progress"],
+         "accuracy": ["--out", "outputs", "--store", "store", "--no-progress"], "render": ["--out", "outputs"]}
+
+
+@fuzz(250)
+@given(st.data())
+def test_command_line_bad_input(cli_files, tmp_path_factory, data):
+    args = data.draw(bad_command_lines(cli_files))
+    work = cli_files["folder"].parent
+    before = _listing(work)
+    with mock.patch("cases.sweep._run_missing", side_effect=AssertionError("a sweep started")), \
+            mock.patch("cases.runner.run_scene", side_effect=AssertionError("a run started")):
+        code, stdout, stderr = call(args + EXTRA[args[0]], work)
+    assert code != 0, (args, stdout)
+    lines = stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in stderr, (args, stderr)
+    assert lines[0].startswith("penetrate") and ": error: " in lines[0], lines
+    assert _listing(work) == before, (args, _listing(work) - before)  # no --out, no store, nothing
+    message = lines[0].split(": error: ", 1)[1]
+    OUTCOMES["command line (bad input)"][f"exit {code}"] += 1
+    assert code == 2, (args, stderr)  # bad input, found before anything runs
+    if code == 2 and not message.startswith(("argument ", "unrecognized", "the following", "invalid choice")):
+        sources = sorted((a for a in args if message.startswith(f"{a}: ")), key=len)  # the scene or a --list
+        check_error(message, sources[-1] if sources else None)
+
+
+# ---------------------------------------------------------------------------
+# valid runs: every number written is finite
+
+
+def _finite_outputs(out: Path, stdout: str | None = None) -> dict:
+    def no_constants(name):
+        raise AssertionError(f"{name} in JSON output")
+
+    summary = json.loads((out / "summary.json").read_text(), parse_constant=no_constants)
+    if stdout:
+        assert json.loads(stdout, parse_constant=no_constants)["depth"] == summary["depth"]
+    numbers = [v for v in summary.values() if isinstance(v, (int, float)) and not isinstance(v, bool)]
+    assert numbers and all(math.isfinite(v) for v in numbers)
+    if (out / "history.csv").exists():
+        text = (out / "history.csv").read_text()
+        assert not re.search(r"(?i)\b(nan|inf)\b", text)
+        history = pd.read_csv(out / "history.csv")
+        assert list(history.columns) == list(HISTORY_UNITS)
+        assert history.drop(columns="resistance_centre_from_tip").notna().all().all()  # empty only where undefined
+        assert history["time"].iloc[-1] == pytest.approx(summary["final_time"], rel=1e-9)  # %.10g in the CSV
+    return summary
+
+
+TINY = ["--set", "numerics.mesh_size=0.04"]
+
+
+@fuzz(8)
+@given(speed=st.floats(20, 2000), attack=st.floats(-20, 20), oblique=st.floats(-40, 40), yaw=st.floats(-10, 10),
+       spin=st.tuples(st.floats(-50, 50), st.floats(-50, 50), st.floats(-50, 50)),
+       integrator=st.sampled_from(["rk4", "dopri54"]), friction=st.sampled_from(["none", "coulomb"]),
+       every=st.integers(1, 40), history=st.booleans(), limit=st.floats(5e-4, 4e-3))
+def test_valid_runs_write_finite_numbers(tmp_path_factory, speed, attack, oblique, yaw, spin, integrator, friction,
+                                         every, history, limit):
+    out = tmp_path_factory.mktemp("run") / "out"
+    sets = [f"impact.speed={speed!r}", f"impact.attack_angle={attack!r}", f"impact.oblique_angle={oblique!r}",
+            f"impact.yaw_angle={yaw!r}", f"impact.angular_velocity=[{spin[0]!r}, {spin[1]!r}, {spin[2]!r}]",
+            f"numerics.integrator={integrator}", "numerics.rtol=1e-4", f"effects.friction.model={friction}",
+            f"outputs.history_every={every}", f"outputs.history={'true' if history else 'false'}",
+            f"numerics.time_limit={limit!r}"]
+    args = ["run", GOOD, *TINY, "--json", "--out", str(out)]
+    for item in sets:
+        args += ["--set", item]
+    code, stdout, stderr = call(args, out.parent)
+    OUTCOMES["valid runs"][f"exit {code}"] += 1
+    if code != 0:  # a run that fails says so in one line, and writes nothing
+        assert len(stderr.strip().splitlines()) == 1 and not out.exists(), stderr
+        return
+    _finite_outputs(out, stdout)
+    assert (out / "history.csv").exists() == history
+
+
+# ---------------------------------------------------------------------------
+# the real command, in a subprocess
+
+
+def penetrate(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "cases.cli", *args], capture_output=True, text=True, timeout=300,
+                          cwd=cwd)
+
+
+@pytest.mark.parametrize("args, expected", [
+    (["run", "{missing}"], "cannot read the scene file"),
+    (["run", "{folder}"], "cannot read the scene file"),
+    (["run", "{binary}"], "cannot read the scene file"),
+    (["run", "{nested}"], "nested too deeply"),
+    (["run", GOOD, "--set", "impact.speed=" + "1" * 5000], "not readable"),
+    (["run", GOOD, "--set", "impact.speed=true"], "impact.speed = true: input should be a number"),
+    (["run", GOOD, "--bogus"], "unrecognized arguments: --bogus"),
+    (["sweep", GOOD, "--grid", "impact.speed=0:inf:1"], "START:STOP:STEP must be finite numbers"),
+    (["sweep", GOOD, "--workers", "0"], "argument --workers: '0': must be a whole number >= 1"),
+    (["critical", GOOD, "--resolution", "nan"], "argument --resolution: 'nan': must be a finite number > 0"),
+])
+def test_real_command_bad_input(cli_files, args, expected):
+    args = [a.format(**{k: str(v) for k, v in cli_files.items()}) for a in args]
+    work = cli_files["folder"].parent
+    before = _listing(work)
+    done = penetrate(*args, *EXTRA[args[0]], cwd=work)
+    assert done.returncode == 2, done.stderr
+    assert expected in done.stderr and "Traceback" not in done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1 and done.stdout == ""
+    assert _listing(work) == before
