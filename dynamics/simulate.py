@@ -230,7 +230,6 @@ def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: Runge
     steps = rejected = forced = energy_rejections = 0
     h = time_step if time_step is not None else min(first_step, max_step)
     end_reason = TIME_LIMIT
-    energy = None  # kinetic energy of the current state, once known
 
     while True:
         remaining = time_limit - state.time
@@ -256,9 +255,7 @@ def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: Runge
             end_reason = NON_FINITE
             break
         if dissipative and size > min_step:
-            if energy is None:
-                energy = body.kinetic_energy(state)
-            before, after = energy, body.kinetic_energy(new)
+            before, after = body.kinetic_energy(state), body.kinetic_energy(new)
             if after > before * (1.0 + ENERGY_TOLERANCE):
                 energy_rejections += 1
                 h = max(min_step, 0.5 * size)
@@ -279,7 +276,6 @@ def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: Runge
             body, counted, new.position, new.velocity, new.attitude, new.angular_velocity)
         recorder.add(new, first)
         state, values = new, new_values
-        energy = after if dissipative and size > min_step else None
 
     statistics = {"steps": steps, "rejected_steps": rejected, "forced_steps": int(forced),
                   "energy_rejections": energy_rejections, "load_evaluations": calls}
