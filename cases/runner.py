@@ -150,23 +150,49 @@ def _prepare(spec_json: str, numerics_json: str) -> PreparedProjectile:
 
 def _compute_prepared(spec: Projectile, numerics: Numerics, geometry: ProjectileGeometry,
                       densities: dict[int, float]) -> PreparedProjectile:
-    """Mesh, scikit-fem mass properties and outer-surface quadrature."""
-    mesh = cached_mesh(geometry, numerics.mesh_size, numerics.geometry_order)
-    fem_mesh = to_skfem(mesh)
-    if spec.mass_properties is not None:
-        given = spec.mass_properties
-        mass = MassProperties.axisymmetric(given.mass, given.centre_of_mass, given.axial_inertia,
-                                           given.transverse_inertia)
-    else:
-        mass = mass_properties(mesh, densities, fem_mesh)
-        if spec.mass is not None and spec.counterweight is None:
-            # a homogeneous body of the given mass: scale its density
-            scale = spec.mass / mass.mass
-            mass = MassProperties(spec.mass, mass.centre, mass.inertia * scale, mass.volume)
+    """Mesh, scikit-fem mass properties and outer-surface quadrature.
+
+    Raises
+    ------
+    RuntimeError
+        gmsh could not mesh the projectile at ``numerics.mesh_size``, or
+        scikit-fem could not map its curved elements (very slender noses and
+        thin walls meshed coarsely); the one-line message names the field.
+    ValueError
+        ``projectile.transverse_inertia_scale`` makes an inertia tensor no rigid body has.
+    """
+    size = f"numerics.mesh_size = {numerics.mesh_size:g}"
+    try:
+        mesh = cached_mesh(geometry, numerics.mesh_size, numerics.geometry_order)
+    except Exception as exc:  # gmsh raises bare Exceptions ("HXT 3D mesh failed", ...)
+        raise RuntimeError(f"{size}: gmsh could not mesh this projectile at this size ({exc});"
+                           " a finer numerics.mesh_size usually works") from exc
+    try:
+        fem_mesh = to_skfem(mesh)
+        if spec.mass_properties is not None:
+            given = spec.mass_properties
+            mass = MassProperties.axisymmetric(given.mass, given.centre_of_mass, given.axial_inertia,
+                                               given.transverse_inertia)
+        else:
+            mass = mass_properties(mesh, densities, fem_mesh)
+            if spec.mass is not None and spec.counterweight is None:
+                # a homogeneous body of the given mass: scale its density
+                scale = spec.mass / mass.mass
+                mass = MassProperties(spec.mass, mass.centre, mass.inertia * scale, mass.volume)
+        quadrature = surface_quadrature(mesh, mass.centre, geometry.profile, numerics.normals,
+                                        numerics.quadrature_order, fem_mesh)
+    except Exception as exc:  # scikit-fem: "Newton iteration didn't converge" on distorted curved elements
+        raise RuntimeError(f"{size}: the elements of this mesh are too distorted to integrate ({exc});"
+                           " a finer numerics.mesh_size, or numerics.geometry_order = 1, usually works") from exc
     if spec.transverse_inertia_scale != 1.0:
+        axial, transverse = mass.axial_inertia, mass.transverse_inertia
+        lowest = 0.5 * axial / transverse  # I_axial <= 2 I_transverse for every rigid body
+        if spec.transverse_inertia_scale < lowest:
+            raise ValueError(f"projectile.transverse_inertia_scale = {spec.transverse_inertia_scale:g}: the transverse"
+                             f" moments ({spec.transverse_inertia_scale * transverse:.3g} kg m^2) would be less than"
+                             f" half the axial moment ({axial:.3g} kg m^2), which no rigid body has (allowed for this"
+                             f" projectile: transverse_inertia_scale >= {lowest:.3g})")
         mass = mass.with_transverse_scale(spec.transverse_inertia_scale)
-    quadrature = surface_quadrature(mesh, mass.centre, geometry.profile, numerics.normals,
-                                    numerics.quadrature_order, fem_mesh)
     return PreparedProjectile(geometry, mass, quadrature, len(mesh.tetra))
 
 
@@ -299,16 +325,41 @@ def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
     return RunResult(scene, prepared, trajectory, end - start, end - integrate_start)
 
 
+# attitude errors are measured against this angle (rad), not against a radian: the disturbances
+# of interest are of the order of a degree (docs/numerics.md, Hard cases)
+ANGLE_SCALE = 1e-2
+# the step floor below the time step: 10 halvings of the energy guard (docs/numerics.md, Hard cases)
+FLOOR_FRACTION = 2.0 ** -10
+
+
 def _integrate(scene: Scene, prepared: PreparedProjectile, body: RigidBody, driving, state: State, method,
                events: list[Event], dissipative: bool) -> Trajectory:
+    """Integrate one run with the scene's integrator.
+
+    ``rk4`` steps by ``numerics.time_step``.  ``dopri54`` controls the error
+    with ``numerics.rtol`` and absolute tolerances ``rtol`` times the
+    projectile length (position, path), the impact speed (velocity),
+    :data:`ANGLE_SCALE` (rotation) and ``ANGLE_SCALE`` times the impact speed
+    over the length (angular velocity); it never steps below
+    ``numerics.time_step``: a step of that size that fails the tolerance is
+    accepted (``forced_steps``), since across the shank's ``Vn = 0`` switch no
+    step meets a smooth error model.  Either integrator ends the run with
+    ``step_floor`` when it would need a step below ``time_step / 1024`` (the
+    energy guard, a non-finite trial step of ``dopri54``).
+    """
     numerics = scene.numerics
+    floor = numerics.time_step * FLOOR_FRACTION
     if method.adaptive:
         length, speed = prepared.profile.length, scene.impact.speed
-        scales = np.array([length] * 3 + [speed] * 3 + [1.0] * 3 + [speed / length] * 3 + [length])
+        rate = ANGLE_SCALE * speed / length
+        scales = np.array([length] * 3 + [speed] * 3 + [ANGLE_SCALE] * 3 + [rate] * 3 + [length])
         trajectory = simulate(body, driving, state, method, time_limit=numerics.time_limit,
                               rtol=numerics.rtol, atol=numerics.rtol * scales,
-                              first_step=1e-3 * length / speed, events=events, dissipative=dissipative)
+                              first_step=1e-3 * length / speed,
+                              forced_step=numerics.time_step, min_step=floor, events=events,
+                              dissipative=dissipative)
     else:
         trajectory = simulate(body, driving, state, method, time_limit=numerics.time_limit,
-                              time_step=numerics.time_step, events=events, dissipative=dissipative)
+                              time_step=numerics.time_step, min_step=floor, events=events,
+                              dissipative=dissipative)
     return trajectory

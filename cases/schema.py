@@ -20,8 +20,11 @@ __all__ = ["Scene", "Projectile", "Target", "LayerSpec", "Effects", "FrictionSpe
            "MassPropertiesSpec", "LawSpec"]
 
 
-MAX_STEPS = 5_000_000  # dynamics.simulate's max_steps: a fixed-step run never takes more
+MAX_STEPS = 5_000_000  # dynamics.simulate's max_steps: no run steps below time_step, so none takes more
 MAX_MESH_CELLS = 2e6  # cells of mesh_size^3 in the projectile's bounding cylinder (about 1e7 tetrahedra)
+# lightest mean density (kg/m^3) over the bounding cylinder: far below any hard projectile (balsa is 150);
+# a 1e-300 kg projectile overflowed the first step (math domain error)
+MIN_MEAN_DENSITY = 100.0
 
 
 def _field(default=..., *, unit: str = "", description: str = "", **limits):
@@ -130,6 +133,15 @@ class MassPropertiesSpec(_Strict):
     axial_inertia: Number = _field(unit="kg m^2", gt=0.0, le=1e9)
     transverse_inertia: Number = _field(unit="kg m^2", gt=0.0, le=1e9)
 
+    @model_validator(mode="after")
+    def _rigid_body(self):
+        # I_axial = int (y^2 + z^2) dm <= I_y + I_z = 2 I_transverse for every rigid body
+        if self.axial_inertia > 2.0 * self.transverse_inertia:
+            raise ValueError(f"axial_inertia = {self.axial_inertia:g}: more than twice transverse_inertia ="
+                             f" {self.transverse_inertia:g}, which no rigid body has (allowed: axial_inertia"
+                             " <= 2 transverse_inertia)")
+        return self
+
 
 class Projectile(_Strict):
     """An axisymmetric projectile: nose, cylindrical shank and flat tail."""
@@ -193,6 +205,12 @@ class Projectile(_Strict):
         if self.counterweight is not None and self.counterweight.start is not None:
             span = (self.counterweight.start, self.counterweight.end)
         ProjectileGeometry(profile, interior, span)
+        mass = self.mass_properties.mass if self.mass_properties is not None else self.mass
+        lightest = MIN_MEAN_DENSITY * 0.25 * math.pi * self.diameter ** 2 * self.length
+        if mass is not None and mass < lightest:
+            field = "mass_properties.mass" if self.mass_properties is not None else "mass"
+            raise ValueError(f"{field} = {mass:g}: lighter than {MIN_MEAN_DENSITY:g} kg/m^3 over the bounding"
+                             f" cylinder (allowed: {field} >= {lightest:.3g} kg for this diameter and length)")
         return self
 
     @property
@@ -336,7 +354,8 @@ class Numerics(_Strict):
     normals: Literal["exact", "mesh"] = "exact"
     quadrature_order: Whole = _field(2, ge=1, le=10, description="degree exact on each facet")
     integrator: Literal["rk4", "dopri54"] = "rk4"
-    time_step: Number = _field(2e-5, unit="s", gt=0.0, le=1e-2, description="fixed step (rk4)")
+    time_step: Number = _field(2e-5, unit="s", gt=0.0, le=1e-2,
+                               description="fixed step (rk4); the shortest step of the error control (dopri54)")
     rtol: Number = _field(1e-6, gt=0.0, lt=1.0, description="relative tolerance (dopri54)")
     time_limit: Number = _field(1.0, unit="s", gt=0.0, le=100.0)
     stop_speed: Number = _field(0.5, unit="m/s", gt=0.0, le=1e3,
@@ -347,7 +366,8 @@ class Numerics(_Strict):
 
     @model_validator(mode="after")
     def _reachable_time_limit(self):
-        if self.integrator == "rk4" and self.time_limit / self.time_step > MAX_STEPS:
+        # rk4 steps by time_step, and dopri54 never steps below it
+        if self.time_limit / self.time_step > MAX_STEPS:
             raise ValueError(f"time_step = {self.time_step:g}: {self.time_limit / self.time_step:.3g} steps to reach"
                              f" time_limit = {self.time_limit:g} s (allowed: time_limit / time_step <= {MAX_STEPS:g};"
                              " shorten time_limit or lengthen time_step)")
@@ -382,4 +402,7 @@ class Scene(_Strict):
             raise ValueError(f"numerics.mesh_size = {size:g}: too fine for this projectile (allowed: numerics.mesh_size"
                              f" >= {finest:.3g} m, at most {MAX_MESH_CELLS:g} cells of mesh_size^3 in"
                              " pi/4 diameter^2 length)")
+        if size > p.diameter:  # describes nothing of the cross-section; gmsh fails on such meshes (HXT, Newton)
+            raise ValueError(f"numerics.mesh_size = {size:g}: coarser than the projectile (allowed: numerics.mesh_size"
+                             f" <= projectile.diameter = {p.diameter:g} m)")
         return self

@@ -5,10 +5,10 @@ This package takes a load function and knows nothing of meshes or resistance law
 
 from .integrators import METHODS, RK4, DormandPrince54, RungeKutta
 from .rigid_body import LoadFunction, RigidBody, State
-from .simulate import MAX_STEPS, NON_FINITE, TIME_LIMIT, Event, SpeedBelow, Trajectory, simulate
+from .simulate import MAX_STEPS, NON_FINITE, STEP_FLOOR, TIME_LIMIT, Event, SpeedBelow, Trajectory, simulate
 
 __all__ = [
     "RigidBody", "State", "LoadFunction",
     "RungeKutta", "RK4", "DormandPrince54", "METHODS",
-    "Event", "SpeedBelow", "Trajectory", "simulate", "TIME_LIMIT", "NON_FINITE", "MAX_STEPS",
+    "Event", "SpeedBelow", "Trajectory", "simulate", "TIME_LIMIT", "NON_FINITE", "MAX_STEPS", "STEP_FLOOR",
 ]

@@ -19,9 +19,12 @@ import numpy as np
 from .integrators import Evaluation, RungeKutta, StepResult, evaluate
 from .rigid_body import LoadFunction, RigidBody, State
 
-__all__ = ["Event", "SpeedBelow", "Trajectory", "simulate", "find_root", "TIME_LIMIT", "NON_FINITE", "MAX_STEPS"]
+__all__ = ["Event", "SpeedBelow", "Trajectory", "simulate", "find_root", "TIME_LIMIT", "NON_FINITE", "MAX_STEPS",
+           "STEP_FLOOR"]
 
 TIME_LIMIT, NON_FINITE, MAX_STEPS = "time_limit", "non_finite", "max_steps"
+# the integration needed a step shorter than its floor: a numerical failure, the history up to it is kept
+STEP_FLOOR = "step_floor"
 
 # relative kinetic-energy gain above which a step of a dissipative system is retaken: far above
 # round-off and the harmless gains of the shank's sliding chatter (1e-10 after convergence, up to 5e-8
@@ -165,7 +168,7 @@ def _error_norm(result: StepResult, before: State, rtol: float, atol: np.ndarray
 def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: RungeKutta, *,
              time_limit: float, time_step: float | None = None, rtol: float | None = None,
              atol: np.ndarray | float | None = None, first_step: float = 1e-6,
-             min_step: float = 1e-10, max_step: float = math.inf,
+             min_step: float = 1e-10, forced_step: float = 0.0, max_step: float = math.inf,
              events: Sequence[Event] = (), max_steps: int = 5_000_000,
              dissipative: bool = False) -> Trajectory:
     """Integrate the motion of ``body`` under ``loads`` from ``initial``.
@@ -188,11 +191,25 @@ def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: Runge
         Relative tolerance of the error control (needs an adaptive method).
     atol : float or ndarray, shape (13,), optional
         Absolute tolerance of the increments ``(x, v, u, omega, s)``; default ``rtol``.
-    first_step, min_step, max_step : float
-        Step sizes of the error control (s).  A step that still fails the
-        tolerance at ``min_step`` is accepted and counted in
-        ``statistics["forced_steps"]``: the load is discontinuous, and at a jump
-        no step size meets a tolerance on a smooth error model.
+    first_step, max_step : float
+        First and largest step of the error control (s).
+    min_step : float
+        The step floor (s): no step is retaken shorter than this.  When a step
+        would have to be (the error control rejects a step and
+        ``forced_step`` does not apply, or the energy guard rejects a step of
+        less than twice the floor) the run ends with :data:`STEP_FLOOR`; an
+        error-controlled trial step whose state is not finite is retaken
+        shorter, and at the floor the run ends with :data:`NON_FINITE`.  The
+        history up to the last accepted step is kept.  The last step before the
+        time limit may be shorter than the floor.
+    forced_step : float
+        Error control only: the error control does not shorten a step below
+        this (s); a step of this size that fails the tolerance is accepted and
+        counted in ``statistics["forced_steps"]``.  The DAFL load jumps (at
+        ``Vn = 0`` on the shank, where points cross the target surface), and
+        across a jump no step size meets a tolerance set on a smooth error
+        model: without this bound the step collapses at every jump and the
+        cost has no bound.  0 (default): no forced steps.
     events : sequence of Event
         Terminal events, checked after every step.
     max_steps : int
@@ -204,6 +221,13 @@ def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: Runge
         overshoots, and repeated overshoots (chatter) can pump energy in.
         Such a step is retaken at half the size, down to ``min_step``; the
         retakes are counted in ``statistics["energy_rejections"]``.
+
+    Returns
+    -------
+    Trajectory
+        One row per accepted step, plus the start; ``end_reason`` is the name
+        of the event that ended the run, :data:`TIME_LIMIT`, :data:`NON_FINITE`,
+        :data:`STEP_FLOOR` or :data:`MAX_STEPS`.
     """
     if (time_step is None) == (rtol is None):
         raise ValueError("give exactly one of time_step (fixed step) and rtol (error control)")
@@ -211,6 +235,8 @@ def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: Runge
         raise ValueError(f"{type(method).__name__} has no error estimate: use a fixed time_step")
     if time_step is not None and not time_step > 0:
         raise ValueError(f"time_step = {time_step}: must be > 0")
+    if not (min_step > 0 and math.isfinite(min_step)):
+        raise ValueError(f"min_step = {min_step}: must be a finite number > 0")
     if rtol is not None:
         atol = np.broadcast_to(np.asarray(rtol if atol is None else atol, dtype=float), (13,))
 
@@ -228,8 +254,9 @@ def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: Runge
     recorder.add(state, first)
     values = [event.function(state) for event in events]
     steps = rejected = forced = energy_rejections = 0
-    h = time_step if time_step is not None else min(first_step, max_step)
+    h = time_step if time_step is not None else max(min(first_step, max_step), min_step, forced_step)
     end_reason = TIME_LIMIT
+    smallest = math.inf
 
     while True:
         remaining = time_limit - state.time
@@ -240,30 +267,46 @@ def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: Runge
             break
         size = min(h, remaining)
         result = method.step(body, counted, state, size, first)
+        new = result.state
+        finite = new.is_finite()
         if rtol is not None:
-            norm = _error_norm(result, state, rtol, atol)
-            factor = 0.9 * norm ** (-1.0 / (method.error_order + 1)) if norm > 0 else 5.0
-            if norm > 1.0 and size > min_step:
+            norm = _error_norm(result, state, rtol, atol) if finite else math.inf
+            if not norm <= 1.0 and (size > forced_step or not finite):
+                # reject: shorten by the usual factor (a fifth for a non-finite trial)
+                factor = 0.9 * norm ** (-1.0 / (method.error_order + 1)) if math.isfinite(norm) else 0.2
+                shorter = size * min(1.0, max(0.2, factor))
+                if finite:
+                    shorter = max(shorter, forced_step)
+                if shorter < min_step:
+                    end_reason = STEP_FLOOR if finite else NON_FINITE
+                    break
                 rejected += 1
-                h = max(min_step, size * min(1.0, max(0.2, factor)))
+                h = shorter
                 first = result.first
                 continue
             forced += norm > 1.0
-            h = min(max_step, max(min_step, size * min(5.0, max(0.2, factor))))
-        new = result.state
-        if not new.is_finite():
+            factor = 0.9 * norm ** (-1.0 / (method.error_order + 1)) if norm > 0 else 5.0
+            h = min(max_step, max(min_step, forced_step, size * min(5.0, max(0.2, factor))))
+        if not finite:
             end_reason = NON_FINITE
             break
-        if dissipative and size > min_step:
+        if dissipative:
             before, after = body.kinetic_energy(state), body.kinetic_energy(new)
             if after > before * (1.0 + ENERGY_TOLERANCE):
-                energy_rejections += 1
-                h = max(min_step, 0.5 * size)
-                first = result.first
-                continue
+                if 0.5 * size >= min_step:
+                    energy_rejections += 1
+                    h = 0.5 * size
+                    first = result.first
+                    continue
+                if size >= h:
+                    end_reason = STEP_FLOOR  # no shorter step may be taken: the guard cannot hold
+                    break
+                # else: a last step before the time limit, already shorter than the floor: accepted
             if time_step is not None:
                 h = time_step
         steps += 1
+        if size < remaining:  # the last step before the time limit does not count
+            smallest = min(smallest, size)
         new_values = [event.function(new) for event in events]
         fired = [ev for ev, g0, g1 in zip(events, values, new_values) if ev.fired(state, new, g0, g1)]
         if fired:
@@ -278,7 +321,8 @@ def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: Runge
         state, values = new, new_values
 
     statistics = {"steps": steps, "rejected_steps": rejected, "forced_steps": int(forced),
-                  "energy_rejections": energy_rejections, "load_evaluations": calls}
+                  "energy_rejections": energy_rejections, "load_evaluations": calls,
+                  "smallest_step": smallest if math.isfinite(smallest) else None}
     return recorder.trajectory(end_reason, statistics)
 
 
