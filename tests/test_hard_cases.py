@@ -1,0 +1,548 @@
+"""Hard cases of the integration (issue 7, item 1), each with its pass criterion in the docstring.
+
+Every run here sets its numerics explicitly (mesh size, facet quadrature, step), so that a change of
+the shipped scenes' numerics does not change what is tested.  The default run (``./dev test``) takes
+about a minute on 2 cores; the ``slow`` variants (finer meshes and steps, very long runs) run in CI's
+second step (``./dev test -m slow``).  The measured figures and what failed before the fixes are in
+docs/numerics.md, "Hard cases".
+"""
+
+from __future__ import annotations
+
+import functools
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from cases import history_table, load_scene, run_scene, scene_path, summary
+from cases.reference import axial_depth_1d
+from cases.runner import prepare_projectile, resolve_law, scene_loads
+from cases.scene import SceneError, read_toml, scene_from_dict
+from cases.studies import convergence_speed, is_unstable
+from dynamics import (NON_FINITE, RK4, STEP_FLOOR, TIME_LIMIT, DormandPrince54, RigidBody, State,
+                      simulate)
+from dynamics.quaternion import rotation_matrix
+
+FL5, FL3, FL2, P3 = "forrestal_luk_test5", "forrestal_luk_test3", "forrestal_luk_test2", "paper_p3"
+MM20 = ("numerics.mesh_size=0.02", "numerics.quadrature_order=2")
+MM40 = ("numerics.mesh_size=0.04", "numerics.quadrature_order=2")
+RK4_2E5 = ("numerics.integrator=rk4", "numerics.time_step=2e-5")
+
+
+@functools.lru_cache(maxsize=None)
+def _run(name: str, *overrides: str):
+    """Run a shipped scene with overrides: (result, history, summary), cached for the module."""
+    result = run_scene(load_scene(scene_path(name), list(overrides)))
+    history = history_table(result)
+    return result, history, summary(result, history)
+
+
+def _kinetic_energy(result) -> np.ndarray:
+    tr, mass = result.trajectory, result.prepared.mass
+    energy = 0.5 * mass.mass * np.einsum("ij,ij->i", tr.velocity, tr.velocity)
+    return energy + 0.5 * np.einsum("ni,ij,nj->n", tr.angular_velocity, mass.inertia, tr.angular_velocity)
+
+
+def _lowest_heights(result) -> np.ndarray:
+    """Height (m) of the lowest surface quadrature point at every recorded state."""
+    loads = scene_loads(result.scene, result.prepared)
+    tr = result.trajectory
+    return np.array([loads.lowest_height(x, rotation_matrix(q)) for x, q in zip(tr.position, tr.attitude)])
+
+
+# ---------------------------------------------------------------------------------------------------
+# 1. the attack angle decaying to zero: sigma_n jumps at Vn = 0 on the shank and the moment chatters
+
+DOPRI = ("numerics.integrator=dopri54", "numerics.time_step=2e-5")
+
+
+@pytest.mark.parametrize("rtol", [1e-4, 1e-6])
+def test_attack_decay_adaptive_integrator_does_not_stall(rtol):
+    """Forrestal-Luk test 5 (3.5 deg attack) with Dormand-Prince at rtol 1e-4 and 1e-6, 20 mm.
+
+    Once the attack angle has decayed, the shank's ``A sigma_0`` load switches side from step to step
+    (a sliding mode of the ``Vn = 0`` jump, about 2 MN on 23 kg) and no step size meets a smooth error
+    model.  Pass: the run stops (no stall, no step floor), with at most ``1 ms / time_step + 1``
+    accepted steps per simulated millisecond (the error control never goes below ``time_step``) and at
+    most 10 rejected steps per simulated millisecond; forced steps (accepted at the floor) are counted,
+    so the chatter was met and not hidden.  Before the fix rtol 1e-6 took about 870 steps and 80
+    rejections per millisecond at 10 mm (72 s).
+    """
+    result, _, record = _run(FL5, *MM20, *DOPRI, f"numerics.rtol={rtol}")
+    stats = result.trajectory.statistics
+    milliseconds = record["final_time"] * 1e3
+    assert record["end_reason"] == "stopped"
+    assert stats["steps"] / milliseconds <= 1e-3 / 2e-5 + 1
+    assert stats["rejected_steps"] / milliseconds <= 10
+    assert stats["forced_steps"] > 0
+    assert stats["smallest_step"] >= 2e-5 * (1 - 1e-12)
+
+
+@pytest.mark.parametrize("rtol", [1e-4, 1e-6])
+def test_attack_decay_both_integrators_agree(rtol):
+    """RK4 at 2e-5 s and Dormand-Prince (rtol 1e-4, 1e-6; never below 2e-5 s) on test 5, 20 mm.
+
+    Pass: the same end (stopped); path length and tip depth within 0.5 % of each other; axis turn
+    within 0.5 deg; the attack angle decayed below 0.2 deg in both by half the impact speed.  0.5 deg
+    is RK4's own step error in the turn at 2e-5 s (3.59 deg; 3.84 at 1e-5, 3.96 at 5e-6: the turn
+    converges at first order through the chatter); 0.5 % is the scale of Table 3's comparisons and 4x
+    the mesh error at 20 mm.  Before the fix Dormand-Prince at rtol 1e-4 reached a tip depth of
+    5.13 m against 4.96 m (3.4 %): the attack angle kept chattering at +-0.5 deg while every step
+    passed the error test, attitude errors being measured against a radian.
+    """
+    _, rk4_history, rk4 = _run(FL5, *MM20, *RK4_2E5)
+    _, dopri_history, dopri = _run(FL5, *MM20, *DOPRI, f"numerics.rtol={rtol}")
+    assert rk4["end_reason"] == dopri["end_reason"] == "stopped"
+    assert dopri["path_length"] == pytest.approx(rk4["path_length"], rel=5e-3)
+    assert dopri["depth"] == pytest.approx(rk4["depth"], rel=5e-3)
+    assert dopri["axis_angle_change"] == pytest.approx(rk4["axis_angle_change"], abs=0.5)
+    for history in (rk4_history, dopri_history):
+        speed = history["speed"].to_numpy()
+        at_half = int(np.argmax(speed < 0.5 * speed[0]))
+        assert abs(history["attack_angle"].iloc[at_half]) < 0.2
+
+
+@pytest.mark.slow
+def test_attack_decay_shipped_scene_at_10_mm_agrees():
+    """The same agreement at 10 mm with Dormand-Prince's default rtol (1e-6) against RK4 at 1e-5 s.
+
+    Pass: stopped; path and tip depth within 0.5 %, axis turn within 0.5 deg; at most 1 ms / 2e-5 s
+    + 1 accepted and 10 rejected steps per simulated ms.  Before the fix: 38 356 steps and 3 405
+    rejections (870 per ms) in 72 s.
+    """
+    mesh = ("numerics.mesh_size=0.01", "numerics.quadrature_order=2")
+    _, _, rk4 = _run(FL5, *mesh, "numerics.time_step=1e-5")
+    result, _, dopri = _run(FL5, *mesh, *DOPRI)
+    milliseconds = dopri["final_time"] * 1e3
+    assert rk4["end_reason"] == dopri["end_reason"] == "stopped"
+    assert dopri["path_length"] == pytest.approx(rk4["path_length"], rel=5e-3)
+    assert dopri["depth"] == pytest.approx(rk4["depth"], rel=5e-3)
+    assert dopri["axis_angle_change"] == pytest.approx(rk4["axis_angle_change"], abs=0.5)
+    assert result.trajectory.statistics["steps"] / milliseconds <= 51
+    assert result.trajectory.statistics["rejected_steps"] / milliseconds <= 10
+
+
+# ---------------------------------------------------------------------------------------------------
+# 2. just below and just above the critical speed of projectile #3 (911 m/s at 20 mm, 2e-5 s)
+
+SIDES = {"below": 900.0, "above": 920.0}  # 1.2 % and 1.0 % from 911 m/s
+LADDER = [(0.04, 4e-5), (0.02, 2e-5), (0.02, 1e-5)]
+LADDER_SLOW = [(0.02, 1e-5), (0.01, 2e-5), (0.01, 1e-5)]
+
+
+def _critical_run(speed: float, size: float, step: float) -> dict:
+    _, history, record = _run(P3, f"numerics.mesh_size={size}", "numerics.quadrature_order=2",
+                              *RK4_2E5[:1], f"numerics.time_step={step}", f"impact.speed={speed}")
+    record = dict(record)
+    record["convergence_speed"] = convergence_speed(history)
+    return record
+
+
+def _check_side(side: str, ladder: list[tuple[float, float]]) -> None:
+    runs = [_critical_run(SIDES[side], size, step) for size, step in ladder]
+    for run in runs:  # the side never flips along the ladder
+        assert is_unstable(run["axis_angle_change"]) == (side == "above"), run
+    for coarse, fine in zip(runs, runs[1:]):  # neighbouring settings agree
+        assert fine["path_length"] == pytest.approx(coarse["path_length"], rel=5e-3)
+        assert fine["max_attack_angle"] == pytest.approx(coarse["max_attack_angle"], rel=0.02)
+        assert fine["axis_angle_change"] == pytest.approx(coarse["axis_angle_change"], abs=2.5)
+        assert fine["convergence_speed"] == pytest.approx(coarse["convergence_speed"], rel=0.01)
+
+
+@pytest.mark.parametrize("side", SIDES)
+def test_near_critical_speed_converges_and_keeps_its_side(side):
+    """Projectile #3, 1 deg attack, at 900 m/s (stable) and 920 m/s (unstable) on the ladder
+    40 mm / 4e-5 s -> 20 mm / 2e-5 s -> 20 mm / 1e-5 s.
+
+    Pass: every setting puts the run on its side (axis turn below / at least 30 deg:
+    ``cases.studies.is_unstable``), and each pair of neighbouring settings agrees in path length
+    within 0.5 %, in the peak attack angle within 2 %, in the axis turn within 2.5 deg and in the
+    speed at which the attack angle has collapsed within 1 %: well inside the jump that marks the
+    critical speed (axis turn 8 -> 103 deg, path 28 -> 22.6 m, convergence 750 -> 362 m/s).  The
+    speeds sit 1 % either side of the critical speed; closer, the side depends on the setting (the
+    critical speed itself moves by a few m/s between settings).
+    """
+    _check_side(side, LADDER)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("side", SIDES)
+def test_near_critical_speed_converges_at_10_mm(side):
+    """The same criteria on the ladder 20 mm / 1e-5 s -> 10 mm / 2e-5 s -> 10 mm / 1e-5 s."""
+    _check_side(side, LADDER_SLOW)
+
+
+# ---------------------------------------------------------------------------------------------------
+# 3. grazing impact and trajectories that turn back: the exit is located and nothing follows it
+
+GRAZING = [(FL3, 60.0), (FL3, 70.0), (FL3, 80.0), (FL3, 85.0), (FL3, 89.0),
+           (P3, 0.0), (P3, 30.0), (P3, 60.0), (P3, 80.0)]
+
+
+@pytest.mark.parametrize(("name", "oblique"), GRAZING)
+def test_exit_is_located_and_ends_the_run(name, oblique):
+    """Oblique impacts up to 89 deg (Forrestal-Luk at 280 m/s; #3 at 1200 m/s, which turns back and
+    leaves even at normal incidence), 20 mm, RK4 2e-5 s.
+
+    Pass: a run ends ``exited`` exactly when no surface point is inside any more: the last recorded
+    state has its lowest point at or above the surface by at most 1e-9 m (located, not a step
+    later), every state between the first one inside and the last is inside (no exit missed), and
+    the state a millionth of the last step earlier is still inside.  A run that stays in ends
+    ``stopped`` with the body inside.  The projectile may leave without ever being wholly inside
+    (grazing: the tip itself stays above the surface at 85 deg and more).
+    """
+    speed = 280.0 if name == FL3 else 1200.0
+    result, _, record = _run(name, *MM20, *RK4_2E5, f"impact.oblique_angle={oblique}", f"impact.speed={speed}")
+    lowest = _lowest_heights(result)
+    inside = np.flatnonzero(lowest < 0.0)
+    assert len(inside) and lowest[0] >= 0.0
+    if record["end_reason"] == "stopped":
+        assert np.all(lowest[inside[0]:] < 0.0)
+        return
+    assert record["end_reason"] == "exited"
+    assert 0.0 <= lowest[-1] < 1e-9
+    assert np.all(lowest[inside[0]:-1] < 0.0)
+    tr = result.trajectory
+    before = tr.state(-2)
+    short = RK4().step(RigidBody(result.prepared.mass.mass, result.prepared.mass.inertia),
+                       scene_loads(result.scene, result.prepared), before,
+                       (tr.time[-1] - tr.time[-2]) * (1 - 1e-6)).state
+    assert scene_loads(result.scene, result.prepared).lowest_height(short.position, short.rotation) < 0.0
+    assert tr.time[-1] - tr.time[-2] <= 2e-5 * (1 + 1e-9)
+
+
+# ---------------------------------------------------------------------------------------------------
+# 4. extremes: very high and very low speeds, tiny and very fine meshes, extreme noses, long runs
+
+def _normal_impact_error(*overrides: str) -> float:
+    """Relative error of the tip depth of a normal impact of the Forrestal-Luk projectile against the
+    independent 1-D integration with exact nose entry (no mesh)."""
+    result, _, record = _run(FL2, *overrides)
+    scene = result.scene
+    reference, _ = axial_depth_1d(result.prepared.profile, resolve_law(scene.target.law), result.prepared.mass.mass,
+                                  scene.impact.speed, scene.numerics.stop_speed)
+    assert record["end_reason"] == "stopped"
+    return record["depth"] / reference - 1.0
+
+
+EXTREMES = {  # case: (overrides, |error| bound)
+    "3000 m/s": ((*MM20, *RK4_2E5, "impact.speed=3000"), 5e-3),
+    "5 m/s": ((*MM20, *RK4_2E5, "impact.speed=5"), 5e-3),
+    "CRH 0.5 (hemisphere)": ((*MM20, *RK4_2E5, "projectile.nose={shape='ogive', crh=0.5}"), 5e-3),
+    "CRH 20": ((*MM20, *RK4_2E5, "projectile.nose={shape='ogive', crh=20}"), 5e-3),
+    "cone 5 deg": ((*MM20, *RK4_2E5, "projectile.nose={shape='cone', half_angle=5}"), 5e-3),
+    "cone 60 deg": ((*MM20, *RK4_2E5, "projectile.nose={shape='cone', half_angle=60}"), 5e-3),
+    "cone 85 deg": ((*MM20, *RK4_2E5, "projectile.nose={shape='cone', half_angle=85}"), 5e-3),
+    "tiny mesh (one diameter)": (("numerics.mesh_size=0.0952", "numerics.quadrature_order=2", *RK4_2E5), 2e-2),
+}
+EXTREMES_SLOW = {
+    "very fine mesh (5 mm)": (("numerics.mesh_size=0.005", "numerics.quadrature_order=2", *RK4_2E5), 5e-4),
+    "3000 m/s at 10 mm, 5e-6 s": (("numerics.mesh_size=0.01", "numerics.quadrature_order=2", "numerics.time_step=5e-6",
+                                   "impact.speed=3000"), 2e-3),
+    "CRH 100 at 10 mm": (("numerics.mesh_size=0.01", "numerics.quadrature_order=2", *RK4_2E5,
+                          "projectile.nose={shape='ogive', crh=100}"), 2e-3),
+    "cone 2 deg at 20 mm": ((*MM20, *RK4_2E5, "projectile.nose={shape='cone', half_angle=2}", "projectile.length=1.6"),
+                            5e-3),
+}
+
+
+@pytest.mark.parametrize("case", EXTREMES)
+def test_extreme_normal_impacts_match_the_1d_reference(case):
+    """Normal impact of the Forrestal-Luk body at extreme speeds, nose shapes and mesh sizes.
+
+    Pass: the run stops and its tip depth is within the bound of the independent 1-D integration
+    (exact nose entry, no mesh): 0.5 % at 20 mm (4x the 20 mm error of test 2 at 280 m/s), 2 % for a
+    mesh as coarse as the diameter (the nose is then one or two elements long).  At 5 m/s the nose
+    stops 36 mm in, part-embedded; at 3000 m/s it goes 32 m.
+    """
+    overrides, bound = EXTREMES[case]
+    assert abs(_normal_impact_error(*overrides)) < bound
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case", EXTREMES_SLOW)
+def test_extreme_normal_impacts_match_the_1d_reference_finely(case):
+    """The same at 5 and 10 mm (and slender noses that need them): 0.05 % at 5 mm, 0.2 % at 10 mm."""
+    overrides, bound = EXTREMES_SLOW[case]
+    assert abs(_normal_impact_error(*overrides)) < bound
+
+
+def test_extreme_attack_at_3000_m_s_ends_cleanly():
+    """#3 at 3000 m/s with 5 deg attack, 20 mm, 1e-5 s: a violent, very long turning run.
+
+    Pass: it ends by an event (stopped or exited, not the time limit, a step floor or a non-finite
+    state), with unit quaternions to 1e-12 and a kinetic energy that never increases.
+    """
+    result, _, record = _run(P3, *MM20, "numerics.time_step=1e-5", "impact.speed=3000", "impact.attack_angle=5")
+    assert record["end_reason"] in ("stopped", "exited")
+    assert np.abs(np.linalg.norm(result.trajectory.attitude, axis=1) - 1.0).max() < 1e-12
+    energy = _kinetic_energy(result)
+    assert np.all(np.diff(energy) <= 1e-15 * energy[:-1])
+
+
+# ---------------------------------------------------------------------------------------------------
+# 5. long-run invariants
+
+LONG_RUNS = {  # name: overrides
+    "#3 1200 m/s, turns 145 deg and leaves": (P3, (*MM20, "numerics.time_step=1e-5")),
+    "test 5 at 5e-6 s (8 000 steps)": (FL5, (*MM20, "numerics.time_step=5e-6")),
+    "test 5 with Dormand-Prince": (FL5, (*MM20, *DOPRI, "numerics.rtol=1e-4")),
+}
+
+
+@pytest.mark.parametrize("case", LONG_RUNS)
+def test_long_run_unit_quaternion_and_energy(case):
+    """Pass: every recorded attitude is a unit quaternion to 1e-12, and the kinetic energy never
+    increases from one recorded state to the next beyond the round-off of evaluating it (1e-15,
+    relative).  Before the fix steps gaining less than the energy guard's 1e-7 were kept: 192 steps
+    of #3's run gained up to 3e-8; they are now projected back (docs/numerics.md).
+    """
+    name, overrides = LONG_RUNS[case]
+    result, _, _ = _run(name, *overrides)
+    assert np.abs(np.linalg.norm(result.trajectory.attitude, axis=1) - 1.0).max() < 1e-12
+    energy = _kinetic_energy(result)
+    assert np.all(np.diff(energy) <= 1e-15 * energy[:-1])
+
+
+@pytest.mark.slow
+def test_very_long_run_invariants():
+    """Test 2 at 280 m/s with a 5e-7 s step at 40 mm: about 82 000 steps.
+
+    Pass: unit quaternions to 1e-12, kinetic energy never increasing (1e-15), the path straight
+    (lateral position below 1e-12 m) and the depth within 1 % of the 1-D reference, as in a
+    short run: nothing accumulates over 1e5 steps.
+    """
+    overrides = (*MM40, "numerics.time_step=5e-7")
+    error = _normal_impact_error(*overrides)
+    result, history, _ = _run(FL2, *overrides)
+    assert len(history) > 80_000
+    assert abs(error) < 1e-2
+    assert np.abs(np.linalg.norm(result.trajectory.attitude, axis=1) - 1.0).max() < 1e-12
+    energy = _kinetic_energy(result)
+    assert np.all(np.diff(energy) <= 1e-15 * energy[:-1])
+    assert np.abs(history[["position_x", "position_y"]].to_numpy()).max() < 1e-12
+
+
+def _mirror_difference(name: str, overrides: tuple[str, ...], key: str, value: float, flip: np.ndarray):
+    a, _, ra = _run(name, *overrides, f"{key}={value}")
+    b, _, rb = _run(name, *overrides, f"{key}={-value}")
+    n = min(len(a.trajectory.time), len(b.trajectory.time))
+    difference = np.abs(a.trajectory.position[:n] - b.trajectory.position[:n] * flip).max(axis=1)
+    return a, b, ra, rb, difference
+
+
+@pytest.mark.parametrize(("key", "value", "flip"), [("impact.attack_angle", 3.5, (-1, 1, 1)),
+                                                    ("impact.yaw_angle", 3.5, (1, -1, 1))])
+def test_mirrored_disturbance_gives_the_mirrored_path(key, value, flip):
+    """Test 5 with its attack angle (or a yaw angle) of +3.5 and -3.5 deg, 20 mm, RK4 2e-5 s.
+
+    Pass: the two paths are mirror images to 1e-12 m at every step, the same number of steps.  The
+    mesh is mirrored exactly (docs/numerics.md), so the loads are mirror images up to the order of
+    summation.
+    """
+    attack = () if key == "impact.attack_angle" else ("impact.attack_angle=0",)
+    a, b, ra, rb, difference = _mirror_difference(FL5, (*MM20, *RK4_2E5, *attack), key, value, np.array(flip))
+    assert ra["end_reason"] == rb["end_reason"] and len(a.trajectory.time) == len(b.trajectory.time)
+    assert difference.max() < 1e-12
+
+
+def test_mirrored_disturbance_of_an_unstable_run():
+    """#3 at 1200 m/s with +1 and -1 deg attack (turns 145 deg and leaves), 20 mm, 1e-5 s.
+
+    Pass: mirror images to 1e-9 m until the attack angle has collapsed after its peak; afterwards
+    within 1e-4 of the path length, and the same end (exit) within 1e-4 of the time.  Why not 1e-12 to
+    the end: once the attack angle has collapsed, the shank's load switches side at every step
+    (the sliding chatter), each switch decided by round-off, and the summation order (not mirrored)
+    seeds different switches; the difference (7e-4 m over 17.5 m) is a tenth of the time-step error
+    (7e-3 m between 2e-5 and 1e-5 s).
+    """
+    a, b, ra, rb, difference = _mirror_difference(P3, (*MM20, "numerics.time_step=1e-5"), "impact.attack_angle", 1.0,
+                                                  np.array([-1.0, 1.0, 1.0]))
+    history = history_table(a)
+    peak = int(np.argmax(history["total_attack_angle"].to_numpy()))
+    collapsed = peak + int(np.argmax(history["total_attack_angle"].to_numpy()[peak:] < 0.1))
+    assert ra["end_reason"] == rb["end_reason"] == "exited"
+    assert difference[:collapsed].max() < 1e-9
+    assert difference.max() < 1e-4 * ra["path_length"]
+    assert rb["final_time"] == pytest.approx(ra["final_time"], rel=1e-4)
+
+
+def test_zero_disturbance_stays_straight():
+    """Normal impact of the Forrestal-Luk body at 280 m/s without any disturbance, 20 mm, 2e-5 s.
+
+    Pass: the centre of mass never leaves the axis by more than 1e-12 m, the attack angle stays
+    below 1e-9 deg and the angular velocity below 1e-9 rad/s, to the stop.
+    """
+    _, history, record = _run(FL2, *MM20, *RK4_2E5)
+    assert record["end_reason"] == "stopped"
+    assert np.abs(history[["position_x", "position_y"]].to_numpy()).max() < 1e-12
+    assert history["total_attack_angle"].max() < 1e-9
+    assert np.abs(history[["angular_velocity_x", "angular_velocity_y", "angular_velocity_z"]].to_numpy()).max() < 1e-9
+
+
+UNDISTURBED_LONG = {  # the runs in which round-off seeds grow: (scene, overrides)
+    "Forrestal-Luk at 3000 m/s": (FL2, (*MM20, *RK4_2E5, "impact.speed=3000")),
+    "#3 at 1200 m/s": (P3, (*MM20, *RK4_2E5, "impact.attack_angle=0")),
+}
+
+
+@pytest.mark.xfail(strict=True, reason="round-off seeds (1e-16) of the quadrature and the summation order grow once "
+                                       "the speed is low, through the Vn guard's dead zone into the shank's "
+                                       "sliding chatter: docs/numerics.md, Hard cases")
+@pytest.mark.parametrize("case", UNDISTURBED_LONG)
+def test_zero_disturbance_of_long_runs_stays_straight(case):
+    """The strict criterion of the test above for a 32 m run at 3000 m/s and for #3 at 1200 m/s.
+
+    Fails: straight to 1e-16 m down to half the impact speed; then the lateral drift reaches
+    3e-11 m (3000 m/s) and 6e-4 m (#3) by 10 % of the impact speed, and 0.5 mm and 3.3 mm at the
+    stop, the attack angle 0.016 deg (#3) while moving and tens of degrees near rest.
+    """
+    name, overrides = UNDISTURBED_LONG[case]
+    _, history, _ = _run(name, *overrides)
+    assert np.abs(history[["position_x", "position_y"]].to_numpy()).max() < 1e-12
+    assert history["total_attack_angle"].max() < 1e-9
+
+
+@pytest.mark.parametrize("case", UNDISTURBED_LONG)
+def test_zero_disturbance_of_long_runs_stays_nearly_straight(case):
+    """What holds of the undisturbed long runs (see the xfail above).
+
+    Pass: straight to 1e-12 m while the speed is above half the impact speed; the attack angle below
+    0.05 deg while the speed is at least 10 % of it (the window of the summary's max_attack_angle;
+    0.05 deg is the shank chatter's amplitude at this step, where a 1 deg disturbance of #3 peaks at
+    17 deg); lateral drift below 1e-3 of the path to the stop; axis turn below 0.1 deg.
+    """
+    name, overrides = UNDISTURBED_LONG[case]
+    _, history, record = _run(name, *overrides)
+    speed = history["speed"].to_numpy()
+    lateral = np.hypot(history["position_x"], history["position_y"]).to_numpy()
+    assert record["end_reason"] == "stopped"
+    assert lateral[speed >= 0.5 * speed[0]].max() < 1e-12
+    assert history["total_attack_angle"].to_numpy()[speed >= 0.1 * speed[0]].max() < 0.05
+    assert lateral.max() < 1e-3 * record["path_length"]
+    assert abs(record["axis_angle_change"]) < 0.1
+
+
+# ---------------------------------------------------------------------------------------------------
+# 6. numerical failure ends the run with a clear reason and keeps the history
+
+BODY = RigidBody(23.1, np.diag([0.03, 3.8, 3.8]))
+
+
+def _start(speed: float = 280.0) -> State:
+    return State(0.0, np.zeros(3), np.array([0.0, 0.0, -speed]), np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3))
+
+
+@pytest.mark.parametrize("method", [RK4(), DormandPrince54()])
+def test_non_finite_loads_end_the_run_with_the_history(method):
+    """Loads that turn NaN after 0.4 ms. Pass: ``non_finite``, a finite history to just before it."""
+    def loads(x, v, r, w):
+        return (np.full(3, np.nan) if -x[2] > 0.112 else np.array([0.0, 0.0, 1e5])), np.zeros(3)
+
+    kwargs = {"time_step": 1e-5} if not method.adaptive else {"rtol": 1e-6, "forced_step": 1e-5, "min_step": 1e-8}
+    tr = simulate(BODY, loads, _start(), method, time_limit=1.0, **kwargs)
+    assert tr.end_reason == NON_FINITE
+    assert np.isfinite(tr.position).all() and np.isfinite(tr.velocity).all()
+    assert 0.108 < -tr.position[-1, 2] <= 0.112 and len(tr.time) > 10
+
+
+def test_overflowing_rotation_ends_the_run_instead_of_raising():
+    """A moment that overflows the angular velocity makes ``math.sin`` of an infinite rotation raise
+    inside a step (what ``projectile.mass = 1e-300`` did: "math domain error").  Pass: the run ends
+    ``non_finite`` with its finite history."""
+    def loads(x, v, r, w):
+        return np.zeros(3), np.array([0.0, 1e308 if -x[2] > 0.05 else 0.0, 0.0])
+
+    tr = simulate(BODY, loads, _start(), RK4(), time_limit=1.0, time_step=1e-5)
+    assert tr.end_reason == NON_FINITE and np.isfinite(tr.angular_velocity).all() and len(tr.time) > 10
+
+
+def test_energy_guard_below_the_floor_ends_the_run():
+    """Loads that push energy in although the run is declared dissipative: the guard halves the
+    step down to its floor and must then stop.  Pass: ``step_floor`` after the last accepted step,
+    its history kept (before: the step at the floor was accepted silently, and the guard could go
+    on halving to 1e-10 s: 5 minutes without an end for ``transverse_inertia_scale = 1e-6``)."""
+    def loads(x, v, r, w):
+        return (np.array([0.0, 0.0, -1e5]) if -x[2] > 0.05 else np.zeros(3)), np.zeros(3)
+
+    tr = simulate(BODY, loads, _start(), RK4(), time_limit=1.0, time_step=1e-5, min_step=1e-5 / 1024,
+                  dissipative=True)
+    assert tr.end_reason == STEP_FLOOR
+    assert 0.049 < -tr.position[-1, 2] < 0.05 + 280 * 1e-5 and np.isfinite(tr.position).all()
+    assert tr.statistics["energy_rejections"] >= 10
+
+
+def test_error_control_below_the_floor_ends_the_run():
+    """A sliding mode like the shank's: a lateral force of 2 MN on 23.1 kg against the sign of the
+    lateral velocity, which reaches zero after 12 us and then switches at every step.
+
+    Pass: without forced steps Dormand-Prince's error control shrinks the step until it would pass
+    the floor (1e-8 s) and the run ends ``step_floor`` with its finite history, before 0.1 ms (with a
+    floor of 1e-9 s it crawls on at 4e-9 s steps: 242 798 steps for 1 ms); with ``forced_step`` =
+    1e-6 s the same millisecond takes at most 1 ms / 1e-6 s + 10 steps, the steps at the switch
+    accepted and counted.
+    """
+    start = State(0.0, np.zeros(3), np.array([1.0, 0.0, -280.0]), np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3))
+
+    def loads(x, v, r, w):
+        return np.array([-2e6 * np.sign(v[0]), 0.0, 0.0]), np.zeros(3)
+
+    tr = simulate(BODY, loads, start, DormandPrince54(), time_limit=1e-3, rtol=1e-6, min_step=1e-8)
+    assert tr.end_reason == STEP_FLOOR and tr.time[-1] < 1e-4
+    assert np.isfinite(tr.velocity).all() and abs(tr.velocity[-1, 0]) < 1e-2
+    forced = simulate(BODY, loads, start, DormandPrince54(), time_limit=1e-3, rtol=1e-6, min_step=1e-8,
+                      forced_step=1e-6)
+    assert forced.end_reason == TIME_LIMIT and forced.statistics["forced_steps"] > 900
+    assert forced.statistics["steps"] <= 1010
+
+
+# ---------------------------------------------------------------------------------------------------
+# 7. valid-looking scenes that failed at run time without naming a field
+
+@pytest.mark.parametrize(("change", "expected"), [
+    ({"mass": 1e-300}, "projectile: mass = 1e-300: lighter than 100 kg/m^3 over the bounding cylinder"),
+    ({"mass": None, "mass_properties": {"mass": 23.1, "centre_of_mass": 0.8, "axial_inertia": 9.0,
+                                        "transverse_inertia": 4.0}},
+     "axial_inertia = 9: more than twice transverse_inertia"),
+    ({"numerics.mesh_size": 1.0}, "numerics.mesh_size = 1: coarser than the projectile"),
+])
+def test_absurd_scenes_fail_early_naming_the_field(change, expected):
+    """Pass: ``SceneError`` (exit 2) with one line naming the field and the allowed range, before
+    anything is meshed.  Before: "math domain error" in the first step (mass), a run with an
+    inertia no rigid body has, and the mesh room's "mesh size = 1.0: must lie in (0, 1.4) m" or
+    gmsh's "Newton iteration didn't converge" at run time (exit 1)."""
+    data = read_toml(scene_path(FL2))
+    for key, value in change.items():  # "name" in [projectile], "section.name" elsewhere
+        section, _, name = key.rpartition(".")
+        table = data[section or "projectile"]
+        if value is None:
+            del table[name]
+        else:
+            table[name] = value
+    with pytest.raises(SceneError) as caught:
+        scene_from_dict(data)
+    message = str(caught.value)
+    assert expected in message and "allowed" in message and len(message.splitlines()) == 1
+
+
+def test_inertia_scale_below_the_rigid_body_limit_is_a_clear_run_error():
+    """``transverse_inertia_scale = 1e-300``: the inertia is only known after meshing.  Pass: one
+    line naming the field and the smallest allowed value (before: "inertia must be positive
+    definite"; at 1e-6 the run went on for over 5 minutes)."""
+    scene = load_scene(scene_path(FL2), [*MM40, "projectile.transverse_inertia_scale=1e-300"])
+    with pytest.raises(ValueError, match=r"projectile.transverse_inertia_scale = 1e-300: .* >= 0\.00"):
+        prepare_projectile(scene)
+
+
+def test_unmeshable_nose_is_a_clear_one_line_run_error(tmp_path):
+    """A CRH 100 ogive at 40 mm: scikit-fem cannot map the distorted quadratic elements at its tip.
+    Pass: exit 1 and one stderr line naming ``numerics.mesh_size`` and what usually works (before:
+    "Exception: Newton iteration didn't converge up to TOL=1e-12")."""
+    done = subprocess.run([sys.executable, "-m", "cases.cli", "run", str(scene_path(FL2)), "--set",
+                           "numerics.mesh_size=0.04", "--set", "projectile.nose={shape='ogive', crh=100}"],
+                          capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert done.returncode == 1
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "numerics.mesh_size = 0.04" in lines[0] and "finer numerics.mesh_size" in lines[0]
