@@ -340,7 +340,8 @@ def _integrate(scene: Scene, prepared: PreparedProjectile, body: RigidBody, driv
     with ``numerics.rtol`` and absolute tolerances ``rtol`` times the
     projectile length (position, path), the impact speed (velocity),
     :data:`ANGLE_SCALE` (rotation) and ``ANGLE_SCALE`` times the impact speed
-    over the length (angular velocity); it never steps below
+    over the length (angular velocity); it starts with a step of 1e-3 of the
+    length over the speed and never shortens a step below
     ``numerics.time_step``: a step of that size that fails the tolerance is
     accepted (``forced_steps``), since across the shank's ``Vn = 0`` switch no
     step meets a smooth error model.  Either integrator ends the run with

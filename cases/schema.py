@@ -20,7 +20,7 @@ __all__ = ["Scene", "Projectile", "Target", "LayerSpec", "Effects", "FrictionSpe
            "MassPropertiesSpec", "LawSpec"]
 
 
-MAX_STEPS = 5_000_000  # dynamics.simulate's max_steps: no run steps below time_step, so none takes more
+MAX_STEPS = 5_000_000  # dynamics.simulate's max_steps: no run takes more than time_limit / time_step
 MAX_MESH_CELLS = 2e6  # cells of mesh_size^3 in the projectile's bounding cylinder (about 1e7 tetrahedra)
 # lightest mean density (kg/m^3) over the bounding cylinder: far below any hard projectile (balsa is 150);
 # a 1e-300 kg projectile overflowed the first step (math domain error)
@@ -355,7 +355,7 @@ class Numerics(_Strict):
     quadrature_order: Whole = _field(2, ge=1, le=10, description="degree exact on each facet")
     integrator: Literal["rk4", "dopri54"] = "rk4"
     time_step: Number = _field(2e-5, unit="s", gt=0.0, le=1e-2,
-                               description="fixed step (rk4); the shortest step of the error control (dopri54)")
+                               description="fixed step (rk4); the error control shortens no step below it (dopri54)")
     rtol: Number = _field(1e-6, gt=0.0, lt=1.0, description="relative tolerance (dopri54)")
     time_limit: Number = _field(1.0, unit="s", gt=0.0, le=100.0)
     stop_speed: Number = _field(0.5, unit="m/s", gt=0.0, le=1e3,
@@ -366,7 +366,7 @@ class Numerics(_Strict):
 
     @model_validator(mode="after")
     def _reachable_time_limit(self):
-        # rk4 steps by time_step, and dopri54 never steps below it
+        # rk4 steps by time_step, and dopri54 shortens no step below it
         if self.time_limit / self.time_step > MAX_STEPS:
             raise ValueError(f"time_step = {self.time_step:g}: {self.time_limit / self.time_step:.3g} steps to reach"
                              f" time_limit = {self.time_limit:g} s (allowed: time_limit / time_step <= {MAX_STEPS:g};"

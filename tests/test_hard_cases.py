@@ -65,7 +65,7 @@ def test_attack_decay_adaptive_integrator_does_not_stall(rtol):
     Once the attack angle has decayed, the shank's ``A sigma_0`` load switches side from step to step
     (a sliding mode of the ``Vn = 0`` jump, about 2 MN on 23 kg) and no step size meets a smooth error
     model.  Pass: the run stops (no stall, no step floor), with at most ``1 ms / time_step + 1``
-    accepted steps per simulated millisecond (the error control never goes below ``time_step``) and at
+    accepted steps per simulated millisecond (the error control shortens no step below ``time_step``) and at
     most 10 rejected steps per simulated millisecond; forced steps (accepted at the floor) are counted,
     so the chatter was met and not hidden.  Before the fix rtol 1e-6 took about 870 steps and 80
     rejections per millisecond at 10 mm (72 s).
@@ -77,7 +77,8 @@ def test_attack_decay_adaptive_integrator_does_not_stall(rtol):
     assert stats["steps"] / milliseconds <= 1e-3 / 2e-5 + 1
     assert stats["rejected_steps"] / milliseconds <= 10
     assert stats["forced_steps"] > 0
-    assert stats["smallest_step"] >= 2e-5 * (1 - 1e-12)
+    steps = np.diff(result.trajectory.time)
+    assert steps[1:-1].min() >= 2e-5 * (1 - 1e-12)  # only the first step and the located end are shorter
 
 
 @pytest.mark.parametrize("rtol", [1e-4, 1e-6])
