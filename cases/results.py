@@ -127,6 +127,7 @@ def summary(result: RunResult, history: pd.DataFrame | None = None) -> dict:
         "rejected_steps": stats.get("rejected_steps"),
         "forced_steps": stats.get("forced_steps"),
         "energy_rejections": stats.get("energy_rejections"),
+        "energy_projections": stats.get("energy_projections"),
         "load_evaluations": stats.get("load_evaluations"),
     }
 
