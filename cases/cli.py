@@ -27,6 +27,7 @@ def _human(record: dict, scene) -> str:
         f"wall time      {record['wall_time']:.3g} s (integration {record['integration_time']:.3g} s,"
         f" {record['steps']} steps, {record['load_evaluations']} load evaluations)",
     ]
+    lines += [f"warning        {text}" for text in record.get("warnings", [])]
     return "\n".join(lines)
 
 

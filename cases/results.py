@@ -129,7 +129,34 @@ def summary(result: RunResult, history: pd.DataFrame | None = None) -> dict:
         "energy_rejections": stats.get("energy_rejections"),
         "energy_projections": stats.get("energy_projections"),
         "load_evaluations": stats.get("load_evaluations"),
+        "warnings": run_warnings(result.trajectory.end_reason, stats),
     }
+
+
+# a share of steps above which retaken or forced steps mean the numerics do not suit the scene
+WARN_SHARE = 0.1
+
+
+def run_warnings(end_reason: str, statistics: dict) -> list[str]:
+    """Plain-language warnings about a run's numerics (empty when nothing needs saying).
+
+    A run that ends by a numerical failure or the time limit, or whose steps were
+    often retaken by the energy guard or accepted above the adaptive tolerance,
+    still returns its numbers; these lines say why they deserve suspicion.
+    """
+    steps = max(1, int(statistics.get("steps") or 0))
+    warnings = []
+    if end_reason not in ("stopped", "exited"):
+        warnings.append(f"the run ended by {end_reason}, not by stopping or leaving the target")
+    retaken = int(statistics.get("energy_rejections") or 0)
+    if retaken > WARN_SHARE * steps:
+        warnings.append(f"{retaken} retakes by the energy guard for {steps} steps: numerics.time_step is too coarse"
+                        " for this scene (docs/numerics.md, the energy guard)")
+    forced = int(statistics.get("forced_steps") or 0)
+    if forced > WARN_SHARE * steps:
+        warnings.append(f"{forced} of {steps} steps accepted above the tolerance at the step floor: the error control"
+                        " cannot meet numerics.rtol here (docs/numerics.md, hard cases)")
+    return warnings
 
 
 def _umask() -> int:

@@ -121,3 +121,14 @@ def test_energy_guard_keeps_coarse_steps_dissipative():
     assert np.diff(raw).max() > 0 and raw_run.end_reason == "time_limit"
     assert np.max(np.diff(guarded) / guarded[:-1]) <= ENERGY_TOLERANCE and guarded_run.end_reason == "stopped"
     assert guarded_run.statistics["energy_rejections"] > 0
+
+
+def test_runs_warn_when_the_numerics_do_not_suit_the_scene():
+    """3000 m/s at the shipped test-2 step (2e-4 s) makes the energy guard retake more steps than it
+    takes; the summary says so. The shipped scene itself carries no warning."""
+    coarse, _ = _run("forrestal_luk_test2", "impact.speed=3000", "numerics.mesh_size=0.04")
+    record = summary(coarse)
+    assert record["energy_rejections"] > 0.1 * record["steps"]
+    assert any("energy guard" in text for text in record["warnings"])
+    shipped, history = _run("forrestal_luk_test2")
+    assert summary(shipped, history)["warnings"] == []
