@@ -239,15 +239,20 @@ def _render(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_pool_options(parser: argparse.ArgumentParser, store: str) -> None:
+    """The run store and where the runs go: shared by every command that runs many scenes."""
+    parser.add_argument("--store", default=store, metavar="DIR",
+                        help=f"where finished runs are kept and found again (default {store})")
+    parser.add_argument("--workers", type=_positive_int, metavar="N", help="local processes (default: every core)")
+    parser.add_argument("--scheduler", metavar="ADDRESS", help="run on this Dask distributed scheduler")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
 def _add_study_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scene", help="a scene TOML file")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="override a scene key by its dotted path (repeatable)")
-    parser.add_argument("--store", default="runs/store", metavar="DIR",
-                        help="where finished runs are kept and found again (default runs/store)")
-    parser.add_argument("--workers", type=_positive_int, metavar="N", help="local processes (default: every core)")
-    parser.add_argument("--scheduler", metavar="ADDRESS", help="run on this Dask distributed scheduler")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    _add_pool_options(parser, "runs/store")
     parser.add_argument("--json", action="store_true", help="print the result as one JSON object")
 
 
@@ -317,12 +322,8 @@ def build_parser() -> argparse.ArgumentParser:
                             " options make a cartesian product")
     sweep.add_argument("--list", metavar="FILE",
                        help="a TOML file of [[run]] tables of dotted keys, one run each (with --grid: their product)")
-    sweep.add_argument("--store", default="runs/store", metavar="DIR",
-                       help="where finished runs are kept and found again (default runs/store)")
+    _add_pool_options(sweep, "runs/store")
     sweep.add_argument("--out", type=_out_file, metavar="FILE", help="write the results table as CSV")
-    sweep.add_argument("--workers", type=_positive_int, metavar="N", help="local processes (default: every core)")
-    sweep.add_argument("--scheduler", metavar="ADDRESS", help="run on this Dask distributed scheduler")
-    sweep.add_argument("--no-progress", action="store_true", help="no progress bar")
     sweep.add_argument("--json", action="store_true", help="print the table as JSON records")
     sweep.set_defaults(handler=_sweep)
 
@@ -365,11 +366,7 @@ def build_parser() -> argparse.ArgumentParser:
     paper = commands.add_parser("paper", help="regenerate the paper's study: tables and figures")
     paper.add_argument("--out", default="docs/paper", type=_out_folder, metavar="DIR",
                        help="where to write (default docs/paper)")
-    paper.add_argument("--store", default="runs/paper-store", metavar="DIR",
-                       help="where finished runs are kept and found again (default runs/paper-store)")
-    paper.add_argument("--workers", type=_positive_int, metavar="N", help="local processes (default: every core)")
-    paper.add_argument("--scheduler", metavar="ADDRESS", help="run on this Dask distributed scheduler")
-    paper.add_argument("--no-progress", action="store_true", help="no progress bar")
+    _add_pool_options(paper, "runs/paper-store")
     paper.add_argument("--variants", action="store_true",
                        help="the paper's variants instead: friction, conical nose, other soil laws")
     paper.set_defaults(handler=_paper)

@@ -26,16 +26,20 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
-def multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """Hamilton product ``p * q``."""
-    pw, px, py, pz = p.tolist()
-    qw, qx, qy, qz = q.tolist()
+def _hamilton(p: tuple[float, ...] | list[float], q: tuple[float, ...] | list[float]) -> np.ndarray:
+    pw, px, py, pz = p
+    qw, qx, qy, qz = q
     return np.array([
         pw * qw - px * qx - py * qy - pz * qz,
         pw * qx + px * qw + py * qz - pz * qy,
         pw * qy - px * qz + py * qw + pz * qx,
         pw * qz + px * qy - py * qx + pz * qw,
     ])
+
+
+def multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Hamilton product ``p * q``."""
+    return _hamilton(p.tolist(), q.tolist())
 
 
 def _exp(rotation_vector: np.ndarray) -> tuple[float, float, float, float]:
@@ -55,14 +59,7 @@ def exp_map(rotation_vector: np.ndarray) -> np.ndarray:
 
 def compose(q: np.ndarray, rotation_vector: np.ndarray) -> np.ndarray:
     """``q * exp_map(rotation_vector)`` in one call (the attitude inside a Runge-Kutta step)."""
-    ew, ex, ey, ez = _exp(rotation_vector)
-    pw, px, py, pz = q.tolist()
-    return np.array([
-        pw * ew - px * ex - py * ey - pz * ez,
-        pw * ex + px * ew + py * ez - pz * ey,
-        pw * ey - px * ez + py * ew + pz * ex,
-        pw * ez + px * ey - py * ex + pz * ew,
-    ])
+    return _hamilton(q.tolist(), _exp(rotation_vector))
 
 
 def normalize(q: np.ndarray) -> np.ndarray:

@@ -80,10 +80,10 @@ class DAFLLoads:
         self._weights = np.ascontiguousarray(q.weights)
         self._radius2 = np.einsum("ij,ij->i", q.points, q.points)
         self._max_radius = float(np.sqrt(self._radius2.max()))
-        # the plain case (one law, separation, no free surface): the law folded into the
+        # the plain case (one law, separation, no free surface, no friction): the law folded into the
         # weights, and work buffers reused by every call, so that an evaluation makes one
         # pass over the cached arrays and a few in-place passes over n numbers
-        self._plain = isinstance(law, ResistanceLaw) and separation and free_surface is None
+        self._plain = isinstance(law, ResistanceLaw) and separation and free_surface is None and friction is None
         if self._plain:
             self._static_weights = law.static_stress * self._weights
             self._dynamic_weights = law.dynamic_density * self._weights
@@ -127,13 +127,7 @@ class DAFLLoads:
         angular_velocity : ndarray, shape (3,)
             Angular velocity in the body frame (rad/s).
         """
-        generalised = np.empty(6)
-        generalised[:3] = velocity @ rotation  # R^T V
-        generalised[3:] = angular_velocity
-        normal_velocity = generalised @ self._normal_arm_t
-        speed = math.sqrt(float(velocity @ velocity))
-        spin = math.sqrt(float(angular_velocity @ angular_velocity))
-        guard = self.normal_velocity_guard * (speed + spin * self._max_radius)
+        normal_velocity, guard = self._normal_velocity(velocity, rotation, angular_velocity, np.empty(6))
         heights = self.heights(position, rotation)
         if isinstance(self.law, LayeredTarget):
             static, dynamic = self.law.coefficients(-heights)
@@ -152,6 +146,18 @@ class DAFLLoads:
         sigma = np.where(loaded, stress, 0.0)
         return sigma, normal_velocity
 
+    def _normal_velocity(self, velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray,
+                         generalised: np.ndarray) -> tuple[np.ndarray, float]:
+        """``Vn`` at every point (one product with ``[n | r x n]``) and the guard below which it counts as 0.
+
+        ``generalised`` is a 6-vector to fill with ``(R^T V, omega)``.
+        """
+        generalised[:3] = velocity @ rotation  # R^T V
+        generalised[3:] = angular_velocity
+        speed = math.sqrt(float(velocity @ velocity))
+        spin = math.sqrt(float(angular_velocity @ angular_velocity))
+        return generalised @ self._normal_arm_t, self.normal_velocity_guard * (speed + spin * self._max_radius)
+
     def __call__(self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray,
                  angular_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Resultant load.
@@ -163,7 +169,7 @@ class DAFLLoads:
         moment : ndarray, shape (3,)
             Moment about the centre of mass in the body frame (N m).
         """
-        if self._plain and self.friction is None:
+        if self._plain:
             load = self._plain_load(position, velocity, rotation, angular_velocity)
             return rotation @ load[:3], load[3:]
         sigma, normal_velocity = self.stress(position, velocity, rotation, angular_velocity)
@@ -183,13 +189,7 @@ class DAFLLoads:
         """
         if self.fully_outside(position):
             return np.zeros(6)
-        generalised = self._generalised
-        generalised[:3] = velocity @ rotation  # R^T V
-        generalised[3:] = angular_velocity
-        normal_velocity = generalised @ self._normal_arm_t
-        speed = math.sqrt(float(velocity @ velocity))
-        spin = math.sqrt(float(angular_velocity @ angular_velocity))
-        guard = self.normal_velocity_guard * (speed + spin * self._max_radius)
+        normal_velocity, guard = self._normal_velocity(velocity, rotation, angular_velocity, self._generalised)
         stress = self._stress_buffer
         np.multiply(normal_velocity, normal_velocity, out=stress)
         stress *= self._dynamic_weights
