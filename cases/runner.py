@@ -40,7 +40,7 @@ from mesh.profile import BluntOgiveNose, SecantOgiveNose
 
 from .schema import LawSpec, MaterialLawSpec, Numerics, Projectile, Scene
 
-__all__ = ["PreparedProjectile", "prepare_projectile", "resolve_law", "initial_state", "run_scene",
+__all__ = ["PreparedProjectile", "prepare_projectile", "preparation_key", "resolve_law", "initial_state", "run_scene",
            "scene_loads", "projectile_geometry",
            "RunResult", "STOPPED", "EXITED", "DEFAULT_BODY_DENSITY"]
 
@@ -204,9 +204,13 @@ def prepare_projectile(scene: Scene) -> PreparedProjectile:
     a later run of the same projectile and numerics reads them back without
     meshing, assembling or importing gmsh and scikit-fem.
     """
-    mesh_fields = {"mesh_size", "geometry_order", "normals", "quadrature_order"}
-    numerics = scene.numerics.model_dump_json(include=mesh_fields)
-    return _prepare(scene.projectile.model_dump_json(), numerics)
+    return _prepare(*preparation_key(scene))
+
+
+def preparation_key(scene: Scene) -> tuple[str, str]:
+    """What a prepared projectile depends on: the projectile and the mesh and quadrature numerics (JSON)."""
+    return (scene.projectile.model_dump_json(),
+            scene.numerics.model_dump_json(include={"mesh_size", "geometry_order", "normals", "quadrature_order"}))
 
 
 def resolve_law(law: str | LawSpec | MaterialLawSpec) -> ResistanceLaw:

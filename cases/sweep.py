@@ -248,11 +248,11 @@ def prepare_record(scene_json: str) -> None:
 
 def _distinct_projectiles(scenes: Sequence[Scene]) -> list[str]:
     """One scene (as JSON) per distinct projectile and mesh setting."""
+    from .runner import preparation_key
+
     seen: dict[tuple, str] = {}
     for scene in scenes:
-        n = scene.numerics
-        token = (scene.projectile.model_dump_json(), n.mesh_size, n.geometry_order, n.normals, n.quadrature_order)
-        seen.setdefault(token, scene.model_dump_json())
+        seen.setdefault(preparation_key(scene), scene.model_dump_json())
     return list(seen.values())
 
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from cases import load_scene, run_scene, scene_path
-from cases.runner import _prepare, _prepared_path, prepare_projectile, scene_loads
+from cases.runner import _prepare, _prepared_path, prepare_projectile, preparation_key, scene_loads
 from dynamics.quaternion import normalize, rotation_matrix
 
 COARSE = ["numerics.mesh_size=0.04"]
@@ -57,9 +57,7 @@ def test_bounding_sphere_shortcuts_are_exact(loads):
 def test_prepared_projectile_comes_back_bit_identical_from_the_disk_cache():
     scene = load_scene(scene_path("forrestal_luk_test5"), COARSE)
     first = prepare_projectile(scene)
-    spec, numerics = scene.projectile.model_dump_json(), scene.numerics.model_dump_json(
-        include={"mesh_size", "geometry_order", "normals", "quadrature_order"})
-    path = _prepared_path(spec, numerics)
+    path = _prepared_path(*preparation_key(scene))
     assert path.exists()
     _prepare.cache_clear()  # forget the in-memory copy: the next one is read from disk
     again = prepare_projectile(scene)
@@ -79,8 +77,7 @@ def test_prepared_projectile_comes_back_bit_identical_from_the_disk_cache():
 
 def test_runs_from_the_cache_and_from_scratch_agree_bitwise():
     scene = load_scene(scene_path("forrestal_luk_test2"), COARSE)
-    numerics = scene.numerics.model_dump_json(include={"mesh_size", "geometry_order", "normals", "quadrature_order"})
-    _prepared_path(scene.projectile.model_dump_json(), numerics).unlink(missing_ok=True)
+    _prepared_path(*preparation_key(scene)).unlink(missing_ok=True)
     _prepare.cache_clear()
     cold = run_scene(scene).trajectory  # mass properties and quadrature assembled by scikit-fem
     _prepare.cache_clear()
