@@ -28,7 +28,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from dynamics import METHODS, Event, RigidBody, SpeedBelow, State, Trajectory, simulate
-from dynamics.quaternion import from_rotation_matrix
+from dynamics.quaternion import multiply, rotation_matrix
 from fem_loads import (DAFLLoads, MassProperties, ResistanceLaw, SurfaceQuadrature, mass_properties,
                        resistance_law, surface_quadrature, to_skfem)
 from fem_loads.resistance import locking_cavity_expansion
@@ -102,7 +102,7 @@ def projectile_geometry(spec: Projectile) -> tuple[ProjectileGeometry, dict[int,
 
 
 # bump when the mass properties or the surface quadrature computed from a mesh change
-PREPARED_FORMAT_VERSION = 1
+PREPARED_FORMAT_VERSION = 3  # 3: mirror-symmetric quadrature (with its quarters) and mass properties
 
 
 def _prepared_path(spec_json: str, numerics_json: str) -> Path:
@@ -118,7 +118,9 @@ def _load_prepared(path: Path, geometry: ProjectileGeometry) -> PreparedProjecti
     try:
         with np.load(path) as data:
             mass = MassProperties(float(data["mass"]), data["centre"], data["inertia"], float(data["volume"]))
-            quadrature = SurfaceQuadrature(data["points"], data["normals"], data["weights"])
+            quarters = data["mirror_quarters"]
+            quadrature = SurfaceQuadrature(data["points"], data["normals"], data["weights"],
+                                           quarters if quarters.size else None)
             return PreparedProjectile(geometry, mass, quadrature, int(data["n_tetra"]))
     except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile):
         path.unlink(missing_ok=True)  # absent, or a corrupt entry: compute again
@@ -131,7 +133,8 @@ def _save_prepared(path: Path, prepared: PreparedProjectile) -> None:
     m, q = prepared.mass, prepared.quadrature
     with tempfile.NamedTemporaryFile(dir=path.parent, suffix=".npz.tmp", delete=False) as tmp:
         np.savez(tmp, mass=m.mass, centre=m.centre, inertia=m.inertia, volume=m.volume, points=q.points,
-                 normals=q.normals, weights=q.weights, n_tetra=prepared.n_tetra)
+                 normals=q.normals, weights=q.weights, n_tetra=prepared.n_tetra,
+                 mirror_quarters=q.mirror_quarters if q.mirror_quarters is not None else np.empty(0, dtype=np.int64))
     os.replace(tmp.name, path)
 
 
@@ -223,20 +226,28 @@ def resolve_law(law: str | LawSpec | MaterialLawSpec) -> ResistanceLaw:
 
 
 def initial_attitude(oblique_angle: float, attack_angle: float, yaw_angle: float) -> np.ndarray:
-    """Body-to-world rotation at impact (angles in degrees)."""
-    phi = math.radians(oblique_angle + attack_angle)
-    psi = math.radians(yaw_angle)
-    axis = math.cos(psi) * np.array([math.sin(phi), 0.0, -math.cos(phi)]) + math.sin(psi) * np.array([0, 1.0, 0])
-    y_world = np.array([0.0, 1.0, 0.0])
-    side = y_world - (y_world @ axis) * axis
-    side /= np.linalg.norm(side)
-    return np.column_stack([axis, side, np.cross(axis, side)])
+    """Body-to-world attitude quaternion at impact (angles in degrees).
+
+    The axis leaves the downward vertical by ``oblique_angle + attack_angle`` in the
+    ``XZ`` plane and turns by ``yaw_angle`` towards ``Y``; the body ``y`` axis stays in
+    the plane of the axis and ``Y``.  Built as the exact nose-down quarter turn about
+    ``Y``, ``(sqrt(1/2), 0, sqrt(1/2), 0)``, times the pitch and yaw turns, so that a
+    straight normal impact starts exactly on the axis (``cos`` and ``sin`` of 45 degrees
+    differ by one ulp in floating point).
+    """
+    pitch = math.radians(oblique_angle + attack_angle) / 2  # about -Y
+    yaw = math.radians(yaw_angle) / 2  # about body z
+    half = math.sqrt(0.5)
+    nose_down = np.array([half, 0.0, half, 0.0])
+    return multiply(multiply(nose_down, np.array([math.cos(pitch), 0.0, -math.sin(pitch), 0.0])),
+                    np.array([math.cos(yaw), 0.0, 0.0, math.sin(yaw)]))
 
 
 def initial_state(scene: Scene, prepared: PreparedProjectile) -> State:
     """The tip touches the surface at the origin; at grazing incidence the lowest point does."""
     impact = scene.impact
-    rotation = initial_attitude(impact.oblique_angle, impact.attack_angle, impact.yaw_angle)
+    attitude = initial_attitude(impact.oblique_angle, impact.attack_angle, impact.yaw_angle)
+    rotation = rotation_matrix(attitude)
     beta = math.radians(impact.oblique_angle)
     velocity = impact.speed * np.array([math.sin(beta), 0.0, -math.cos(beta)])
     position = rotation @ (-prepared.tip)  # the tip at the origin
@@ -247,7 +258,7 @@ def initial_state(scene: Scene, prepared: PreparedProjectile) -> State:
     up = rotation[2]
     lowest = float(np.min(-s * up[0] - profile.radius_at(s) * math.hypot(up[1], up[2])))
     position[2] -= min(lowest, 0.0)
-    return State(0.0, position, velocity, from_rotation_matrix(rotation),
+    return State(0.0, position, velocity, attitude,
                  np.asarray(impact.angular_velocity, dtype=float))
 
 

@@ -70,10 +70,14 @@ def normalize(q: np.ndarray) -> np.ndarray:
 def rotation_matrix(q: np.ndarray) -> np.ndarray:
     """Body-to-world rotation matrix of a unit quaternion."""
     w, x, y, z = q.tolist()
+    ww, xx, yy, zz = w * w, x * x, y * y, z * z
+    # the homogeneous diagonal (w^2 + x^2 - y^2 - z^2, not 1 - 2 (y^2 + z^2)): a quaternion with two
+    # bitwise-equal components gives exact zeros, e.g. R[2, 2] = 0 for the nose-down attitude
+    # (sqrt(1/2), 0, sqrt(1/2), 0), where the other form leaves -2.2e-16 and tilts a straight impact
     return np.array([
-        1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
-        2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
-        2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y),
+        (ww + xx) - (yy + zz), 2 * (x * y - w * z), 2 * (x * z + w * y),
+        2 * (x * y + w * z), (ww + yy) - (xx + zz), 2 * (y * z - w * x),
+        2 * (x * z - w * y), 2 * (y * z + w * x), (ww + zz) - (xx + yy),
     ]).reshape(3, 3)
 
 

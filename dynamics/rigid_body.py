@@ -8,7 +8,7 @@ from typing import Protocol
 
 import numpy as np
 
-from .quaternion import cross, rotation_matrix
+from .quaternion import rotation_matrix
 
 __all__ = ["RigidBody", "State", "LoadFunction"]
 
@@ -52,17 +52,27 @@ class RigidBody:
             raise ValueError("inertia: must be positive definite")
         object.__setattr__(self, "inertia", inertia)
         object.__setattr__(self, "_inertia_inverse", np.linalg.inv(inertia))
+        # the same matrices as Python floats: called several times per step on 3-vectors, where
+        # numpy's per-call overhead (~1 us) is most of the cost
+        object.__setattr__(self, "_inertia_rows", tuple(tuple(row) for row in inertia.tolist()))
+        object.__setattr__(self, "_inverse_rows", tuple(tuple(row) for row in self._inertia_inverse.tolist()))
 
     def accelerations(self, force: np.ndarray, moment: np.ndarray,
                       angular_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Linear acceleration (world) and angular acceleration (body) from Newton-Euler."""
-        gyroscopic = cross(angular_velocity, self.inertia @ angular_velocity)
-        return force / self.mass, self._inertia_inverse @ (moment - gyroscopic)
+        w0, w1, w2 = angular_velocity.tolist()
+        h0, h1, h2 = (a * w0 + b * w1 + c * w2 for a, b, c in self._inertia_rows)  # I omega
+        m0, m1, m2 = moment.tolist()
+        # M - omega x (I omega)
+        r0, r1, r2 = m0 - (w1 * h2 - w2 * h1), m1 - (w2 * h0 - w0 * h2), m2 - (w0 * h1 - w1 * h0)
+        return force / self.mass, np.array([a * r0 + b * r1 + c * r2 for a, b, c in self._inverse_rows])
 
     def kinetic_energy(self, state: State) -> float:
         """Translational plus rotational kinetic energy (J)."""
-        w = state.angular_velocity
-        return 0.5 * self.mass * float(state.velocity @ state.velocity) + 0.5 * float(w @ self.inertia @ w)
+        v0, v1, v2 = state.velocity.tolist()
+        w0, w1, w2 = state.angular_velocity.tolist()
+        rotational = sum(w * (a * w0 + b * w1 + c * w2) for w, (a, b, c) in zip((w0, w1, w2), self._inertia_rows))
+        return 0.5 * self.mass * (v0 * v0 + v1 * v1 + v2 * v2) + 0.5 * rotational
 
 
 @dataclass(frozen=True)

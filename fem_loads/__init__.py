@@ -5,12 +5,12 @@ Knows nothing of time integration.
 
 from .dafl import DAFLLoads
 from .mass import MassProperties, mass_properties, to_skfem
-from .quadrature import NORMAL_MODELS, SurfaceQuadrature, surface_quadrature
+from .quadrature import NORMAL_MODELS, SurfaceQuadrature, mirror_quarters, surface_quadrature
 from .resistance import NAMED_LAWS, ResistanceLaw, resistance_law
 
 __all__ = [
     "MassProperties", "mass_properties", "to_skfem",
-    "SurfaceQuadrature", "surface_quadrature", "NORMAL_MODELS",
+    "SurfaceQuadrature", "surface_quadrature", "mirror_quarters", "NORMAL_MODELS",
     "ResistanceLaw", "NAMED_LAWS", "resistance_law",
     "DAFLLoads",
 ]

@@ -17,6 +17,19 @@ reduction, friction ``dF = -(sigma_n n + tau t) dS`` and, for comparison,
 no separation: every embedded point stays in contact with
 ``sigma_n = max(0, A sigma_0 + B rho_0 Vn |Vn|)``, so receding surfaces feel
 the static pressure less the dynamic term.  An absent effect costs nothing.
+
+Mirror symmetry.  When the quadrature is mirror symmetric about the body
+planes ``y = 0`` and ``z = 0`` (``SurfaceQuadrature.mirror_quarters``), the
+sums run over one quarter of the points with the stresses of the four images
+``s0..s3`` combined first: ``n_x`` takes ``(s0 + s1) + (s2 + s3)``, ``n_y`` and
+``(r x n)_z`` take ``(s0 - s1) + (s2 - s3)``, and so on.  A state symmetric
+about a plane then gives exactly equal stresses on mirrored points (each
+image's ``Vn`` and height are computed by the same operations on the same
+numbers), their differences are exactly zero and the load is exactly
+symmetric, whatever the summation order.  Without it, round-off of order
+``1e-16`` breaks the symmetry of a straight normal impact and grows, once the
+projectile is slow, through the jump of the stress at ``Vn = 0`` on the
+shank (docs/numerics.md, Hard cases).
 """
 
 from __future__ import annotations
@@ -25,6 +38,7 @@ import math
 
 import numpy as np
 
+from .images import MirrorImages
 from .quadrature import SurfaceQuadrature
 from .resistance import ResistanceLaw
 from .target import FreeSurface, Friction, LayeredTarget
@@ -89,7 +103,18 @@ class DAFLLoads:
             self._dynamic_weights = law.dynamic_density * self._weights
         n = len(self._weights)
         self._generalised = np.empty(6)
+        # mirror-symmetric quadrature: sums over the four images of the quarter (fem_loads.images)
+        self._images = None
+        if quadrature.mirror_quarters is not None:
+            self._images = MirrorImages(quadrature.mirror_quarters, self._normal_arm_t, self._points_t)
+            self._weights_q = self._images.quarter(self._weights)
+            if self._plain:
+                self._static_weights = self._images.quarter(self._static_weights)
+                self._dynamic_weights = self._images.quarter(self._dynamic_weights)
+            n = self._images.shape
+        self._normal_velocity_buffer = np.empty(n)
         self._stress_buffer = np.empty(n)
+        self._height_buffer = np.empty(n)
         self._unloaded = np.empty(n, dtype=bool)
         self._outside = np.empty(n, dtype=bool)
 
@@ -98,7 +123,9 @@ class DAFLLoads:
 
     def heights(self, position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
         """World height ``Z`` (m) of every quadrature point; negative inside the target."""
-        return position[2] + rotation[2] @ self._points_t
+        if self._images is None:
+            return position[2] + rotation[2] @ self._points_t
+        return self._images.scatter(self._images.heights(position[2], rotation[2], np.empty(self._images.shape)))
 
     def fully_embedded(self, position: np.ndarray) -> bool:
         """Whether every quadrature point is inside the target, from the bounding sphere alone."""
@@ -128,6 +155,8 @@ class DAFLLoads:
             Angular velocity in the body frame (rad/s).
         """
         normal_velocity, guard = self._normal_velocity(velocity, rotation, angular_velocity, np.empty(6))
+        if self._images is not None:  # the same numbers as the loads, in point order
+            normal_velocity = self._images.scatter(normal_velocity)
         heights = self.heights(position, rotation)
         if isinstance(self.law, LayeredTarget):
             static, dynamic = self.law.coefficients(-heights)
@@ -156,7 +185,10 @@ class DAFLLoads:
         generalised[3:] = angular_velocity
         speed = math.sqrt(float(velocity @ velocity))
         spin = math.sqrt(float(angular_velocity @ angular_velocity))
-        return generalised @ self._normal_arm_t, self.normal_velocity_guard * (speed + spin * self._max_radius)
+        guard = self.normal_velocity_guard * (speed + spin * self._max_radius)
+        if self._images is None:
+            return generalised @ self._normal_arm_t, guard
+        return self._images.normal_velocity(generalised, self._normal_velocity_buffer), guard
 
     def __call__(self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray,
                  angular_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -173,7 +205,10 @@ class DAFLLoads:
             load = self._plain_load(position, velocity, rotation, angular_velocity)
             return rotation @ load[:3], load[3:]
         sigma, normal_velocity = self.stress(position, velocity, rotation, angular_velocity)
-        load = -(self._normal_arm_t @ (sigma * self._weights))
+        if self._images is None:
+            load = -(self._normal_arm_t @ (sigma * self._weights))
+        else:
+            load = self._images.negative_resultant(self._images.gather(sigma) * self._weights_q)
         if self.friction is not None:
             load += self._friction_load(sigma, normal_velocity, velocity @ rotation, angular_velocity)
         return rotation @ load[:3], load[3:]
@@ -196,8 +231,12 @@ class DAFLLoads:
         stress += self._static_weights
         unloaded = np.less_equal(normal_velocity, guard, out=self._unloaded)
         if not self.fully_embedded(position):
-            unloaded |= np.greater_equal(self.heights(position, rotation), 0.0, out=self._outside)
+            heights = (self._images.heights(position[2], rotation[2], self._height_buffer) if self._images is not None
+                       else self.heights(position, rotation))
+            unloaded |= np.greater_equal(heights, 0.0, out=self._outside)
         np.copyto(stress, 0.0, where=unloaded)
+        if self._images is not None:
+            return self._images.negative_resultant(stress)
         return -(self._normal_arm_t @ stress)
 
     def _friction_load(self, sigma: np.ndarray, normal_velocity: np.ndarray, velocity_body: np.ndarray,

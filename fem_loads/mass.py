@@ -1,4 +1,11 @@
-"""Mass, centre of mass and inertia tensor of a multi-material solid mesh (scikit-fem)."""
+"""Mass, centre of mass and inertia tensor of a multi-material solid mesh (scikit-fem).
+
+The projectile meshes are mirrored exactly about ``y = 0`` and ``z = 0``
+(:mod:`mesh.geometry`); the integrals of the odd monomials (``y``, ``x y``,
+``y z``, ...) over such a mesh are zero, and are set to zero rather than left
+at their round-off (~1e-16 kg m^2), which would tilt the principal axes and
+break the mirror symmetry of the motion.
+"""
 
 from __future__ import annotations
 
@@ -12,7 +19,7 @@ if TYPE_CHECKING:  # scikit-fem is imported where it is used: a run from cached 
 
 from mesh.geometry import ProjectileMesh
 
-__all__ = ["MassProperties", "to_skfem", "mass_properties"]
+__all__ = ["MassProperties", "to_skfem", "mass_properties", "mirror_symmetric_axes"]
 
 
 @dataclass(frozen=True)
@@ -83,6 +90,31 @@ _MONOMIALS = (
 )
 
 
+def mirror_symmetric_axes(mesh: ProjectileMesh) -> tuple[int, ...]:
+    """The axes (1 for ``y``, 2 for ``z``) in whose plane ``x[axis] = 0`` the mesh is its own mirror image.
+
+    Exact (bitwise) test: every node's image is a node, and the image of every
+    element is an element of the same region.
+    """
+    points = mesh.points + 0.0  # -0.0 -> 0.0, so that the comparison is of values
+    corners = np.sort(mesh.tetra[:, :4], axis=1)
+    elements = np.column_stack([corners, mesh.tetra_region])
+    elements = elements[np.lexsort(elements.T[::-1])]
+    axes = []
+    for axis in (1, 2):
+        image = points.copy()
+        image[:, axis] = -image[:, axis] + 0.0
+        order, image_order = np.lexsort(points.T[::-1]), np.lexsort(image.T[::-1])
+        if not np.array_equal(points[order], image[image_order]):
+            continue
+        partner = np.empty(len(points), dtype=np.int64)
+        partner[image_order] = order  # the image of node image_order[k] is node order[k]
+        mirrored = np.column_stack([np.sort(partner[mesh.tetra[:, :4]], axis=1), mesh.tetra_region])
+        if np.array_equal(elements, mirrored[np.lexsort(mirrored.T[::-1])]):
+            axes.append(axis)
+    return tuple(axes)
+
+
 def mass_properties(mesh: ProjectileMesh, densities: dict[int, float],
                     skfem_mesh: MeshTet1 | MeshTet2 | None = None) -> MassProperties:
     """Integrate the mass properties of a multi-material mesh.
@@ -108,6 +140,11 @@ def mass_properties(mesh: ProjectileMesh, densities: dict[int, float],
     per_element = np.array([Functional(lambda w, f=f: f(w.x)).elemental(basis) for f in _MONOMIALS])
     volume = float(per_element[0].sum())
     v, sx, sy, sz, xx, yy, zz, xy, xz, yz = per_element @ rho
+    symmetric = mirror_symmetric_axes(mesh)
+    if 1 in symmetric:  # odd in y
+        sy = xy = yz = 0.0
+    if 2 in symmetric:  # odd in z
+        sz = xz = yz = 0.0
     centre = np.array([sx, sy, sz]) / v
     second = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
     # inertia about the origin, then shifted to the centre of mass (parallel-axis theorem)

@@ -18,6 +18,15 @@ built once, so each costs the same per load evaluation):
     facets then only partition the exact surface.  The flat tail disc (and
     the flat front face of a blunt nose) are stretched radially to their
     exact areas.
+
+The projectile meshes are mirrored exactly about the planes ``y = 0`` and
+``z = 0`` (:mod:`mesh.geometry`), but scikit-fem computes each facet's points
+and normals from its own node order, so mirrored points differ in their last
+bits.  :func:`mirror_quarters` finds the four mirror images of every point of
+the quarter ``y > 0, z > 0`` and :func:`surface_quadrature` rewrites the other
+three quarters from it by exact sign changes: the quadrature is then mirror
+symmetric bitwise, and :class:`~fem_loads.DAFLLoads` can sum the images so
+that a symmetric state gives an exactly symmetric load.
 """
 
 from __future__ import annotations
@@ -35,7 +44,10 @@ from .mass import to_skfem
 if TYPE_CHECKING:  # scikit-fem is imported where it is used
     from skfem import MeshTet1, MeshTet2
 
-__all__ = ["SurfaceQuadrature", "surface_quadrature", "NORMAL_MODELS"]
+__all__ = ["SurfaceQuadrature", "surface_quadrature", "mirror_quarters", "NORMAL_MODELS"]
+
+# the sign of (y, z) in the four mirror images, in the order of ``mirror_quarters``
+MIRROR_SIGNS = ((1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0))
 
 NORMAL_MODELS = ("mesh", "exact")
 
@@ -52,6 +64,12 @@ class SurfaceQuadrature:
         Outward unit normals.
     weights : ndarray, shape (n,)
         Area weights (m^2).
+    mirror_quarters : ndarray of int, shape (4, n // 4), optional
+        Indices of the four mirror images of each point in the quarter
+        ``y > 0, z > 0``: the point itself, its images in ``y = 0``, in
+        ``z = 0`` and in both (:data:`MIRROR_SIGNS`); the images are exact
+        (bitwise) sign changes of the point and its normal, with equal weights.
+        None for a quadrature without that symmetry.
     moment_arms : ndarray, shape (n, 3)
         ``r x n`` for each point, cached for the moment and the normal velocity.
     """
@@ -59,6 +77,7 @@ class SurfaceQuadrature:
     points: np.ndarray
     normals: np.ndarray
     weights: np.ndarray
+    mirror_quarters: np.ndarray | None = None
     moment_arms: np.ndarray = field(init=False)
 
     def __post_init__(self) -> None:
@@ -125,6 +144,54 @@ def _to_exact_surface(points: np.ndarray, normals: np.ndarray, weights: np.ndarr
     return points, normals, weights
 
 
+def mirror_quarters(points: np.ndarray, rtol: float = 1e-9) -> np.ndarray | None:
+    """The four mirror images (about ``y = 0`` and ``z = 0``) of each point of the quarter ``y > 0, z > 0``.
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 3)
+        Points relative to the axis ``y = z = 0``.
+    rtol : float
+        Largest distance between a point's image and its partner, relative to
+        the largest coordinate.
+
+    Returns
+    -------
+    ndarray of int, shape (4, n // 4), or None
+        Rows: the quarter's points, their images in ``y = 0``, in ``z = 0``
+        and in both; None unless every point has exactly one partner in each
+        image (a point on a plane, or an asymmetric set).
+    """
+    from scipy.spatial import cKDTree  # imported where used: only when a quadrature is built
+
+    n = len(points)
+    quarter = np.flatnonzero((points[:, 1] > 0) & (points[:, 2] > 0))
+    if n == 0 or 4 * len(quarter) != n:
+        return None
+    tree = cKDTree(points)
+    images = [quarter]
+    for sign_y, sign_z in MIRROR_SIGNS[1:]:
+        distance, partner = tree.query(points[quarter] * np.array([1.0, sign_y, sign_z]))
+        if distance.max() > rtol * np.abs(points).max():
+            return None
+        images.append(partner)
+    images = np.array(images)
+    if len(np.unique(images)) != n:
+        return None
+    return images
+
+
+def _symmetrise(points: np.ndarray, normals: np.ndarray, weights: np.ndarray,
+                images: np.ndarray) -> None:
+    """Rewrite the other three quarters from the first by exact sign changes (in place)."""
+    quarter = images[0]
+    for partner, (sign_y, sign_z) in zip(images[1:], MIRROR_SIGNS[1:]):
+        signs = np.array([1.0, sign_y, sign_z])
+        points[partner] = points[quarter] * signs
+        normals[partner] = normals[quarter] * signs
+        weights[partner] = weights[quarter]
+
+
 def surface_quadrature(mesh: ProjectileMesh, centre: np.ndarray, profile: Profile | None = None,
                        normal_model: str = "exact", intorder: int = 2,
                        skfem_mesh: MeshTet1 | MeshTet2 | None = None) -> SurfaceQuadrature:
@@ -164,5 +231,11 @@ def surface_quadrature(mesh: ProjectileMesh, centre: np.ndarray, profile: Profil
     normals = normals / np.linalg.norm(normals, axis=1)[:, None]
     if normal_model == "exact":
         points, normals, weights = _to_exact_surface(points, normals, weights, profile)
-    return SurfaceQuadrature(np.ascontiguousarray(points - centre), np.ascontiguousarray(normals),
-                             np.ascontiguousarray(weights))
+    points = np.ascontiguousarray(points - centre)
+    normals = np.ascontiguousarray(normals)
+    weights = np.ascontiguousarray(weights)
+    # each point keeps its facet (the renderer draws facet by facet): only the values are rewritten
+    images = mirror_quarters(points)
+    if images is not None:
+        _symmetrise(points, normals, weights, images)
+    return SurfaceQuadrature(points, normals, weights, images)

@@ -16,8 +16,13 @@ the outer surface ``outer``.
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
 import math
+import os
+import sys
 import threading
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -287,6 +292,31 @@ def build_mesh(geometry: ProjectileGeometry, size: float, order: int = 2) -> Pro
         raise ValueError(f"order = {order}: must be 1 or 2")
     if not (0.0 < size < geometry.profile.length and math.isfinite(size)):
         raise ValueError(f"mesh size = {size}: must lie in (0, {geometry.profile.length}) m")
-    with _GMSH_LOCK:
+    with _GMSH_LOCK, _standard_output_discarded():
         quarter = _mesh_quarter(geometry, size, order)
     return _mirror(_mirror(quarter, 1), 2)
+
+
+@contextlib.contextmanager
+def _standard_output_discarded() -> Iterator[None]:
+    """Discard what C code prints on file descriptor 1 meanwhile.
+
+    ``General.Terminal = 0`` silences gmsh's own messages, but its HXT mesher prints
+    "PLC Error" lines with ``printf`` before it fails; the caller's one-line error
+    says what went wrong, and standard output stays the caller's (``--json``).
+    """
+    sys.stdout.flush()
+    try:
+        saved = os.dup(1)
+    except OSError:  # no standard output to protect
+        yield
+        return
+    try:
+        with open(os.devnull, "wb") as devnull:
+            os.dup2(devnull.fileno(), 1)
+        yield
+    finally:
+        with contextlib.suppress(OSError, AttributeError):
+            ctypes.CDLL(None).fflush(None)  # C's buffered printf output goes to the discarded descriptor
+        os.dup2(saved, 1)
+        os.close(saved)

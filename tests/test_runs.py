@@ -78,10 +78,11 @@ def test_planar_scene_stays_in_its_plane(name):
 
 
 def test_zero_disturbance_stays_straight():
+    """The shipped validation scene stays on its axis exactly (test_hard_cases.py has the long runs)."""
     result, history = _run("forrestal_luk_test2")
-    assert np.abs(history[["position_x", "position_y"]].to_numpy()).max() < 1e-12
-    assert history["total_attack_angle"].max() < 1e-9
-    assert np.abs(result.trajectory.angular_velocity).max() < 1e-9
+    assert not history[["position_x", "position_y"]].to_numpy().any()
+    assert not history["total_attack_angle"].any()
+    assert not result.trajectory.angular_velocity.any()
 
 
 def test_rotating_the_scene_about_the_normal_rotates_the_trajectory():
@@ -124,9 +125,10 @@ def test_energy_guard_keeps_coarse_steps_dissipative():
 
 
 def test_runs_warn_when_the_numerics_do_not_suit_the_scene():
-    """3000 m/s at the shipped test-2 step (2e-4 s) makes the energy guard retake more steps than it
-    takes; the summary says so. The shipped scene itself carries no warning."""
-    coarse, _ = _run("forrestal_luk_test2", "impact.speed=3000", "numerics.mesh_size=0.04")
+    """3000 m/s with a 1-degree attack angle at the shipped test-2 step (2e-4 s) makes the energy guard
+    retake more steps than it takes (the shank's chatter near rest); the summary says so. The shipped
+    scene itself carries no warning."""
+    coarse, _ = _run("forrestal_luk_test2", "impact.speed=3000", "impact.attack_angle=1", "numerics.mesh_size=0.04")
     record = summary(coarse)
     assert record["energy_rejections"] > 0.1 * record["steps"]
     assert any("energy guard" in text for text in record["warnings"])

@@ -92,8 +92,9 @@ def test_load_evaluation(benchmark, tmp_path, mesh_size, depth):
     g = np.concatenate([velocity @ rotation, spin])
     guard = loads.normal_velocity_guard * (np.linalg.norm(velocity) + np.linalg.norm(spin) * loads._max_radius)
     out = np.zeros(6)
-    arrays = [np.ascontiguousarray(a) for a in (loads._normal_arm_t, loads._points_t, loads._static_weights,
-                                                loads._dynamic_weights, g, rotation[2])]
+    weights = loads.quadrature.weights  # the C loop runs over every point (no mirror images)
+    arrays = [np.ascontiguousarray(a) for a in (loads._normal_arm_t, loads._points_t, loads.law.static_stress * weights,
+                                                loads.law.dynamic_density * weights, g, rotation[2])]
 
     def compiled(repeat: int) -> np.ndarray:
         lib.dafl(n, *(a.ctypes.data_as(pointer) for a in arrays), position[2], guard,
