@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .results import atomic_write_text
+from .results import atomic_write_text, save_figure
 from .studies import convergence_speed, is_unstable
 from .sweep import RunStore, Sweep, Variation, run_sweep
 
@@ -209,5 +209,5 @@ def _write(table: pd.DataFrame, reference: dict, scene, out: Path) -> None:
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(out / "accuracy.png", dpi=110)
+    save_figure(fig, out / "accuracy.png")
     plt.close(fig)

@@ -9,7 +9,7 @@ import pandas as pd
 
 from fem_loads.resistance import resistance_law
 
-from .results import atomic_write_text
+from .results import atomic_write_text, save_figure
 from .sweep import RunStore, Sweep, Variation, run_sweep
 
 __all__ = ["compare_laws"]
@@ -60,6 +60,5 @@ def _figure(table: pd.DataFrame, store: RunStore, path: Path) -> None:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path)
     plt.close(fig)

@@ -25,7 +25,7 @@ import pandas as pd
 
 from fem_loads import DAFLLoads, SurfaceQuadrature
 
-from .results import atomic_write_bytes
+from .results import save_figure
 from .runner import PreparedProjectile
 
 __all__ = ["ring_stress", "default_station", "plot_histories", "plot_polar"]
@@ -91,15 +91,6 @@ def ring_stress(evaluator, index: int, station: float, n: int = 360) -> tuple[np
     return theta, sigma
 
 
-def _save(figure, path: Path) -> Path:
-    import io
-
-    buffer = io.BytesIO()
-    figure.savefig(buffer, format="png", dpi=100)
-    atomic_write_bytes(Path(path), buffer.getvalue())
-    return Path(path)
-
-
 def plot_histories(history: pd.DataFrame, prepared: PreparedProjectile, path: str | os.PathLike,
                    instants: Sequence[tuple[str, int]] = ()) -> Path:
     """Resistance centre, pitch moment and attack angle against time, one PNG.
@@ -141,7 +132,7 @@ def plot_histories(history: pd.DataFrame, prepared: PreparedProjectile, path: st
     for ax in (centre_ax, moment_ax, angle_ax):
         ax.grid(alpha=0.3)
     figure.tight_layout()
-    return _save(figure, Path(path))
+    return save_figure(figure, path, dpi=100)
 
 
 def plot_polar(evaluator, instants: Sequence[tuple[str, int]], path: str | os.PathLike,
@@ -170,4 +161,4 @@ def plot_polar(evaluator, instants: Sequence[tuple[str, int]], path: str | os.Pa
                  "(0 deg: windward side)", fontsize=10)
     ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.06), ncol=1)
     figure.tight_layout()
-    return _save(figure, Path(path))
+    return save_figure(figure, path, dpi=100)

@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 
 from . import scene_path
-from .results import atomic_write_text, attack_angle_peak
+from .results import atomic_write_text, attack_angle_peak, save_figure
 from .studies import (CONVERGENCE_THRESHOLD, convergence_speed, find_critical_velocities, is_unstable)
 from .sweep import RunStore, Sweep, Variation, grid, run_sweep
 
@@ -163,7 +163,7 @@ def _angle_figure(study: Study, runs: list[tuple[str, str]], title: str, path: P
     axes[2].legend(fontsize=8)
     fig.suptitle(title)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path)
     plt.close(fig)
 
 
@@ -186,7 +186,7 @@ def _history_figure(study: Study, runs: list[tuple[str, str]], centre: float, ti
         ax.legend(fontsize=8)
     fig.suptitle(title)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path)
     plt.close(fig)
 
 
@@ -207,7 +207,7 @@ def _speeds_figure(ratios, criticals, convergents, fits, path: Path) -> None:
     for ax in axes:
         ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path)
     plt.close(fig)
 
 
@@ -240,7 +240,7 @@ def _boundary_figure(study: Study, boundary, rows: list[dict], path: Path) -> No
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path)
     plt.close(fig)
 
 
@@ -522,7 +522,7 @@ def reproduce_variants(out: str | Path, store: RunStore, workers: int | None = N
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(out / "variants.png", dpi=110)
+    save_figure(fig, out / "variants.png")
     plt.close(fig)
 
     lines = ["# The paper's variants, regenerated", "",

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import glob
 import json
 import math
 import os
@@ -177,13 +178,16 @@ def atomic_write_bytes(path: Path, data: bytes) -> None:
     """Write ``data`` to ``path`` through a synced temporary file renamed into place.
 
     A reader (or a process killed at any moment) sees the old file or the new
-    one, never a part; a kill can leave a hidden ``.NAME.*.tmp`` file beside it,
-    never a partial file under the final name.  The file gets the usual
-    permissions (``0666`` less the umask), not the temporary file's ``0600``.
+    one, never a part.  A kill can leave the hidden temporary file
+    ``.NAME.PID.*.tmp`` beside it, never a partial file under the final name;
+    the next write of the same file removes those of processes that no longer
+    run.  The file gets the usual permissions (``0666`` less the umask), not
+    the temporary file's ``0600``.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    remove_stale_temporaries(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.{os.getpid()}.", suffix=".tmp")
     try:
         with os.fdopen(fd, "wb") as f:
             f.write(data)
@@ -204,6 +208,45 @@ def atomic_write_bytes(path: Path, data: bytes) -> None:
         pass
     finally:
         os.close(directory)
+
+
+def _running(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # exists, owned by someone else
+        return True
+    return True
+
+
+def remove_stale_temporaries(path: Path) -> list[Path]:
+    """Remove the temporary files of :func:`atomic_write_bytes` for ``path`` left by killed processes.
+
+    Only files named ``.NAME.PID.*.tmp`` whose process no longer runs are removed
+    (a live writer's file is left alone).  Returns the removed paths.
+    """
+    path = Path(path)
+    prefix = f".{path.name}."
+    removed = []
+    for tmp in path.parent.glob(f"{glob.escape(prefix)}*.tmp"):
+        pid = tmp.name[len(prefix):].split(".", 1)[0]
+        if pid.isdigit() and not _running(int(pid)):
+            tmp.unlink(missing_ok=True)
+            removed.append(tmp)
+    return removed
+
+
+def save_figure(figure, path: str | os.PathLike, dpi: int = 110) -> Path:
+    """Save a matplotlib figure as PNG atomically (:func:`atomic_write_bytes`)."""
+    import io
+
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png", dpi=dpi)
+    atomic_write_bytes(Path(path), buffer.getvalue())
+    return Path(path)
 
 
 def atomic_write_text(path: Path, text: str) -> None:

@@ -111,6 +111,30 @@ def test_killed_runs_leave_complete_files_or_none(tmp_path):
         key = f"{'older run present' if i % 2 else 'empty folder'} -> {state}" + (", exit 0" if code == 0 else "")
         seen[key] = seen.get(key, 0) + 1
     print("kills:", seen)
+    # running again into a killed run's folder completes it and removes the killed writers' temporaries
+    for i in range(8):
+        out = tmp_path / f"kill{i}"
+        subprocess.run([*args, str(out)], check=True, capture_output=True, timeout=300)
+        assert check_outputs(out) == "complete"
+        assert {p.name for p in out.iterdir()} == {"summary.json", "history.csv"}
+
+
+def test_stale_temporaries_of_dead_writers_are_removed(tmp_path):
+    """A temporary named for a process that no longer runs is removed by the next write of that file;
+    one of a running process (a concurrent writer) and other files are left alone."""
+    from cases.results import atomic_write_text
+
+    finished = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
+                              text=True, check=True)
+    dead = int(finished.stdout)
+    stale = tmp_path / f".summary.json.{dead}.abc123.tmp"
+    live = tmp_path / f".summary.json.{os.getppid()}.def456.tmp"
+    other = tmp_path / f".history.csv.{dead}.abc123.tmp"
+    for path in (stale, live, other):
+        path.write_text("partial")
+    atomic_write_text(tmp_path / "summary.json", "{}")
+    assert not stale.exists() and live.exists() and other.exists()
+    assert (tmp_path / "summary.json").read_text() == "{}"
 
 
 def test_writes_interrupted_at_every_step(tmp_path):
