@@ -19,17 +19,16 @@ no separation: every embedded point stays in contact with
 the static pressure less the dynamic term.  An absent effect costs nothing.
 
 Mirror symmetry.  When the quadrature is mirror symmetric about the body
-planes ``y = 0`` and ``z = 0`` (``SurfaceQuadrature.mirror_quarters``), the
-sums run over one quarter of the points with the stresses of the four images
-``s0..s3`` combined first: ``n_x`` takes ``(s0 + s1) + (s2 + s3)``, ``n_y`` and
-``(r x n)_z`` take ``(s0 - s1) + (s2 - s3)``, and so on.  A state symmetric
-about a plane then gives exactly equal stresses on mirrored points (each
-image's ``Vn`` and height are computed by the same operations on the same
-numbers), their differences are exactly zero and the load is exactly
-symmetric, whatever the summation order.  Without it, round-off of order
-``1e-16`` breaks the symmetry of a straight normal impact and grows, once the
-projectile is slow, through the jump of the stress at ``Vn = 0`` on the
-shank (docs/numerics.md, Hard cases).
+planes ``y = 0`` and ``z = 0`` (``SurfaceQuadrature.mirror_quarters``), every
+per-point quantity is computed as four rows, one per mirror image of the
+quarter ``y > 0, z > 0``, and the resultant folds the images' sums in mirrored
+pairs (:mod:`fem_loads.images`).  A state symmetric about a plane then gives
+exactly equal stresses on mirrored points, their differences are exactly zero
+and the load is exactly symmetric, whatever the summation order.  Without it,
+round-off of order ``1e-16`` breaks the symmetry of a straight normal impact
+and grows, once the projectile is slow, through the jump of the stress at
+``Vn = 0`` on the shank (docs/numerics.md, Hard cases).  The friction load is
+summed over all points in their own order (not exactly symmetric).
 """
 
 from __future__ import annotations
