@@ -209,3 +209,16 @@ def test_start_attitude_matches_its_definition_and_is_exact_nose_down():
     # body x exactly down, body y exactly Y: a straight impact has an exactly axial body velocity
     assert rotation[0, 0] == rotation[1, 0] == rotation[2, 2] == rotation[2, 1] == 0.0 and rotation[2, 0] < 0
     assert np.array_equal(np.array([0.0, 0.0, -500.0]) @ rotation * np.array([0, 1, 1]), np.zeros(3))
+
+
+def test_a_quadrature_without_mirror_quarters_uses_the_plain_sums():
+    """The same points without their quarters (as for an asymmetric surface): plain sums, the same load."""
+    q = _quadrature(2, "exact")
+    symmetric = DAFLLoads(q, SOIL)
+    plain = DAFLLoads(SurfaceQuadrature(q.points, q.normals, q.weights), SOIL)
+    assert symmetric._images is not None and plain._images is None
+    rng = np.random.default_rng(8)
+    for _ in range(20):
+        state = _random_state(rng)
+        a, b = np.concatenate(symmetric(*state)), np.concatenate(plain(*state))
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-12 * np.abs(b).max())
