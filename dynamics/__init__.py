@@ -1,8 +1,10 @@
-"""Rigid-body dynamics: state, quaternion kinematics, Runge-Kutta integrators and events.
+"""Rigid-body dynamics: state, quaternion kinematics, Runge-Kutta integrators, step control and events.
 
-This package takes a load function and knows nothing of meshes or resistance laws.
+This package takes a load function and knows nothing of meshes or resistance laws; it imports
+neither ``mesh`` nor ``fem_loads``.
 """
 
+from .control import ENERGY_TOLERANCE, EnergyGuard, ErrorControl, FixedStep, StepControl
 from .integrators import METHODS, RK4, DormandPrince54, RungeKutta
 from .rigid_body import LoadFunction, RigidBody, State
 from .simulate import MAX_STEPS, NON_FINITE, STEP_FLOOR, TIME_LIMIT, Event, SpeedBelow, Trajectory, simulate
@@ -10,5 +12,6 @@ from .simulate import MAX_STEPS, NON_FINITE, STEP_FLOOR, TIME_LIMIT, Event, Spee
 __all__ = [
     "RigidBody", "State", "LoadFunction",
     "RungeKutta", "RK4", "DormandPrince54", "METHODS",
+    "StepControl", "FixedStep", "ErrorControl", "EnergyGuard", "ENERGY_TOLERANCE",
     "Event", "SpeedBelow", "Trajectory", "simulate", "TIME_LIMIT", "NON_FINITE", "MAX_STEPS", "STEP_FLOOR",
 ]

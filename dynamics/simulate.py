@@ -12,25 +12,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from .integrators import Evaluation, RungeKutta, StepResult, evaluate
+from .control import END, NON_FINITE, RETAKE, STEP_FLOOR, EnergyGuard, StepControl
+from .integrators import Evaluation, RungeKutta, evaluate
 from .rigid_body import LoadFunction, RigidBody, State
 
 __all__ = ["Event", "SpeedBelow", "Trajectory", "simulate", "find_root", "TIME_LIMIT", "NON_FINITE", "MAX_STEPS",
            "STEP_FLOOR"]
 
-TIME_LIMIT, NON_FINITE, MAX_STEPS = "time_limit", "non_finite", "max_steps"
-# the integration needed a step shorter than its floor: a numerical failure, the history up to it is kept
-STEP_FLOOR = "step_floor"
-
-# relative kinetic-energy gain above which a step of a dissipative system is retaken: far above
-# round-off and the harmless gains of the shank's sliding chatter (1e-10 after convergence, up to 5e-8
-# while a turned projectile leaves the target),
-# far below the pumping that lets a run creep near rest (percent per step)
-ENERGY_TOLERANCE = 1e-7
+TIME_LIMIT, MAX_STEPS = "time_limit", "max_steps"
 
 
 @dataclass(frozen=True)
@@ -153,27 +146,14 @@ class _Recorder:
         )
 
 
-def _error_norm(result: StepResult, before: State, rtol: float, atol: np.ndarray) -> float:
-    """RMS of the error estimate scaled by ``atol + rtol |value|``."""
-    after = result.state
-    magnitude = np.concatenate([
-        np.maximum(np.abs(before.position), np.abs(after.position)),
-        np.maximum(np.abs(before.velocity), np.abs(after.velocity)),
-        np.zeros(3),  # the rotation increment starts from zero: absolute tolerance only
-        np.maximum(np.abs(before.angular_velocity), np.abs(after.angular_velocity)),
-        [max(before.path_length, after.path_length)],
-    ])
-    scaled = result.error / (atol + rtol * magnitude)
-    return float(np.sqrt(np.mean(scaled * scaled)))
-
-
-def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: RungeKutta, *,
-             time_limit: float, time_step: float | None = None, rtol: float | None = None,
-             atol: np.ndarray | float | None = None, first_step: float = 1e-6,
-             min_step: float = 1e-10, forced_step: float = 0.0, max_step: float = math.inf,
-             events: Sequence[Event] = (), max_steps: int = 5_000_000,
-             dissipative: bool = False) -> Trajectory:
+def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: RungeKutta, control: StepControl, *,
+             time_limit: float, events: Sequence[Event] = (), guard: EnergyGuard | None = None,
+             max_steps: int = 5_000_000) -> Trajectory:
     """Integrate the motion of ``body`` under ``loads`` from ``initial``.
+
+    The driver only loops: ``control`` sizes and judges every trial step
+    (:class:`~dynamics.control.FixedStep`, :class:`~dynamics.control.ErrorControl`),
+    ``guard`` judges the accepted ones once more, and the events end the run.
 
     Parameters
     ----------
@@ -185,66 +165,26 @@ def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: Runge
         The start.
     method : RungeKutta
         The Runge-Kutta method.
+    control : StepControl
+        The step-size control.
     time_limit : float
         The run ends at this time (s) if no event ends it first.
-    time_step : float, optional
-        Fixed step (s).  Give either this or ``rtol``.
-    rtol : float, optional
-        Relative tolerance of the error control (needs an adaptive method).
-    atol : float or ndarray, shape (13,), optional
-        Absolute tolerance of the increments ``(x, v, u, omega, s)``; default ``rtol``.
-    first_step, max_step : float
-        First and largest step of the error control (s).
-    min_step : float
-        The step floor (s): no step is retaken shorter than this.  When a step
-        would have to be (the error control rejects a step and
-        ``forced_step`` does not apply, or the energy guard rejects a step of
-        less than twice the floor) the run ends with :data:`STEP_FLOOR`; an
-        error-controlled trial step whose state is not finite is retaken
-        shorter, and at the floor the run ends with :data:`NON_FINITE`.  The
-        history up to the last accepted step is kept.  The last step before the
-        time limit may be shorter than the floor.
-    forced_step : float
-        Error control only: the error control does not shorten a step below
-        this (s); a step of this size (or a shorter first step) that fails the
-        tolerance is accepted and counted in ``statistics["forced_steps"]``.  The DAFL load jumps (at
-        ``Vn = 0`` on the shank, where points cross the target surface), and
-        across a jump no step size meets a tolerance set on a smooth error
-        model: without this bound the step collapses at every jump and the
-        cost has no bound.  0 (default): no forced steps.
     events : sequence of Event
         Terminal events, checked after every step.
+    guard : EnergyGuard, optional
+        For loads that can only remove energy: steps that gain kinetic energy are
+        retaken shorter, and sub-tolerance gains projected away.
     max_steps : int
         Safety limit on the number of steps.
-    dissipative : bool
-        The loads can only remove energy (``F.V + M.omega <= 0``), so a step
-        whose kinetic energy ends above its start (by more than
-        :data:`ENERGY_TOLERANCE`, relative) is a numerical artefact: an explicit step across a jump of the load
-        overshoots, and repeated overshoots (chatter) can pump energy in.
-        Such a step is retaken at half the size, down to ``min_step``; the
-        retakes are counted in ``statistics["energy_rejections"]``.  A smaller
-        gain is projected away (:func:`_no_energy_gain`, counted in
-        ``statistics["energy_projections"]``), so the kinetic energy never
-        increases from one recorded state to the next.
 
     Returns
     -------
     Trajectory
         One row per accepted step, plus the start; ``end_reason`` is the name
         of the event that ended the run, :data:`TIME_LIMIT`, :data:`NON_FINITE`,
-        :data:`STEP_FLOOR` or :data:`MAX_STEPS`.
+        :data:`STEP_FLOOR` or :data:`MAX_STEPS`.  The history up to the last
+        accepted step is kept whatever ended the run.
     """
-    if (time_step is None) == (rtol is None):
-        raise ValueError("give exactly one of time_step (fixed step) and rtol (error control)")
-    if rtol is not None and not method.adaptive:
-        raise ValueError(f"{type(method).__name__} has no error estimate: use a fixed time_step")
-    if time_step is not None and not time_step > 0:
-        raise ValueError(f"time_step = {time_step}: must be > 0")
-    if not (min_step > 0 and math.isfinite(min_step)):
-        raise ValueError(f"min_step = {min_step}: must be a finite number > 0")
-    if rtol is not None:
-        atol = np.broadcast_to(np.asarray(rtol if atol is None else atol, dtype=float), (13,))
-
     calls = 0
 
     def counted(*args):
@@ -252,16 +192,13 @@ def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: Runge
         calls += 1
         return loads(*args)
 
+    h = control.start(method)
     state = initial
-    first = evaluate(body, counted, state.position, state.velocity, state.attitude,
-                     state.angular_velocity)
+    first = evaluate(body, counted, state.position, state.velocity, state.attitude, state.angular_velocity)
     recorder = _Recorder()
     recorder.add(state, first)
     values = [event.function(state) for event in events]
-    steps = rejected = forced = energy_rejections = projections = 0
-    # the first step may be shorter than forced_step (a smooth start, e.g. the nose entry); the error
-    # control then grows it, and shortens no step below forced_step
-    h = time_step if time_step is not None else max(min(first_step, max_step), min_step)
+    steps = rejected = 0
     end_reason = TIME_LIMIT
     smallest = math.inf
 
@@ -274,94 +211,51 @@ def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: Runge
             break
         size = min(h, remaining)
         result = method.step(body, counted, state, size, first)
-        new = result.state
-        finite = new.is_finite()
-        if rtol is not None:
-            norm = _error_norm(result, state, rtol, atol) if finite else math.inf
-            if not norm <= 1.0 and (size > forced_step or not finite):
-                # reject: shorten by the usual factor (a fifth for a non-finite trial)
-                factor = 0.9 * norm ** (-1.0 / (method.error_order + 1)) if math.isfinite(norm) else 0.2
-                shorter = size * min(1.0, max(0.2, factor))
-                if finite:
-                    shorter = max(shorter, forced_step)
-                if shorter < min_step:
-                    end_reason = STEP_FLOOR if finite else NON_FINITE
-                    break
-                rejected += 1
-                h = shorter
-                first = result.first
-                continue
-            forced += norm > 1.0
-            factor = 0.9 * norm ** (-1.0 / (method.error_order + 1)) if norm > 0 else 5.0
-            h = min(max_step, max(min_step, forced_step, size * min(5.0, max(0.2, factor))))
-        if not finite:
-            end_reason = NON_FINITE
+        verdict, value = control.judge(result, state, size)
+        if verdict == RETAKE:
+            rejected += 1
+            h, first = value, result.first
+            continue
+        if verdict == END:
+            end_reason = value
             break
-        if dissipative:
-            before, after = body.kinetic_energy(state), body.kinetic_energy(new)
-            if after > before * (1.0 + ENERGY_TOLERANCE):
-                if 0.5 * size >= min_step:
-                    energy_rejections += 1
-                    h = 0.5 * size
-                    first = result.first
-                    continue
-                if size >= h:
-                    end_reason = STEP_FLOOR  # no shorter step may be taken: the guard cannot hold
-                    break
-                # else: a last step before the time limit, already shorter than the floor: accepted
-            if time_step is not None:
-                h = time_step
+        next_step = value
+        if guard is not None:
+            verdict, value = guard.judge(body, state, result.state, size, truncated=size < h)
+            if verdict == RETAKE:
+                h, first = value, result.first
+                continue
+            if verdict == END:
+                end_reason = value
+                break
+        h = next_step
         steps += 1
         if size < remaining:  # the last step before the time limit does not count
             smallest = min(smallest, size)
+        new = result.state
         new_values = [event.function(new) for event in events]
         fired = [ev for ev, g0, g1 in zip(events, values, new_values) if ev.fired(state, new, g0, g1)]
         if fired:
             new, end_reason = _locate(body, counted, method, state, result.first, size, fired)
-            if dissipative:
-                new, projected = _no_energy_gain(body, state, new)
-                projections += projected
-            last = evaluate(body, counted, new.position, new.velocity, new.attitude,
-                            new.angular_velocity)
+            if guard is not None:
+                new, _ = guard.project(body, state, new)
+            last = evaluate(body, counted, new.position, new.velocity, new.attitude, new.angular_velocity)
             recorder.add(new, last)
             break
         projected = False
-        if dissipative:
-            new, projected = _no_energy_gain(body, state, new)
-            projections += projected
+        if guard is not None:
+            new, projected = guard.project(body, state, new)
         first = result.last if result.last is not None and not projected else evaluate(
             body, counted, new.position, new.velocity, new.attitude, new.angular_velocity)
         recorder.add(new, first)
         state, values = new, new_values
 
-    statistics = {"steps": steps, "rejected_steps": rejected, "forced_steps": int(forced),
-                  "energy_rejections": energy_rejections, "energy_projections": projections,
+    statistics = {"steps": steps, "rejected_steps": rejected, "forced_steps": int(control.forced_steps),
+                  "energy_rejections": guard.rejections if guard else 0,
+                  "energy_projections": guard.projections if guard else 0,
                   "load_evaluations": calls,
                   "smallest_step": smallest if math.isfinite(smallest) else None}
     return recorder.trajectory(end_reason, statistics)
-
-
-def _no_energy_gain(body: RigidBody, before: State, after: State) -> tuple[State, bool]:
-    """``after`` with no more kinetic energy than ``before``, and whether it had to be changed.
-
-    A step of a dissipative system that gains less than :data:`ENERGY_TOLERANCE`
-    (round-off, or the overshoot of an explicit step across the shank's
-    ``Vn = 0`` switch: up to 3e-8 while projectile #3 turns and leaves the
-    target) is not retaken: its velocity and angular velocity are scaled by
-    ``sqrt(E0 / E1)``, which keeps their directions and removes the gain, as
-    the unit quaternion is renormalised after every step.  The change is below
-    the tolerance the guard already accepts, and the kinetic energy never increases.
-    """
-    start, end = body.kinetic_energy(before), body.kinetic_energy(after)
-    if not end > start:
-        return after, False
-    scale = math.sqrt(start / end) if end > 0 else 0.0
-    for _ in range(4):  # the scaled energy may still exceed the start by an ulp
-        projected = replace(after, velocity=after.velocity * scale, angular_velocity=after.angular_velocity * scale)
-        if body.kinetic_energy(projected) <= start:
-            break
-        scale *= 1.0 - 2.0 ** -52
-    return projected, True
 
 
 def find_root(function: Callable[[float], float], a: float, b: float, fa: float, fb: float,

@@ -34,6 +34,7 @@ summed over all points in their own order (not exactly symmetric).
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -42,7 +43,26 @@ from .quadrature import SurfaceQuadrature
 from .resistance import ResistanceLaw
 from .target import FreeSurface, Friction, LayeredTarget
 
-__all__ = ["DAFLLoads"]
+__all__ = ["DAFLLoads", "SurfaceStress"]
+
+
+class SurfaceStress(NamedTuple):
+    """The stresses of the DAFL at every surface quadrature point, as the loads integrate them.
+
+    Attributes
+    ----------
+    sigma_n : ndarray, shape (n,)
+        Normal stress (Pa); 0 where a point is outside the target or separated.
+    tau : ndarray, shape (n,) or None
+        Magnitude of the tangential stress (Pa), acting against the local slip; 0 where a
+        point does not slip; None without friction.
+    normal_velocity : ndarray, shape (n,)
+        ``Vn`` (m/s), positive into the target.
+    """
+
+    sigma_n: np.ndarray
+    tau: np.ndarray | None
+    normal_velocity: np.ndarray
 
 
 class DAFLLoads:
@@ -238,24 +258,50 @@ class DAFLLoads:
             return self._images.negative_resultant(stress)
         return -(self._normal_arm_t @ stress)
 
+    def surface_stress(self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray,
+                       angular_velocity: np.ndarray) -> SurfaceStress:
+        """``sigma_n``, ``tau`` and ``Vn`` at every quadrature point, in point order (see :meth:`stress`).
+
+        The same numbers the load sums: renderings and field plots take them from here
+        instead of evaluating the law again.
+        """
+        sigma, normal_velocity = self.stress(position, velocity, rotation, angular_velocity)
+        tau = None
+        if self.friction is not None:
+            _, moving, _ = self._slip(normal_velocity, velocity @ rotation, angular_velocity)
+            tau = np.where(moving, self.friction.stress(sigma), 0.0)
+        return SurfaceStress(sigma, tau, normal_velocity)
+
+    def _slip(self, normal_velocity: np.ndarray, velocity_body: np.ndarray,
+              angular_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The slip speed ``|s_i|`` at every point, whether it counts as slipping, and ``r_i . omega``.
+
+        ``s_i = V + omega x r_i - Vn_i n_i``, with ``|s|^2 = |u|^2 - Vn^2`` and
+        ``|u|^2 = |V|^2 + 2 r . (V x omega) + |omega|^2 |r|^2 - (omega . r)^2`` (no per-point
+        cross products).  A point slips when ``|s|`` exceeds ``1e-12 |V|``: at zero slip the
+        direction of the friction stress is undefined, and it carries none.
+        """
+        v, w = velocity_body, angular_velocity
+        r_dot_w = self._points @ w
+        speed2 = (float(v @ v) + 2.0 * (self._points @ np.cross(v, w)) + float(w @ w) * self._radius2
+                  - r_dot_w**2 - normal_velocity**2)
+        slip = np.sqrt(np.maximum(speed2, 0.0))
+        moving = slip > 1e-12 * (math.sqrt(float(v @ v)) + 1e-300)
+        return slip, moving, r_dot_w
+
     def _friction_load(self, sigma: np.ndarray, normal_velocity: np.ndarray, velocity_body: np.ndarray,
                        angular_velocity: np.ndarray) -> np.ndarray:
         """Force and moment (body frame) of the tangential stress, opposite to the local slip.
 
-        With ``c_i = tau_i w_i / |s_i|`` and the slip ``s_i = V + omega x r_i - Vn_i n_i``,
+        With ``c_i = tau_i w_i / |s_i|`` and the slip ``s_i`` of :meth:`_slip`,
         ``F = -sum c_i s_i`` and ``M = -sum c_i r_i x s_i`` expand into weighted sums
         (``sum c``, ``sum c r``, ``sum c |r|^2``, ``sum c r (r . omega)``, ``sum c Vn n``,
         ``sum c Vn r x n``): matrix-vector products over cached arrays, no per-point
-        cross products.  ``|s|^2 = |u|^2 - Vn^2`` with
-        ``|u|^2 = |V|^2 + 2 r . (V x omega) + |omega|^2 |r|^2 - (omega . r)^2``.
+        cross products.
         """
         v, w = velocity_body, angular_velocity
         points = self._points
-        r_dot_w = points @ w
-        speed2 = (float(v @ v) + 2.0 * (points @ np.cross(v, w)) + float(w @ w) * self._radius2
-                  - r_dot_w**2 - normal_velocity**2)
-        slip = np.sqrt(np.maximum(speed2, 0.0))
-        moving = slip > 1e-12 * (math.sqrt(float(v @ v)) + 1e-300)
+        slip, moving, r_dot_w = self._slip(normal_velocity, v, w)
         c = np.where(moving, self.friction.stress(sigma) * self._weights / np.where(moving, slip, 1.0), 0.0)
         c_vn = c * normal_velocity
         sum_c = float(c.sum())

@@ -7,7 +7,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["ResistanceLaw", "NAMED_LAWS", "resistance_law", "register_law", "locking_cavity_expansion"]
+__all__ = ["ResistanceLaw", "NAMED_LAWS", "resistance_law", "register_law", "locking_cavity_expansion",
+           "UnknownLawError"]
+
+
+class UnknownLawError(ValueError):
+    """A law name that :data:`NAMED_LAWS` does not hold; the message lists the names it does."""
 
 
 @dataclass(frozen=True)
@@ -96,4 +101,4 @@ def resistance_law(name: str) -> ResistanceLaw:
     try:
         return NAMED_LAWS[name]
     except KeyError:
-        raise ValueError(f"law = {name!r}: must be one of {sorted(NAMED_LAWS)}") from None
+        raise UnknownLawError(f"law = {name!r}: must be one of {sorted(NAMED_LAWS)}") from None

@@ -1,13 +1,14 @@
-"""Projectile geometry and meshing (gmsh, meshio). Knows nothing of forces or time."""
+"""Projectile geometry and meshing (gmsh, meshio). Knows nothing of forces or time; imports no other package of
+this project."""
 
 from .geometry import BODY, COUNTERWEIGHT, OUTER, ProjectileMesh, build_mesh
-from .io import cached_mesh, read_mesh, write_mesh
+from .io import read_mesh, write_mesh
 from .placement import AxisymmetricMassProperties, analytic_mass_properties, place_counterweight
 from .profile import BluntOgiveNose, ConeNose, Interior, OgiveNose, Profile, ProjectileGeometry, SecantOgiveNose
 
 __all__ = [
     "Profile", "OgiveNose", "ConeNose", "SecantOgiveNose", "BluntOgiveNose", "Interior", "ProjectileGeometry",
     "ProjectileMesh", "build_mesh", "BODY", "COUNTERWEIGHT", "OUTER",
-    "read_mesh", "write_mesh", "cached_mesh",
+    "read_mesh", "write_mesh",
     "AxisymmetricMassProperties", "analytic_mass_properties", "place_counterweight",
 ]

@@ -1,10 +1,11 @@
-"""Field plots for studies: resistance-centre and moment histories, and sigma_n around the shank.
+"""Matplotlib panels of a run's field: the side panel of the frames, resistance-centre and moment
+histories, and ``sigma_n`` around the shank.
 
 ``resistance_centre_from_tip`` is the point R on the axis with ``M = R x F`` (see
-:func:`~cases.results.history_table`); R aft of the centre of mass gives a
+:func:`~cases.run.history_table`); R aft of the centre of mass gives a
 restoring moment, ahead of it an overturning one.
 
-The polar plot evaluates the DAFL law of the scene (the same
+The polar plot evaluates the DAFL law of the scene (the run's own
 :class:`~fem_loads.dafl.DAFLLoads`, with its separation, guard, layers and
 free-surface factor) on a ring of points of the exact surface at a chosen
 station behind the tip, with the exact profile normals: the stress the law
@@ -17,6 +18,7 @@ velocity (purely axial motion) it is measured from the body ``z`` axis.
 from __future__ import annotations
 
 import os
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -25,10 +27,80 @@ import pandas as pd
 
 from fem_loads import DAFLLoads, SurfaceQuadrature
 
-from .results import save_figure
-from .runner import PreparedProjectile
+from ..run import PreparedProjectile
+from ..scene import InputError
+from .field import FieldEvaluator
+from .figures import new_figure, save_figure
 
-__all__ = ["ring_stress", "default_station", "plot_histories", "plot_polar"]
+__all__ = ["SidePanel", "ring_stress", "default_station", "plot_histories", "plot_polar", "SOIL"]
+
+SOIL = (0.80, 0.70, 0.52)
+
+
+class SidePanel:
+    """Matplotlib panel beside the 3-D view: path in the target, speed and attack angle histories."""
+
+    def __init__(self, evaluator: FieldEvaluator, width: int, height: int) -> None:
+        h = evaluator.history
+        t = h["time"].to_numpy() * 1e3
+        dpi = 100
+        self.figure = new_figure((width / dpi, height / dpi), dpi)
+        self.canvas = self.figure.canvas
+        path_ax, speed_ax, angle_ax = self.figure.subplots(3, 1, gridspec_kw={"height_ratios": [1.4, 1, 1]})
+        x, z = h["position_x"].to_numpy(), h["position_z"].to_numpy()
+        span = max(np.ptp(x), np.ptp(z), evaluator.length)
+        path_ax.axhspan(min(z.min(), 0.0) - 0.3 * span, 0.0, color=SOIL, zorder=0)
+        path_ax.axhline(0.0, color="saddlebrown", lw=1.5)
+        path_ax.plot(x, z, color="0.35", lw=0.8)
+        (self._axis_line,) = path_ax.plot([], [], color="crimson", lw=2.5, solid_capstyle="round")
+        path_ax.set_xlim(x.min() - 0.15 * span, x.max() + 0.15 * span)
+        path_ax.set_ylim(min(z.min(), 0.0) - 0.1 * span, 0.15 * span)
+        path_ax.set_aspect("equal", adjustable="box")
+        path_ax.set_xlabel("X (m)", fontsize=8)
+        path_ax.set_ylabel("Z (m)", fontsize=8)
+        path_ax.set_title("path of the centre of mass in the target", fontsize=8)
+        speed_ax.plot(t, h["speed"], color="tab:blue", lw=1.2)
+        speed_ax.set_ylabel("speed (m/s)", fontsize=8)
+        angle_ax.plot(t, h["attack_angle"], color="tab:red", lw=1.2)
+        angle_ax.axhline(0.0, color="0.6", lw=0.6)
+        angle_ax.set_ylabel("attack angle (deg)", fontsize=8)
+        angle_ax.set_xlabel("time (ms)", fontsize=8)
+        self._cursors = [ax.axvline(t[0], color="0.2", lw=0.8, ls="--") for ax in (speed_ax, angle_ax)]
+        (self._speed_dot,) = speed_ax.plot([], [], "o", color="tab:blue", ms=5)
+        (self._angle_dot,) = angle_ax.plot([], [], "o", color="tab:red", ms=5)
+        for ax in (path_ax, speed_ax, angle_ax):
+            ax.tick_params(labelsize=7)
+            ax.grid(alpha=0.3)
+        with warnings.catch_warnings():  # a small panel cannot fit every label: draw it anyway
+            warnings.simplefilter("ignore", UserWarning)
+            self.figure.tight_layout(pad=0.6)
+        self._evaluator = evaluator
+        self._t = t
+        # blitting: the axes, ticks and histories are drawn once; a frame redraws only the markers
+        self._moving = [self._axis_line, *self._cursors, self._speed_dot, self._angle_dot]
+        for artist in self._moving:
+            artist.set_animated(True)
+        self.canvas.draw()
+        self._background = self.canvas.copy_from_bbox(self.figure.bbox)
+
+    def draw(self, index: int) -> np.ndarray:
+        ev = self._evaluator
+        h = ev.history
+        tip = ev.tip(index)
+        tail = tip - ev.rotations[index][:, 0] * ev.length
+        self._axis_line.set_data([tip[0], tail[0]], [tip[2], tail[2]])
+        t = self._t[index]
+        for cursor in self._cursors:
+            cursor.set_xdata([t, t])
+        self._speed_dot.set_data([t], [h["speed"].iloc[index]])
+        self._angle_dot.set_data([t], [h["attack_angle"].iloc[index]])
+        self.canvas.restore_region(self._background)
+        for artist in self._moving:
+            artist.axes.draw_artist(artist)
+        return np.asarray(self.canvas.buffer_rgba())[:, :, :3].copy()
+
+    def close(self) -> None:
+        self.figure.clear()
 
 
 def default_station(prepared: PreparedProjectile) -> float:
@@ -38,13 +110,13 @@ def default_station(prepared: PreparedProjectile) -> float:
     return min(profile.nose_length + profile.diameter, 0.5 * (profile.nose_length + profile.length))
 
 
-def ring_stress(evaluator, index: int, station: float, n: int = 360) -> tuple[np.ndarray, np.ndarray]:
+def ring_stress(evaluator: FieldEvaluator, index: int, station: float, n: int = 360) -> tuple[np.ndarray, np.ndarray]:
     """``sigma_n`` (Pa) around the exact surface at ``station`` (m behind the tip) at row ``index``.
 
     Parameters
     ----------
     evaluator : FieldEvaluator
-        The run's field (:class:`cases.render.FieldEvaluator`).
+        The run's field.
     index : int
         Trajectory row.
     station : float
@@ -62,7 +134,7 @@ def ring_stress(evaluator, index: int, station: float, n: int = 360) -> tuple[np
     prepared = evaluator.prepared
     profile = prepared.profile
     if not (0.0 < station < profile.length):
-        raise ValueError(f"station = {station}: must lie in (0, {profile.length:g}) m behind the tip")
+        raise InputError(f"station = {station}: must lie in (0, {profile.length:g}) m behind the tip")
     tr = evaluator.result.trajectory
     rotation = evaluator.rotations[index]
     velocity_body = tr.velocity[index] @ rotation
@@ -87,8 +159,7 @@ def ring_stress(evaluator, index: int, station: float, n: int = 360) -> tuple[np
     ring = DAFLLoads(SurfaceQuadrature(points, normals, np.full(n, 1.0 / n)), loads.law,
                      loads.normal_velocity_guard, friction=loads.friction, separation=loads.separation,
                      free_surface=loads.free_surface)
-    sigma, _ = ring.stress(tr.position[index], tr.velocity[index], rotation, omega)
-    return theta, sigma
+    return theta, ring.surface_stress(tr.position[index], tr.velocity[index], rotation, omega).sigma_n
 
 
 def plot_histories(history: pd.DataFrame, prepared: PreparedProjectile, path: str | os.PathLike,
@@ -99,12 +170,8 @@ def plot_histories(history: pd.DataFrame, prepared: PreparedProjectile, path: st
     mass is the dashed line: the moment restores where R lies aft of it (below the line, since the
     axis points back from the tip).  The instants are marked by vertical lines.
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
     t = history["time"].to_numpy() * 1e3
-    figure = Figure(figsize=(8, 8))
-    FigureCanvasAgg(figure)
+    figure = new_figure((8, 8))
     centre_ax, moment_ax, angle_ax = figure.subplots(3, 1, sharex=True)
     centre = history["resistance_centre_from_tip"].to_numpy()
     length = prepared.profile.length
@@ -135,18 +202,14 @@ def plot_histories(history: pd.DataFrame, prepared: PreparedProjectile, path: st
     return save_figure(figure, path, dpi=100)
 
 
-def plot_polar(evaluator, instants: Sequence[tuple[str, int]], path: str | os.PathLike,
+def plot_polar(evaluator: FieldEvaluator, instants: Sequence[tuple[str, int]], path: str | os.PathLike,
                station: float | None = None) -> Path:
     """Polar plot of ``sigma_n`` (MPa) around the shank at ``station`` (m behind the tip), one curve per instant.
 
     ``theta = 0`` is the windward side (see the module docstring).
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
     station = default_station(evaluator.prepared) if station is None else station
-    figure = Figure(figsize=(6.5, 6.5))
-    FigureCanvasAgg(figure)
+    figure = new_figure((6.5, 6.5))
     ax = figure.add_subplot(projection="polar")
     times = evaluator.result.trajectory.time
     for label, row in instants:

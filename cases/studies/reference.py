@@ -9,7 +9,7 @@ target (no friction), an element at distance ``s`` behind the tip has
     G(P) = int_0^P 2 pi r r' r'^2 / (1 + r'^2) ds,   P' = min(P, nose length),
 
 and ``G`` of the whole nose is ``pi a^2 N``.  Once the nose is embedded the
-motion has the closed form of brief section 5.  None of this uses the mesh.
+motion has a closed form (docs/validation.md).  None of this uses the mesh.
 """
 
 from __future__ import annotations

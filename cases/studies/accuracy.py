@@ -31,9 +31,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .results import atomic_write_text, save_figure
-from .studies import convergence_speed, is_unstable
-from .sweep import RunStore, Sweep, Variation, run_sweep
+from ..run import RunStore, atomic_write_text, convergence_speed, prepare_projectile
+from ..scene import Overrides
+from ..viz.figures import save_figure, subplots
+from .pool import Pool
+from .reference import axial_depth_1d
+from .speeds import is_unstable
+from .sweep import Sweep, Variation, run_sweep
 
 __all__ = ["accuracy_study", "DEFAULT_SIZES", "DEFAULT_STEPS", "DEFAULT_RTOLS", "DEFAULT_QUADRATURE_ORDERS"]
 
@@ -93,10 +97,9 @@ def _settings(sizes: Sequence[float], steps: Sequence[float], rtols: Sequence[fl
     return settings
 
 
-def accuracy_study(scene: str | os.PathLike, overrides: list[str], store: RunStore, out: str | os.PathLike,
+def accuracy_study(scene: str | os.PathLike, overrides: Overrides | None, store: RunStore, out: str | os.PathLike,
                    sizes: Sequence[float] = DEFAULT_SIZES, steps: Sequence[float] = DEFAULT_STEPS,
-                   rtols: Sequence[float] = DEFAULT_RTOLS, workers: int | None = None,
-                   scheduler: str | None = None, progress: bool = True,
+                   rtols: Sequence[float] = DEFAULT_RTOLS, pool: Pool | None = None,
                    quadrature_orders: Sequence[int] = DEFAULT_QUADRATURE_ORDERS) -> tuple[pd.DataFrame, dict]:
     """Run the grid, compare with the reference, write ``accuracy.md``, ``.csv`` and ``.png`` into ``out``."""
     settings = _settings(sizes, steps, rtols, quadrature_orders)
@@ -104,12 +107,12 @@ def accuracy_study(scene: str | os.PathLike, overrides: list[str], store: RunSto
     settings.append({"axis": "scene"})
     variations = [Variation({k: v for k, v in s.items() if k != "axis"}) for s in settings]
     sweep = Sweep.from_file(scene, overrides, variations)
-    table = run_sweep(sweep, store, workers=workers, scheduler=scheduler, progress=progress)
+    result = run_sweep(sweep, store, pool)
+    table = result.table()
     table.insert(0, "axis", [s["axis"] for s in settings])
     if "error" in table and table["error"].notna().any():
         failed = table[table["error"].notna()]
         raise RuntimeError(f"{len(failed)} accuracy runs failed, e.g. {failed['error'].iloc[0]}")
-    base = sweep.scenes[0]
     own = table["axis"] == "scene"
     for name in ("mesh_size", "geometry_order", "normals", "quadrature_order", "integrator", "time_step", "rtol"):
         column = f"numerics.{name}"
@@ -124,39 +127,40 @@ def accuracy_study(scene: str | os.PathLike, overrides: list[str], store: RunSto
     finest = table[on_time_axis].drop_duplicates("key").sort_values("numerics.time_step")
     # the scene counts as unstable when its most accurate run is
     unstable = is_unstable(float(finest["axis_angle_change"].iloc[0]))
-    table["convergence_speed"] = [convergence_speed(store.history(k)) if unstable else np.nan
-                                  for k in table["key"]]
+    table["convergence_speed"] = [convergence_speed(store.history(k)) if unstable else np.nan for k in table["key"]]
     finest = table.loc[finest.index]
-    reference: dict = {}
-    if _is_plain_normal_impact(base):
-        from .reference import axial_depth_1d
-        from .runner import prepare_projectile, resolve_law
-
-        prepared = prepare_projectile(sweep.scenes[0])
-        depth, _ = axial_depth_1d(prepared.profile, resolve_law(base.target.law), prepared.mass.mass,
-                                  base.impact.speed, base.numerics.stop_speed)
-        reference = {"kind": "1-D integration with exact nose entry (exact)", "depth": depth,
-                     "axis_angle_change": 0.0, "convergence_speed": np.nan, "depth_uncertainty": 0.0}
-    else:
-        q = finest["depth"].to_numpy()
-        reference = {"kind": "finest setting", "depth": float(q[0]),
-                     "axis_angle_change": float(finest["axis_angle_change"].iloc[0]),
-                     "convergence_speed": float(finest["convergence_speed"].iloc[0])}
-        if len(q) >= 3 and q[1] != q[2]:
-            ratio = (q[2] - q[1]) / (q[1] - q[0]) if q[1] != q[0] else math.inf
-            order = math.log2(abs(ratio)) if ratio not in (0, math.inf) and abs(ratio) > 1 else 1.0
-            reference["richardson_order"] = order
-            reference["depth_uncertainty"] = abs(q[1] - q[0]) / (2**order - 1)
-        else:
-            reference["depth_uncertainty"] = float("nan")
+    reference = _reference(sweep, finest)
     table["depth_error"] = (table["depth"] - reference["depth"]).abs() / reference["depth"]
     table["axis_angle_error"] = (table["axis_angle_change"] - reference["axis_angle_change"]).abs()
     table["convergence_speed_error"] = (table["convergence_speed"] - reference["convergence_speed"]).abs()
     is_ref = (table["key"] == finest["key"].iloc[0]) & (reference["kind"] == "finest setting")
     table.loc[is_ref, ["depth_error", "axis_angle_error", "convergence_speed_error"]] = np.nan
     table["pareto"] = _pareto(table["depth_error"].to_numpy(), table["integration_time"].to_numpy())
-    _write(table, reference, base, Path(out))
+    _write(table, reference, sweep.scenes[0], Path(out))
     return table, reference
+
+
+def _reference(sweep: Sweep, finest: pd.DataFrame) -> dict:
+    """The exact 1-D reference of a plain normal impact, else the finest run with a Richardson estimate."""
+    base = sweep.scenes[0]
+    if _is_plain_normal_impact(base):
+        prepared = prepare_projectile(base)
+        depth, _ = axial_depth_1d(prepared.profile, base.target.build(), prepared.mass.mass, base.impact.speed,
+                                  base.numerics.stop_speed)
+        return {"kind": "1-D integration with exact nose entry (exact)", "depth": depth,
+                "axis_angle_change": 0.0, "convergence_speed": np.nan, "depth_uncertainty": 0.0}
+    q = finest["depth"].to_numpy()
+    reference = {"kind": "finest setting", "depth": float(q[0]),
+                 "axis_angle_change": float(finest["axis_angle_change"].iloc[0]),
+                 "convergence_speed": float(finest["convergence_speed"].iloc[0])}
+    if len(q) >= 3 and q[1] != q[2]:
+        ratio = (q[2] - q[1]) / (q[1] - q[0]) if q[1] != q[0] else math.inf
+        order = math.log2(abs(ratio)) if ratio not in (0, math.inf) and abs(ratio) > 1 else 1.0
+        reference["richardson_order"] = order
+        reference["depth_uncertainty"] = abs(q[1] - q[0]) / (2**order - 1)
+    else:
+        reference["depth_uncertainty"] = float("nan")
+    return reference
 
 
 def _pareto(error: np.ndarray, cost: np.ndarray) -> np.ndarray:
@@ -180,13 +184,22 @@ def _label(row: pd.Series) -> str:
 
 
 def _write(table: pd.DataFrame, reference: dict, scene, out: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     out.mkdir(parents=True, exist_ok=True)
     atomic_write_text(out / "accuracy.csv", table.to_csv(index=False))
+    atomic_write_text(out / "accuracy.md", _markdown(table, reference, scene))
+    fig, ax = subplots(figsize=(8, 5.5))
+    for (axis, integrator), group in table.groupby(["axis", "numerics.integrator"]):
+        ax.loglog(group["integration_time"], group["depth_error"], "o", label=f"{axis} axis, {integrator}")
+    front = table[table["pareto"]].sort_values("integration_time")
+    ax.loglog(front["integration_time"], front["depth_error"], "k--", lw=1, label="Pareto front")
+    ax.set(xlabel="integration time (s)", ylabel="relative depth error", title=f"{scene.name}: accuracy against time")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    save_figure(fig, out / "accuracy.png")
+
+
+def _markdown(table: pd.DataFrame, reference: dict, scene) -> str:
     lines = [f"# Accuracy against time: {scene.name or 'scene'}", "",
              f"Reference: {reference['kind']}, depth {reference['depth']:.6f} m"
              + (f" (Richardson estimate of its own error {reference['depth_uncertainty']:.2g} m)"
@@ -199,15 +212,4 @@ def _write(table: pd.DataFrame, reference: dict, scene, out: Path) -> None:
                      f" {row['depth_error']:.2e} | {row['axis_angle_error']:.2e} | {row['convergence_speed_error']:.2g} |"
                      f" {row['integration_time']:.2f} | {row['wall_time']:.2f} | {'yes' if row['pareto'] else ''} |")
     lines += ["", "![depth error against integration time](accuracy.png)", ""]
-    atomic_write_text(out / "accuracy.md", "\n".join(lines))
-    fig, ax = plt.subplots(figsize=(8, 5.5))
-    for (axis, integrator), group in table.groupby(["axis", "numerics.integrator"]):
-        ax.loglog(group["integration_time"], group["depth_error"], "o", label=f"{axis} axis, {integrator}")
-    front = table[table["pareto"]].sort_values("integration_time")
-    ax.loglog(front["integration_time"], front["depth_error"], "k--", lw=1, label="Pareto front")
-    ax.set(xlabel="integration time (s)", ylabel="relative depth error", title=f"{scene.name}: accuracy against time")
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    save_figure(fig, out / "accuracy.png")
-    plt.close(fig)
+    return "\n".join(lines)

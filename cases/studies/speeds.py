@@ -1,4 +1,4 @@
-"""The paper's characteristic speeds, measured on trajectories.
+"""The paper's characteristic speeds, measured on trajectories: ``penetrate critical`` and ``convergent``.
 
 Definitions (docs/studies.md):
 
@@ -28,41 +28,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
-import pandas as pd
 
-from .results import attack_angle_peak
-from .sweep import RunStore, Sweep, Variation, run_sweep
+from ..run import CONVERGENCE_THRESHOLD, RunStore, convergence_speed
+from .pool import Pool
+from .sweep import Sweep, Variation, run_sweep
 
-__all__ = ["convergence_speed", "CriticalSearch", "find_critical_velocity", "find_critical_velocities",
-           "is_unstable",
-           "ConvergentResult", "measure_convergent_velocity",
-           "CONVERGENCE_THRESHOLD", "UNSTABLE_TURN", "indicator"]
+__all__ = ["CriticalSearch", "find_critical_velocity", "find_critical_velocities", "is_unstable", "indicator",
+           "ConvergentResult", "measure_convergent_velocity", "UNSTABLE_TURN", "ScanRun"]
 
-CONVERGENCE_THRESHOLD = 0.1  # deg
 UNSTABLE_TURN = 30.0  # deg of axis turn that marks an unstable run
-
-
-def convergence_speed(history: pd.DataFrame, threshold: float = CONVERGENCE_THRESHOLD) -> float | None:
-    """Speed (m/s) at which the attack angle, after its peak, first falls below ``threshold`` (deg).
-
-    The peak is :func:`~cases.results.attack_angle_peak` (sought while the speed is
-    at least 10 % of the impact speed).  None if the angle never falls below the threshold.
-    """
-    speed = history["speed"].to_numpy()
-    angle = history["total_attack_angle"].to_numpy()
-    peak = attack_angle_peak(history)
-    below = np.flatnonzero(angle[peak:] < threshold)
-    if len(below) == 0:
-        return None
-    i = peak + int(below[0])
-    if i == 0 or angle[i - 1] == angle[i]:
-        return float(speed[i])
-    # linear interpolation of the crossing between the two steps
-    w = (angle[i - 1] - threshold) / (angle[i - 1] - angle[i])
-    return float(speed[i - 1] + w * (speed[i] - speed[i - 1]))
 
 
 def indicator(axis_angle_change: float) -> float:
@@ -75,23 +52,33 @@ def is_unstable(axis_angle_change: float) -> bool:
     return indicator(axis_angle_change) >= UNSTABLE_TURN
 
 
+@dataclass(frozen=True)
+class ScanRun:
+    """One run of a critical-speed search (m/s, deg)."""
+
+    speed: float
+    max_attack_angle: float
+    axis_angle_change: float
+    end_reason: str
+    key: str
+
+
 @dataclass
 class CriticalSearch:
-    """Result of :func:`find_critical_velocity`."""
+    """Result of :func:`find_critical_velocity` (m/s)."""
 
     critical_velocity: float | None
     bracket: list[float] | None
-    indicator: list[dict] = field(default_factory=list)
+    indicator: list[ScanRun] = field(default_factory=list)
     message: str = ""
 
     def as_dict(self) -> dict:
         return {"critical_velocity": self.critical_velocity, "bracket": self.bracket,
-                "indicator": self.indicator, "message": self.message}
+                "indicator": [asdict(run) for run in self.indicator], "message": self.message}
 
 
-def find_critical_velocity(sweep_base: Sweep, store: RunStore, speeds: Sequence[float],
-                           resolution: float = 5.0, workers: int | None = None,
-                           scheduler: str | None = None, progress: bool = False) -> CriticalSearch:
+def find_critical_velocity(sweep_base: Sweep, store: RunStore, speeds: Sequence[float], resolution: float = 5.0,
+                           pool: Pool | None = None) -> CriticalSearch:
     """Bracket the critical impact velocity by a scan over ``speeds``, then bisect.
 
     Parameters
@@ -104,39 +91,41 @@ def find_critical_velocity(sweep_base: Sweep, store: RunStore, speeds: Sequence[
         The coarse scan (m/s).
     resolution : float
         Width (m/s) at which bisection stops.
+    pool : Pool, optional
+        Where the runs go.
     """
-    return find_critical_velocities([sweep_base], store, speeds, resolution, workers, scheduler, progress)[0]
+    return find_critical_velocities([sweep_base], store, speeds, resolution, pool)[0]
+
+
+def _scan(bases: Sequence[Sweep], store: RunStore, pool: Pool | None, seen: list[dict[float, ScanRun]],
+          wanted: list[list[float]]) -> None:
+    """Run the wanted speeds of every base not seen yet, as one parallel sweep; record them in ``seen``."""
+    jobs = [(i, v) for i, values in enumerate(wanted) for v in values if v not in seen[i]]
+    if not jobs:
+        return
+    parts = [(bases[i], Variation({**bases[i].variations[0].values, "impact.speed": v})) for i, v in jobs]
+    result = run_sweep(Sweep.combined(parts), store, pool)
+    for (i, v), run in zip(jobs, result.runs):
+        if run.failed:
+            raise RuntimeError(f"the run at {v:g} m/s failed: {run.error}")
+        s = run.summary
+        seen[i][v] = ScanRun(v, s.max_attack_angle, s.axis_angle_change, s.end_reason, run.key)
 
 
 def find_critical_velocities(bases: Sequence[Sweep], store: RunStore, speeds: Sequence[float],
-                             resolution: float = 5.0, workers: int | None = None,
-                             scheduler: str | None = None, progress: bool = False) -> list[CriticalSearch]:
+                             resolution: float = 5.0, pool: Pool | None = None) -> list[CriticalSearch]:
     """:func:`find_critical_velocity` for several scenes at once.
 
     The searches advance in lockstep (the scans together, then one bisection
     round for all), so every round is one parallel sweep.
     """
     speeds = sorted(float(v) for v in speeds)
-    seen: list[dict[float, dict]] = [{} for _ in bases]
-
-    def measure(wanted: list[list[float]]) -> None:
-        jobs = [(i, v) for i, values in enumerate(wanted) for v in values if v not in seen[i]]
-        if not jobs:
-            return
-        # one sweep over every base: each variation on its own base
-        parts = [(bases[i], Variation({**bases[i].variations[0].values, "impact.speed": v})) for i, v in jobs]
-        table = run_sweep(Sweep.combined(parts), store, workers=workers, scheduler=scheduler, progress=progress)
-        for (i, v), (_, row) in zip(jobs, table.iterrows()):
-            if isinstance(row.get("error"), str):
-                raise RuntimeError(f"the run at {v:g} m/s failed: {row['error']}")
-            seen[i][v] = {"speed": v, "max_attack_angle": float(row["max_attack_angle"]),
-                          "axis_angle_change": float(row["axis_angle_change"]),
-                          "end_reason": row["end_reason"], "key": row["key"]}
+    seen: list[dict[float, ScanRun]] = [{} for _ in bases]
 
     def log_indicator(i: int, v: float) -> float:
-        return math.log(max(indicator(seen[i][v]["axis_angle_change"]), 1e-6))
+        return math.log(max(indicator(seen[i][v].axis_angle_change), 1e-6))
 
-    measure([speeds for _ in bases])
+    _scan(bases, store, pool, seen, [speeds for _ in bases])
     brackets: list[list[float] | None] = []
     for i in range(len(bases)):
         jumps = np.diff([log_indicator(i, v) for v in speeds])
@@ -156,7 +145,7 @@ def find_critical_velocities(bases: Sequence[Sweep], store: RunStore, speeds: Se
         wanted = [[m] if b is not None and (m := middle(b)) is not None else [] for b in brackets]
         if not any(wanted):
             break
-        measure(wanted)
+        _scan(bases, store, pool, seen, wanted)
         for i, values in enumerate(wanted):
             if not values:
                 continue
@@ -168,7 +157,7 @@ def find_critical_velocities(bases: Sequence[Sweep], store: RunStore, speeds: Se
                 brackets[i] = [low, mid]
     results = []
     for i, bracket in enumerate(brackets):
-        rows = sorted(seen[i].values(), key=lambda r: r["speed"])
+        rows = sorted(seen[i].values(), key=lambda r: r.speed)
         if bracket is None:
             message = f"no abrupt change of the axis turn between {speeds[0]:g} and {speeds[-1]:g} m/s"
             results.append(CriticalSearch(None, None, rows, message))
@@ -177,23 +166,34 @@ def find_critical_velocities(bases: Sequence[Sweep], store: RunStore, speeds: Se
     return results
 
 
+@dataclass(frozen=True)
+class ConvergentRun:
+    """One run of :func:`measure_convergent_velocity` (m/s, deg)."""
+
+    speed: float
+    max_attack_angle: float
+    axis_angle_change: float
+    convergence_speed: float | None
+    unstable: bool
+    end_reason: str
+
+
 @dataclass
 class ConvergentResult:
-    """Result of :func:`measure_convergent_velocity`."""
+    """Result of :func:`measure_convergent_velocity` (m/s)."""
 
     characteristic_convergent_velocity: float | None
-    runs: list[dict]
+    runs: list[ConvergentRun]
     message: str
 
     def as_dict(self) -> dict:
         return {"characteristic_convergent_velocity": self.characteristic_convergent_velocity,
-                "runs": self.runs, "message": self.message}
+                "runs": [asdict(run) for run in self.runs], "message": self.message}
 
 
 def measure_convergent_velocity(sweep_base: Sweep, store: RunStore, threshold: float = CONVERGENCE_THRESHOLD,
                                 raise_factor: float = 1.15, max_speed: float = 4000.0,
-                                workers: int | None = None, scheduler: str | None = None,
-                                progress: bool = False) -> ConvergentResult:
+                                pool: Pool | None = None) -> ConvergentResult:
     """The characteristic convergent velocity from an unstable run of the scene.
 
     The scene runs at its own impact speed; if that run is stable (see
@@ -203,25 +203,23 @@ def measure_convergent_velocity(sweep_base: Sweep, store: RunStore, threshold: f
     base_values = dict(sweep_base.variations[0].values)
     scene = sweep_base.scenes[0]
     speed = scene.impact.speed
-    runs: list[dict] = []
+    runs: list[ConvergentRun] = []
     while True:
         variation = Variation({**base_values, "impact.speed": round(speed, 6)})
-        sweep = Sweep(sweep_base.base, [variation], sweep_base.source)
-        row = run_sweep(sweep, store, workers=workers, scheduler=scheduler, progress=progress).iloc[0]
-        if isinstance(row.get("error"), str):
-            raise RuntimeError(f"the run at {speed:g} m/s failed: {row['error']}")
-        history = store.history(row["key"])
-        unstable = is_unstable(float(row["axis_angle_change"]))
-        runs.append({"speed": round(speed, 6), "max_attack_angle": float(row["max_attack_angle"]),
-                     "axis_angle_change": float(row["axis_angle_change"]),
-                     "convergence_speed": convergence_speed(history, threshold), "unstable": unstable,
-                     "end_reason": row["end_reason"]})
-        if unstable:
+        result = run_sweep(Sweep(sweep_base.base, [variation], sweep_base.source), store, pool)
+        run = result.runs[0]
+        if run.failed:
+            raise RuntimeError(f"the run at {speed:g} m/s failed: {run.error}")
+        s = run.summary
+        runs.append(ConvergentRun(round(speed, 6), s.max_attack_angle, s.axis_angle_change,
+                                  convergence_speed(result.history(0), threshold), is_unstable(s.axis_angle_change),
+                                  s.end_reason))
+        if runs[-1].unstable:
             break
         if speed * raise_factor > max_speed:
             return ConvergentResult(None, runs, f"no unstable run up to {max_speed:g} m/s")
         speed *= raise_factor
-    value = runs[-1]["convergence_speed"]
+    value = runs[-1].convergence_speed
     message = ""
     if len(runs) > 1:
         message = (f"the run at {scene.impact.speed:g} m/s is stable; raised the impact speed to"

@@ -1,20 +1,14 @@
-"""Load scenes from TOML, apply ``--set`` overrides, and explain what is wrong.
+"""Pydantic's validation errors as one line each: the field by its dotted path, what is wrong, what is allowed.
 
-Every problem ends in a :class:`SceneError` whose message names the field by
-its dotted path and says what is allowed, e.g.
-``impact.attack_angle = 120: must be <= 90 (allowed: -90 <= impact.attack_angle <= 90 deg)``.
+For example ``impact.attack_angle = 120: must be <= 90 (allowed: -90 <= impact.attack_angle <= 90 deg)``.
 """
 
 from __future__ import annotations
 
-import copy
-import hashlib
 import json
 import math
-import tomllib
 import types
 import typing
-from pathlib import Path
 from typing import Any
 
 import annotated_types
@@ -22,128 +16,15 @@ from pydantic import BaseModel, ValidationError
 
 from fem_loads.resistance import NAMED_LAWS
 
-from .schema import LawSpec, MaterialLawSpec, Scene
+from .schema import Scene
+from .target import LAW_TAGS
 
-__all__ = ["SceneError", "load_scene", "scene_from_dict", "apply_overrides", "parse_override",
-           "scene_key", "read_toml", "one_line", "MAX_SCENE_BYTES"]
-
-MAX_SCENE_BYTES = 1 << 20  # a scene is a few hundred bytes; anything past 1 MiB is not one
-
-
-def one_line(text: str) -> str:
-    """``text`` with every control character (newline, escape, ...) shown as an escape, so it prints as one line."""
-    return "".join(ch if ch.isprintable() or ch == " " else ascii(ch)[1:-1] for ch in str(text))
-
-
-class SceneError(ValueError):
-    """A scene that cannot be used; the message is one line meant for the user."""
-
-    def __init__(self, message: str) -> None:
-        super().__init__(one_line(message))
+__all__ = ["explain"]
 
 
 def _quoted(text: str, limit: int = 80) -> str:
     """``repr`` of a user's text, shortened to ``limit`` characters."""
     return repr(text) if len(text) <= limit else repr(text[: limit - 3]) + "..."
-
-
-def read_toml(path: str | Path) -> dict[str, Any]:
-    """Read a TOML file, turning every failure into a :class:`SceneError`.
-
-    Only data is read: TOML has no expressions, and nothing read is ever evaluated.
-    """
-    path = Path(path)
-    try:
-        with open(path, "rb") as f:  # bounded: /dev/zero or a huge file is refused, not read to the end
-            raw = f.read(MAX_SCENE_BYTES + 1)
-        text = raw.decode("utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else "not UTF-8 text"
-        raise SceneError(f"{path}: cannot read the scene file ({reason})") from None
-    if len(raw) > MAX_SCENE_BYTES:
-        raise SceneError(f"{path}: cannot read the scene file (larger than {MAX_SCENE_BYTES} bytes)")
-    return _toml(text, f"{path}: not valid TOML")
-
-
-def _toml(text: str, what: str) -> dict[str, Any]:
-    """``tomllib.loads`` with its other failures (nesting, 4300-digit integers) as :class:`SceneError`."""
-    try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"{what} ({exc})") from None
-    except RecursionError:
-        raise SceneError(f"{what} (arrays or tables nested too deeply)") from None
-    except ValueError as exc:  # e.g. an integer of more than 4300 digits
-        raise SceneError(f"{what} ({exc})") from None
-
-
-def parse_override(text: str) -> tuple[list[str], Any]:
-    """Split ``key.path=value``; the value is read as a TOML value, else as a string."""
-    if "=" not in text:
-        raise SceneError(f"--set {_quoted(text)}: expected KEY=VALUE, e.g. impact.speed=1120")
-    key, raw = text.split("=", 1)
-    path = key.strip().split(".")
-    if not all(part.strip() and part.replace("_", "").isalnum() for part in path):
-        raise SceneError(f"--set {_quoted(text)}: the key must be a dotted path of names, e.g. impact.speed")
-    raw = raw.strip()
-    try:
-        value = tomllib.loads(f"value = {raw}")["value"]
-    except tomllib.TOMLDecodeError:
-        value = raw  # a bare word such as softer_soil
-    except (RecursionError, ValueError):
-        raise SceneError(f"--set {_quoted(text)}: the value is not readable (arrays nested too deeply,"
-                         " or an integer of more than 4300 digits)") from None
-    return [part.strip() for part in path], value
-
-
-def apply_overrides(data: dict[str, Any], overrides: list[str]) -> dict[str, Any]:
-    """A copy of ``data`` with each ``key.path=value`` of ``overrides`` set."""
-    try:
-        data = copy.deepcopy(data)
-    except RecursionError:
-        raise SceneError("scene: arrays or tables nested too deeply") from None
-    for text in overrides:
-        path, value = parse_override(text)
-        node = data
-        for depth, part in enumerate(path[:-1]):
-            child = node.setdefault(part, {})
-            if not isinstance(child, dict):
-                where = ".".join(path[: depth + 1])
-                raise SceneError(f"--set {_quoted(text)}: {where} is a value, not a table"
-                                 f" (the key must stop at {where})")
-            node = child
-        node[path[-1]] = value
-    return data
-
-
-def scene_from_dict(data: dict[str, Any], source: str = "scene") -> Scene:
-    """Validate a scene given as nested dictionaries."""
-    try:
-        return Scene.model_validate(data)
-    except ValidationError as exc:
-        try:
-            explained = _explain(exc)
-        except RecursionError:
-            explained = "arrays or tables nested too deeply"
-        raise SceneError(f"{source}: " + explained) from None
-    except RecursionError:
-        raise SceneError(f"{source}: arrays or tables nested too deeply") from None
-
-
-def load_scene(path: str | Path, overrides: list[str] | None = None) -> Scene:
-    """Load and validate a TOML scene, with optional ``key.path=value`` overrides."""
-    data = apply_overrides(read_toml(path), overrides or [])
-    return scene_from_dict(data, str(path))
-
-
-def scene_key(scene: Scene) -> str:
-    """A digest of the fully resolved scene (defaults filled in)."""
-    text = json.dumps(scene.model_dump(mode="json"), sort_keys=True)
-    return hashlib.sha256(text.encode()).hexdigest()[:24]
-
-
-# ---------------------------------------------------------------------------
-# error messages
 
 
 def _models_in(annotation: Any) -> list[type[BaseModel]]:
@@ -158,9 +39,6 @@ def _models_in(annotation: Any) -> list[type[BaseModel]]:
     if isinstance(annotation, type) and issubclass(annotation, BaseModel):
         return [annotation]
     return []
-
-
-_LAW_TAGS = {"coefficients": LawSpec, "material": MaterialLawSpec}  # the tags of schema.LawChoice
 
 
 def _field_at(loc: tuple) -> tuple[Any, list[type[BaseModel]], str]:
@@ -187,8 +65,8 @@ def _field_at(loc: tuple) -> tuple[Any, list[type[BaseModel]], str]:
             typing.get_args(f.annotation) == (part,) for f in m.model_fields.values())]
         if tagged:
             models = tagged
-        elif part in _LAW_TAGS and _LAW_TAGS[part] in models:
-            models = [_LAW_TAGS[part]]
+        elif part in LAW_TAGS and LAW_TAGS[part] in models:
+            models = [LAW_TAGS[part]]
         elif part not in ("name", "coefficients", "material"):
             path.append(part if part.isidentifier() else _quoted(part, 40))  # an unknown key, as written
     return info, models, ".".join(path) or "scene"
@@ -241,7 +119,7 @@ def _explain_one(error: dict) -> str:
             return f"{name}: needs shape (allowed: shape = {tags})"
         return f"{name}.shape = {_show(ctx.get('tag'))}: unknown shape (allowed: {tags})"
     if kind in ("model_type", "model_attributes_type", "dict_type"):
-        if loc and loc[-1] in _LAW_TAGS:
+        if loc and loc[-1] in LAW_TAGS:
             return (f"{name} = {_show(given)}: must be a law (allowed: a name, {', '.join(sorted(NAMED_LAWS))};"
                     " a table of A, sigma_0, B, rho_0; or a table of model, sigma_0, rho_0, locking_strain)")
         models = _field_at(loc)[1]
@@ -272,5 +150,6 @@ def _tags(models: list[type[BaseModel]]) -> list[str]:
             for arg in typing.get_args(m.model_fields["shape"].annotation)]
 
 
-def _explain(exc: ValidationError) -> str:
+def explain(exc: ValidationError) -> str:
+    """Every error of ``exc`` as one clause, joined by semicolons (one line)."""
     return "; ".join(_explain_one(e) for e in exc.errors(include_url=False))

@@ -1,0 +1,7 @@
+"""``python -m cases.cli``: the ``penetrate`` command."""
+
+import sys
+
+from . import main
+
+sys.exit(main())

@@ -1,0 +1,77 @@
+"""``penetrate render SCENE``: off-screen images, an animation and ParaView files of the resistance field."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from ..scene import InputError
+from .options import add_scene_options, overrides, positive_float, positive_int
+
+__all__ = ["register"]
+
+
+def register(commands) -> None:
+    parser = commands.add_parser("render", help="off-screen images, an animation and ParaView files of the"
+                                                " resistance field")
+    add_scene_options(parser)
+    parser.add_argument("--times", metavar="T,...",
+                        help="instants: times in seconds or embedded, peak, converged, end (default: those four)")
+    parser.add_argument("--out", default="runs/render", metavar="DIR", help="where to write (default runs/render)")
+    parser.add_argument("--animation", action="store_true", help="also write animation.gif")
+    parser.add_argument("--frames", type=positive_int, default=60, metavar="N",
+                        help="frames of the animation, evenly spaced in time (default 60)")
+    parser.add_argument("--paraview", action="store_true",
+                        help="also write paraview/run.pvd: the surface field over time and the path")
+    parser.add_argument("--steps", default="100", metavar="N|all",
+                        help="steps in the ParaView output, evenly spaced in time, or all (default 100)")
+    parser.add_argument("--station", type=positive_float, metavar="M",
+                        help="distance behind the tip of the polar plot's ring (default: one calibre behind the nose)")
+    parser.add_argument("--size", default="1280x640", metavar="WxH", help="image size in pixels (default 1280x640)")
+    parser.add_argument("--json", action="store_true", help="print the written files and timings as JSON")
+    parser.set_defaults(handler=render)
+
+
+def _checked(args: argparse.Namespace) -> tuple[tuple[int, int], int | None, list[str] | None]:
+    """``--size``, ``--steps`` and ``--times``, refused before the run when they cannot be used."""
+    from ..viz import INSTANT_NAMES
+
+    try:
+        width, height = (int(v) for v in args.size.lower().split("x"))
+    except ValueError:
+        width = height = 0
+    if not (64 <= width <= 8192 and 64 <= height <= 8192):
+        raise InputError(f"--size {args.size!r}: expected WIDTHxHEIGHT in pixels, each 64..8192")
+    try:
+        steps = None if args.steps == "all" else positive_int(args.steps)
+    except argparse.ArgumentTypeError as exc:
+        raise InputError(f"--steps {exc}") from None
+    times = [t.strip() for t in args.times.split(",") if t.strip()] if args.times else None
+    for text in times or ():
+        try:
+            float(text)
+        except ValueError:
+            if text not in INSTANT_NAMES:
+                raise InputError(f"--times {text!r}: expected a time in seconds or one of"
+                                 f" {', '.join(INSTANT_NAMES)}") from None
+    return (width, height), steps, times
+
+
+def render(args: argparse.Namespace) -> int:
+    from ..run import run_scene
+    from ..scene import load_scene
+    from ..viz import render_all
+
+    size, steps, times = _checked(args)
+    result = run_scene(load_scene(args.scene, overrides(args)))
+    record = render_all(result, args.out, times, animation=args.animation, paraview=args.paraview,
+                        frames=args.frames, steps=steps, station=args.station, size=size)
+    if args.json:
+        print(json.dumps(record))
+        return 0
+    for item in record["instants"]:
+        print(f"instant        {item['label'] or 'chosen'} at t = {item['time'] * 1e3:.3f} ms")
+    for path in record["files"]:
+        print(f"written        {path}")
+    print("seconds        " + ", ".join(f"{k} {v:.2f}" for k, v in record["seconds"].items()))
+    return 0

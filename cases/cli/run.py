@@ -1,0 +1,57 @@
+"""``penetrate run SCENE``: one run, its summary, and with ``--out`` its files."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+
+from .options import add_scene_options, out_folder, overrides
+
+__all__ = ["register", "human_summary"]
+
+
+def register(commands) -> None:
+    parser = commands.add_parser("run", help="run one scene")
+    add_scene_options(parser)
+    parser.add_argument("--out", type=out_folder, metavar="DIR", help="write summary.json and history.csv here")
+    parser.add_argument("--json", action="store_true", help="print the summary as one JSON object")
+    parser.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..run import history_table, run_scene, summarise, write_outputs
+    from ..scene import load_scene
+
+    scene = load_scene(args.scene, overrides(args))
+    result = run_scene(scene)
+    history = history_table(result)
+    summary = summarise(result, history)
+    if args.out:
+        write_outputs(result, args.out, scene.outputs.history_every, history)
+    if args.json:
+        print(json.dumps(summary.record()))
+        return 0
+    print(human_summary(summary, scene))
+    if args.out:
+        print(f"written        {os.path.join(args.out, 'summary.json')}"
+              + (f", {os.path.join(args.out, 'history.csv')}" if scene.outputs.history else ""))
+    return 0
+
+
+def human_summary(s, scene) -> str:
+    """The summary of a run for a person: a line each for the projectile, the end, depth, path, angles, time."""
+    lines = [
+        f"scene          {scene.name or '(unnamed)'}" + (f": {scene.description}" if scene.description else ""),
+        f"projectile     {s.mass:.4g} kg, centre of mass {s.centre_of_mass_from_tip:.4g} m behind the tip,"
+        f" transverse inertia {s.transverse_inertia:.4g} kg m^2, {s.surface_points} surface points",
+        f"end            {s.end_reason} at t = {s.final_time:.6g} s, speed {s.final_speed:.4g} m/s",
+        f"depth          {s.depth:.4f} m (nose tip below the surface)",
+        f"path length    {s.path_length:.4f} m (centre of mass)",
+        f"attack angle   max {s.max_attack_angle:.4g} deg, final {s.final_attack_angle:.4g} deg;"
+        f" axis angle change {s.axis_angle_change:.4g} deg",
+        f"wall time      {s.wall_time:.3g} s (integration {s.integration_time:.3g} s,"
+        f" {s.steps} steps, {s.load_evaluations} load evaluations)",
+    ]
+    lines += [f"warning        {text}" for text in s.warnings]
+    return "\n".join(lines)

@@ -1,0 +1,113 @@
+"""``penetrate compare``, ``penetrate accuracy`` and ``penetrate paper``: studies that write reports."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+from ..scene import InputError
+from .options import add_pool_options, add_scene_options, out_folder, overrides, pool
+
+__all__ = ["register"]
+
+
+def register(commands) -> None:
+    compare = commands.add_parser("compare", help="run a scene under several resistance laws, side by side")
+    add_scene_options(compare)
+    add_pool_options(compare, "runs/store")
+    compare.add_argument("--json", action="store_true", help="print the table as JSON records")
+    compare.add_argument("--laws", required=True, metavar="A,B,...",
+                         help="comma-separated law names (see docs/effects.md)")
+    compare.add_argument("--out", default="runs/compare", type=out_folder, metavar="DIR",
+                         help="where to write compare.md, compare.csv and compare.png (default runs/compare)")
+    compare.set_defaults(handler=compare_laws)
+
+    accuracy = commands.add_parser("accuracy", help="what accuracy costs in time, for a scene")
+    add_scene_options(accuracy)
+    add_pool_options(accuracy, "runs/store")
+    accuracy.add_argument("--json", action="store_true", help="print the result as one JSON object")
+    accuracy.add_argument("--sizes", default="0.04,0.02,0.01,0.005", metavar="M,M,...",
+                          help="mesh sizes of the mesh axis (default 0.04,0.02,0.01,0.005 m)")
+    accuracy.add_argument("--steps", default="8e-5,4e-5,2e-5,1e-5,5e-6", metavar="S,S,...",
+                          help="RK4 steps of the time axis (default 8e-5,...,5e-6 s)")
+    accuracy.add_argument("--rtols", default="1e-4,1e-6", metavar="R,R,...",
+                          help="Dormand-Prince tolerances of the time axis (default 1e-4,1e-6)")
+    accuracy.add_argument("--quadrature-orders", default="4,6", metavar="Q,Q,...",
+                          help="facet quadrature degrees beside the default 2, on the mesh-size axis (default 4,6)")
+    accuracy.add_argument("--out", default="runs/accuracy", type=out_folder, metavar="DIR",
+                          help="where to write accuracy.md, .csv and .png (default runs/accuracy)")
+    accuracy.set_defaults(handler=accuracy_study)
+
+    paper = commands.add_parser("paper", help="regenerate the paper's study: tables and figures")
+    paper.add_argument("--out", default="docs/paper", type=out_folder, metavar="DIR",
+                       help="where to write (default docs/paper)")
+    add_pool_options(paper, "runs/paper-store")
+    paper.add_argument("--variants", action="store_true",
+                       help="the paper's variants instead: friction, conical nose, other soil laws")
+    paper.set_defaults(handler=paper_study)
+
+
+def compare_laws(args: argparse.Namespace) -> int:
+    from fem_loads.resistance import UnknownLawError
+
+    from ..run import RunStore
+    from ..studies.compare import compare_laws as compare
+
+    laws = [name.strip() for name in args.laws.split(",") if name.strip()]
+    if not laws:
+        raise InputError("--laws: give one or more law names, e.g. soil,softer_soil")
+    try:
+        table = compare(args.scene, overrides(args), laws, RunStore(args.store), args.out, pool(args))
+    except UnknownLawError as exc:
+        raise InputError(f"--laws: {exc}") from None
+    if args.json:
+        print(table.to_json(orient="records"))
+        return 0
+    out = Path(args.out)
+    print((out / "compare.md").read_text())
+    print("written        " + ", ".join(str(out / name) for name in ("compare.md", "compare.csv", "compare.png")))
+    return 0
+
+
+def _numbers(option: str, text: str) -> list[float]:
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if not values or not all(0 < v < math.inf for v in values):
+        raise InputError(f"{option} {text!r}: expected comma-separated numbers > 0")
+    return values
+
+
+def accuracy_study(args: argparse.Namespace) -> int:
+    from ..run import RunStore
+    from ..studies.accuracy import accuracy_study as study
+
+    orders = _numbers("--quadrature-orders", args.quadrature_orders)
+    if not all(q == int(q) and 1 <= q <= 10 for q in orders):
+        raise InputError(f"--quadrature-orders {args.quadrature_orders!r}: expected integers from 1 to 10")
+    table, reference = study(args.scene, overrides(args), RunStore(args.store), args.out,
+                             _numbers("--sizes", args.sizes), _numbers("--steps", args.steps),
+                             _numbers("--rtols", args.rtols), pool(args), [int(q) for q in orders])
+    if args.json:
+        print(json.dumps({"reference": {k: (None if isinstance(v, float) and v != v else v)
+                                        for k, v in reference.items()},
+                          "settings": json.loads(table.to_json(orient="records"))}))
+    else:
+        print((Path(args.out) / "accuracy.md").read_text())
+    return 0
+
+
+def paper_study(args: argparse.Namespace) -> int:
+    from ..run import RunStore
+    from ..studies.paper import reproduce, reproduce_variants
+
+    if args.variants:
+        record = reproduce_variants(args.out, RunStore(args.store), pool(args))
+        print(f"wrote {args.out}/variants.md, variants.json and variants.png in {record['wall_time']:.0f} s")
+        return 0
+    record = reproduce(args.out, RunStore(args.store), pool(args))
+    print(f"wrote {args.out}/results.md, results.json and the figures in {record['wall_time']:.0f} s")
+    return 0

@@ -1,0 +1,158 @@
+"""Run one scene: the start state, the load function, the integrator and its step control.
+
+World frame: ``X`` horizontal in the paper's vertical plane, ``Y`` horizontal
+out of it, ``Z`` up; the target fills ``Z < 0``.  Body frame: ``x`` along the
+projectile axis towards the nose, origin at the centre of mass; at the start
+``y`` is the world ``Y`` (for zero yaw), so a pitch rate in the vertical plane
+is ``angular_velocity[1]``.  Angles in the vertical plane are measured from the
+inward normal ``-Z`` towards ``+X``: the oblique angle ``beta`` of the
+velocity, the axis angle ``phi = beta + alpha`` and the attack angle
+``alpha``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+from dynamics import (METHODS, EnergyGuard, ErrorControl, Event, FixedStep, RigidBody, SpeedBelow, State,
+                      StepControl, Trajectory, simulate)
+from dynamics.quaternion import multiply, rotation_matrix
+
+from ..scene import Scene
+from .prepare import PreparedProjectile, prepare_projectile
+
+__all__ = ["RunResult", "run_scene", "initial_state", "initial_attitude", "step_control", "WithGravity",
+           "STOPPED", "EXITED", "ANGLE_SCALE", "FLOOR_FRACTION"]
+
+STOPPED, EXITED = "stopped", "exited"
+# attitude errors are measured against this angle (rad), not against a radian: the disturbances
+# of interest are of the order of a degree (docs/numerics.md, Hard cases)
+ANGLE_SCALE = 1e-2
+# the step floor below the time step: 10 halvings of the energy guard (docs/numerics.md, Hard cases)
+FLOOR_FRACTION = 2.0 ** -10
+
+
+@dataclass
+class RunResult:
+    """A finished run: the scene, its projectile, the trajectory and the wall time (s)."""
+
+    scene: Scene
+    prepared: PreparedProjectile
+    trajectory: Trajectory
+    wall_time: float
+    integration_time: float
+
+
+def initial_attitude(oblique_angle: float, attack_angle: float, yaw_angle: float) -> np.ndarray:
+    """Body-to-world attitude quaternion at impact (angles in degrees).
+
+    The axis leaves the downward vertical by ``oblique_angle + attack_angle`` in the
+    ``XZ`` plane and turns by ``yaw_angle`` towards ``Y``; the body ``y`` axis stays in
+    the plane of the axis and ``Y``.  Built as the exact nose-down quarter turn about
+    ``Y``, ``(sqrt(1/2), 0, sqrt(1/2), 0)``, times the pitch and yaw turns, so that a
+    straight normal impact starts exactly on the axis (``cos`` and ``sin`` of 45 degrees
+    differ by one ulp in floating point).
+    """
+    pitch = math.radians(oblique_angle + attack_angle) / 2  # about -Y
+    yaw = math.radians(yaw_angle) / 2  # about body z
+    half = math.sqrt(0.5)
+    nose_down = np.array([half, 0.0, half, 0.0])
+    return multiply(multiply(nose_down, np.array([math.cos(pitch), 0.0, -math.sin(pitch), 0.0])),
+                    np.array([math.cos(yaw), 0.0, 0.0, math.sin(yaw)]))
+
+
+def initial_state(scene: Scene, prepared: PreparedProjectile) -> State:
+    """The tip touches the surface at the origin; at grazing incidence the lowest point does."""
+    impact = scene.impact
+    attitude = initial_attitude(impact.oblique_angle, impact.attack_angle, impact.yaw_angle)
+    rotation = rotation_matrix(attitude)
+    beta = math.radians(impact.oblique_angle)
+    velocity = impact.speed * np.array([math.sin(beta), 0.0, -math.cos(beta)])
+    position = rotation @ (-prepared.tip)  # the tip at the origin
+    # lowest point of the exact surface relative to the tip: min over s of
+    # (-s axis_Z - r(s) |transverse part of Z|)
+    profile = prepared.profile
+    s = np.linspace(0.0, profile.length, 20001)
+    up = rotation[2]
+    lowest = float(np.min(-s * up[0] - profile.radius_at(s) * math.hypot(up[1], up[2])))
+    position[2] -= min(lowest, 0.0)
+    return State(0.0, position, velocity, attitude, np.asarray(impact.angular_velocity, dtype=float))
+
+
+class WithGravity:
+    """A load function plus the weight ``-m g e_Z`` of the body (world frame)."""
+
+    def __init__(self, loads, mass: float, acceleration: float) -> None:
+        self.loads = loads
+        self.weight = np.array([0.0, 0.0, -mass * acceleration])
+
+    def __call__(self, position, velocity, rotation, angular_velocity):
+        force, moment = self.loads(position, velocity, rotation, angular_velocity)
+        return force + self.weight, moment
+
+
+def step_control(scene: Scene, length: float) -> StepControl:
+    """The step control of the scene's integrator (``length``: the projectile's, m).
+
+    ``rk4`` steps by ``numerics.time_step``.  ``dopri54`` controls the error
+    with ``numerics.rtol`` and absolute tolerances ``rtol`` times the
+    projectile length (position, path), the impact speed (velocity),
+    :data:`ANGLE_SCALE` (rotation) and ``ANGLE_SCALE`` times the impact speed
+    over the length (angular velocity); it starts with a step of 1e-3 of the
+    length over the speed and never shortens a step below
+    ``numerics.time_step``: a step of that size that fails the tolerance is
+    accepted (``forced_steps``), since across the shank's ``Vn = 0`` switch no
+    step meets a smooth error model.  Either ends the run with ``step_floor``
+    when it would need a step below ``time_step / 1024`` (:data:`FLOOR_FRACTION`).
+    """
+    numerics = scene.numerics
+    floor = numerics.time_step * FLOOR_FRACTION
+    if not METHODS[numerics.integrator]().adaptive:
+        return FixedStep(numerics.time_step, min_step=floor)
+    speed = scene.impact.speed
+    rate = ANGLE_SCALE * speed / length
+    scales = np.array([length] * 3 + [speed] * 3 + [ANGLE_SCALE] * 3 + [rate] * 3 + [length])
+    return ErrorControl(numerics.rtol, numerics.rtol * scales, first_step=1e-3 * length / speed,
+                        forced_step=numerics.time_step, min_step=floor)
+
+
+def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
+    """Run one scene end to end.
+
+    Parameters
+    ----------
+    scene : Scene
+        The validated scene.
+    initial : State, optional
+        Start from this state instead of the scene's impact conditions.
+    """
+    start = time.perf_counter()
+    prepared = prepare_projectile(scene)
+    numerics, effects = scene.numerics, scene.effects
+    loads = scene.loads(prepared.quadrature)
+    body = RigidBody(prepared.mass.mass, prepared.mass.inertia)
+    driving = WithGravity(loads, body.mass, effects.gravity_acceleration) if effects.gravity else loads
+    control = step_control(scene, prepared.profile.length)
+    # the energy guard needs loads that only dissipate: gravity and no-separation can do work
+    guard = EnergyGuard(control.min_step) if numerics.energy_guard and effects.separation and not effects.gravity \
+        else None
+    state = initial_state(scene, prepared) if initial is None else initial
+    events = [
+        SpeedBelow(STOPPED, numerics.stop_speed),
+        # every surface point back above the surface after having been inside
+        Event(EXITED, lambda st: loads.lowest_height(st.position, st.rotation), direction=1),
+    ]
+    integrate_start = time.perf_counter()
+    # one BLAS thread: the products over ~1e4 points gain nothing from threads, and threads that
+    # wait for a busy core (a sweep runs one process per core) cost up to 50x; one thread also
+    # fixes the summation order, so results do not depend on the machine's core count
+    with threadpool_limits(limits=1, user_api="blas"):
+        trajectory = simulate(body, driving, state, METHODS[numerics.integrator](), control,
+                              time_limit=numerics.time_limit, events=events, guard=guard)
+    end = time.perf_counter()
+    return RunResult(scene, prepared, trajectory, end - start, end - integrate_start)

@@ -1,0 +1,207 @@
+"""The typed summary of a run, the outputs of ``penetrate run --out``, and a run as the run store keeps it."""
+
+from __future__ import annotations
+
+import gzip
+import io
+import json
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Annotated, Any
+
+import pandas as pd
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
+
+from ..scene import Scene
+from .history import ATTACK_ANGLE_SPEED_FRACTION, HISTORY_UNITS, attack_angle_peak, history_csv, history_table
+from .persistence import atomic_write, atomic_write_text, json_safe
+from .runner import RunResult, run_scene
+
+__all__ = ["RunSummary", "summarise", "run_warnings", "write_outputs", "StoredRun", "simulate_record",
+           "MAX_STORED_HISTORY_ROWS", "WARN_SHARE"]
+
+# a share of steps above which retaken or forced steps mean the numerics do not suit the scene
+WARN_SHARE = 0.1
+MAX_STORED_HISTORY_ROWS = 4000  # histories in a run store are thinned to about this many rows
+
+
+def _nan_for_null(value: Any) -> Any:
+    return math.nan if value is None else value
+
+
+# a float that JSON writes as null when it is not finite, and reads back from null as NaN
+Real = Annotated[float, BeforeValidator(_nan_for_null)]
+
+
+def _quantity(unit: str, description: str):
+    return Field(description=description, json_schema_extra={"unit": unit})
+
+
+class RunSummary(BaseModel):
+    """The headline numbers of a run (SI units, angles in degrees).
+
+    What the command line prints, ``summary.json`` holds, a sweep table has per row,
+    and the studies and the paper read.  Each number's unit is in its field's
+    ``json_schema_extra["unit"]``.
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    scene: str = Field(description="the scene's name")
+    depth: Real = _quantity("m", "largest depth of the nose tip below the surface")
+    path_length: Real = _quantity("m", "distance travelled by the centre of mass")
+    end_reason: str = Field(description="stopped, exited, time_limit, non_finite, step_floor or max_steps")
+    final_time: Real = _quantity("s", "time at the end of the run")
+    final_speed: Real = _quantity("m/s", "speed at the end of the run")
+    final_position: list[Real] = _quantity("m", "centre of mass at the end, world frame")
+    max_attack_angle: Real = _quantity("deg", "largest total attack angle while the speed is at least"
+                                              f" {ATTACK_ANGLE_SPEED_FRACTION:g} of the impact speed")
+    final_attack_angle: Real = _quantity("deg", "signed attack angle in the vertical plane at the end")
+    axis_angle_change: Real = _quantity("deg", "turn of the axis in the vertical plane over the run")
+    wall_time: Real = _quantity("s", "the whole run, preparation included")
+    integration_time: Real = _quantity("s", "the time integration alone")
+    mass: Real = _quantity("kg", "mass of the projectile")
+    centre_of_mass_from_tip: Real = _quantity("m", "centre of mass behind the nose tip")
+    axial_inertia: Real = _quantity("kg m^2", "moment of inertia about the axis")
+    transverse_inertia: Real = _quantity("kg m^2", "moment of inertia about a transverse axis")
+    surface_points: int = _quantity("1", "surface quadrature points")
+    tetrahedra: int = _quantity("1", "tetrahedra of the mesh")
+    steps: int | None = _quantity("1", "accepted steps")
+    rejected_steps: int | None = _quantity("1", "steps retaken by the error control")
+    forced_steps: int | None = _quantity("1", "steps accepted above the tolerance at the step floor")
+    energy_rejections: int | None = _quantity("1", "steps retaken by the energy guard")
+    energy_projections: int | None = _quantity("1", "accepted states whose sub-tolerance energy gain was removed")
+    load_evaluations: int | None = _quantity("1", "calls of the load function")
+    warnings: list[str] = Field(description="plain-language doubts about the run's numerics")
+
+    @classmethod
+    def from_record(cls, record: dict) -> RunSummary:
+        """The summary in a stored record (which also holds the resolved scene)."""
+        return cls.model_validate({k: v for k, v in record.items() if k in cls.model_fields})
+
+    def record(self) -> dict:
+        """The summary as a JSON-ready dictionary (non-finite numbers as None)."""
+        return json_safe(self.model_dump())
+
+
+def summarise(result: RunResult, history: pd.DataFrame | None = None) -> RunSummary:
+    """The run's :class:`RunSummary` (``history``: its :func:`~.history.history_table`, computed if not given)."""
+    h = history_table(result) if history is None else history
+    mass = result.prepared.mass
+    stats = result.trajectory.statistics
+    first, last = h.iloc[0], h.iloc[-1]
+    return RunSummary(
+        scene=result.scene.name,
+        depth=float(h["tip_depth"].max()),
+        path_length=float(last["path_length"]),
+        end_reason=result.trajectory.end_reason,
+        final_time=float(last["time"]),
+        final_speed=float(last["speed"]),
+        final_position=[float(last[f"position_{c}"]) for c in "xyz"],
+        max_attack_angle=float(h["total_attack_angle"].iloc[attack_angle_peak(h)]),
+        final_attack_angle=float(last["attack_angle"]),
+        axis_angle_change=float(last["axis_angle"] - first["axis_angle"]),
+        wall_time=result.wall_time,
+        integration_time=result.integration_time,
+        mass=mass.mass,
+        centre_of_mass_from_tip=mass.centre_from_tip,
+        axial_inertia=mass.axial_inertia,
+        transverse_inertia=mass.transverse_inertia,
+        surface_points=len(result.prepared.quadrature),
+        tetrahedra=result.prepared.n_tetra,
+        **{name: stats.get(name) for name in ("steps", "rejected_steps", "forced_steps", "energy_rejections",
+                                               "energy_projections", "load_evaluations")},
+        warnings=run_warnings(result.trajectory.end_reason, stats),
+    )
+
+
+def run_warnings(end_reason: str, statistics: dict) -> list[str]:
+    """Plain-language warnings about a run's numerics (empty when nothing needs saying).
+
+    A run that ends by a numerical failure or the time limit, or whose steps were
+    often retaken by the energy guard or accepted above the adaptive tolerance,
+    still returns its numbers; these lines say why they deserve suspicion.
+    """
+    steps = max(1, int(statistics.get("steps") or 0))
+    warnings = []
+    if end_reason not in ("stopped", "exited"):
+        warnings.append(f"the run ended by {end_reason}, not by stopping or leaving the target")
+    retaken = int(statistics.get("energy_rejections") or 0)
+    if retaken > WARN_SHARE * steps:
+        warnings.append(f"{retaken} retakes by the energy guard for {steps} steps: numerics.time_step is too coarse"
+                        " for this scene (docs/numerics.md, the energy guard)")
+    forced = int(statistics.get("forced_steps") or 0)
+    if forced > WARN_SHARE * steps:
+        warnings.append(f"{forced} of {steps} steps accepted above the tolerance at the step floor: the error control"
+                        " cannot meet numerics.rtol here (docs/numerics.md, hard cases)")
+    return warnings
+
+
+def write_outputs(result: RunResult, out_dir: str | os.PathLike, every: int = 1,
+                  history: pd.DataFrame | None = None) -> dict[str, Path]:
+    """Write ``summary.json`` (with the resolved scene) and ``history.csv`` into ``out_dir``.
+
+    Each file is written atomically, and ``summary.json`` last: a run killed at
+    any moment leaves each file complete or absent, and a ``summary.json``
+    always belongs with the ``history.csv`` beside it.  A previous run's
+    ``summary.json`` in ``out_dir`` is removed first (and its ``history.csv``
+    when this run writes none), so files of two runs never mix.  Non-finite
+    numbers are written as JSON ``null`` and as empty CSV cells.
+    """
+    out = Path(out_dir)
+    h = history_table(result) if history is None else history
+    record = summarise(result, h).record()
+    record["scene_resolved"] = result.scene.model_dump(mode="json")
+    record["history_units"] = HISTORY_UNITS
+    text = json.dumps(record, indent=2, allow_nan=False) + "\n"
+    paths = {"summary": out / "summary.json"}
+    (out / "summary.json").unlink(missing_ok=True)
+    if result.scene.outputs.history:
+        paths["history"] = atomic_write(out / "history.csv", history_csv(h, every))
+    else:
+        (out / "history.csv").unlink(missing_ok=True)
+    atomic_write_text(paths["summary"], text)
+    return paths
+
+
+@dataclass(frozen=True)
+class StoredRun:
+    """A run as a run store keeps it: its summary, or the error that ended it."""
+
+    key: str
+    summary: RunSummary | None
+    error: str | None
+
+    @classmethod
+    def from_record(cls, key: str, record: dict | None) -> StoredRun:
+        if record is None:
+            return cls(key, None, "not run")
+        if "error" in record:
+            return cls(key, None, str(record["error"]))
+        return cls(key, RunSummary.from_record(record), None)
+
+    @property
+    def failed(self) -> bool:
+        return self.summary is None
+
+
+def simulate_record(scene_json: str) -> tuple[dict, bytes | None]:
+    """Run one resolved scene (a worker's job): its stored record and gzipped CSV history, or the error.
+
+    The record is the summary and the resolved scene; the history is thinned to about
+    :data:`MAX_STORED_HISTORY_ROWS` rows (the last row always kept).
+    """
+    scene = Scene.model_validate_json(scene_json)
+    try:
+        result = run_scene(scene)
+        history = history_table(result)
+        record = summarise(result, history).record()
+        record["scene_resolved"] = scene.model_dump(mode="json")
+    except Exception as exc:  # recorded, so that one failure does not stop the sweep
+        return {"error": f"{type(exc).__name__}: {exc}"}, None
+    buffer = io.BytesIO()
+    with gzip.GzipFile(fileobj=buffer, mode="wb", mtime=0) as gz:
+        gz.write(history_csv(history, max(1, len(history) // MAX_STORED_HISTORY_ROWS)))
+    return record, buffer.getvalue()

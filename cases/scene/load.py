@@ -1,0 +1,222 @@
+"""Read scenes from TOML, apply overrides, validate, and key them.
+
+Overrides are ``(dotted key, value)`` pairs, e.g. ``{"impact.speed": 1120}``,
+applied to the scene's nested dictionaries before validation; values are
+never passed as text (the command line's ``--set KEY=VALUE`` is read once, by
+:func:`parse_override`).  An override replaces what the scene gave: setting one
+of a set of alternative keys removes the others the scene file had
+(:data:`ALTERNATIVES`, :data:`TAGGED_TABLES`), so ``target.layers`` replaces
+``target.law`` and a new ``projectile.nose.shape`` drops the old shape's keys.
+
+Every problem ends in a :class:`~.errors.SceneError` whose message names the
+field by its dotted path and says what is allowed.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import json
+import tomllib
+import typing
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+from typing import Any
+
+from pydantic import ValidationError
+
+from .errors import SceneError
+from .explain import explain
+from .projectile import NOSE_SPECS
+from .schema import Scene
+
+__all__ = ["Overrides", "load_scene", "scene_from_dict", "apply_overrides", "parse_override", "scene_key",
+           "read_toml", "read_toml_text", "dotted_key", "MAX_SCENE_BYTES", "ALTERNATIVES", "TAGGED_TABLES"]
+
+MAX_SCENE_BYTES = 1 << 20  # a scene is a few hundred bytes; anything past 1 MiB is not one
+
+Overrides = Mapping[str, Any] | Iterable[tuple[str, Any]]
+"""Dotted keys and their values: a mapping or a sequence of pairs (applied in order)."""
+
+# Keys of a table that exclude each other: when overrides set keys of one alternative, the keys of
+# the others that the scene gave (and no override set) are removed.  The last entry applies only to
+# a homogeneous body (with a counterweight, body_density and mass are both used).
+ALTERNATIVES: list[tuple[str, tuple[frozenset[str], ...], str]] = [
+    ("target", (frozenset({"law"}), frozenset({"layers"})), ""),
+    ("projectile", (frozenset({"centre_of_mass"}), frozenset({"centre_of_mass_ratio"})), ""),
+    ("projectile", (frozenset({"mass_properties"}),
+                    frozenset({"mass", "centre_of_mass", "centre_of_mass_ratio"})), ""),
+    ("projectile", (frozenset({"counterweight.start", "counterweight.end"}),
+                    frozenset({"mass", "centre_of_mass", "centre_of_mass_ratio"})), ""),
+    ("projectile", (frozenset({"mass"}), frozenset({"body_density"})), "no counterweight"),
+]
+# Tables whose tag decides their other keys: a new tag drops the keys the new kind does not have.
+TAGGED_TABLES: dict[str, tuple[str, dict[str, frozenset[str]]]] = {
+    "projectile.nose": ("shape", {typing.get_args(spec.model_fields["shape"].annotation)[0]:
+                                  frozenset(spec.model_fields) for spec in NOSE_SPECS}),
+    "effects.friction": ("model", {"none": frozenset({"model", "coefficient"}),
+                                   "coulomb": frozenset({"model", "coefficient"}),
+                                   "capped": frozenset({"model", "coefficient", "cap"})}),
+}
+
+
+def _quoted(text: str, limit: int = 80) -> str:
+    """``repr`` of a user's text, shortened to ``limit`` characters."""
+    return repr(text) if len(text) <= limit else repr(text[: limit - 3]) + "..."
+
+
+def read_toml(path: str | Path) -> dict[str, Any]:
+    """Read a TOML file, turning every failure into a :class:`SceneError`.
+
+    Only data is read: TOML has no expressions, and nothing read is ever evaluated.
+    """
+    path = Path(path)
+    try:
+        with open(path, "rb") as f:  # bounded: /dev/zero or a huge file is refused, not read to the end
+            raw = f.read(MAX_SCENE_BYTES + 1)
+        text = raw.decode("utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else "not UTF-8 text"
+        raise SceneError(f"{path}: cannot read the scene file ({reason})") from None
+    if len(raw) > MAX_SCENE_BYTES:
+        raise SceneError(f"{path}: cannot read the scene file (larger than {MAX_SCENE_BYTES} bytes)")
+    return read_toml_text(text, f"{path}: not valid TOML")
+
+
+def read_toml_text(text: str, what: str) -> dict[str, Any]:
+    """``tomllib.loads`` with every failure (nesting, 4300-digit integers) as :class:`SceneError` starting ``what``."""
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"{what} ({exc})") from None
+    except RecursionError:
+        raise SceneError(f"{what} (arrays or tables nested too deeply)") from None
+    except ValueError as exc:  # e.g. an integer of more than 4300 digits
+        raise SceneError(f"{what} ({exc})") from None
+
+
+def dotted_key(key: str, what: str) -> list[str]:
+    """The parts of a dotted key such as ``impact.speed``; ``what`` names the key's source in the error."""
+    path = [part.strip() for part in str(key).strip().split(".")]
+    if not all(part and part.replace("_", "").isalnum() for part in path):
+        raise SceneError(f"{what}: the key must be a dotted path of names, e.g. impact.speed")
+    return path
+
+
+def parse_override(text: str) -> tuple[str, Any]:
+    """``KEY=VALUE`` of the command line's ``--set`` as a pair; the value is read as a TOML value, else as a string."""
+    if "=" not in text:
+        raise SceneError(f"--set {_quoted(text)}: expected KEY=VALUE, e.g. impact.speed=1120")
+    key, raw = text.split("=", 1)
+    path = dotted_key(key, f"--set {_quoted(text)}")
+    raw = raw.strip()
+    try:
+        value = tomllib.loads(f"value = {raw}")["value"]
+    except tomllib.TOMLDecodeError:
+        value = raw  # a bare word such as softer_soil
+    except (RecursionError, ValueError):
+        raise SceneError(f"--set {_quoted(text)}: the value is not readable (arrays nested too deeply,"
+                         " or an integer of more than 4300 digits)") from None
+    return ".".join(path), value
+
+
+def _pairs(overrides: Overrides | None) -> list[tuple[str, Any]]:
+    if overrides is None:
+        return []
+    return list(overrides.items() if isinstance(overrides, Mapping) else overrides)
+
+
+def apply_overrides(data: dict[str, Any], overrides: Overrides | None) -> dict[str, Any]:
+    """A copy of ``data`` with each ``(dotted key, value)`` of ``overrides`` set, replacing alternatives."""
+    try:
+        data = copy.deepcopy(data)
+    except RecursionError:
+        raise SceneError("scene: arrays or tables nested too deeply") from None
+    paths = []
+    for key, value in _pairs(overrides):
+        path = dotted_key(key, f"override {_quoted(str(key))}")
+        node = data
+        for depth, part in enumerate(path[:-1]):
+            child = node.setdefault(part, {})
+            if not isinstance(child, dict):
+                where = ".".join(path[: depth + 1])
+                raise SceneError(f"override {'.'.join(path)}: {where} is a value, not a table"
+                                 f" (the key must stop at {where})")
+            node = child
+        try:
+            node[path[-1]] = copy.deepcopy(value)
+        except RecursionError:
+            raise SceneError(f"override {'.'.join(path)}: arrays or tables nested too deeply") from None
+        paths.append(path)
+    _drop_replaced(data, paths)
+    return data
+
+
+def _holder(data: dict, path: list[str]) -> dict | None:
+    """The dictionary that holds the key ``path`` (None when a table on the way is absent)."""
+    for part in path[:-1]:
+        data = data.get(part)
+        if not isinstance(data, dict):
+            return None
+    return data
+
+
+def _drop_replaced(data: dict[str, Any], paths: list[list[str]]) -> None:
+    """Remove what the overrides replaced: the other alternatives, the keys an old tag had."""
+    def present(full: list[str]) -> bool:
+        holder = _holder(data, full)
+        return holder is not None and full[-1] in holder
+
+    def touched(full: list[str]) -> bool:  # an override set this key, a key inside it, or a table holding it
+        return any(p[:len(full)] == full for p in paths) or (present(full) and any(full[:len(p)] == p for p in paths))
+
+    def table_at(dotted: str) -> tuple[list[str], dict | None]:
+        base = dotted.split(".")
+        if any(base[:len(p)] == p for p in paths):
+            return base, None  # replaced as a whole: nothing of the scene file is left in it
+        holder = _holder(data, base)
+        table = holder.get(base[-1]) if holder is not None else None
+        return base, table if isinstance(table, dict) else None
+
+    for dotted, alternatives, condition in ALTERNATIVES:
+        base, table = table_at(dotted)
+        if table is None or (condition == "no counterweight" and "counterweight" in table):
+            continue
+        chosen = [alt for alt in alternatives if any(touched(base + key.split(".")) for key in alt)]
+        if len(chosen) != 1:
+            continue  # none set, or the overrides set two alternatives: validation will say so
+        for key in {key for alt in alternatives if alt is not chosen[0] for key in alt}:
+            full = base + key.split(".")
+            if present(full) and not touched(full):
+                del _holder(data, full)[full[-1]]
+    for dotted, (tag, keys_of) in TAGGED_TABLES.items():
+        base, table = table_at(dotted)
+        if table is None or base + [tag] not in paths or table.get(tag) not in keys_of:
+            continue
+        for key in [k for k in table if k not in keys_of[table[tag]] and not touched(base + [k])]:
+            del table[key]
+
+
+def scene_from_dict(data: dict[str, Any], source: str = "scene") -> Scene:
+    """Validate a scene given as nested dictionaries."""
+    try:
+        return Scene.model_validate(data)
+    except ValidationError as exc:
+        try:
+            explained = explain(exc)
+        except RecursionError:
+            explained = "arrays or tables nested too deeply"
+        raise SceneError(f"{source}: " + explained) from None
+    except RecursionError:
+        raise SceneError(f"{source}: arrays or tables nested too deeply") from None
+
+
+def load_scene(path: str | Path, overrides: Overrides | None = None) -> Scene:
+    """Load and validate a TOML scene, with optional overrides (dotted key -> value)."""
+    return scene_from_dict(apply_overrides(read_toml(path), overrides), str(path))
+
+
+def scene_key(scene: Scene) -> str:
+    """A digest of the fully resolved scene (defaults filled in)."""
+    text = json.dumps(scene.model_dump(mode="json"), sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()[:24]

@@ -1,0 +1,229 @@
+"""The projectile of a scene: nose, body, interior, counterweight and mass; each spec builds its mesh-room object."""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Literal
+
+from pydantic import Field, model_validator
+
+from mesh import (BODY, COUNTERWEIGHT, BluntOgiveNose, ConeNose, Interior, OgiveNose, Profile, ProjectileGeometry,
+                  SecantOgiveNose, place_counterweight)
+
+from .base import Label, Number, Strict, field
+
+__all__ = ["Projectile", "NoseSpec", "OgiveNoseSpec", "ConeNoseSpec", "SecantOgiveNoseSpec", "HemisphereNoseSpec",
+           "BluntNoseSpec", "InteriorSpec", "CounterweightSpec", "MassPropertiesSpec", "DEFAULT_BODY_DENSITY",
+           "MIN_MEAN_DENSITY"]
+
+DEFAULT_BODY_DENSITY = 7850.0  # steel (kg/m^3)
+# lightest mean density (kg/m^3) over the bounding cylinder: far below any hard projectile (balsa is 150);
+# a 1e-300 kg projectile overflowed the first step (math domain error)
+MIN_MEAN_DENSITY = 100.0
+
+
+class OgiveNoseSpec(Strict):
+    """Tangent ogive nose."""
+
+    shape: Literal["ogive"]
+    crh: Number = field(unit="calibres", ge=0.5, le=100.0, description="caliber-radius-head: ogive radius in diameters")
+
+    def build(self) -> OgiveNose:
+        return OgiveNose(self.crh)
+
+
+class ConeNoseSpec(Strict):
+    """Conical nose."""
+
+    shape: Literal["cone"]
+    half_angle: Number = field(unit="deg", gt=0.0, lt=90.0, description="cone half-angle")
+
+    def build(self) -> ConeNose:
+        return ConeNose(self.half_angle)
+
+
+class SecantOgiveNoseSpec(Strict):
+    """Secant ogive: an arc of ``crh`` diameters through the tip and the shoulder."""
+
+    shape: Literal["secant_ogive"]
+    crh: Number = field(unit="calibres", gt=0.0, le=100.0, description="ogive radius in diameters")
+    length: Number = field(unit="calibres", gt=0.0, le=50.0, description="nose length in diameters")
+
+    def build(self) -> SecantOgiveNose:
+        return SecantOgiveNose(self.crh, self.length)
+
+
+class HemisphereNoseSpec(Strict):
+    """Hemispherical nose (a tangent ogive of CRH 0.5)."""
+
+    shape: Literal["hemisphere"]
+
+    def build(self) -> OgiveNose:
+        return OgiveNose(0.5)
+
+
+class BluntNoseSpec(Strict):
+    """Flat-tipped nose: a tangent ogive of ``crh`` truncated by a flat face of radius ``flat_radius``."""
+
+    shape: Literal["blunt"]
+    crh: Number = field(unit="calibres", ge=0.5, le=100.0)
+    flat_radius: Number = field(unit="m", gt=0.0, le=5.0, description="radius of the flat front face")
+
+    def build(self) -> BluntOgiveNose:
+        return BluntOgiveNose(self.crh, self.flat_radius)
+
+
+NOSE_SPECS = (OgiveNoseSpec, ConeNoseSpec, SecantOgiveNoseSpec, HemisphereNoseSpec, BluntNoseSpec)
+NoseSpec = Annotated[OgiveNoseSpec | ConeNoseSpec | SecantOgiveNoseSpec | HemisphereNoseSpec | BluntNoseSpec,
+                     Field(discriminator="shape")]
+
+
+class InteriorSpec(Strict):
+    """A cavity a wall thickness inside the outer profile."""
+
+    wall_thickness: Number = field(unit="m", gt=0.0, le=10.0, description="radial wall thickness")
+    tail_thickness: Number = field(unit="m", gt=0.0, le=100.0, description="tail plate thickness")
+
+    def build(self) -> Interior:
+        return Interior(self.wall_thickness, self.tail_thickness)
+
+
+class CounterweightSpec(Strict):
+    """A counterweight filling the cavity between two cross-sections.
+
+    Give ``start`` and ``end`` (m from the tip), or neither: then the
+    projectile's ``mass`` and centre of mass place it.
+    """
+
+    density: Number = field(18000.0, unit="kg/m^3", gt=0.0, le=1e5)
+    start: Number | None = field(None, unit="m", ge=0.0, le=100.0, description="from the nose tip")
+    end: Number | None = field(None, unit="m", gt=0.0, le=100.0, description="from the nose tip")
+
+    @model_validator(mode="after")
+    def _both_or_neither(self):
+        if (self.start is None) != (self.end is None):
+            raise ValueError("give both start and end (m from the tip), or neither")
+        if self.start is not None and not self.start < self.end:
+            raise ValueError(f"start = {self.start} must be less than end = {self.end}")
+        return self
+
+
+class MassPropertiesSpec(Strict):
+    """Mass properties given directly instead of integrated over the mesh."""
+
+    mass: Number = field(unit="kg", gt=0.0, le=1e6)
+    centre_of_mass: Number = field(unit="m", gt=0.0, le=100.0, description="from the nose tip")
+    axial_inertia: Number = field(unit="kg m^2", gt=0.0, le=1e9)
+    transverse_inertia: Number = field(unit="kg m^2", gt=0.0, le=1e9)
+
+    @model_validator(mode="after")
+    def _rigid_body(self):
+        # I_axial = int (y^2 + z^2) dm <= I_y + I_z = 2 I_transverse for every rigid body
+        if self.axial_inertia > 2.0 * self.transverse_inertia:
+            raise ValueError(f"axial_inertia = {self.axial_inertia:g}: more than twice transverse_inertia ="
+                             f" {self.transverse_inertia:g}, which no rigid body has (allowed: axial_inertia"
+                             " <= 2 transverse_inertia)")
+        return self
+
+
+class Projectile(Strict):
+    """An axisymmetric projectile: nose, cylindrical shank and flat tail."""
+
+    name: Label = ""
+    diameter: Number = field(unit="m", gt=0.0, le=10.0)
+    length: Number = field(unit="m", gt=0.0, le=100.0, description="nose tip to tail")
+    nose: NoseSpec
+    body_density: Number | None = field(None, unit="kg/m^3", gt=0.0, le=1e5)
+    mass: Number | None = field(None, unit="kg", gt=0.0, le=1e6)
+    centre_of_mass: Number | None = field(None, unit="m", gt=0.0, le=100.0,
+                                          description="target centre of mass, from the nose tip")
+    centre_of_mass_ratio: Number | None = field(None, unit="Lc/L", gt=0.0, lt=1.0,
+                                                description="target centre of mass over length")
+    interior: InteriorSpec | None = None
+    counterweight: CounterweightSpec | None = None
+    mass_properties: MassPropertiesSpec | None = None
+    transverse_inertia_scale: Number = field(1.0, unit="", gt=0.0, le=100.0,
+                                             description="factor on both transverse moments of inertia")
+
+    @model_validator(mode="after")
+    def _consistent(self):
+        wants_centre = self.centre_of_mass is not None or self.centre_of_mass_ratio is not None
+        if self.centre_of_mass is not None and self.centre_of_mass_ratio is not None:
+            raise ValueError("give centre_of_mass or centre_of_mass_ratio, not both")
+        if self.counterweight is not None and self.interior is None:
+            raise ValueError("counterweight needs an interior (a cavity to fill)")
+        if self.mass_properties is not None:
+            if self.mass is not None or wants_centre:
+                raise ValueError("mass_properties sets mass and centre of mass itself:"
+                                 " drop mass, centre_of_mass and centre_of_mass_ratio")
+            return self
+        if self._placed_by_mass:
+            if self.mass is None or not wants_centre:
+                raise ValueError("a counterweight without start and end needs mass and"
+                                 " centre_of_mass (or centre_of_mass_ratio) to place it")
+            return self
+        if wants_centre:
+            raise ValueError("centre_of_mass places a counterweight that has no start and end;"
+                             " to set it directly give mass_properties")
+        if self.mass is not None and self.counterweight is not None:
+            raise ValueError("with a placed counterweight the mass follows from the densities: drop mass")
+        if self.mass is not None and self.body_density is not None:
+            raise ValueError("give mass or body_density, not both")
+        return self
+
+    @model_validator(mode="after")
+    def _buildable(self):
+        """The mesh room's own checks of the shape (nose shorter than the body, cavity inside the wall, ...),
+        made here so that they fail before any meshing, naming the field."""
+        span = None
+        if self.counterweight is not None and self.counterweight.start is not None:
+            span = (self.counterweight.start, self.counterweight.end)
+        ProjectileGeometry(self.profile(), self.interior.build() if self.interior else None, span)
+        mass = self.mass_properties.mass if self.mass_properties is not None else self.mass
+        lightest = MIN_MEAN_DENSITY * 0.25 * math.pi * self.diameter ** 2 * self.length
+        if mass is not None and mass < lightest:
+            field_name = "mass_properties.mass" if self.mass_properties is not None else "mass"
+            raise ValueError(f"{field_name} = {mass:g}: lighter than {MIN_MEAN_DENSITY:g} kg/m^3 over the bounding"
+                             f" cylinder (allowed: {field_name} >= {lightest:.3g} kg for this diameter and length)")
+        return self
+
+    @property
+    def _placed_by_mass(self) -> bool:
+        """A counterweight without start and end, placed by the mass and centre of mass."""
+        return self.counterweight is not None and self.counterweight.start is None and self.mass_properties is None
+
+    @property
+    def centre_target(self) -> float | None:
+        """Target centre of mass from the tip (m), if any."""
+        if self.centre_of_mass_ratio is not None:
+            return self.centre_of_mass_ratio * self.length
+        return self.centre_of_mass
+
+    def profile(self) -> Profile:
+        """The outer profile (mesh room)."""
+        return Profile(self.diameter, self.length, self.nose.build())
+
+    def densities(self) -> dict[int, float]:
+        """Density (kg/m^3) of each mesh region: the body and, with a counterweight, the counterweight."""
+        body = {BODY: self.body_density or DEFAULT_BODY_DENSITY}
+        if self.interior is not None and self.counterweight is not None:
+            return {**body, COUNTERWEIGHT: self.counterweight.density}
+        return body
+
+    def geometry(self) -> ProjectileGeometry:
+        """The geometry to mesh: profile, cavity and the counterweight's span (placed here when the
+        mass and centre of mass place it; with ``mass_properties`` an unplaced counterweight is
+        left out, since the given properties replace the integrated ones)."""
+        profile = self.profile()
+        if self.interior is None:
+            return ProjectileGeometry(profile)
+        interior = self.interior.build()
+        weight = self.counterweight
+        if weight is None or (weight.start is None and not self._placed_by_mass):
+            return ProjectileGeometry(profile, interior)
+        if weight.start is not None:
+            span = (weight.start, weight.end)
+        else:
+            span = place_counterweight(profile, interior, self.body_density or DEFAULT_BODY_DENSITY, weight.density,
+                                       self.mass, self.centre_target)
+        return ProjectileGeometry(profile, interior, span)

@@ -1,0 +1,112 @@
+"""The scene schema: what a TOML scene may say, with units and allowed ranges.
+
+Every model forbids unknown keys and non-finite numbers.  Units are SI except
+angles, which are in degrees where the name ends in ``angle``.  The projectile
+(:mod:`.projectile`) and the target and effects (:mod:`.target`) have their
+own modules; a :class:`Scene` builds its DAFL load function from them.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Literal
+
+from pydantic import BeforeValidator, model_validator
+
+from fem_loads import DAFLLoads, SurfaceQuadrature
+
+from .base import Label, Number, Strict, Whole, field, not_boolean
+from .projectile import Projectile
+from .target import Effects, Target
+
+__all__ = ["Scene", "Impact", "Numerics", "Outputs", "MAX_STEPS", "MAX_MESH_CELLS"]
+
+MAX_STEPS = 5_000_000  # dynamics.simulate's max_steps: no run takes more than time_limit / time_step
+MAX_MESH_CELLS = 2e6  # cells of mesh_size^3 in the projectile's bounding cylinder (about 1e7 tetrahedra)
+
+
+class Impact(Strict):
+    """Initial conditions; the tip (or, at grazing incidence, the lowest point) touches the surface."""
+
+    speed: Number = field(unit="m/s", gt=0.0, le=1e4)
+    oblique_angle: Number = field(0.0, unit="deg", gt=-90.0, lt=90.0, description="velocity from the target normal")
+    attack_angle: Number = field(0.0, unit="deg", ge=-90.0, le=90.0,
+                                 description="axis from the velocity, in the vertical plane")
+    yaw_angle: Number = field(0.0, unit="deg", gt=-90.0, lt=90.0, description="axis out of the vertical plane")
+    angular_velocity: tuple[Number, Number, Number] = field(
+        (0.0, 0.0, 0.0), unit="rad/s",
+        description="body frame: x along the axis, y normal to the vertical plane")
+
+    @model_validator(mode="after")
+    def _bounded_spin(self):
+        if max(abs(w) for w in self.angular_velocity) > 1e5:
+            raise ValueError("angular_velocity: each component must lie in [-1e5, 1e5] rad/s")
+        return self
+
+
+class Numerics(Strict):
+    """Discretisation and integration settings."""
+
+    mesh_size: Number = field(unit="m", gt=0.0, le=10.0, description="target element size")
+    geometry_order: Annotated[Literal[1, 2], BeforeValidator(not_boolean)] = 2
+    normals: Literal["exact", "mesh"] = "exact"
+    quadrature_order: Whole = field(2, ge=1, le=10, description="degree exact on each facet")
+    integrator: Literal["rk4", "dopri54"] = "rk4"
+    time_step: Number = field(2e-5, unit="s", gt=0.0, le=1e-2,
+                              description="fixed step (rk4); the error control shortens no step below it (dopri54)")
+    rtol: Number = field(1e-6, gt=0.0, lt=1.0, description="relative tolerance (dopri54)")
+    time_limit: Number = field(1.0, unit="s", gt=0.0, le=100.0)
+    stop_speed: Number = field(0.5, unit="m/s", gt=0.0, le=1e3,
+                               description="the run ends when the speed falls below this")
+    normal_velocity_guard: Number = field(1e-9, ge=0.0, le=1e-3, description="relative guard on Vn = 0")
+    energy_guard: bool = field(True, description="retake shorter any step that gains kinetic energy")
+
+    @model_validator(mode="after")
+    def _reachable_time_limit(self):
+        # rk4 steps by time_step, and dopri54 shortens no step below it
+        if self.time_limit / self.time_step > MAX_STEPS:
+            raise ValueError(f"time_step = {self.time_step:g}: {self.time_limit / self.time_step:.3g} steps to reach"
+                             f" time_limit = {self.time_limit:g} s (allowed: time_limit / time_step <= {MAX_STEPS:g};"
+                             " shorten time_limit or lengthen time_step)")
+        return self
+
+
+class Outputs(Strict):
+    """What a run writes with --out."""
+
+    history: bool = True
+    history_every: Whole = field(1, ge=1, le=1_000_000, description="keep every n-th step")
+
+
+class Scene(Strict):
+    """A complete scene: projectile, target, impact, numerics and outputs."""
+
+    name: Label = ""
+    description: Label = ""
+    projectile: Projectile
+    target: Target = Target()
+    effects: Effects = Effects()
+    impact: Impact
+    numerics: Numerics
+    outputs: Outputs = Outputs()
+
+    @model_validator(mode="after")
+    def _meshable(self):
+        # a guard against typos (1e-5 for 1e-2) that would mesh forever: the studies' finest mesh has ~1e5 cells
+        p, size = self.projectile, self.numerics.mesh_size
+        finest = (0.25 * math.pi * p.diameter ** 2 * p.length / MAX_MESH_CELLS) ** (1 / 3)
+        if size < finest:
+            raise ValueError(f"numerics.mesh_size = {size:g}: too fine for this projectile (allowed: numerics.mesh_size"
+                             f" >= {finest:.3g} m, at most {MAX_MESH_CELLS:g} cells of mesh_size^3 in"
+                             " pi/4 diameter^2 length)")
+        if size > p.diameter:  # describes nothing of the cross-section; gmsh fails on such meshes (HXT, Newton)
+            raise ValueError(f"numerics.mesh_size = {size:g}: coarser than the projectile (allowed: numerics.mesh_size"
+                             f" <= projectile.diameter = {p.diameter:g} m)")
+        return self
+
+    def loads(self, quadrature: SurfaceQuadrature) -> DAFLLoads:
+        """The DAFL load function over ``quadrature`` with exactly the effects the scene asks for."""
+        effects = self.effects
+        free_surface = effects.free_surface.build() if effects.free_surface is not None else None
+        return DAFLLoads(quadrature, self.target.build(), self.numerics.normal_velocity_guard,
+                         friction=effects.friction.build(), separation=effects.separation, free_surface=free_surface)

@@ -1,0 +1,355 @@
+"""Off-screen pyvista frames of a run's field: field images at chosen instants and an animated GIF.
+
+VTK draws through EGL (``VTK_DEFAULT_OPENGL_WINDOW=vtkEGLRenderWindow``, set
+here before VTK is imported unless the environment sets it), so no display or
+X server is needed: the system libraries ``libegl1`` and ``libgl1-mesa-dri``
+suffice.  Every plotter is closed in a ``finally`` block.  What the colours
+mean is in :mod:`.field`.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+
+import numpy as np  # noqa: E402
+
+from ..run import atomic_write  # noqa: E402
+from .field import FieldEvaluator, SurfaceField, frame_rows  # noqa: E402
+from .panels import SidePanel  # noqa: E402
+
+__all__ = ["FrameRenderer", "render_snapshots", "render_animation", "png_bytes", "pyvista_off_screen",
+           "colour_range", "space_titles", "STRESS_CMAP", "N_COLOURS", "BACKGROUND"]
+
+STRESS_CMAP = "turbo"
+N_COLOURS = 256
+SOIL_LIGHT = (0.93, 0.88, 0.78)
+BACKGROUND = "white"
+
+
+def space_titles(plotter) -> None:
+    """Lift the colour bars' titles clear of their top labels."""
+    for bar in plotter.scalar_bars.values():
+        bar.SetVerticalTitleSeparation(12)
+
+
+def pyvista_off_screen():
+    """pyvista, set to draw off-screen (imported on first use: the ParaView writer needs no OpenGL)."""
+    import pyvista as pv
+
+    pv.OFF_SCREEN = True
+    return pv
+
+
+def colour_range(values: np.ndarray) -> tuple[float, float]:
+    """Colour range of a field (MPa): its min and max; a constant field gets a range of 1 MPa above it."""
+    lo, hi = float(values.min()), float(values.max())
+    return (lo, hi) if hi > lo else (lo, lo + 1.0)
+
+
+def png_bytes(image: np.ndarray) -> bytes:
+    """PNG encoding of an RGB image (Pillow)."""
+    from PIL import Image
+
+    buffer = io.BytesIO()
+    Image.fromarray(image).save(buffer, format="PNG", optimize=True)
+    return buffer.getvalue()
+
+
+def _basis(direction: np.ndarray) -> np.ndarray:
+    """A rotation whose first column is ``direction`` (unit)."""
+    d = direction / np.linalg.norm(direction)
+    helper = np.array([0.0, 1.0, 0.0]) if abs(d[1]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    b = np.cross(d, helper)
+    b /= np.linalg.norm(b)
+    return np.column_stack([d, b, np.cross(d, b)])
+
+
+class FrameRenderer:
+    """Renders frames of a run off-screen: the projectile in close-up with its field, beside the histories.
+
+    One pyvista plotter and one matplotlib figure serve every frame (the meshes are
+    updated in place), so rendering many frames neither re-creates OpenGL contexts
+    nor grows memory.  Use as a context manager, or call :meth:`close`.
+
+    Parameters
+    ----------
+    evaluator : FieldEvaluator
+        The run's field.
+    size : (int, int)
+        Width and height of a frame (pixels), side panel included.
+    side_panel : bool
+        Draw the path, speed and attack-angle panel on the right.
+    lighting : bool
+        Shade the surface.  Off, every pixel of a facet has exactly its colour-map colour
+        (used by the tests to read values back from pixels).
+    clim : (float, float), optional
+        Fixed colour range of ``sigma_n`` (MPa); by default each frame spans its own min..max.
+    tau_clim : (float, float), optional
+        The same for ``tau`` (MPa).
+    """
+
+    def __init__(self, evaluator: FieldEvaluator, size: tuple[int, int] = (1280, 640), *, side_panel: bool = True,
+                 lighting: bool = True, clim: tuple[float, float] | None = None,
+                 tau_clim: tuple[float, float] | None = None) -> None:
+        pv = pyvista_off_screen()
+        self.evaluator = evaluator
+        width, height = size
+        self.panel_width = int(round(0.3 * width)) if side_panel else 0
+        self.view_size = (width - self.panel_width, height)
+        self.fields = ["sigma_n", "tau"] if evaluator.friction else ["sigma_n"]
+        self.fixed_clim = {"sigma_n": clim, "tau": tau_clim}
+        self.plotter = None
+        self.panel = None
+        self.last_field: SurfaceField | None = None
+        self.last_clim: dict[str, tuple[float, float]] = {}
+        try:
+            self._build(pv, lighting)
+            if side_panel:
+                self.panel = SidePanel(evaluator, self.panel_width, height)
+        except BaseException:
+            self.close()
+            raise
+
+    def _build(self, pv, lighting: bool) -> None:
+        ev = self.evaluator
+        rows = len(self.fields)
+        self.plotter = plotter = pv.Plotter(off_screen=True, window_size=self.view_size, shape=(rows, 1),
+                                            border=False, lighting="light kit" if lighting else "none")
+        plotter.set_background(BACKGROUND)
+        surface = ev.surface
+        faces = np.hstack([np.full((len(surface.triangles), 1), 3), surface.triangles]).ravel()
+        length = ev.length
+        positions = ev.result.trajectory.position
+        # the target seen from the side: a tan backdrop below Z = 0 behind the body, and the surface line
+        x_lo, x_hi = positions[:, 0].min() - 5 * length, positions[:, 0].max() + 5 * length
+        z_lo = min(positions[:, 2].min(), 0.0) - 5 * length
+        y_back = positions[:, 1].max() + 3 * length
+        soil = pv.Plane(center=(0.5 * (x_lo + x_hi), y_back, 0.5 * z_lo), direction=(0, -1, 0), i_size=-z_lo,
+                        j_size=x_hi - x_lo)
+        surface_line = pv.Line((x_lo, y_back - 0.01 * length, 0.0), (x_hi, y_back - 0.01 * length, 0.0))
+        path = pv.lines_from_points(positions) if len(positions) > 1 else None
+        arrow = {"start": (0, 0, 0), "direction": (1, 0, 0), "scale": 1.0, "tip_length": 0.22, "tip_radius": 0.05,
+                 "shaft_radius": 0.015}
+        self._arrow_template = np.asarray(pv.Arrow(**arrow).points)
+        self.arrow = pv.Arrow(**arrow)
+        self.meshes = {}
+        self.actors = {}
+        self.texts = {}
+        for row, name in enumerate(self.fields):
+            plotter.subplot(row, 0)
+            mesh = pv.PolyData(surface.points.copy(), faces)
+            mesh.cell_data[name] = np.zeros(len(surface.triangles))
+            unit = "sigma_n (MPa)" if name == "sigma_n" else "tau (MPa)"
+            self.actors[name] = plotter.add_mesh(
+                mesh, scalars=name, cmap=STRESS_CMAP, n_colors=N_COLOURS, clim=(0.0, 1.0), lighting=lighting,
+                smooth_shading=False, show_scalar_bar=True,
+                scalar_bar_args={"title": unit, "vertical": True, "position_x": 0.86, "position_y": 0.1,
+                                 "width": 0.06, "height": 0.62, "fmt": "%.4g", "title_font_size": 14,
+                                 "label_font_size": 12, "color": "black", "n_labels": 6})
+            self.meshes[name] = mesh
+            plotter.add_mesh(soil, color=SOIL_LIGHT, lighting=False)
+            plotter.add_mesh(surface_line, color="saddlebrown", line_width=3, lighting=False)
+            if path is not None:
+                plotter.add_mesh(path, color=(0.45, 0.45, 0.45), line_width=1.0, lighting=False)
+            plotter.add_mesh(self.arrow, color="black", lighting=lighting)
+            self.texts[name] = plotter.add_text("", position="upper_edge", font_size=10, color="black")
+            if row == len(self.fields) - 1:
+                plotter.add_text("black arrow: velocity direction; tan: the target (Z < 0); grey line: path of"
+                                 " the centre of mass", position="lower_left", font_size=8, color="black")
+            camera = plotter.camera
+            camera.parallel_projection = True
+        space_titles(plotter)
+        self.scalar_bars = {name: self.actors[name].mapper.lookup_table for name in self.fields}
+
+    def _update(self, index: int, label: str) -> dict[str, tuple[float, float]]:
+        ev = self.evaluator
+        fld = ev.at(index)
+        points = ev.surface.points @ fld.rotation.T + fld.position
+        speed = float(np.linalg.norm(fld.velocity))
+        tip = ev.tip(index)
+        direction = fld.velocity / speed if speed > 0 else fld.rotation[:, 0]
+        self.arrow.points = (self._arrow_template * (0.4 * ev.length)) @ _basis(direction).T + tip
+        clims = {}
+        for row, name in enumerate(self.fields):
+            values = fld.sigma_n if name == "sigma_n" else fld.tau
+            values_mpa = ev.cell_values(values) * 1e-6
+            mesh = self.meshes[name]
+            mesh.points = points
+            mesh.cell_data[name] = values_mpa
+            clim = self.fixed_clim[name] or colour_range(values_mpa)
+            self.actors[name].mapper.scalar_range = clim
+            clims[name] = clim
+            caption = fld.title(label) if row == 0 else "tangential stress tau (friction), against the slip"
+            if not values.any():
+                caption += "   (no stress on the surface)"
+            self.texts[name].SetText(2, caption)  # 2: upper edge
+            self.plotter.subplot(row, 0)
+            self._aim(self.plotter.camera, fld, tip)
+        self.last_field = fld
+        return clims
+
+    def _aim(self, camera, fld: SurfaceField, tip: np.ndarray) -> None:
+        """Side view from -Y (the paper's vertical plane), parallel projection, framing the body and the arrow.
+
+        The body and the velocity arrow fill the left 84 % of the view (the colour bar takes the rest).
+        """
+        length = self.evaluator.length
+        radius = 0.5 * self.evaluator.prepared.profile.diameter
+        speed = float(np.linalg.norm(fld.velocity))
+        ahead = fld.velocity / speed if speed > 0 else fld.rotation[:, 0]
+        ends = np.array([tip, tip - length * fld.rotation[:, 0], tip + 0.4 * length * ahead])[:, [0, 2]]
+        lo, hi = ends.min(axis=0) - 1.5 * radius, ends.max(axis=0) + 1.5 * radius
+        w, h = self.view_size
+        aspect = w / (h / len(self.fields))
+        usable = 0.84
+        half_height = 1.08 * max(0.5 * (hi[1] - lo[1]), 0.5 * (hi[0] - lo[0]) / (usable * aspect))
+        camera.parallel_scale = half_height
+        middle = 0.5 * (lo + hi)
+        # the body's middle sits in the middle of the usable part: move the view's centre right of it
+        centre = np.array([middle[0] + (1 - usable) * half_height * aspect, fld.position[1], middle[1]])
+        camera.focal_point = centre
+        camera.position = centre + np.array([0.0, -10 * length, 0.0])
+        camera.up = (0.0, 0.0, 1.0)
+        camera.clipping_range = (1 * length, 20 * length + self._depth_of_backdrop(fld))
+
+    def _depth_of_backdrop(self, fld: SurfaceField) -> float:
+        return float(self.evaluator.result.trajectory.position[:, 1].max() - fld.position[1])
+
+    def render(self, index: int, label: str = "") -> np.ndarray:
+        """The RGB frame (height x width x 3, uint8) of trajectory row ``index``, titled with ``label``."""
+        self.last_clim = self._update(index, label)
+        self.plotter.render()
+        view = self.plotter.screenshot(None, return_img=True)
+        view = np.asarray(view)[:, :, :3]
+        if self.panel is None:
+            return view
+        panel = self.panel.draw(index)
+        return np.hstack([view, panel[: view.shape[0], :, :]])
+
+    def to_pixels(self, points: np.ndarray, row: int = 0) -> np.ndarray:
+        """Pixel (column, row from the top) of world points in the last frame, in panel ``row``'s view."""
+        renderer = self.plotter.renderers[row]
+        out = []
+        height = self.view_size[1]
+        for p in np.atleast_2d(points):
+            renderer.SetWorldPoint(*p, 1.0)
+            renderer.WorldToDisplay()
+            x, y, _ = renderer.GetDisplayPoint()
+            out.append((x, height - 1 - y))
+        return np.array(out)
+
+    def scalar_bar_range(self, name: str = "sigma_n") -> tuple[float, float]:
+        """The range (MPa) the colour bar of ``name`` shows in the last frame."""
+        return tuple(float(v) for v in self.scalar_bars[name].GetRange())
+
+    def close(self) -> None:
+        """Release the OpenGL context and the figure."""
+        if self.plotter is not None:
+            self.plotter.close()
+            self.plotter.deep_clean()
+            self.plotter = None
+        if self.panel is not None:
+            self.panel.close()
+            self.panel = None
+
+    def __enter__(self) -> FrameRenderer:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def _file_label(label: str, time_s: float) -> str:
+    """``nose_embedded`` for a named instant, ``t2.000ms`` for a chosen time."""
+    return label.replace(" ", "_") if label else f"t{time_s * 1e3:.3f}ms"
+
+
+def render_snapshots(evaluator: FieldEvaluator, out_dir: str | os.PathLike,
+                     instants: Sequence[tuple[str, int]], size: tuple[int, int] = (1280, 640)) -> list[Path]:
+    """PNG images of the field at the given instants: ``field_<label>.png`` (``field_t<ms>ms.png`` unlabelled).
+
+    Each image: the projectile in close-up coloured by ``sigma_n`` (and ``tau`` below it with
+    friction), its colour bar in MPa spanning the instant's min..max, the velocity direction
+    (black arrow from the tip), the target (a tan backdrop below the surface line ``Z = 0``), the
+    path of the centre of mass, a title (time, speed, attack angle, tip depth), and a side panel
+    with the path in the target and the speed and attack-angle histories at that instant.
+
+    Parameters
+    ----------
+    evaluator : FieldEvaluator
+        The run's field.
+    out_dir : path
+        Folder to write into (made if missing).
+    instants : sequence of (str, int)
+        Label and trajectory row of each image (:func:`resolve_instants`).
+    size : (int, int)
+        Width and height in pixels.
+
+    Returns
+    -------
+    list of Path
+        The written images, in the order of ``instants``.
+    """
+    out = Path(out_dir)
+    paths = []
+    with FrameRenderer(evaluator, size) as renderer:
+        for label, row in instants:
+            image = renderer.render(row, label)
+            path = out / f"field_{_file_label(label, evaluator.result.trajectory.time[row])}.png"
+            atomic_write(path, png_bytes(image))
+            paths.append(path)
+    return paths
+
+
+def render_animation(evaluator: FieldEvaluator, path: str | os.PathLike, frames: int = 60, fps: float = 12.0,
+                     size: tuple[int, int] = (960, 480), clim: str = "frame") -> dict:
+    """An animated GIF (Pillow) of the run: the projectile along its path with its field and the histories.
+
+    Parameters
+    ----------
+    frames : int
+        Frames, evenly spaced in time.
+    fps : float
+        Frames per second of the GIF.
+    clim : {"frame", "run"}
+        Colour range of ``sigma_n``: each frame's own min..max (the pattern stays readable as the
+        stress falls with speed) or one range for the whole run (the magnitudes compare).
+
+    Returns
+    -------
+    dict
+        ``path``, ``frames``, ``seconds`` (wall time), ``seconds_per_frame``, ``bytes``.
+    """
+    from PIL import Image
+
+    if clim not in ("frame", "run"):
+        raise ValueError(f"clim = {clim!r}: must be 'frame' or 'run'")
+    start = time.perf_counter()
+    rows = frame_rows(evaluator, frames)
+    fixed = fixed_tau = None
+    if clim == "run":
+        fields = [evaluator.at(int(r)) for r in rows]
+        fixed = colour_range(np.concatenate([f.sigma_n for f in fields]) * 1e-6)
+        if evaluator.friction:
+            fixed_tau = colour_range(np.concatenate([f.tau for f in fields]) * 1e-6)
+    images = []
+    with FrameRenderer(evaluator, size, clim=fixed, tau_clim=fixed_tau) as renderer:
+        for row in rows:
+            frame = renderer.render(int(row))
+            # an adaptive palette per frame keeps each in memory as one byte per pixel
+            images.append(Image.fromarray(frame).quantize(colors=255, method=Image.Quantize.MEDIANCUT))
+    buffer = io.BytesIO()
+    images[0].save(buffer, format="GIF", save_all=True, append_images=images[1:],
+                   duration=int(round(1000 / fps)), loop=0, optimize=False)
+    data = buffer.getvalue()
+    path = Path(path)
+    atomic_write(path, data)
+    seconds = time.perf_counter() - start
+    return {"path": str(path), "frames": len(rows), "seconds": seconds, "seconds_per_frame": seconds / len(rows),
+            "bytes": len(data)}
