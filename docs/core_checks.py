@@ -11,9 +11,8 @@ import time
 
 import numpy as np
 
-from cases import history_table, load_scene, run_scene, scene_path, summary
-from cases.reference import axial_depth_1d, embedded_axial_force
-from cases.runner import resolve_law
+from cases import history_table, load_scene, run_scene, scene_path, summarise
+from cases.studies.reference import axial_depth_1d, embedded_axial_force
 from fem_loads import DAFLLoads, mass_properties, resistance_law, surface_quadrature
 from mesh import (BODY, COUNTERWEIGHT, Interior, OgiveNose, Profile, ProjectileGeometry,
                   analytic_mass_properties, build_mesh, place_counterweight)
@@ -65,12 +64,12 @@ def normal_impact() -> None:
     print("## Normal impact, Forrestal-Luk test 2 (280 m/s)")
     scene = load_scene(scene_path("forrestal_luk_test2"))
     result = run_scene(scene)
-    record = summary(result)
-    law = resolve_law(scene.target.law)
+    record = summarise(result)
+    law = scene.target.build()
     reference, v1 = axial_depth_1d(result.prepared.profile, law, result.prepared.mass.mass, 280.0,
                                    scene.numerics.stop_speed)
-    print(f"3-D depth {record['depth']:.5f} m; 1-D with exact nose entry {reference:.5f} m;"
-          f" relative difference {record['depth'] / reference - 1:+.2e}; speed at full embedding {v1:.3f} m/s")
+    print(f"3-D depth {record.depth:.5f} m; 1-D with exact nose entry {reference:.5f} m;"
+          f" relative difference {record.depth / reference - 1:+.2e}; speed at full embedding {v1:.3f} m/s")
     print()
 
 
@@ -82,10 +81,10 @@ def table3() -> None:
     for test, (measured, paper) in published.items():
         start = time.perf_counter()
         result = run_scene(load_scene(scene_path(f"forrestal_luk_test{test}")))
-        record = summary(result, history_table(result))
+        record = summarise(result, history_table(result))
         wall = time.perf_counter() - start
-        print(f"| {test} | {measured} | {paper} | {record['path_length']:.3f} | {record['path_length'] / paper - 1:+.2%}"
-              f" | {record['depth']:.3f} | {wall:.1f} |")
+        print(f"| {test} | {measured} | {paper} | {record.path_length:.3f} | {record.path_length / paper - 1:+.2%}"
+              f" | {record.depth:.3f} | {wall:.1f} |")
     print()
 
 

@@ -15,8 +15,10 @@ import timeit
 
 import numpy as np
 
-from cases import load_scene, run_scene, scene_path
-from cases.runner import WithGravity, initial_state, prepare_projectile, resolve_law, scene_loads
+from cases import load_scene, prepare_projectile, run_scene, scene_path
+from cases.run import initial_state
+from cases.run.runner import WithGravity
+from cases.scene import parse_override
 from dynamics.quaternion import rotation_matrix
 from fem_loads import DAFLLoads
 
@@ -42,26 +44,21 @@ def main() -> None:
     rotation = rotation_matrix(state.attitude)
     position = state.position + np.array([0.0, 0.0, -(0.16 + 1.0)])
     args = (position, state.velocity, rotation, np.array([0.0, 2.0, 0.0]))
-    bare = DAFLLoads(prepared.quadrature, resolve_law(scene.target.law))
+    bare = DAFLLoads(prepared.quadrature, scene.target.build())
     print("| configuration | one load evaluation (us, median) | test 5 integration (s, median of 3) |")
     print("|---|---|---|")
     print(f"| bare core (DAFLLoads with the law only) | {load_timing(bare, args):.0f} | - |")
-    layers = load_scene(scene_path("forrestal_luk_test5"))
     for name, overrides in EFFECTS.items():
-        s = load_scene(scene_path("forrestal_luk_test5"), overrides)
-        loads = scene_loads(s, prepared)
+        s = load_scene(scene_path("forrestal_luk_test5"), [parse_override(text) for text in overrides])
+        loads = s.loads(prepared.quadrature)
         if s.effects.gravity:
             loads = WithGravity(loads, prepared.mass.mass, s.effects.gravity_acceleration)
         per_call = load_timing(loads, args)
         runs = [run_scene(s).integration_time for _ in range(3)]
         print(f"| {name} | {per_call:.0f} | {statistics.median(runs):.2f} |")
-    data = layers.model_dump()
-    from cases.scene import scene_from_dict
-
-    del data["target"]["law"]
-    data["target"]["layers"] = [{"thickness": 2.0, "law": "soil"}, {"law": "softer_soil"}]
-    s = scene_from_dict(data)
-    per_call = load_timing(scene_loads(s, prepared), args)
+    s = load_scene(scene_path("forrestal_luk_test5"),
+                   {"target.layers": [{"thickness": 2.0, "law": "soil"}, {"law": "softer_soil"}]})
+    per_call = load_timing(s.loads(prepared.quadrature), args)
     runs = [run_scene(s).integration_time for _ in range(3)]
     print(f"| two layers | {per_call:.0f} | {statistics.median(runs):.2f} |")
 

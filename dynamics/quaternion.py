@@ -63,8 +63,16 @@ def compose(q: np.ndarray, rotation_vector: np.ndarray) -> np.ndarray:
 
 
 def normalize(q: np.ndarray) -> np.ndarray:
-    """``q / |q|``."""
-    return q / math.sqrt(float(q @ q))
+    """``q / |q|``.
+
+    ``|q|^2`` is summed on Python floats as ``(w^2 + y^2) + (x^2 + z^2)``: the same bits for the
+    quaternions of mirrored attitudes (which swap ``w`` with ``y`` and ``x`` with ``z``, or change
+    signs).  ``q @ q`` goes to the BLAS dot kernel, whose order depends on the CPU: with fused
+    multiply-adds (OpenBLAS on AVX-512) ``(w, 0, y, 0)`` and ``(y, 0, w, 0)`` differ in the last bit
+    in a fifth of the cases, which broke the mirror symmetry of whole runs.
+    """
+    w, x, y, z = q.tolist()
+    return q / math.sqrt((w * w + y * y) + (x * x + z * z))
 
 
 def rotation_matrix(q: np.ndarray) -> np.ndarray:

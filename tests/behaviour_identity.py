@@ -100,8 +100,33 @@ def _table(path: Path) -> list[dict] | None:
     return [{k: v for k, v in row.items() if k not in VOLATILE} for row in rows]
 
 
+HEADLINE = ("depth", "path_length", "axis_angle_change", "max_attack_angle", "final_time")
+
+
+def _relative(a, b) -> float:
+    try:
+        a, b = float(a), float(b)
+    except (TypeError, ValueError):
+        return 0.0 if a == b else float("inf")
+    if a == b:
+        return 0.0
+    return abs(a - b) / max(abs(a), abs(b), 1e-300)
+
+
+def _worst(a: dict | None, b: dict | None) -> tuple[float, str]:
+    """The largest relative change of the headline numbers of a summary or a table row, and its name."""
+    if a is None or b is None:
+        return float("inf"), "missing"
+    return max(((_relative(a.get(k), b.get(k)), k) for k in HEADLINE if k in a), default=(0.0, ""))
+
+
+def _how_different(a: dict | None, b: dict | None) -> str:
+    change, name = _worst(a, b)
+    return f"largest change {name} {change:.1e}"
+
+
 def compare(before: Path, after: Path, scenes: list[str], sweep: bool) -> bool:
-    """Print one line per compared file; True when all are identical."""
+    """Print one line per compared file (how much a different one changed); True when all are identical."""
     same = True
     print(f"{'output':44} {'before':16} {'after':16} result")
     for name in scenes:
@@ -110,17 +135,21 @@ def compare(before: Path, after: Path, scenes: list[str], sweep: bool) -> bool:
         same &= identical
         print(f"{name + '/history.csv':44} {_digest(a):16} {_digest(b):16} "
               f"{'byte-identical' if identical else 'DIFFERENT'}")
-        summary_same = _summary(before / name / "summary.json") == _summary(after / name / "summary.json")
-        same &= summary_same
+        sa, sb = _summary(before / name / "summary.json"), _summary(after / name / "summary.json")
+        same &= sa == sb
         print(f"{name + '/summary.json (no timings)':44} {'':16} {'':16} "
-              f"{'identical' if summary_same else 'DIFFERENT'}")
+              f"{'identical' if sa == sb else 'DIFFERENT: ' + _how_different(sa, sb)}")
     if sweep:
         a, b = _table(before / "family_sweep.csv"), _table(after / "family_sweep.csv")
         identical = a is not None and a == b
         same &= identical
         rows = len(a) if a else 0
-        print(f"{'family_sweep.csv (no timing columns)':44} {f'{rows} rows':16} {'':16} "
-              f"{'identical' if identical else 'DIFFERENT'}")
+        result = "identical"
+        if not identical:
+            changed = [(ra, rb) for ra, rb in zip(a or [], b or []) if ra != rb]
+            change, name = max((_worst(ra, rb) for ra, rb in changed), default=(float("inf"), "missing"))
+            result = f"DIFFERENT: {len(changed)} rows, largest change {name} {change:.1e}"
+        print(f"{'family_sweep.csv (no timing columns)':44} {f'{rows} rows':16} {'':16} {result}")
     return same
 
 

@@ -123,30 +123,38 @@ def parse_override(text: str) -> tuple[str, Any]:
 def _pairs(overrides: Overrides | None) -> list[tuple[str, Any]]:
     if overrides is None:
         return []
-    return list(overrides.items() if isinstance(overrides, Mapping) else overrides)
+    pairs = list(overrides.items() if isinstance(overrides, Mapping) else overrides)
+    for pair in pairs:
+        if not (isinstance(pair, tuple) and len(pair) == 2 and isinstance(pair[0], str)):
+            raise SceneError(f"overrides: expected (dotted key, value) pairs or a mapping, got {pair!r:.60}"
+                             " (text such as 'impact.speed=1120' is read by parse_override)")
+    return pairs
 
 
-def apply_overrides(data: dict[str, Any], overrides: Overrides | None) -> dict[str, Any]:
-    """A copy of ``data`` with each ``(dotted key, value)`` of ``overrides`` set, replacing alternatives."""
+def apply_overrides(data: dict[str, Any], overrides: Overrides | None, source: str = "scene") -> dict[str, Any]:
+    """A copy of ``data`` with each ``(dotted key, value)`` of ``overrides`` set, replacing alternatives.
+
+    ``source`` names the scene in error messages, as :func:`scene_from_dict` does.
+    """
     try:
         data = copy.deepcopy(data)
     except RecursionError:
-        raise SceneError("scene: arrays or tables nested too deeply") from None
+        raise SceneError(f"{source}: arrays or tables nested too deeply") from None
     paths = []
     for key, value in _pairs(overrides):
-        path = dotted_key(key, f"override {_quoted(str(key))}")
+        path = dotted_key(key, f"{source}: override {_quoted(str(key))}")
         node = data
         for depth, part in enumerate(path[:-1]):
             child = node.setdefault(part, {})
             if not isinstance(child, dict):
                 where = ".".join(path[: depth + 1])
-                raise SceneError(f"override {'.'.join(path)}: {where} is a value, not a table"
+                raise SceneError(f"{source}: {'.'.join(path)}: {where} is a value, not a table"
                                  f" (the key must stop at {where})")
             node = child
         try:
             node[path[-1]] = copy.deepcopy(value)
         except RecursionError:
-            raise SceneError(f"override {'.'.join(path)}: arrays or tables nested too deeply") from None
+            raise SceneError(f"{source}: {'.'.join(path)}: arrays or tables nested too deeply") from None
         paths.append(path)
     _drop_replaced(data, paths)
     return data
@@ -213,7 +221,7 @@ def scene_from_dict(data: dict[str, Any], source: str = "scene") -> Scene:
 
 def load_scene(path: str | Path, overrides: Overrides | None = None) -> Scene:
     """Load and validate a TOML scene, with optional overrides (dotted key -> value)."""
-    return scene_from_dict(apply_overrides(read_toml(path), overrides), str(path))
+    return scene_from_dict(apply_overrides(read_toml(path), overrides, str(path)), str(path))
 
 
 def scene_key(scene: Scene) -> str:

@@ -114,12 +114,13 @@ class Sweep:
 
     def __post_init__(self) -> None:
         # validate everything before anything runs: a typo fails the sweep at once
-        self.scenes = [scene_from_dict(apply_overrides(self.base, v.values), self.source) for v in self.variations]
+        self.scenes = [scene_from_dict(apply_overrides(self.base, v.values, self.source), self.source)
+                       for v in self.variations]
 
     @classmethod
     def from_file(cls, path: str | os.PathLike, overrides: Overrides | None = None,
                   variations: Sequence[Variation] = ()) -> Sweep:
-        base = apply_overrides(read_toml(path), overrides)
+        base = apply_overrides(read_toml(path), overrides, str(path))
         return cls(base, list(variations) or [Variation({})], str(path))
 
     @classmethod
@@ -128,7 +129,7 @@ class Sweep:
         sweep = cls.__new__(cls)
         sweep.base, sweep.source = {}, "scenes"
         sweep.variations = [variation for _, variation in parts]
-        sweep.scenes = [scene_from_dict(apply_overrides(base.base, variation.values), base.source)
+        sweep.scenes = [scene_from_dict(apply_overrides(base.base, variation.values, base.source), base.source)
                         for base, variation in parts]
         return sweep
 

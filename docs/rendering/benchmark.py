@@ -23,12 +23,22 @@ from pathlib import Path
 import numpy as np
 
 from cases import load_scene, run_scene, scene_path
-from cases.render import (FieldEvaluator, FrameRenderer, render_animation, render_snapshots, render_trajectory,
-                          resolve_instants, rss_bytes, write_paraview)
+from cases.viz.field import FieldEvaluator, resolve_instants
+from cases.viz.frames import FrameRenderer, render_animation, render_snapshots
+from cases.viz.paraview import write_paraview
+from cases.viz.trajectory import render_trajectory
+
+
+def rss_bytes() -> int:
+    """Resident memory of this process (bytes), from ``/proc/self/statm`` (Linux)."""
+    import os
+
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
 
 
 def main() -> None:
-    scene = load_scene(scene_path("paper_p3"), ["impact.speed=1120"])
+    scene = load_scene(scene_path("paper_p3"), {"impact.speed": 1120})
     start = time.perf_counter()
     result = run_scene(scene)
     run_seconds = time.perf_counter() - start

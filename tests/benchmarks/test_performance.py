@@ -26,11 +26,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cases import load_scene, run_scene, scene_path
-from cases.paper import STUDY_NUMERICS
-from cases.runner import prepare_projectile, scene_loads
-from cases.sweep import RunStore, Sweep, Variation, grid, read_variations, run_sweep
-from dynamics import RK4, RigidBody, State, simulate
+from cases import load_scene, prepare_projectile, run_scene, scene_path
+from cases.run import RunStore
+from cases.studies import Pool, Sweep, Variation, grid, read_variations, run_sweep
+from cases.studies.paper import STUDY_NUMERICS
+from dynamics import RK4, FixedStep, RigidBody, State, simulate
 from dynamics.quaternion import from_rotation_matrix, rotation_matrix
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -84,8 +84,8 @@ def _state(depth: float):
 @pytest.mark.parametrize("depth", [-3.0, -0.3], ids=["embedded", "entering"])
 @pytest.mark.parametrize("mesh_size", [0.04, 0.02, 0.01, 0.005])
 def test_load_evaluation(benchmark, tmp_path, mesh_size, depth):
-    scene = load_scene(scene_path("paper_p3"), [f"numerics.mesh_size={mesh_size}"])
-    loads = scene_loads(scene, prepare_projectile(scene))
+    scene = load_scene(scene_path("paper_p3"), {"numerics.mesh_size": mesh_size})
+    loads = scene.loads(prepare_projectile(scene).quadrature)
     position, velocity, rotation, spin = _state(depth)
     lib, pointer = _c_kernel(tmp_path)
     n = len(loads)
@@ -128,7 +128,7 @@ def test_integrator_steps_free_load(benchmark):
     start = State(0.0, np.zeros(3), np.array([800.0, 0.0, 0.0]), from_rotation_matrix(np.eye(3)),
                   np.array([0.0, 0.5, 2.0]))
     steps = 2000
-    trajectory = benchmark(simulate, body, loads, start, RK4(), time_limit=steps * 1e-5, time_step=1e-5)
+    trajectory = benchmark(simulate, body, loads, start, RK4(), FixedStep(1e-5), time_limit=steps * 1e-5)
     assert trajectory.statistics["steps"] == steps
     benchmark.extra_info.update(steps=steps, steps_per_second=steps / benchmark.stats.stats.median)
 
@@ -136,8 +136,8 @@ def test_integrator_steps_free_load(benchmark):
 @pytest.mark.parametrize("mesh_size", [0.04, 0.02, 0.01])
 def test_integrator_steps_dafl(benchmark, mesh_size):
     """Steps per second of #3 at 900 m/s (a whole run to rest), against the surface points."""
-    scene = load_scene(scene_path("paper_p3"), [f"numerics.mesh_size={mesh_size}", "numerics.time_step=2e-5",
-                                                "impact.speed=900"])
+    scene = load_scene(scene_path("paper_p3"), {"numerics.mesh_size": mesh_size, "numerics.time_step": 2e-5,
+                                                "impact.speed": 900})
     run_scene(scene)  # prepare (mesh, mass properties, quadrature) outside the timing
     result = benchmark.pedantic(run_scene, args=(scene,), rounds=3, iterations=1)
     steps = result.trajectory.statistics["steps"]
@@ -166,7 +166,7 @@ def test_one_run_process(benchmark):
 def test_sweep_72_runs(benchmark, tmp_path, monkeypatch, numerics, cache):
     """The 155 mm family: 6 speeds x 4 projectiles x 3 disturbances on every core, into an empty store.
 
-    ``study``: the numerics of ``penetrate paper`` (20 mm, 2e-5 s; cases.paper.STUDY_NUMERICS);
+    ``study``: the numerics of ``penetrate paper`` (20 mm, 2e-5 s; cases.studies.paper.STUDY_NUMERICS);
     ``shipped``: the scene files' own (10 mm, 2e-5 s).  ``warm``: meshes and prepared
     projectiles already in the disk cache (a user's second sweep of the same family);
     ``cold``: an empty cache, so the sweep meshes four projectiles.
@@ -178,18 +178,18 @@ def test_sweep_72_runs(benchmark, tmp_path, monkeypatch, numerics, cache):
         for v in read_variations(ROOT / "docs" / "performance" / "disturbances.toml")
     ]
     assert len(variations) == 72
-    sweep = Sweep.from_file(scene_path("paper_p3"), STUDY_NUMERICS if numerics == "study" else [], variations)
+    sweep = Sweep.from_file(scene_path("paper_p3"), STUDY_NUMERICS if numerics == "study" else None, variations)
     rounds = iter(range(100))
 
     def setup():
         round_ = next(rounds)
         if cache == "cold":
             monkeypatch.setenv("PENETRATE_CACHE_DIR", str(tmp_path / f"cache-{round_}"))
-        return (sweep, RunStore(tmp_path / f"store-{round_}")), {"progress": False}
+        return (sweep, RunStore(tmp_path / f"store-{round_}"), Pool(progress=False)), {}
 
     if cache == "warm":
-        run_sweep(sweep, RunStore(tmp_path / "fill"), progress=False)
-    table = benchmark.pedantic(run_sweep, setup=setup, rounds=3, iterations=1)
+        run_sweep(sweep, RunStore(tmp_path / "fill"), Pool(progress=False))
+    table = benchmark.pedantic(run_sweep, setup=setup, rounds=3, iterations=1).table()
     assert len(table) == 72 and ("error" not in table or table["error"].isna().all())
     benchmark.extra_info.update(runs=72, steps_total=int(table["steps"].sum()),
                                 points=int(table["surface_points"].iloc[0]))

@@ -24,16 +24,24 @@ import pandas as pd
 import pytest
 
 from cases import scene_path
-from cases.results import HISTORY_UNITS, write_outputs
-from cases.runner import run_scene
-from cases.scene import SceneError, load_scene
-from cases.sweep import RunStore, Sweep, grid, run_sweep
+from cases.run import HISTORY_UNITS, RunStore, atomic_write_text, run_scene, write_outputs
+from cases.scene import InputError, SceneError, load_scene as _load_scene, parse_override
+from cases.studies import Pool, Sweep, grid, run_sweep
 
 ROOT = Path(__file__).resolve().parents[1]
 TEST2 = str(scene_path("forrestal_luk_test2"))
 TINY = ["numerics.mesh_size=0.04"]
 TEMPORARY = re.compile(r"^\.(summary\.json|history\.csv)\..+\.tmp$")
 VOLATILE = ("wall_time", "integration_time")
+
+
+def load_scene(path, texts=()):
+    """A scene with ``KEY=VALUE`` overrides, as typed after ``--set``."""
+    return _load_scene(path, [parse_override(text) for text in texts])
+
+
+def _sweep(texts, variations):
+    return Sweep.from_file(TEST2, [parse_override(text) for text in texts], variations)
 
 
 def _cli(*args: str) -> list[str]:
@@ -122,8 +130,6 @@ def test_killed_runs_leave_complete_files_or_none(tmp_path):
 def test_stale_temporaries_of_dead_writers_are_removed(tmp_path):
     """A temporary named for a process that no longer runs is removed by the next write of that file;
     one of a running process (a concurrent writer) and other files are left alone."""
-    from cases.results import atomic_write_text
-
     finished = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
                               text=True, check=True)
     dead = int(finished.stdout)
@@ -191,15 +197,14 @@ def test_writes_interrupted_at_every_step(tmp_path):
 
 
 def test_one_or_two_workers_give_identical_bits(tmp_path):
-    sweep = Sweep.from_file(TEST2, TINY + ["numerics.time_limit=0.004", "impact.attack_angle=3"],
-                            grid({"impact.speed": [250, 300, 350]}))
-    one = run_sweep(sweep, RunStore(tmp_path / "one"), workers=1, progress=False)
-    two = run_sweep(sweep, RunStore(tmp_path / "two"), workers=2, progress=False)
+    sweep = _sweep(TINY + ["numerics.time_limit=0.004", "impact.attack_angle=3"], grid({"impact.speed": [250, 300, 350]}))
+    stores = {n: RunStore(tmp_path / f"w{n}") for n in (1, 2)}
+    one, two = (run_sweep(sweep, stores[n], Pool(workers=n, progress=False)).table() for n in (1, 2))
     pd.testing.assert_frame_equal(one.drop(columns=list(VOLATILE)), two.drop(columns=list(VOLATILE)),
                                   check_exact=True)
     for key in one["key"]:
-        assert (tmp_path / "one" / f"{key}.csv.gz").read_bytes() == (tmp_path / "two" / f"{key}.csv.gz").read_bytes()
-        a, b = (json.loads((tmp_path / d / f"{key}.json").read_text()) for d in ("one", "two"))
+        assert stores[1].history_path(key).read_bytes() == stores[2].history_path(key).read_bytes()
+        a, b = (store.load(key) for store in stores.values())
         assert {k: v for k, v in a.items() if k not in VOLATILE} == {k: v for k, v in b.items() if k not in VOLATILE}
 
 
@@ -233,6 +238,8 @@ def test_expressions_in_a_scene_are_text_or_rejected(tmp_path):
             load_scene(as_number)
         with pytest.raises(SceneError, match="target.law: unknown law"):
             load_scene(TEST2, [f'target.law="{PAYLOAD}"'])
+        with pytest.raises(SceneError, match="target.law: unknown law"):
+            _load_scene(TEST2, {"target.law": PAYLOAD})  # a typed value is used as it is: a name, not code
         # in a label it is just text: the run goes ahead and writes it back verbatim
         labelled = tmp_path / "label.toml"
         labelled.write_text(text.replace('name = "forrestal_luk_test2"', f'name = "{PAYLOAD}"')
@@ -252,7 +259,7 @@ def test_nothing_evaluates_or_unpickles_data():
     forbidden_modules = {"pickle", "marshal", "shelve", "dill", "cloudpickle", "yaml"}
     found = []
     for folder in ("cases", "mesh", "fem_loads", "dynamics"):
-        for path in sorted((ROOT / folder).glob("*.py")):
+        for path in sorted((ROOT / folder).rglob("*.py")):
             tree = ast.parse(path.read_text(), str(path))
             for node in ast.walk(tree):
                 where = f"{path.relative_to(ROOT)}:{getattr(node, 'lineno', 0)}"
@@ -293,21 +300,21 @@ def test_names_in_a_scene_never_become_paths(tmp_path):
 def test_run_store_files_are_named_by_digest_only(tmp_path):
     store = RunStore(tmp_path / "store")
     assert not store.root.exists()  # made by the first save, not by a failing command
-    sweep = Sweep.from_file(TEST2, TINY + ["numerics.time_limit=0.001", 'name="../../x"'],
-                            grid({"impact.speed": [250, 260]}))
-    run_sweep(sweep, store, workers=1, progress=False)
-    names = sorted(p.name for p in tmp_path.rglob("*") if p.is_file())
+    sweep = _sweep(TINY + ["numerics.time_limit=0.001", 'name="../../x"'], grid({"impact.speed": [250, 260]}))
+    run_sweep(sweep, store, Pool(workers=1, progress=False))
+    files = sorted(p for p in tmp_path.rglob("*") if p.is_file())
+    names = [p.name for p in files]
     assert len(names) == 4 and all(re.fullmatch(r"[0-9a-f]{24}\.(json|csv\.gz)", n) for n in names), names
-    for path in (tmp_path / "store").glob("*.csv.gz"):  # undefined cells empty, as in history.csv
+    assert all(p.parent == tmp_path / "store" / "run" for p in files)
+    for path in (tmp_path / "store" / "run").glob("*.csv.gz"):  # undefined cells empty, as in history.csv
         text = gzip.decompress(path.read_bytes()).decode()
         assert not re.search(r"(?i)\b(nan|inf)\b", text) and ",\n" in text
-    for key in ["../x", "/etc/passwd", "a/b", "a\\b", ".hidden", "", "a\x00b", "a\nb"]:
-        with pytest.raises(ValueError, match="plain file name"):
-            store.record_path(key)
-        with pytest.raises(ValueError, match="plain file name"):
-            store.history_path(key)
-    with pytest.raises(SceneError, match="must be a folder"):
-        RunStore(tmp_path / "store" / names[0])
+    for key in ["../x", "/etc/passwd", "a/b", "a\\b", ".hidden", "", "a\x00b", "a\nb"]:  # any key: a digest
+        for path in (store.record_path(key), store.history_path(key)):
+            assert path.parent == tmp_path / "store" / "run" and re.fullmatch(r"[0-9a-f]{24}\.(json|csv\.gz)",
+                                                                                path.name)
+    with pytest.raises(InputError, match="must be a folder"):
+        RunStore(files[0])
 
 
 def test_output_files_get_the_usual_permissions(tmp_path):

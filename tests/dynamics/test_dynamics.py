@@ -1,4 +1,4 @@
-"""Integrators and events, each problem paired with its exact solution."""
+"""Integrators, step control, the energy guard and events, each problem paired with its exact solution."""
 
 import math
 
@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from dynamics import NON_FINITE, RK4, TIME_LIMIT, DormandPrince54, Event, RigidBody, SpeedBelow, State, simulate
+from dynamics import (NON_FINITE, RK4, STEP_FLOOR, TIME_LIMIT, DormandPrince54, EnergyGuard, ErrorControl, Event,
+                      FixedStep, RigidBody, SpeedBelow, State, simulate)
 from dynamics.quaternion import exp_map, from_rotation_matrix, multiply, rotation_matrix
 
 I_AXIAL, I_TRANSVERSE = 0.25, 2.3
@@ -32,7 +33,7 @@ def _torque_free_exact(start: State, t: float) -> np.ndarray:
 
 def _attitude_error(h: float, method=RK4, **kw) -> float:
     start = _spinning_start()
-    tr = simulate(BODY, NO_LOAD, start, method(), time_limit=0.5, time_step=h, **kw)
+    tr = simulate(BODY, NO_LOAD, start, method(), FixedStep(h), time_limit=0.5, **kw)
     return float(np.abs(rotation_matrix(tr.attitude[-1]) - _torque_free_exact(start, 0.5)).max())
 
 
@@ -45,7 +46,7 @@ def test_rk4_attitude_converges_at_fourth_order():
 def test_dopri54_meets_its_tolerance_on_the_free_top():
     start = _spinning_start()
     for rtol in (1e-6, 1e-9):
-        tr = simulate(BODY, NO_LOAD, start, DormandPrince54(), time_limit=0.5, rtol=rtol)
+        tr = simulate(BODY, NO_LOAD, start, DormandPrince54(), ErrorControl(rtol), time_limit=0.5)
         error = np.abs(rotation_matrix(tr.attitude[-1]) - _torque_free_exact(start, 0.5)).max()
         assert error < 100 * rtol
         assert tr.time[-1] == pytest.approx(0.5, abs=1e-15)
@@ -56,7 +57,7 @@ def test_unit_quaternion_and_momentum_over_a_long_run():
     start = _spinning_start()
     drifts = []
     for h in (1e-3, 5e-4):
-        tr = simulate(BODY, NO_LOAD, start, RK4(), time_limit=5.0, time_step=h)
+        tr = simulate(BODY, NO_LOAD, start, RK4(), FixedStep(h), time_limit=5.0)
         assert np.abs(np.linalg.norm(tr.attitude, axis=1) - 1).max() < 1e-12
         momentum = np.array([rotation_matrix(q) @ (BODY.inertia @ w)
                              for q, w in zip(tr.attitude, tr.angular_velocity)])
@@ -74,7 +75,7 @@ def test_constant_force_parabola_and_located_stop():
     stopped = SpeedBelow("stopped", stop)
     # a 7e-4 s step changes the velocity by 1.9 m/s: the speed passes through zero
     # and out again inside one step, and the reversal must still end the run
-    tr = simulate(BODY, loads, start, RK4(), time_limit=1.0, time_step=7e-4, events=[stopped])
+    tr = simulate(BODY, loads, start, RK4(), FixedStep(7e-4), time_limit=1.0, events=[stopped])
     t_stop = (v0 - stop) * BODY.mass / brake
     assert tr.end_reason == "stopped"
     assert tr.time[-1] == pytest.approx(t_stop, rel=1e-12)
@@ -89,14 +90,14 @@ def test_rising_event_is_located():
     g = np.array([0.0, 0.0, -9.81 * BODY.mass])
     start = State(0.0, np.zeros(3), np.array([0.0, 0.0, 30.0]), np.array([1.0, 0, 0, 0]), np.zeros(3))
     height = Event("height", lambda s: s.position[2] - 20.0, direction=1)
-    tr = simulate(BODY, lambda x, v, r, w: (g, np.zeros(3)), start, RK4(), time_limit=5.0,
-                  time_step=0.1, events=[height])
+    tr = simulate(BODY, lambda x, v, r, w: (g, np.zeros(3)), start, RK4(), FixedStep(0.1), time_limit=5.0,
+                  events=[height])
     assert tr.end_reason == "height"
     assert tr.time[-1] == pytest.approx((30 - math.sqrt(900 - 392.4)) / 9.81, rel=1e-12)
 
 
 def test_time_limit_is_hit_exactly():
-    tr = simulate(BODY, NO_LOAD, _spinning_start(), RK4(), time_limit=0.01, time_step=3e-3)
+    tr = simulate(BODY, NO_LOAD, _spinning_start(), RK4(), FixedStep(3e-3), time_limit=0.01)
     assert tr.end_reason == TIME_LIMIT and tr.time[-1] == pytest.approx(0.01, abs=1e-15)
     assert len(tr.time) == 5  # 0, 3, 6, 9, 10 ms
 
@@ -108,16 +109,66 @@ def test_non_finite_load_ends_the_run_and_keeps_the_history():
         calls["n"] += 1
         return (np.full(3, np.nan) if calls["n"] > 9 else np.zeros(3)), np.zeros(3)
 
-    tr = simulate(BODY, failing, _spinning_start(), RK4(), time_limit=1.0, time_step=1e-3)
+    tr = simulate(BODY, failing, _spinning_start(), RK4(), FixedStep(1e-3), time_limit=1.0)
     assert tr.end_reason == NON_FINITE
     assert len(tr.time) == 3 and np.isfinite(tr.position).all()
 
 
 def test_bad_integrator_settings():
-    with pytest.raises(ValueError, match="exactly one"):
-        simulate(BODY, NO_LOAD, _spinning_start(), RK4(), time_limit=1.0)
+    with pytest.raises(ValueError, match="time_step = -1"):
+        FixedStep(-1.0)
+    with pytest.raises(ValueError, match="min_step = 0"):
+        ErrorControl(1e-6, min_step=0.0)
     with pytest.raises(ValueError, match="no error estimate"):
-        simulate(BODY, NO_LOAD, _spinning_start(), RK4(), time_limit=1.0, rtol=1e-6)
+        simulate(BODY, NO_LOAD, _spinning_start(), RK4(), ErrorControl(1e-6), time_limit=1.0)
+
+
+def _pumping(gain: float):
+    """A load that adds ``gain`` (relative) kinetic energy per second along the velocity: no dissipative system."""
+    def loads(x, v, r, w):
+        return 0.5 * gain * BODY.mass * v, np.zeros(3)
+    return loads
+
+
+def _energies(tr) -> np.ndarray:
+    return np.array([BODY.kinetic_energy(tr.state(i)) for i in range(len(tr.time))])
+
+
+def test_energy_guard_projects_small_gains_and_the_energy_never_rises():
+    """A gain of 1e-9 per 1e-3 s step is below the guard's tolerance: every step is kept, its gain removed."""
+    start = State(0.0, np.zeros(3), np.array([100.0, 0.0, 0.0]), np.array([1.0, 0, 0, 0]), np.array([0, 1.0, 0]))
+    guard = EnergyGuard(min_step=1e-6)
+    tr = simulate(BODY, _pumping(1e-6), start, RK4(), FixedStep(1e-3), time_limit=0.01, guard=guard)
+    assert tr.end_reason == TIME_LIMIT and tr.statistics["energy_rejections"] == 0
+    assert tr.statistics["energy_projections"] == guard.projections == 10
+    assert np.all(np.diff(_energies(tr)) <= 0.0)
+    free = simulate(BODY, _pumping(1e-6), start, RK4(), FixedStep(1e-3), time_limit=0.01)
+    assert np.all(np.diff(_energies(free)) > 0.0)  # the same load without the guard gains
+
+
+def test_energy_guard_retakes_large_gains_down_to_its_floor():
+    """A gain of 1e-2 per second: every halving still gains above 1e-7, so the run ends at the step floor."""
+    start = State(0.0, np.zeros(3), np.array([100.0, 0.0, 0.0]), np.array([1.0, 0, 0, 0]), np.zeros(3))
+    tr = simulate(BODY, _pumping(1.0), start, RK4(), FixedStep(1e-3), time_limit=0.01,
+                  guard=EnergyGuard(min_step=1e-3 / 1024))
+    assert tr.end_reason == STEP_FLOOR and len(tr.time) == 1  # the history up to the failure: the start
+    assert tr.statistics["energy_rejections"] == 10  # 1e-3 halved ten times reaches the floor
+
+
+def test_error_control_forces_steps_at_its_minimum():
+    """A load that jumps every 1e-4 s: no step meets 1e-10; at forced_step each is accepted and counted."""
+    def jumping(x, v, r, w):
+        return np.array([0.0, 1e5 * (-1) ** int(x[0] / 1e-2), 0.0]), np.zeros(3)
+
+    start = State(0.0, np.zeros(3), np.array([100.0, 0.0, 0.0]), np.array([1.0, 0, 0, 0]), np.zeros(3))
+    control = ErrorControl(1e-10, first_step=1e-6, forced_step=1e-5, min_step=1e-8)
+    tr = simulate(BODY, jumping, start, DormandPrince54(), control, time_limit=2e-3)
+    assert tr.end_reason == TIME_LIMIT
+    assert tr.statistics["forced_steps"] == control.forced_steps > 0
+    assert tr.statistics["smallest_step"] >= 1e-6 * (1 - 1e-12)
+    no_floor = simulate(BODY, jumping, start, DormandPrince54(), ErrorControl(1e-10, first_step=1e-6, min_step=1e-8),
+                        time_limit=2e-3)
+    assert no_floor.end_reason == STEP_FLOOR  # without forced steps the control shortens to its floor
 
 
 def test_quaternion_helpers_agree_with_scipy():

@@ -6,13 +6,14 @@ import numpy as np
 import pytest
 
 from fem_loads import surface_quadrature
-from mesh import ProjectileGeometry, analytic_mass_properties, build_mesh, cached_mesh
+from mesh import ProjectileGeometry, analytic_mass_properties, build_mesh
+from support import meshed
 
 DEFAULT_SIZE = 0.01
 
 
 def _errors(profile, size, model, order=2):
-    mesh = cached_mesh(ProjectileGeometry(profile), size, order)
+    mesh = meshed(ProjectileGeometry(profile), size, order)
     q = surface_quadrature(mesh, np.zeros(3), profile, model)
     closure = np.abs(q.normals.T @ q.weights).max() / (math.pi * profile.radius**2)
     volume = analytic_mass_properties(ProjectileGeometry(profile), 1.0).volume

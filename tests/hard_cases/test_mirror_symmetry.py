@@ -1,4 +1,4 @@
-"""Exact mirror symmetry: mesh, mass properties, quadrature, loads and start attitude (issue 7).
+"""Exact mirror symmetry: mesh, mass properties, quadrature, loads and start attitude.
 
 A straight normal impact, and the mirror image of any run, must stay exactly so (bitwise): these
 tests check each piece the long-run tests in test_hard_cases.py rely on, against independent truth
@@ -13,13 +13,14 @@ import math
 import numpy as np
 import pytest
 
-from cases.runner import initial_attitude
+from cases.run.runner import initial_attitude
 from dynamics.quaternion import rotation_matrix
 from fem_loads import DAFLLoads, SurfaceQuadrature, mass_properties, mirror_quarters, resistance_law, surface_quadrature
 from fem_loads.images import MirrorImages
 from fem_loads.mass import mirror_symmetric_axes
 from fem_loads.quadrature import MIRROR_SIGNS
-from mesh import BODY, OgiveNose, Profile, ProjectileGeometry, cached_mesh
+from mesh import BODY, OgiveNose, Profile, ProjectileGeometry
+from support import meshed
 
 PROFILE = Profile(0.155, 0.93, OgiveNose(5.0))
 SOIL = resistance_law("soil")
@@ -28,7 +29,7 @@ SIGNS = [np.array([1.0, sy, sz]) for sy, sz in MIRROR_SIGNS]
 
 @functools.lru_cache(maxsize=None)
 def _mesh(order: int):
-    return cached_mesh(ProjectileGeometry(PROFILE), 0.04, order)
+    return meshed(ProjectileGeometry(PROFILE), 0.04, order)
 
 
 @functools.lru_cache(maxsize=None)

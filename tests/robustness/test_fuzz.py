@@ -34,9 +34,8 @@ from pydantic import BaseModel
 
 from cases import SHIPPED_SCENES, scene_path
 from cases.cli import main
-from cases.results import HISTORY_UNITS
-from cases.scene import SceneError, load_scene, read_toml, scene_from_dict
-from cases.schema import Scene
+from cases.run import HISTORY_UNITS
+from cases.scene import Scene, SceneError, load_scene, parse_override, read_toml, scene_from_dict
 
 SCALE = float(os.environ.get("PENETRATE_FUZZ_SCALE", "1"))
 OUTCOMES: dict[str, collections.Counter] = collections.defaultdict(collections.Counter)
@@ -50,8 +49,11 @@ def fuzz(examples: int):
 
 @pytest.fixture(scope="module", autouse=True)
 def report_outcomes(request):
-    """Print how many cases each property tried and how they ended."""
+    """Print how many cases each property tried and how they ended: with ``-v``, or when
+    ``PENETRATE_FUZZ_SCALE`` asks for a larger run (the default run stays quiet)."""
     yield
+    if request.config.getoption("verbose") <= 0 and "PENETRATE_FUZZ_SCALE" not in os.environ:
+        return
     lines = [f"fuzz {name}: {sum(c.values())} cases: " + ", ".join(f"{k} {v}" for k, v in sorted(c.items()))
              for name, c in OUTCOMES.items()]
     reporter = request.config.pluginmanager.get_plugin("terminalreporter")
@@ -437,7 +439,7 @@ overrides = st.one_of(
 @fuzz(400)
 @given(st.lists(overrides, min_size=1, max_size=3))
 def test_malformed_overrides(items):
-    outcome("--set strings", lambda: load_scene(GOOD, items), GOOD)
+    outcome("--set strings", lambda: load_scene(GOOD, [parse_override(text) for text in items]), GOOD)
 
 
 def test_no_expression_in_a_scene_is_evaluated(scratch, monkeypatch):
@@ -445,7 +447,7 @@ def test_no_expression_in_a_scene_is_evaluated(scratch, monkeypatch):
     assert not Path("PWNED").exists()
     assert "PWNED" in " ".join(WORDS)  # the fuzzers above feed this expression everywhere
     with pytest.raises(SceneError, match="impact.speed = .*input should be a valid number"):
-        load_scene(scene_path("forrestal_luk_test2"), ["impact.speed=__import__('os').system('touch PWNED')"])
+        load_scene(scene_path("forrestal_luk_test2"), [parse_override("impact.speed=__import__('os').system('touch PWNED')")])
     assert not Path("PWNED").exists()
 
 
@@ -564,8 +566,8 @@ def test_command_line_bad_input(cli_files, tmp_path_factory, data):
     args = data.draw(bad_command_lines(cli_files))
     work = cli_files["folder"].parent
     before = _listing(work)
-    with mock.patch("cases.sweep._run_missing", side_effect=AssertionError("a sweep started")), \
-            mock.patch("cases.runner.run_scene", side_effect=AssertionError("a run started")):
+    with mock.patch("cases.studies.sweep.run_missing", side_effect=AssertionError("a sweep started")), \
+            mock.patch("cases.run.run_scene", side_effect=AssertionError("a run started")):
         code, stdout, stderr = call(args + EXTRA[args[0]], work)
     assert code != 0, (args, stdout)
     lines = stderr.strip().splitlines()

@@ -8,7 +8,7 @@ import pandas as pd
 import pytest
 
 from cases import scene_path
-from cases.results import HISTORY_UNITS
+from cases.run import HISTORY_UNITS
 
 FAST = ["--set", "numerics.mesh_size=0.03"]
 REQUIRED = {"depth", "path_length", "end_reason", "final_speed", "max_attack_angle", "axis_angle_change",

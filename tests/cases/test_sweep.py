@@ -1,7 +1,11 @@
-"""Sweeps: grids, the run store, failures, interruption and resumption, Dask."""
+"""Sweeps: grids, the run store, failures, interruption and resumption, Dask (a LocalCluster and a cluster of
+``dask scheduler`` and ``dask worker`` processes)."""
 
+import json
 import os
+import shutil
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -9,16 +13,22 @@ import time
 import pandas as pd
 import pytest
 
-from cases import SceneError, scene_path
-from cases.sweep import RunStore, Sweep, grid, parse_grid, run_sweep
+from cases import InputError, SceneError, scene_path
+from cases.run import RunStore
+from cases.studies import Pool, Sweep, grid, parse_grid, read_variations, run_sweep
 
 # short runs of projectile #3: coarse mesh, 4 ms of penetration
-QUICK = ["numerics.mesh_size=0.03", "numerics.time_step=2e-5", "numerics.time_limit=0.004"]
+QUICK = {"numerics.mesh_size": 0.03, "numerics.time_step": 2e-5, "numerics.time_limit": 0.004}
+QUICK_SET = ["numerics.mesh_size=0.03", "numerics.time_step=2e-5", "numerics.time_limit=0.004"]
 VOLATILE = ["wall_time", "integration_time"]
 
 
-def _sweep(speeds=(1000, 1100, 1200), extra=()):
-    return Sweep.from_file(scene_path("paper_p3"), QUICK + list(extra), grid({"impact.speed": list(speeds)}))
+def _sweep(speeds=(1000, 1100, 1200)):
+    return Sweep.from_file(scene_path("paper_p3"), QUICK, grid({"impact.speed": list(speeds)}))
+
+
+def _records(store):
+    return sorted((store / "run").glob("*.json"))
 
 
 def _stable(table: pd.DataFrame) -> pd.DataFrame:
@@ -37,7 +47,7 @@ def test_parse_grid(text, key, values):
 
 @pytest.mark.parametrize("bad", ["impact.speed", "impact.speed=", "impact.speed=3:1:1", "impact.speed=a:b:c"])
 def test_parse_grid_errors(bad):
-    with pytest.raises(SceneError, match="--grid"):
+    with pytest.raises(InputError, match="--grid"):
         parse_grid(bad)
 
 
@@ -45,7 +55,24 @@ def test_grid_is_a_cartesian_product():
     variations = grid({"a": [1, 2], "b": ["x", "y", "z"]})
     assert [v.values for v in variations][:4] == [{"a": 1, "b": "x"}, {"a": 1, "b": "y"}, {"a": 1, "b": "z"},
                                                    {"a": 2, "b": "x"}]
-    assert variations[0].overrides() == ["a=1", 'b="x"']
+
+
+def test_variation_values_reach_the_scene_as_they_are():
+    """A table value in a list file stays a table (it used to go through text and come back a string)."""
+    sweep = Sweep.from_file(scene_path("paper_p3"), QUICK, read_variations_text(
+        '[[run]]\n"effects.friction" = { model = "capped", coefficient = 0.1, cap = 1e7 }\n'))
+    assert sweep.scenes[0].effects.friction.cap == 1e7
+
+
+def read_variations_text(text: str):
+    import tempfile
+
+    with tempfile.NamedTemporaryFile("w", suffix=".toml", delete=False) as f:
+        f.write(text)
+    try:
+        return read_variations(f.name)
+    finally:
+        os.unlink(f.name)
 
 
 def test_bad_variation_fails_before_anything_runs(tmp_path):
@@ -57,16 +84,18 @@ def test_bad_variation_fails_before_anything_runs(tmp_path):
 def test_sweep_stores_runs_and_skips_them_when_run_again(tmp_path):
     store = RunStore(tmp_path / "store")
     sweep = _sweep()
-    table = run_sweep(sweep, store, workers=2, progress=False)
+    result = run_sweep(sweep, store, Pool(workers=2, progress=False))
+    table = result.table()
     assert list(table["impact.speed"]) == [1000, 1100, 1200]
     assert table["end_reason"].eq("time_limit").all() and "error" not in table
-    records = sorted((tmp_path / "store").glob("*.json"))
-    assert len(records) == 3 and len(list((tmp_path / "store").glob("*.csv.gz"))) == 3
+    assert [run.summary.end_reason for run in result.runs] == ["time_limit"] * 3  # typed, as the studies read them
+    records = _records(tmp_path / "store")
+    assert len(records) == 3 and len(list((tmp_path / "store" / "run").glob("*.csv.gz"))) == 3
     stamps = [p.stat().st_mtime_ns for p in records]
-    again = run_sweep(sweep, store, workers=2, progress=False)
+    again = run_sweep(sweep, store, Pool(workers=2, progress=False)).table()
     assert [p.stat().st_mtime_ns for p in records] == stamps
     pd.testing.assert_frame_equal(again, table)
-    history = store.history(table["key"][0])
+    history = result.history(0)
     assert history["time"].iloc[-1] == pytest.approx(0.004)
 
 
@@ -75,7 +104,9 @@ def test_a_failed_run_is_recorded_and_does_not_stop_the_others(tmp_path):
     # a centre of mass the counterweight cannot reach fails at run time, in the worker
     sweep = Sweep.from_file(scene_path("paper_p3"), QUICK,
                             grid({"projectile.centre_of_mass_ratio": [0.5636, 0.2]}))
-    table = run_sweep(sweep, store, workers=1, progress=False)
+    result = run_sweep(sweep, store, Pool(workers=1, progress=False))
+    assert not result.runs[0].failed and result.runs[1].failed
+    table = result.table()
     assert table["end_reason"].iloc[0] == "time_limit" and pd.isna(table["error"].iloc[0])
     assert "centre_of_mass" in table["error"].iloc[1]
     assert not store.finished(table["key"].iloc[1]) and store.finished(table["key"].iloc[0])
@@ -84,7 +115,7 @@ def test_a_failed_run_is_recorded_and_does_not_stop_the_others(tmp_path):
 def _cli_sweep(store, out, *extra):
     args = [sys.executable, "-m", "cases.cli", "sweep", str(scene_path("paper_p3")), "--store", str(store),
             "--out", str(out), "--workers", "1", "--no-progress", "--grid", "impact.speed=900:1400:100"]
-    for item in QUICK:
+    for item in QUICK_SET:
         args += ["--set", item]
     return args + list(extra)
 
@@ -94,14 +125,14 @@ def test_killed_sweep_loses_nothing_and_resumes(tmp_path):
     proc = subprocess.Popen(_cli_sweep(store, out), start_new_session=True,
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.time() + 240
-    while time.time() < deadline and len(list(store.glob("*.json"))) < 2:
+    while time.time() < deadline and len(_records(store)) < 2:
         time.sleep(0.05)
     os.killpg(proc.pid, signal.SIGKILL)
     proc.wait()
-    finished = {p: p.stat().st_mtime_ns for p in store.glob("*.json")}
+    finished = {p: p.stat().st_mtime_ns for p in _records(store)}
     assert 2 <= len(finished) < 6 and not out.exists()
-    for path in finished:  # every stored run is complete
-        assert RunStore(store).finished(path.stem)
+    for path in finished:  # every stored run is complete: a record and the history beside it
+        assert "error" not in json.loads(path.read_text()) and path.with_suffix(".csv.gz").exists()
     done = subprocess.run(_cli_sweep(store, out), capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr
     assert all(p.stat().st_mtime_ns == stamp for p, stamp in finished.items())  # reused, not rerun
@@ -117,12 +148,62 @@ def test_killed_sweep_loses_nothing_and_resumes(tmp_path):
 def test_dask_local_cluster_gives_the_same_table(tmp_path):
     distributed = pytest.importorskip("distributed")
     sweep = _sweep(speeds=(1000, 1200))
-    local = run_sweep(sweep, RunStore(tmp_path / "local"), workers=2, progress=False)
+    local = run_sweep(sweep, RunStore(tmp_path / "local"), Pool(workers=2, progress=False)).table()
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster:
-        remote = run_sweep(sweep, RunStore(tmp_path / "dask"), scheduler=cluster.scheduler_address,
-                           progress=False)
+        remote = run_sweep(sweep, RunStore(tmp_path / "dask"), Pool(scheduler=cluster.scheduler_address,
+                                                                   progress=False)).table()
     pd.testing.assert_frame_equal(_stable(remote), _stable(local), check_exact=True)
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_dask_scheduler_and_worker_processes_give_the_same_table(tmp_path):
+    """A cluster of separate ``dask scheduler`` and ``dask worker`` processes, as on a real cluster: the
+    workers import this project themselves (nothing is shared with this process) and report the code
+    version they ran, which must be this process's."""
+    pytest.importorskip("distributed")
+    dask = shutil.which("dask", path=os.path.dirname(sys.executable))
+    if dask is None:
+        pytest.skip("no dask command beside this interpreter")
+    address = f"tcp://127.0.0.1:{_free_port()}"
+    env = {**os.environ, "PYTHONPATH": ""}  # the workers find the project as installed, from another folder
+    scheduler = subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", address.rsplit(":", 1)[1],
+                                  "--no-dashboard"], cwd=tmp_path, env=env, start_new_session=True,
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    worker = subprocess.Popen([dask, "worker", address, "--nworkers", "2", "--nthreads", "1", "--no-dashboard"],
+                              cwd=tmp_path, env=env, start_new_session=True,
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        from distributed import Client
+
+        with Client(address, timeout=60) as client:
+            client.wait_for_workers(2, timeout=60)
+        sweep = _sweep(speeds=(1000, 1200))
+        remote = run_sweep(sweep, RunStore(tmp_path / "cluster"), Pool(scheduler=address, progress=False)).table()
+        local = run_sweep(sweep, RunStore(tmp_path / "local"), Pool(workers=1, progress=False)).table()
+        pd.testing.assert_frame_equal(_stable(remote), _stable(local), check_exact=True)
+    finally:
+        for proc in (worker, scheduler):
+            os.killpg(proc.pid, signal.SIGTERM)
+        for proc in (worker, scheduler):
+            try:
+                proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+
+
+def test_a_worker_running_other_code_is_refused(tmp_path, monkeypatch):
+    from cases.studies import pool
+
+    monkeypatch.setattr(pool, "run_job", lambda text: (*pool.simulate_record(text), "other-code"))
+    with pytest.raises(pool.CodeMismatch, match="code version other-code"):
+        run_sweep(_sweep(speeds=(1000,)), RunStore(tmp_path), Pool(workers=1, progress=False))
+    assert not (tmp_path / "run").exists()  # nothing stored under this process's version
 
 
 def test_listed_variations_combine_with_a_grid(tmp_path):
@@ -131,7 +212,7 @@ def test_listed_variations_combine_with_a_grid(tmp_path):
     args = [sys.executable, "-m", "cases.cli", "sweep", str(scene_path("paper_p3")), "--list", str(listing),
             "--grid", "impact.oblique_angle=0,10", "--store", str(tmp_path / "s"), "--out", str(tmp_path / "t.csv"),
             "--no-progress", "--workers", "2"]
-    for item in QUICK:
+    for item in QUICK_SET:
         args += ["--set", item]
     done = subprocess.run(args, capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr
@@ -142,9 +223,7 @@ def test_listed_variations_combine_with_a_grid(tmp_path):
 
 
 def test_bad_list_file(tmp_path):
-    from cases.sweep import read_variations
-
     bad = tmp_path / "bad.toml"
     bad.write_text('speed = 3\n')
-    with pytest.raises(SceneError, match=r"\[\[run\]\]"):
+    with pytest.raises(InputError, match=r"\[\[run\]\]"):
         read_variations(bad)

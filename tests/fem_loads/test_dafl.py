@@ -9,8 +9,9 @@ from scipy import integrate
 
 from fem_loads import DAFLLoads, resistance_law, surface_quadrature
 from fem_loads.mass import mass_properties
-from mesh import BODY, ConeNose, OgiveNose, Profile, ProjectileGeometry, cached_mesh
-from cases.reference import embedded_axial_force
+from mesh import BODY, ConeNose, OgiveNose, Profile, ProjectileGeometry
+from support import meshed
+from cases.studies.reference import embedded_axial_force
 
 SOIL = resistance_law("soil")
 DOWN = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])  # body x -> world -Z
@@ -19,7 +20,7 @@ DEEP = np.array([0.0, 0.0, -10.0])
 
 @functools.lru_cache(maxsize=None)
 def _loads(profile, size=0.01, model="exact", order=2, law=SOIL):
-    mesh = cached_mesh(ProjectileGeometry(profile), size, order)
+    mesh = meshed(ProjectileGeometry(profile), size, order)
     centre = mass_properties(mesh, {BODY: 1.0}).centre
     return DAFLLoads(surface_quadrature(mesh, centre, profile, model), law), -centre[0]
 

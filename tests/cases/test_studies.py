@@ -9,10 +9,11 @@ import pandas as pd
 import pytest
 
 from cases import scene_path
-from cases.studies import convergence_speed, find_critical_velocity, is_unstable, measure_convergent_velocity
-from cases.sweep import RunStore, Sweep
+from cases.run import RunStore, convergence_speed
+from cases.studies import Pool, Sweep, find_critical_velocity, is_unstable, measure_convergent_velocity
 
-STUDY = ["numerics.mesh_size=0.02", "numerics.time_step=2e-5"]
+STUDY = {"numerics.mesh_size": 0.02, "numerics.time_step": 2e-5}
+QUIET, SERIAL = Pool(workers=2, progress=False), Pool(workers=1, progress=False)
 
 
 def test_convergence_speed_on_an_exact_history():
@@ -36,31 +37,32 @@ def store(tmp_path_factory):
 
 def test_critical_velocity_brackets_the_jump(store):
     sweep = Sweep.from_file(scene_path("paper_p3"), STUDY)
-    search = find_critical_velocity(sweep, store, [800, 1000], resolution=50.0, workers=2)
+    search = find_critical_velocity(sweep, store, [800, 1000], resolution=50.0, pool=QUIET)
     low, high = search.bracket
     assert 800 <= low < high <= 1000 and high - low <= 50
-    by_speed = {row["speed"]: row for row in search.indicator}
+    by_speed = {run.speed: run for run in search.indicator}
     # the two ends of the final bracket sit on either side of the jump
-    assert not is_unstable(by_speed[low]["axis_angle_change"])
-    assert is_unstable(by_speed[high]["axis_angle_change"])
+    assert not is_unstable(by_speed[low].axis_angle_change)
+    assert is_unstable(by_speed[high].axis_angle_change)
+    assert search.as_dict()["indicator"][0]["speed"] == 800
     assert search.critical_velocity == pytest.approx(0.5 * (low + high))
 
 
 def test_convergent_velocity_barely_moves_with_the_threshold(store):
     """In an unstable run the attack angle collapses: 0.05 to 1 degree moves the speed by < 2 %."""
-    sweep = Sweep.from_file(scene_path("paper_p3"), STUDY + ["impact.speed=1000"])
-    values = [measure_convergent_velocity(sweep, store, threshold, workers=1).characteristic_convergent_velocity
+    sweep = Sweep.from_file(scene_path("paper_p3"), {**STUDY, "impact.speed": 1000})
+    values = [measure_convergent_velocity(sweep, store, threshold, pool=SERIAL).characteristic_convergent_velocity
               for threshold in (0.05, 0.1, 0.5, 1.0)]
     assert all(v is not None for v in values)
     assert (max(values) - min(values)) / min(values) < 0.02
 
 
 def test_convergent_raises_a_stable_scene_and_says_so(store):
-    sweep = Sweep.from_file(scene_path("paper_p3"), STUDY + ["impact.speed=800"])
-    result = measure_convergent_velocity(sweep, store, 0.1, raise_factor=1.25, workers=1)
-    assert not result.runs[0]["unstable"] and result.runs[-1]["unstable"]
+    sweep = Sweep.from_file(scene_path("paper_p3"), {**STUDY, "impact.speed": 800})
+    result = measure_convergent_velocity(sweep, store, 0.1, raise_factor=1.25, pool=SERIAL)
+    assert not result.runs[0].unstable and result.runs[-1].unstable
     assert "raised the impact speed" in result.message
-    assert result.characteristic_convergent_velocity < result.runs[-1]["speed"]
+    assert result.characteristic_convergent_velocity < result.runs[-1].speed
 
 
 def test_cli_convergent_json(store):

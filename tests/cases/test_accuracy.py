@@ -3,8 +3,9 @@
 import numpy as np
 
 from cases import scene_path
-from cases.accuracy import _pareto, accuracy_study
-from cases.sweep import RunStore
+from cases.run import RunStore
+from cases.studies import Pool
+from cases.studies.accuracy import _pareto, accuracy_study
 
 
 def test_pareto_front():
@@ -14,9 +15,9 @@ def test_pareto_front():
 
 
 def test_normal_impact_uses_the_exact_reference(tmp_path):
-    table, reference = accuracy_study(scene_path("forrestal_luk_test2"), [], RunStore(tmp_path / "s"),
+    table, reference = accuracy_study(scene_path("forrestal_luk_test2"), None, RunStore(tmp_path / "s"),
                                       tmp_path / "out", sizes=(0.04, 0.02), steps=(8e-5, 4e-5), rtols=(1e-4,),
-                                      workers=2, progress=False, quadrature_orders=(4,))
+                                      pool=Pool(workers=2, progress=False), quadrature_orders=(4,))
     assert reference["kind"].startswith("1-D integration")
     # mesh axis 2 sizes x 2 orders x 2 normal models, quadrature axis 2 sizes x 1 order, time axis
     # one more step and one tolerance, combined axis the one size x step pair not yet run, and the

@@ -6,11 +6,10 @@ import math
 import numpy as np
 import pytest
 
-from cases import history_table, load_scene, run_scene, scene_path, summary
-from cases.reference import axial_depth_1d, closed_form_depth
-from cases.runner import initial_state, prepare_projectile, resolve_law
-from dynamics import State
-from dynamics.simulate import ENERGY_TOLERANCE
+from cases import history_table, load_scene, prepare_projectile, run_scene, scene_path, summarise
+from cases.run import initial_state
+from cases.studies.reference import axial_depth_1d, closed_form_depth
+from dynamics import ENERGY_TOLERANCE, State
 from dynamics.quaternion import from_rotation_matrix, multiply
 
 TABLE3 = {  # test: (paper's prediction of the distance travelled, m)
@@ -21,7 +20,8 @@ TABLE3 = {  # test: (paper's prediction of the distance travelled, m)
 
 @functools.lru_cache(maxsize=None)
 def _run(name, *overrides):
-    scene = load_scene(scene_path(name), list(overrides))
+    """Run a shipped scene with (key, value) overrides, once per test session."""
+    scene = load_scene(scene_path(name), overrides)
     result = run_scene(scene)
     return result, history_table(result)
 
@@ -29,7 +29,7 @@ def _run(name, *overrides):
 def test_normal_impact_matches_the_1d_integration_and_closed_form():
     result, history = _run("forrestal_luk_test2")
     scene = result.scene
-    profile, law, mass = result.prepared.profile, resolve_law(scene.target.law), result.prepared.mass.mass
+    profile, law, mass = result.prepared.profile, scene.target.build(), result.prepared.mass.mass
     stop = scene.numerics.stop_speed
     reference, v_embedded = axial_depth_1d(profile, law, mass, scene.impact.speed, stop)
     depth = history["tip_depth"].max()
@@ -49,9 +49,9 @@ def test_normal_impact_matches_the_1d_integration_and_closed_form():
 @pytest.mark.parametrize("name", sorted(TABLE3))
 def test_table3_path_lengths_within_2_percent_of_the_paper(name):
     result, history = _run(name)
-    record = summary(result, history)
-    assert record["end_reason"] == "stopped"
-    assert record["path_length"] == pytest.approx(TABLE3[name], rel=0.02)
+    record = summarise(result, history)
+    assert record.end_reason == "stopped"
+    assert record.path_length == pytest.approx(TABLE3[name], rel=0.02)
 
 
 @pytest.mark.parametrize("name", ["forrestal_luk_test3", "forrestal_luk_test5"])
@@ -86,8 +86,7 @@ def test_zero_disturbance_stays_straight():
 
 
 def test_rotating_the_scene_about_the_normal_rotates_the_trajectory():
-    name, coarse = "forrestal_luk_test5", "numerics.mesh_size=0.02"
-    scene = load_scene(scene_path(name), [coarse])
+    scene = load_scene(scene_path("forrestal_luk_test5"), {"numerics.mesh_size": 0.02})
     start = initial_state(scene, prepare_projectile(scene))
     angle = math.radians(37.0)
     c, s = math.cos(angle), math.sin(angle)
@@ -108,7 +107,7 @@ def test_energy_guard_keeps_coarse_steps_dissipative():
     gains energy and the run stops.  It still creeps near rest before it stops
     (a known artefact of steps this coarse: see docs/numerics.md).
     """
-    coarse = ["numerics.mesh_size=0.03", "numerics.time_step=1e-4"]
+    coarse = [("numerics.mesh_size", 0.03), ("numerics.time_step", 1e-4)]
 
     def energy(*extra):
         result, _ = _run("forrestal_luk_test5", *coarse, *extra)
@@ -117,7 +116,7 @@ def test_energy_guard_keeps_coarse_steps_dissipative():
         kinetic += 0.5 * np.einsum("ni,ij,nj->n", tr.angular_velocity, mass.inertia, tr.angular_velocity)
         return kinetic, tr
 
-    raw, raw_run = energy("numerics.energy_guard=false", "numerics.time_limit=0.2")
+    raw, raw_run = energy(("numerics.energy_guard", False), ("numerics.time_limit", 0.2))
     guarded, guarded_run = energy()
     assert np.diff(raw).max() > 0 and raw_run.end_reason == "time_limit"
     assert np.max(np.diff(guarded) / guarded[:-1]) <= ENERGY_TOLERANCE and guarded_run.end_reason == "stopped"
@@ -128,9 +127,25 @@ def test_runs_warn_when_the_numerics_do_not_suit_the_scene():
     """3000 m/s with a 1-degree attack angle at the shipped test-2 step (2e-4 s) makes the energy guard
     retake more steps than it takes (the shank's chatter near rest); the summary says so. The shipped
     scene itself carries no warning."""
-    coarse, _ = _run("forrestal_luk_test2", "impact.speed=3000", "impact.attack_angle=1", "numerics.mesh_size=0.04")
-    record = summary(coarse)
-    assert record["energy_rejections"] > 0.1 * record["steps"]
-    assert any("energy guard" in text for text in record["warnings"])
+    coarse, _ = _run("forrestal_luk_test2", ("impact.speed", 3000), ("impact.attack_angle", 1),
+                     ("numerics.mesh_size", 0.04))
+    record = summarise(coarse)
+    assert record.energy_rejections > 0.1 * record.steps
+    assert any("energy guard" in text for text in record.warnings)
     shipped, history = _run("forrestal_luk_test2")
-    assert summary(shipped, history)["warnings"] == []
+    assert summarise(shipped, history).warnings == []
+
+
+def test_the_summary_is_typed_with_units_and_round_trips_through_json():
+    """What the command line, the run store, the studies and the paper read: one model with a unit per number."""
+    from cases.run import RunSummary
+
+    result, history = _run("forrestal_luk_test2")
+    summary = summarise(result, history)
+    assert RunSummary.model_fields["depth"].json_schema_extra["unit"] == "m"
+    assert all(f.json_schema_extra and "unit" in f.json_schema_extra for name, f in RunSummary.model_fields.items()
+               if f.annotation in (float, int) or name in ("depth", "wall_time", "final_position"))
+    record = summary.record()
+    assert RunSummary.from_record({**record, "scene_resolved": {}}) == summary
+    nan_free = summary.model_copy(update={"final_speed": math.nan}).record()
+    assert nan_free["final_speed"] is None and math.isnan(RunSummary.from_record(nan_free).final_speed)

@@ -5,12 +5,12 @@ import functools
 import numpy as np
 import pytest
 
-from cases import load_scene, run_scene, scene_path, summary
-from cases.reference import axial_depth_1d, embedded_axial_force
-from cases.runner import resolve_law
+from cases import load_scene, run_scene, scene_path, summarise
+from cases.studies.reference import axial_depth_1d, embedded_axial_force
 from fem_loads import DAFLLoads, mass_properties, resistance_law, surface_quadrature
 from mesh import (BODY, BluntOgiveNose, ConeNose, OgiveNose, Profile, ProjectileGeometry, SecantOgiveNose,
-                  analytic_mass_properties, cached_mesh)
+                  analytic_mass_properties)
+from support import meshed
 
 NOSES = {
     "tangent ogive CRH 5": OgiveNose(5.0),
@@ -26,7 +26,7 @@ DOWN = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
 @functools.lru_cache(maxsize=None)
 def _meshed(name):
     profile = Profile(0.155, 0.93, NOSES[name])
-    mesh = cached_mesh(ProjectileGeometry(profile), 0.01, 2)
+    mesh = meshed(ProjectileGeometry(profile), 0.01, 2)
     mass = mass_properties(mesh, {BODY: 1.0})
     return profile, mesh, mass
 
@@ -67,8 +67,8 @@ def test_embedded_axial_force_matches_the_nose_factors(name, friction):
 
 def test_blunt_normal_impact_matches_the_1d_integration():
     scene = load_scene(scene_path("forrestal_luk_test2"),
-                       ['projectile.nose={shape = "blunt", crh = 3.0, flat_radius = 0.01}'])
+                       {"projectile.nose": {"shape": "blunt", "crh": 3.0, "flat_radius": 0.01}})
     result = run_scene(scene)
-    reference, _ = axial_depth_1d(result.prepared.profile, resolve_law(scene.target.law),
+    reference, _ = axial_depth_1d(result.prepared.profile, scene.target.build(),
                                   result.prepared.mass.mass, 280.0, scene.numerics.stop_speed)
-    assert summary(result)["depth"] == pytest.approx(reference, rel=1e-3)
+    assert summarise(result).depth == pytest.approx(reference, rel=1e-3)

@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from cases import apply_overrides, history_table, run_scene, scene_from_dict, scene_path, summary
-from cases.scene import read_toml
-from cases.reference import embedded_axial_force, nose_factors
+from cases import history_table, load_scene, run_scene, scene_path, summarise
+from cases.studies.reference import embedded_axial_force, nose_factors
 from fem_loads import DAFLLoads, mass_properties, resistance_law, surface_quadrature
 from fem_loads.target import FreeSurface, Friction, LayeredTarget
-from mesh import BODY, ConeNose, OgiveNose, Profile, ProjectileGeometry, cached_mesh
+from mesh import BODY, ConeNose, OgiveNose, Profile, ProjectileGeometry
+from support import meshed
 
 SOIL = resistance_law("soil")
 DOWN = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
@@ -22,12 +22,12 @@ PROFILES = {
     "Forrestal-Luk CRH 3": Profile(0.0952, 1.4, OgiveNose(3.0)),
     "cone 12.92 deg": Profile(0.155, 0.93, ConeNose(12.92)),
 }
-COARSE = ["numerics.mesh_size=0.02"]
+COARSE = (("numerics.mesh_size", 0.02),)
 
 
 @functools.lru_cache(maxsize=None)
 def _quadrature(profile):
-    mesh = cached_mesh(ProjectileGeometry(profile), 0.01, 2)
+    mesh = meshed(ProjectileGeometry(profile), 0.01, 2)
     return surface_quadrature(mesh, mass_properties(mesh, {BODY: 1.0}).centre, profile, "exact")
 
 
@@ -71,14 +71,18 @@ def test_capped_friction_is_the_cap_times_the_sliding_area():
     assert extra == pytest.approx(cap * side, rel=5e-3)
 
 
+def _thaw(value):
+    """Tuples of pairs back to tables and tuples to arrays (the cache below needs hashable arguments)."""
+    if isinstance(value, tuple) and value and all(isinstance(v, tuple) and len(v) == 2 and isinstance(v[0], str)
+                                                 for v in value):
+        return {k: _thaw(v) for k, v in value}
+    return [_thaw(v) for v in value] if isinstance(value, tuple) else value
+
+
 @functools.lru_cache(maxsize=None)
-def _run(name, *overrides, layers=None):
-    data = apply_overrides(read_toml(scene_path(name)), list(overrides))
-    if layers is not None:  # a layered target replaces the scene's homogeneous law
-        del data["target"]["law"]
-        data["target"]["layers"] = [{k: dict(v) if isinstance(v, tuple) else v for k, v in layer}
-                                    for layer in layers]
-    result = run_scene(scene_from_dict(data))
+def _run(name, *overrides):
+    """Run a shipped scene with (key, value) overrides; a ``target.layers`` override replaces its law."""
+    result = run_scene(load_scene(scene_path(name), [(k, _thaw(v)) for k, v in overrides]))
     return result, history_table(result)
 
 
@@ -87,22 +91,23 @@ SOFT_OVER_STIFF = ((("thickness", 2.0), ("law", "soil")), (("law", STIFF),))
 
 
 def test_friction_lowers_depth():
-    plain = summary(*_run("forrestal_luk_test2", *COARSE))
-    rough = summary(*_run("forrestal_luk_test2", *COARSE, "effects.friction.model=coulomb"))
-    assert rough["depth"] < 0.9 * plain["depth"]
+    plain = summarise(*_run("forrestal_luk_test2", *COARSE))
+    rough = summarise(*_run("forrestal_luk_test2", *COARSE, ("effects.friction.model", "coulomb")))
+    assert rough.depth < 0.9 * plain.depth
 
 
 def test_two_layers_of_one_law_are_the_homogeneous_target():
     one, _ = _run("forrestal_luk_test5", *COARSE)
-    two, _ = _run("forrestal_luk_test5", *COARSE, layers=((("thickness", 2.0), ("law", "soil")), (("law", "soil"),)))
+    two, _ = _run("forrestal_luk_test5", *COARSE,
+                  ("target.layers", ((("thickness", 2.0), ("law", "soil")), (("law", "soil"),))))
     np.testing.assert_allclose(two.trajectory.position, one.trajectory.position, rtol=0, atol=1e-12)
     np.testing.assert_allclose(two.trajectory.velocity, one.trajectory.velocity, rtol=1e-13, atol=1e-10)
 
 
 def test_a_stiffer_layer_decelerates_faster():
     soft, soft_h = _run("forrestal_luk_test2", *COARSE)
-    layered, layered_h = _run("forrestal_luk_test2", *COARSE, layers=SOFT_OVER_STIFF)
-    assert summary(layered, layered_h)["depth"] < summary(soft, soft_h)["depth"]
+    layered, layered_h = _run("forrestal_luk_test2", *COARSE, ("target.layers", SOFT_OVER_STIFF))
+    assert summarise(layered, layered_h).depth < summarise(soft, soft_h).depth
     # identical until the nose reaches the interface, then a larger deceleration
     before = soft_h["tip_depth"] < 1.9
     n = int(before.sum())
@@ -118,7 +123,7 @@ def test_crossing_into_a_stiffer_layer_at_an_angle_turns_away_from_the_normal():
     extra axial drag first pulls the velocity towards the axis, which then trails it by 0.2
     degree; the path after the interface, start to stop, is the robust measure.)"""
     _, homogeneous = _run("forrestal_luk_test3", *COARSE)
-    _, crossing = _run("forrestal_luk_test3", *COARSE, layers=SOFT_OVER_STIFF)
+    _, crossing = _run("forrestal_luk_test3", *COARSE, ("target.layers", SOFT_OVER_STIFF))
 
     def direction_after_interface(h):
         i = int(np.searchsorted(h["tip_depth"].to_numpy(), 2.0))
@@ -132,17 +137,17 @@ def test_crossing_into_a_stiffer_layer_at_an_angle_turns_away_from_the_normal():
 def test_free_surface_reduction_deepens_the_path():
     factor = FreeSurface(0.5, 0.2).factor(np.array([-1.0, 0.0, 0.25, 0.5, 2.0]))
     np.testing.assert_allclose(factor, [0.2, 0.2, 0.6, 1.0, 1.0])
-    plain = summary(*_run("forrestal_luk_test2", *COARSE))
-    reduced = summary(*_run("forrestal_luk_test2", *COARSE, "effects.free_surface.depth=0.5"))
-    assert reduced["depth"] > plain["depth"] + 0.05
+    plain = summarise(*_run("forrestal_luk_test2", *COARSE))
+    reduced = summarise(*_run("forrestal_luk_test2", *COARSE, ("effects.free_surface.depth", 0.5)))
+    assert reduced.depth > plain.depth + 0.05
 
 
 def test_gravity_adds_the_weight():
     plain, _ = _run("forrestal_luk_test2", *COARSE)
-    heavy, _ = _run("forrestal_luk_test2", *COARSE, "effects.gravity=true")
+    heavy, _ = _run("forrestal_luk_test2", *COARSE, ("effects.gravity", True))
     mass = plain.prepared.mass.mass
     np.testing.assert_allclose(heavy.trajectory.force[0], plain.trajectory.force[0] + [0, 0, -9.80665 * mass])
-    assert summary(heavy)["depth"] > summary(plain)["depth"]
+    assert summarise(heavy).depth > summarise(plain).depth
 
 
 def test_layers_pick_the_law_by_depth():
@@ -171,7 +176,7 @@ def _friction_by_points(loads, position, velocity, rotation, omega):
 @pytest.mark.parametrize("cap", [None, 5e6])
 def test_fast_friction_sums_equal_the_pointwise_definition(cap):
     profile = PROFILES["paper CRH 5"]
-    mesh = cached_mesh(ProjectileGeometry(profile), 0.03, 2)
+    mesh = meshed(ProjectileGeometry(profile), 0.03, 2)
     quadrature = surface_quadrature(mesh, mass_properties(mesh, {BODY: 1.0}).centre, profile, "exact")
     with_friction = DAFLLoads(quadrature, SOIL, friction=Friction(0.2, cap))
     without = DAFLLoads(quadrature, SOIL)

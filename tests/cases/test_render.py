@@ -1,4 +1,4 @@
-"""Off-screen renderings, the animation and the ParaView files of the resistance field (cases.render).
+"""Off-screen renderings, the animation and the ParaView files of the resistance field (cases.viz).
 
 The scenes are projectile #3 on a coarse mesh (40 mm, RK4 at 40 us): a 1120 m/s run with
 1 degree of attack (unstable: the attack angle peaks near 16 degrees, then converges) and a
@@ -21,26 +21,30 @@ from PIL import Image
 from scipy.spatial import cKDTree
 
 from cases import load_scene, run_scene, scene_path
-from cases.fields import default_station, ring_stress
-from cases.render import (FieldEvaluator, FrameRenderer, key_instants, render_animation, render_snapshots,
-                          render_trajectory, resolve_instants, rss_bytes, write_paraview)
-from cases.runner import resolve_law
+from cases.scene import InputError
+from cases.viz.field import FieldEvaluator, key_instants, resolve_instants
+from cases.viz.frames import FrameRenderer, render_animation, render_snapshots
+from cases.viz.panels import default_station, ring_stress
+from cases.viz.paraview import write_paraview
+from cases.viz.trajectory import render_trajectory
+from support import rss_bytes
 
-COARSE = ["numerics.mesh_size=0.04", "numerics.time_step=4e-5"]
+COARSE = {"numerics.mesh_size": 0.04, "numerics.time_step": 4e-5}
+COARSE_SET = ["numerics.mesh_size=0.04", "numerics.time_step=4e-5"]
 
 
 @pytest.fixture(scope="module")
 def unstable():
     """Projectile #3 at 1120 m/s, 1 degree attack: the whole run."""
-    scene = load_scene(scene_path("paper_p3"), ["impact.speed=1120", *COARSE])
+    scene = load_scene(scene_path("paper_p3"), {"impact.speed": 1120, **COARSE})
     return FieldEvaluator(run_scene(scene))
 
 
 @pytest.fixture(scope="module")
 def axial():
     """Projectile #3 at 1120 m/s straight along its axis, until the nose and 0.4 m more are in."""
-    scene = load_scene(scene_path("paper_p3"), ["impact.speed=1120", "impact.attack_angle=0",
-                                                 "numerics.time_limit=0.0007", *COARSE])
+    scene = load_scene(scene_path("paper_p3"), {"impact.speed": 1120, "impact.attack_angle": 0,
+                                                "numerics.time_limit": 0.0007, **COARSE})
     return FieldEvaluator(run_scene(scene))
 
 
@@ -119,13 +123,13 @@ def test_default_instants(unstable):
     assert labelled[0] == ("peak attack angle", rows["peak"])
     assert ev.result.trajectory.time[labelled[1][1]] == pytest.approx(0.01, abs=2.1e-5)
     for bad in (["soon"], ["1.0"]):
-        with pytest.raises(ValueError, match="--times"):
+        with pytest.raises(InputError, match="--times"):
             resolve_instants(ev, bad)
 
 
 def test_axial_motion_has_no_peak_or_convergence_by_default(axial):
     assert list(key_instants(axial)) == ["embedded", "end"]
-    with pytest.raises(ValueError, match="no such instant"):
+    with pytest.raises(InputError, match="no such instant"):
         resolve_instants(axial, ["converged"])
 
 
@@ -215,9 +219,9 @@ def test_snapshots_are_images_of_the_field(unstable, tmp_path):
 
 
 def test_friction_adds_the_tangential_stress_panel(tmp_path):
-    scene = load_scene(scene_path("paper_p3"), ["impact.speed=1120", "numerics.time_limit=0.001",
-                                                 "effects.friction.model=coulomb", "effects.friction.coefficient=0.1",
-                                                 *COARSE])
+    scene = load_scene(scene_path("paper_p3"), {"impact.speed": 1120, "numerics.time_limit": 0.001,
+                                                "effects.friction.model": "coulomb",
+                                                "effects.friction.coefficient": 0.1, **COARSE})
     ev = FieldEvaluator(run_scene(scene))
     fld = ev.at(-1)
     assert fld.tau is not None and fld.tau.max() > 0
@@ -312,7 +316,7 @@ def test_ring_stress_on_the_nose_is_the_closed_form_and_the_shank_windward(axial
     """On the nose in axial motion sigma_n = A sigma_0 + B rho_0 (V n_x)^2 all round; at an attack angle the
     shank is loaded on the windward side (theta = 0) only."""
     ev = axial
-    law = resolve_law(ev.result.scene.target.law)
+    law = ev.result.scene.target.build()
     profile = ev.prepared.profile
     station = 0.5 * profile.nose_length
     row = len(ev) - 1
@@ -328,14 +332,14 @@ def test_ring_stress_on_the_nose_is_the_closed_form_and_the_shank_windward(axial
     theta, sigma = ring_stress(ev, key_instants(ev)["peak"], default_station(ev.prepared))
     assert sigma[0] == sigma.max() > 0
     assert np.all(sigma[np.abs(theta - np.pi) < np.pi / 2 - 0.05] == 0.0)
-    with pytest.raises(ValueError, match="station"):
+    with pytest.raises(InputError, match="station"):
         ring_stress(ev, 0, 2.0)
 
 
 def test_render_command(tmp_path):
     out = tmp_path / "render"
     args = [sys.executable, "-m", "cases.cli", "render", str(scene_path("paper_p3")), "--set", "impact.speed=1120",
-            "--set", "numerics.time_limit=0.004", *[a for s in COARSE for a in ("--set", s)],
+            "--set", "numerics.time_limit=0.004", *[a for s in COARSE_SET for a in ("--set", s)],
             "--times", "embedded,0.002,end", "--out", str(out), "--paraview", "--steps", "3", "--animation",
             "--frames", "3", "--size", "640x320", "--json"]
     done = subprocess.run(args, capture_output=True, text=True, timeout=300)
