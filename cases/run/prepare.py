@@ -52,7 +52,8 @@ def cached_mesh(geometry: ProjectileGeometry, size: float, order: int = 2) -> Pr
     A sweep therefore meshes each projectile once.  Writes are atomic, so concurrent
     workers at worst mesh the same projectile twice; a corrupt entry is meshed again.
     """
-    inputs = {"geometry": dataclasses.asdict(geometry), "nose": type(geometry.profile.nose).__name__, "size": size, "order": order}
+    inputs = {"geometry": dataclasses.asdict(geometry), "nose": type(geometry.profile.nose).__name__, "size": size,
+              "order": order}
     path = ContentCache(cache_dir()).path("mesh", inputs, ".vtu")
     if path.exists():
         try:

@@ -6,13 +6,15 @@ physics object: ``NoseSpec.build()``, ``LawSpec.build()``, ``Projectile.geometry
 """
 
 from .errors import InputError, SceneError, one_line
-from .load import Overrides, apply_overrides, dotted_key, load_scene, parse_override, read_toml, scene_from_dict, scene_key
+from .load import (Overrides, apply_overrides, dotted_key, load_scene, parse_override, read_toml, scene_from_dict,
+                   scene_key)
 from .projectile import Projectile
 from .schema import Impact, Numerics, Outputs, Scene
 from .target import Effects, Target, build_law
 
 __all__ = [
     "Scene", "Projectile", "Target", "Effects", "Impact", "Numerics", "Outputs", "build_law",
-    "load_scene", "scene_from_dict", "apply_overrides", "dotted_key", "parse_override", "read_toml", "scene_key", "Overrides",
+    "load_scene", "scene_from_dict", "apply_overrides", "dotted_key", "parse_override", "read_toml", "scene_key",
+    "Overrides",
     "InputError", "SceneError", "one_line",
 ]

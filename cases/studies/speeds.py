@@ -151,7 +151,8 @@ def find_critical_velocities(bases: Sequence[Sweep], store: RunStore, speeds: Se
                 continue
             mid = values[0]
             low, high = brackets[i]
-            if abs(log_indicator(i, mid) - log_indicator(i, low)) <= abs(log_indicator(i, mid) - log_indicator(i, high)):
+            to_low = abs(log_indicator(i, mid) - log_indicator(i, low))
+            if to_low <= abs(log_indicator(i, mid) - log_indicator(i, high)):
                 brackets[i] = [mid, high]
             else:
                 brackets[i] = [low, mid]

@@ -57,3 +57,28 @@ def test_bad_input_is_one_line_and_exit_2(args, message, tmp_path):
 def test_missing_scene_file(tmp_path):
     done = penetrate("run", str(tmp_path / "nope.toml"))
     assert done.returncode == 2 and "cannot read the scene file" in done.stderr
+
+
+def test_an_override_replaces_the_scene_files_alternative(tmp_path):
+    """``--set target.layers=[...]`` on a scene that names ``target.law`` means the layers instead."""
+    done = penetrate("run", str(scene_path("forrestal_luk_test2")), *FAST, "--json", "--out", str(tmp_path / "o"),
+                     "--set", 'target.layers=[{thickness = 2.0, law = "soil"}, {law = "softer_soil"}]')
+    assert done.returncode == 0, done.stderr
+    resolved = json.loads((tmp_path / "o" / "summary.json").read_text())["scene_resolved"]["target"]
+    assert [layer["law"] for layer in resolved["layers"]] == ["soil", "softer_soil"]
+    plain = json.loads(penetrate("run", str(scene_path("forrestal_luk_test2")), *FAST, "--json").stdout)
+    assert json.loads(done.stdout)["depth"] > plain["depth"]  # the softer soil below 2 m
+
+
+def test_compare_says_where_it_wrote(tmp_path):
+    out = tmp_path / "cmp"
+    done = penetrate("compare", str(scene_path("forrestal_luk_test2")), *FAST, "--set", "numerics.time_limit=0.002",
+                     "--laws", "soil,softer_soil", "--out", str(out), "--store", str(tmp_path / "s"),
+                     "--no-progress", "--workers", "1")
+    assert done.returncode == 0, done.stderr
+    written = [line for line in done.stdout.splitlines() if line.startswith("written")]
+    assert written and all(str(out / name) in written[0] for name in ("compare.md", "compare.csv", "compare.png"))
+    assert {p.name for p in out.iterdir()} == {"compare.md", "compare.csv", "compare.png"}
+    bad = penetrate("compare", str(scene_path("forrestal_luk_test2")), "--laws", "soil,clay", "--out",
+                    str(tmp_path / "bad"), "--store", str(tmp_path / "s2"), "--no-progress")
+    assert bad.returncode == 2 and "--laws: law = 'clay'" in bad.stderr and not (tmp_path / "bad").exists()

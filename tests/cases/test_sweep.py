@@ -208,7 +208,8 @@ def test_a_worker_running_other_code_is_refused(tmp_path, monkeypatch):
 
 def test_listed_variations_combine_with_a_grid(tmp_path):
     listing = tmp_path / "runs.toml"
-    listing.write_text('[[run]]\n"impact.speed" = 1000\n\n[[run]]\n"impact.speed" = 1100\n"impact.attack_angle" = 5.0\n')
+    listing.write_text('[[run]]\n"impact.speed" = 1000\n\n'
+                       '[[run]]\n"impact.speed" = 1100\n"impact.attack_angle" = 5.0\n')
     args = [sys.executable, "-m", "cases.cli", "sweep", str(scene_path("paper_p3")), "--list", str(listing),
             "--grid", "impact.oblique_angle=0,10", "--store", str(tmp_path / "s"), "--out", str(tmp_path / "t.csv"),
             "--no-progress", "--workers", "2"]

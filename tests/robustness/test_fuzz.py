@@ -447,7 +447,8 @@ def test_no_expression_in_a_scene_is_evaluated(scratch, monkeypatch):
     assert not Path("PWNED").exists()
     assert "PWNED" in " ".join(WORDS)  # the fuzzers above feed this expression everywhere
     with pytest.raises(SceneError, match="impact.speed = .*input should be a valid number"):
-        load_scene(scene_path("forrestal_luk_test2"), [parse_override("impact.speed=__import__('os').system('touch PWNED')")])
+        load_scene(scene_path("forrestal_luk_test2"),
+                   [parse_override("impact.speed=__import__('os').system('touch PWNED')")])
     assert not Path("PWNED").exists()
 
 

@@ -197,7 +197,8 @@ def test_writes_interrupted_at_every_step(tmp_path):
 
 
 def test_one_or_two_workers_give_identical_bits(tmp_path):
-    sweep = _sweep(TINY + ["numerics.time_limit=0.004", "impact.attack_angle=3"], grid({"impact.speed": [250, 300, 350]}))
+    sweep = _sweep(TINY + ["numerics.time_limit=0.004", "impact.attack_angle=3"],
+                   grid({"impact.speed": [250, 300, 350]}))
     stores = {n: RunStore(tmp_path / f"w{n}") for n in (1, 2)}
     one, two = (run_sweep(sweep, stores[n], Pool(workers=n, progress=False)).table() for n in (1, 2))
     pd.testing.assert_frame_equal(one.drop(columns=list(VOLATILE)), two.drop(columns=list(VOLATILE)),

@@ -126,7 +126,8 @@ def test_imports_flow_one_way():
 
 
 def test_nothing_imports_the_command_line():
-    users = [m for m, targets in GRAPH.items() if room(m) != "cases.cli" and any(room(t) == "cases.cli" for t in targets)]
+    users = [m for m, targets in GRAPH.items()
+             if room(m) != "cases.cli" and any(room(t) == "cases.cli" for t in targets)]
     assert not users
 
 
