@@ -4,13 +4,24 @@ For each surface quadrature point with outward normal ``n`` at ``r`` from the
 centre of mass, moving with ``u = V + omega x r``:
 
 * ``Vn = u . n`` (positive when the element pushes into the target);
-* ``sigma_n = f(Vn)`` when ``Vn > 0`` and the point lies inside the target,
-  else 0 (the target separates from surfaces that move away from it);
+* ``sigma_n = f(Vn) c(Vn) e(Z)`` with ``f(Vn) = A sigma_0 + B rho_0 Vn^2``: the
+  contact factor ``c`` is 0 for ``Vn <= 0`` (the target separates from surfaces
+  that move away from it) and 1 from ``Vn >= w`` (``contact_width``), the entry
+  factor ``e`` is 1 for a point a distance ``l/2`` below the surface and 0 for
+  one ``l/2`` above it (``l``: the point's own extent, ``entry_smoothing``
+  times the square root of its quadrature weight);
 * ``dF = -sigma_n n dS``, ``F = sum dF``, ``M = sum r x dF``.
 
+Both factors are the smooth step of :mod:`fem_loads.ramps`, so the load is a
+continuous (Lipschitz, twice differentiable) function of the state; with
+``w = 0`` and ``l = 0`` they are the sharp switches of the paper's law (then a
+point carries stress only when ``Vn > guard (|V| + |omega| r_max)``, see
+``normal_velocity_guard``).  docs/model.md argues both widths and the
+convergence to the sharp law as they go to zero.
+
 The target is the half-space ``Z < 0`` of the world frame (``Z`` up).  All
-per-point work is a few matrix-vector products over arrays cached at
-construction, so nothing is reassembled per evaluation.
+per-point work is a few passes over arrays cached at construction, so nothing
+is reassembled per evaluation.
 
 Optional effects (:mod:`fem_loads.target`): layered targets, a free-surface
 reduction, friction ``dF = -(sigma_n n + tau t) dS`` and, for comparison,
@@ -24,11 +35,8 @@ per-point quantity is computed as four rows, one per mirror image of the
 quarter ``y > 0, z > 0``, and the resultant folds the images' sums in mirrored
 pairs (:mod:`fem_loads.images`).  A state symmetric about a plane then gives
 exactly equal stresses on mirrored points, their differences are exactly zero
-and the load is exactly symmetric, whatever the summation order.  Without it,
-round-off of order ``1e-16`` breaks the symmetry of a straight normal impact
-and grows, once the projectile is slow, through the jump of the stress at
-``Vn = 0`` on the shank (docs/numerics.md, Hard cases).  The friction load is
-summed over all points in their own order (not exactly symmetric).
+and the load is exactly symmetric, whatever the summation order.  The friction
+load is summed over all points in their own order (not exactly symmetric).
 """
 
 from __future__ import annotations
@@ -40,6 +48,7 @@ import numpy as np
 
 from .images import MirrorImages
 from .quadrature import SurfaceQuadrature
+from .ramps import smooth_step
 from .resistance import ResistanceLaw
 from .target import FreeSurface, Friction, LayeredTarget
 
@@ -54,8 +63,7 @@ class SurfaceStress(NamedTuple):
     sigma_n : ndarray, shape (n,)
         Normal stress (Pa); 0 where a point is outside the target or separated.
     tau : ndarray, shape (n,) or None
-        Magnitude of the tangential stress (Pa), acting against the local slip; 0 where a
-        point does not slip; None without friction.
+        Magnitude of the tangential stress (Pa), acting against the local slip; None without friction.
     normal_velocity : ndarray, shape (n,)
         ``Vn`` (m/s), positive into the target.
     """
@@ -75,36 +83,42 @@ class DAFLLoads:
     law : ResistanceLaw or LayeredTarget
         Normal stress as a function of the normal velocity (and, for layers, of depth).
     normal_velocity_guard : float
-        Relative guard on ``Vn = 0``: a point carries stress only when
-        ``Vn > guard * (|V| + |omega| r_max)``.  The stress jumps from 0 to
-        ``A sigma_0`` at ``Vn = 0``; on the shank of a projectile moving
-        straight along its axis ``Vn`` is zero up to round-off, and without
-        the guard round-off alone would switch on a lateral load of the order
-        of ``A sigma_0`` times half the shank area.
+        Sharp contact only (``contact_width = 0``): a point carries stress only when
+        ``Vn > guard * (|V| + |omega| r_max)``.  The sharp stress jumps from 0 to
+        ``A sigma_0`` at ``Vn = 0``; on the shank of a projectile moving straight along
+        its axis ``Vn`` is zero up to round-off, which alone would switch on a lateral
+        load of the order of ``A sigma_0`` times half the shank area.
     friction : Friction, optional
         Tangential stress; none by default.
     separation : bool
-        True (default): no stress where ``Vn <= 0``.  False keeps every
-        embedded point in contact, ``max(0, A sigma_0 + B rho_0 Vn |Vn|)``,
-        for comparison; the loads can then do positive work.
+        True (default): no stress where ``Vn <= 0``.  False keeps every embedded point
+        in contact, ``max(0, A sigma_0 + B rho_0 Vn |Vn|)``, for comparison; the loads
+        can then do positive work.
     free_surface : FreeSurface, optional
         Reduction of the normal stress near the surface; none by default.
+    contact_width : float
+        ``w`` (m/s): the normal velocity over which a point's stress rises from 0 (at
+        ``Vn = 0``) to the full law; with friction, the slip speed below which the
+        friction stress fades (its direction is undefined at zero slip).  0: sharp.
+    entry_smoothing : float
+        ``l / sqrt(weight)``: the length over which a point enters the target (and
+        crosses a layer interface), in units of the square root of its quadrature weight
+        (about its own size).  0: sharp.
     """
 
     def __init__(self, quadrature: SurfaceQuadrature, law: ResistanceLaw | LayeredTarget,
                  normal_velocity_guard: float = 1e-9, *, friction: Friction | None = None,
-                 separation: bool = True, free_surface: FreeSurface | None = None) -> None:
-        self.quadrature = quadrature
-        self.law = law
+                 separation: bool = True, free_surface: FreeSurface | None = None, contact_width: float = 0.0,
+                 entry_smoothing: float = 0.0) -> None:
+        if not (contact_width >= 0.0 and entry_smoothing >= 0.0):
+            raise ValueError("contact_width and entry_smoothing must be >= 0")
+        self.quadrature, self.law = quadrature, law
         self.normal_velocity_guard = float(normal_velocity_guard)
-        self.friction = friction
-        self.separation = separation
-        self.free_surface = free_surface
+        self.friction, self.separation, self.free_surface = friction, separation, free_surface
+        self.contact_width, self.entry_smoothing = float(contact_width), float(entry_smoothing)
         q = quadrature
-        # [n | r x n]: one product gives Vn = n.V + (r x n).omega, and the
-        # weighted stresses times it give force and moment together.  Stored
-        # transposed, (6, n): a row-combining product over contiguous rows is
-        # about twice as fast as the (n, 6) matrix-vector product for n ~ 1e4.
+        # [n | r x n]: one product gives Vn = n.V + (r x n).omega, and the weighted stresses times
+        # it give force and moment together; stored transposed, (6, n), for row-combining products
         self._normal_arm = np.ascontiguousarray(np.hstack([q.normals, q.moment_arms]))
         self._normal_arm_t = np.ascontiguousarray(self._normal_arm.T)
         self._points = np.ascontiguousarray(q.points)
@@ -113,32 +127,38 @@ class DAFLLoads:
         self._weights = np.ascontiguousarray(q.weights)
         self._radius2 = np.einsum("ij,ij->i", q.points, q.points)
         self._max_radius = float(np.sqrt(self._radius2.max()))
-        # the plain case (one law, separation, no free surface, no friction): the law folded into the
-        # weights, and work buffers reused by every call, so that an evaluation makes one
-        # pass over the cached arrays and a few in-place passes over n numbers
+        # each point's entry length l: it carries load from l/2 above the surface to its full value l/2 below
+        self._entry_length = self.entry_smoothing * np.sqrt(self._weights)
+        self._half_entry = 0.5 * float(self._entry_length.max()) if len(self._weights) else 0.0
         self._plain = isinstance(law, ResistanceLaw) and separation and free_surface is None and friction is None
-        if self._plain:
-            self._static_weights = law.static_stress * self._weights
-            self._dynamic_weights = law.dynamic_density * self._weights
-        n = len(self._weights)
+        self._setup_buffers()
+
+    def _setup_buffers(self) -> None:
+        """The hot path's arrays (per image, when the quadrature is mirror symmetric) and work buffers."""
         self._generalised = np.empty(6)
-        # mirror-symmetric quadrature: sums over the four images of the quarter (fem_loads.images)
         self._images = None
-        if quadrature.mirror_quarters is not None:
-            self._images = MirrorImages(quadrature.mirror_quarters, self._normal_arm_t, self._points_t)
-            self._weights_q = self._images.quarter(self._weights)
-            if self._plain:
-                self._static_weights = self._images.quarter(self._static_weights)
-                self._dynamic_weights = self._images.quarter(self._dynamic_weights)
+        per_point = {"weights": self._weights}
+        if self.entry_smoothing:
+            per_point["inverse_entry"] = 1.0 / self._entry_length
+        if self._plain:
+            per_point["static"] = self.law.static_stress * self._weights
+            per_point["dynamic"] = self.law.dynamic_density * self._weights
+        n = len(self._weights)
+        if self.quadrature.mirror_quarters is not None:
+            self._images = MirrorImages(self.quadrature.mirror_quarters, self._normal_arm_t, self._points_t)
+            per_point = {name: self._images.quarter(values) for name, values in per_point.items()}
             n = self._images.shape
+        self._hot = per_point
         self._normal_velocity_buffer = np.empty(n)
         self._stress_buffer = np.empty(n)
         self._height_buffer = np.empty(n)
+        self._factor_buffer = np.empty(n)
         self._unloaded = np.empty(n, dtype=bool)
-        self._outside = np.empty(n, dtype=bool)
 
     def __len__(self) -> int:
         return len(self._weights)
+
+    # -- geometry ---------------------------------------------------------------------------------
 
     def heights(self, position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
         """World height ``Z`` (m) of every quadrature point; negative inside the target."""
@@ -147,16 +167,34 @@ class DAFLLoads:
         return self._images.scatter(self._images.heights(position[2], rotation[2], np.empty(self._images.shape)))
 
     def fully_embedded(self, position: np.ndarray) -> bool:
-        """Whether every quadrature point is inside the target, from the bounding sphere alone."""
-        return position[2] + self._max_radius < 0.0
+        """Whether every point carries its full load as far as depth goes (bounding sphere alone)."""
+        return position[2] + self._max_radius + self._half_entry < 0.0
 
     def fully_outside(self, position: np.ndarray) -> bool:
-        """Whether no quadrature point can be inside the target (bounding sphere)."""
-        return position[2] - self._max_radius >= 0.0
+        """Whether no point can carry load (bounding sphere)."""
+        return position[2] - self._max_radius - self._half_entry >= 0.0
 
     def lowest_height(self, position: np.ndarray, rotation: np.ndarray) -> float:
-        """Height of the lowest surface point (m); negative once any point is inside."""
-        return float(self.heights(position, rotation).min())
+        """Height (m) of the lowest point of the loaded band, ``min(Z - l/2)``; negative once any point
+        carries load (with sharp entry, the lowest surface point)."""
+        heights = self.heights(position, rotation)
+        return float((heights - 0.5 * self._entry_length).min() if self.entry_smoothing else heights.min())
+
+    # -- the factors of the switches ---------------------------------------------------------------
+
+    def _contact(self, normal_velocity: np.ndarray, guard: float) -> np.ndarray:
+        """The contact factor ``c(Vn)`` at every point (any layout)."""
+        if self.contact_width:
+            return smooth_step(normal_velocity / self.contact_width)
+        return (normal_velocity > guard).astype(float)
+
+    def _entry(self, heights: np.ndarray) -> np.ndarray:
+        """The entry factor ``e(Z)`` at every point, in point order."""
+        if self.entry_smoothing:
+            return smooth_step(0.5 - heights / self._entry_length)
+        return (heights < 0.0).astype(float)
+
+    # -- per point ---------------------------------------------------------------------------------
 
     def stress(self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray,
                angular_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -178,21 +216,31 @@ class DAFLLoads:
             normal_velocity = self._images.scatter(normal_velocity)
         heights = self.heights(position, rotation)
         if isinstance(self.law, LayeredTarget):
-            static, dynamic = self.law.coefficients(-heights)
+            static, dynamic = self.law.coefficients(-heights, self._entry_length if self.entry_smoothing else None)
         else:
             static, dynamic = self.law.static_stress, self.law.dynamic_density
         if self.separation:
-            stress = static + dynamic * np.square(normal_velocity)
+            stress = (static + dynamic * np.square(normal_velocity)) * self._contact(normal_velocity, guard)
         else:
             # contact everywhere: receding surfaces feel the static pressure less the dynamic term
             stress = np.maximum(static + dynamic * normal_velocity * np.abs(normal_velocity), 0.0)
         if self.free_surface is not None:
             stress = stress * self.free_surface.factor(-heights)
-        loaded = heights < 0.0
-        if self.separation:
-            loaded &= normal_velocity > guard
-        sigma = np.where(loaded, stress, 0.0)
-        return sigma, normal_velocity
+        return stress * self._entry(heights), normal_velocity
+
+    def surface_stress(self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray,
+                       angular_velocity: np.ndarray) -> SurfaceStress:
+        """``sigma_n``, ``tau`` and ``Vn`` at every quadrature point, in point order (see :meth:`stress`).
+
+        The same numbers the load sums: renderings and field plots take them from here
+        instead of evaluating the law again.
+        """
+        sigma, normal_velocity = self.stress(position, velocity, rotation, angular_velocity)
+        tau = None
+        if self.friction is not None:
+            slip, scale = self._slip(normal_velocity, velocity @ rotation, angular_velocity)
+            tau = self.friction.stress(sigma) * scale * slip
+        return SurfaceStress(sigma, tau, normal_velocity)
 
     def _normal_velocity(self, velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray,
                          generalised: np.ndarray) -> tuple[np.ndarray, float]:
@@ -208,6 +256,8 @@ class DAFLLoads:
         if self._images is None:
             return generalised @ self._normal_arm_t, guard
         return self._images.normal_velocity(generalised, self._normal_velocity_buffer), guard
+
+    # -- resultants ----------------------------------------------------------------------------------
 
     def __call__(self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray,
                  angular_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -227,7 +277,7 @@ class DAFLLoads:
         if self._images is None:
             load = -(self._normal_arm_t @ (sigma * self._weights))
         else:
-            load = self._images.negative_resultant(self._images.gather(sigma) * self._weights_q)
+            load = self._images.negative_resultant(self._images.gather(sigma) * self._hot["weights"])
         if self.friction is not None:
             load += self._friction_load(sigma, normal_velocity, velocity @ rotation, angular_velocity)
         return rotation @ load[:3], load[3:]
@@ -236,73 +286,72 @@ class DAFLLoads:
                     angular_velocity: np.ndarray) -> np.ndarray:
         """Force and moment (body frame) of one law with separation: the hot path.
 
-        The same sums as :meth:`stress` then ``-sum sigma w [n | r x n]``, with
-        ``A sigma_0 w`` and ``B rho_0 w`` cached, in-place passes into reused
-        buffers, and the heights skipped while the bounding sphere is wholly in
-        (or out of) the target.
+        The same sums as :meth:`stress` then ``-sum sigma w [n | r x n]``, with ``A sigma_0 w`` and
+        ``B rho_0 w`` cached, in-place passes into reused buffers, and the heights skipped while
+        the bounding sphere is wholly in (or out of) the target.
         """
         if self.fully_outside(position):
             return np.zeros(6)
+        hot = self._hot
         normal_velocity, guard = self._normal_velocity(velocity, rotation, angular_velocity, self._generalised)
         stress = self._stress_buffer
         np.multiply(normal_velocity, normal_velocity, out=stress)
-        stress *= self._dynamic_weights
-        stress += self._static_weights
-        unloaded = np.less_equal(normal_velocity, guard, out=self._unloaded)
+        stress *= hot["dynamic"]
+        stress += hot["static"]
+        factor = self._factor_buffer
+        if self.contact_width:
+            np.multiply(normal_velocity, 1.0 / self.contact_width, out=factor)
+            stress *= smooth_step(factor, out=factor)
+        else:
+            np.copyto(stress, 0.0, where=np.less_equal(normal_velocity, guard, out=self._unloaded))
         if not self.fully_embedded(position):
             heights = (self._images.heights(position[2], rotation[2], self._height_buffer) if self._images is not None
-                       else self.heights(position, rotation))
-            unloaded |= np.greater_equal(heights, 0.0, out=self._outside)
-        np.copyto(stress, 0.0, where=unloaded)
+                       else np.add(position[2], rotation[2] @ self._points_t, out=self._height_buffer))
+            if self.entry_smoothing:
+                np.multiply(heights, hot["inverse_entry"], out=factor)
+                np.subtract(0.5, factor, out=factor)
+                stress *= smooth_step(factor, out=factor)
+            else:
+                np.copyto(stress, 0.0, where=np.greater_equal(heights, 0.0, out=self._unloaded))
         if self._images is not None:
             return self._images.negative_resultant(stress)
         return -(self._normal_arm_t @ stress)
 
-    def surface_stress(self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray,
-                       angular_velocity: np.ndarray) -> SurfaceStress:
-        """``sigma_n``, ``tau`` and ``Vn`` at every quadrature point, in point order (see :meth:`stress`).
-
-        The same numbers the load sums: renderings and field plots take them from here
-        instead of evaluating the law again.
-        """
-        sigma, normal_velocity = self.stress(position, velocity, rotation, angular_velocity)
-        tau = None
-        if self.friction is not None:
-            _, moving, _ = self._slip(normal_velocity, velocity @ rotation, angular_velocity)
-            tau = np.where(moving, self.friction.stress(sigma), 0.0)
-        return SurfaceStress(sigma, tau, normal_velocity)
-
     def _slip(self, normal_velocity: np.ndarray, velocity_body: np.ndarray,
-              angular_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The slip speed ``|s_i|`` at every point, whether it counts as slipping, and ``r_i . omega``.
+              angular_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The slip speed ``|s_i|`` at every point and the factor ``k_i`` that gives the friction
+        stress's share along the slip: ``tau_i k_i s_i`` is the tangential stress vector.
 
         ``s_i = V + omega x r_i - Vn_i n_i``, with ``|s|^2 = |u|^2 - Vn^2`` and
         ``|u|^2 = |V|^2 + 2 r . (V x omega) + |omega|^2 |r|^2 - (omega . r)^2`` (no per-point
-        cross products).  A point slips when ``|s|`` exceeds ``1e-12 |V|``: at zero slip the
-        direction of the friction stress is undefined, and it carries none.
+        cross products).  With a contact width ``w`` the direction fades below ``w`` of slip,
+        ``k = 1 / sqrt(|s|^2 + w^2)``, so the stress is continuous through zero slip; sharp,
+        ``k = 1/|s|`` where ``|s| > 1e-12 |V|`` and 0 elsewhere (the direction is undefined at zero).
         """
         v, w = velocity_body, angular_velocity
         r_dot_w = self._points @ w
         speed2 = (float(v @ v) + 2.0 * (self._points @ np.cross(v, w)) + float(w @ w) * self._radius2
                   - r_dot_w**2 - normal_velocity**2)
         slip = np.sqrt(np.maximum(speed2, 0.0))
+        if self.contact_width:
+            return slip, 1.0 / np.sqrt(slip * slip + self.contact_width**2)
         moving = slip > 1e-12 * (math.sqrt(float(v @ v)) + 1e-300)
-        return slip, moving, r_dot_w
+        return slip, np.where(moving, 1.0 / np.where(moving, slip, 1.0), 0.0)
 
     def _friction_load(self, sigma: np.ndarray, normal_velocity: np.ndarray, velocity_body: np.ndarray,
                        angular_velocity: np.ndarray) -> np.ndarray:
         """Force and moment (body frame) of the tangential stress, opposite to the local slip.
 
-        With ``c_i = tau_i w_i / |s_i|`` and the slip ``s_i`` of :meth:`_slip`,
-        ``F = -sum c_i s_i`` and ``M = -sum c_i r_i x s_i`` expand into weighted sums
-        (``sum c``, ``sum c r``, ``sum c |r|^2``, ``sum c r (r . omega)``, ``sum c Vn n``,
-        ``sum c Vn r x n``): matrix-vector products over cached arrays, no per-point
-        cross products.
+        With ``c_i = tau_i k_i w_i`` (:meth:`_slip`) and the slip ``s_i``, ``F = -sum c_i s_i`` and
+        ``M = -sum c_i r_i x s_i`` expand into weighted sums (``sum c``, ``sum c r``, ``sum c |r|^2``,
+        ``sum c r (r . omega)``, ``sum c Vn n``, ``sum c Vn r x n``): matrix-vector products over
+        cached arrays, no per-point cross products.
         """
         v, w = velocity_body, angular_velocity
         points = self._points
-        slip, moving, r_dot_w = self._slip(normal_velocity, v, w)
-        c = np.where(moving, self.friction.stress(sigma) * self._weights / np.where(moving, slip, 1.0), 0.0)
+        _, scale = self._slip(normal_velocity, v, w)
+        r_dot_w = points @ w
+        c = self.friction.stress(sigma) * self._weights * scale
         c_vn = c * normal_velocity
         sum_c = float(c.sum())
         sum_cr = c @ points

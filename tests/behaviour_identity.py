@@ -122,6 +122,8 @@ def _worst(a: dict | None, b: dict | None) -> tuple[float, str]:
 
 def _how_different(a: dict | None, b: dict | None) -> str:
     change, name = _worst(a, b)
+    if change == 0.0 and a is not None and b is not None:
+        return "in " + ", ".join(sorted(k for k in a.keys() | b.keys() if a.get(k) != b.get(k)))
     return f"largest change {name} {change:.1e}"
 
 

@@ -103,12 +103,14 @@ def step_control(scene: Scene, length: float) -> StepControl:
     with ``numerics.rtol`` and absolute tolerances ``rtol`` times the
     projectile length (position, path), the impact speed (velocity),
     :data:`ANGLE_SCALE` (rotation) and ``ANGLE_SCALE`` times the impact speed
-    over the length (angular velocity); it starts with a step of 1e-3 of the
-    length over the speed and never shortens a step below
+    over the length (angular velocity) and starts with a step of 1e-3 of the
+    length over the speed.  When the load has a sharp switch (``contact_width``
+    or ``entry_smoothing`` zero) it never shortens a step below
     ``numerics.time_step``: a step of that size that fails the tolerance is
-    accepted (``forced_steps``), since across the shank's ``Vn = 0`` switch no
-    step meets a smooth error model.  Either ends the run with ``step_floor``
-    when it would need a step below ``time_step / 1024`` (:data:`FLOOR_FRACTION`).
+    accepted (``forced_steps``), since across a jump of the load no step meets
+    a smooth error model; with the continuous load (the default) no step is
+    forced.  Either ends the run with ``step_floor`` when it would need a step
+    below ``time_step / 1024`` (:data:`FLOOR_FRACTION`).
     """
     numerics = scene.numerics
     floor = numerics.time_step * FLOOR_FRACTION
@@ -117,8 +119,9 @@ def step_control(scene: Scene, length: float) -> StepControl:
     speed = scene.impact.speed
     rate = ANGLE_SCALE * speed / length
     scales = np.array([length] * 3 + [speed] * 3 + [ANGLE_SCALE] * 3 + [rate] * 3 + [length])
+    sharp = scene.effects.contact_width == 0.0 or numerics.entry_smoothing == 0.0
     return ErrorControl(numerics.rtol, numerics.rtol * scales, first_step=1e-3 * length / speed,
-                        forced_step=numerics.time_step, min_step=floor)
+                        forced_step=numerics.time_step if sharp else 0.0, min_step=floor)
 
 
 def run_scene(scene: Scene, initial: State | None = None) -> RunResult:

@@ -139,6 +139,9 @@ class Effects(Strict):
 
     friction: FrictionSpec = FrictionSpec()
     separation: bool = field(True, description="no stress where Vn <= 0")
+    contact_width: Number = field(1.5, unit="m/s", ge=0.0, le=100.0,
+                                  description="normal velocity over which the stress rises from 0 at Vn = 0 to the"
+                                              " full law; 0: the sharp switch (docs/model.md)")
     free_surface: FreeSurfaceSpec | None = None
     gravity: bool = False
     gravity_acceleration: Number = field(9.80665, unit="m/s^2", ge=0.0, le=1e3)

@@ -146,8 +146,8 @@ def _reference(sweep: Sweep, finest: pd.DataFrame) -> dict:
     if _is_plain_normal_impact(base):
         prepared = prepare_projectile(base)
         depth, _ = axial_depth_1d(prepared.profile, base.target.build(), prepared.mass.mass, base.impact.speed,
-                                  base.numerics.stop_speed)
-        return {"kind": "1-D integration with exact nose entry (exact)", "depth": depth,
+                                  base.numerics.stop_speed, contact_width=base.effects.contact_width)
+        return {"kind": "1-D integration with exact nose entry and the same contact width (exact)", "depth": depth,
                 "axis_angle_change": 0.0, "convergence_speed": np.nan, "depth_uncertainty": 0.0}
     q = finest["depth"].to_numpy()
     reference = {"kind": "finest setting", "depth": float(q[0]),

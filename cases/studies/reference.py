@@ -9,7 +9,14 @@ target (no friction), an element at distance ``s`` behind the tip has
     G(P) = int_0^P 2 pi r r' r'^2 / (1 + r'^2) ds,   P' = min(P, nose length),
 
 and ``G`` of the whole nose is ``pi a^2 N``.  Once the nose is embedded the
-motion has a closed form (docs/validation.md).  None of this uses the mesh.
+motion has a closed form (docs/validation.md).  With a contact width ``w``
+(the stress of an element rises from 0 at ``Vn = 0`` to the full law at
+``Vn = w``, :mod:`fem_loads.ramps`) the force is
+
+    F(P, V) = int_0^P' 2 pi r r' (A sigma_0 + B rho_0 V^2 sin^2) S(V sin / w) ds,
+
+which is no longer separable: the whole run is integrated, the integral over
+the nose taken by Gauss-Legendre quadrature.  None of this uses the mesh.
 """
 
 from __future__ import annotations
@@ -20,10 +27,11 @@ import numpy as np
 from scipy import integrate
 from scipy.interpolate import BarycentricInterpolator
 
+from fem_loads.ramps import smooth_step
 from fem_loads.resistance import ResistanceLaw
 from mesh.profile import ConeNose, OgiveNose, Profile
 
-__all__ = ["embedded_axial_force", "closed_form_depth", "axial_depth_1d", "nose_factors"]
+__all__ = ["embedded_axial_force", "closed_form_depth", "axial_depth_1d", "axial_force", "nose_factors"]
 
 
 def nose_factors(profile: Profile, friction: float = 0.0) -> tuple[float, float]:
@@ -94,12 +102,13 @@ def closed_form_depth(profile: Profile, law: ResistanceLaw, mass: float, speed: 
 
 
 def axial_depth_1d(profile: Profile, law: ResistanceLaw, mass: float, speed: float,
-                   stop_speed: float = 0.0, rtol: float = 1e-12) -> tuple[float, float]:
+                   stop_speed: float = 0.0, rtol: float = 1e-12, contact_width: float = 0.0) -> tuple[float, float]:
     """Tip depth (m) at which the speed falls to ``stop_speed``, with exact nose entry.
 
     Integrates ``dP/dt = V, m dV/dt = -F(P, V)`` through the nose-entry phase
     (``G`` interpolated to round-off on Chebyshev points); after full
-    embedding the closed form takes over exactly.
+    embedding the closed form takes over exactly.  With ``contact_width > 0``
+    the whole run is integrated with the force of :func:`axial_force`.
 
     Returns
     -------
@@ -108,6 +117,8 @@ def axial_depth_1d(profile: Profile, law: ResistanceLaw, mass: float, speed: flo
     embedding_speed : float
         Speed (m/s) when the nose is fully embedded.
     """
+    if contact_width > 0.0:
+        return _axial_depth_contact(profile, law, mass, speed, stop_speed, rtol, contact_width)
     ln = profile.nose_length
     # G is smooth on the nose: tabulate it once on Chebyshev points for a fast, exact-to-rtol integrand
     nodes = 0.5 * ln * (1 - np.cos(np.linspace(0, math.pi, 401)))
@@ -120,20 +131,64 @@ def axial_depth_1d(profile: Profile, law: ResistanceLaw, mass: float, speed: flo
         force += law.dynamic_density * y[1] ** 2 * float(g_interp(p))
         return [y[1], -force / mass]
 
-    def embedded(t: float, y: np.ndarray) -> float:
-        return y[0] - ln
-
-    def stopped(t: float, y: np.ndarray) -> float:
-        return y[1] - stop_speed
-
-    embedded.terminal = stopped.terminal = True
-    # the entry phase in time: dP/dt = V, m dV/dt = -F(P, V)
-    horizon = 10 * ln / speed + 1.0
-    sol = integrate.solve_ivp(rate, (0.0, horizon), [0.0, speed], method="DOP853", rtol=rtol,
-                              atol=1e-14, events=[embedded, stopped])
+    sol = _integrate_entry(rate, ln, speed, stop_speed, rtol)
     if len(sol.t_events[0]) == 0:  # stopped before full embedding
         return float(sol.y[0, -1]), float("nan")
     v1 = float(sol.y_events[0][0][1])
     # after embedding: P(V) in closed form between v1 and stop_speed
     rest = closed_form_depth(profile, law, mass, v1) - closed_form_depth(profile, law, mass, stop_speed)
     return ln + rest, v1
+
+
+def _integrate_entry(rate, nose_length: float, speed: float, stop_speed: float, rtol: float):
+    """``solve_ivp`` of ``(P, V)`` from the surface until the nose is embedded or the speed falls to ``stop_speed``."""
+    def embedded(t: float, y: np.ndarray) -> float:
+        return y[0] - nose_length
+
+    def stopped(t: float, y: np.ndarray) -> float:
+        return y[1] - stop_speed
+
+    embedded.terminal = stopped.terminal = True
+    horizon = 10 * nose_length / speed + 1.0
+    return integrate.solve_ivp(rate, (0.0, horizon), [0.0, speed], method="DOP853", rtol=rtol, atol=1e-14,
+                               events=[embedded, stopped])
+
+
+_GAUSS = np.polynomial.legendre.leggauss(2000)
+
+
+def axial_force(profile: Profile, law: ResistanceLaw, depth: float, speed: float, contact_width: float) -> float:
+    """Axial force (N) with the nose embedded to ``depth`` (m) at ``speed`` (m/s), with a contact width (m/s).
+
+    ``int_0^P' 2 pi r r' (A sigma_0 + B rho_0 V^2 sin^2) S(V sin / w) ds`` by 2000-point Gauss-Legendre
+    quadrature, plus a flat front face (``sin = 1``) of a blunt nose.
+    """
+    extent = min(max(depth, 0.0), profile.nose_length)
+    x, weights = _GAUSS
+    s = 0.5 * extent * (x + 1.0)
+    slope = profile.slope_at(s)
+    sine = slope / np.sqrt(1.0 + slope**2)
+    stress = (law.static_stress + law.dynamic_density * speed**2 * sine**2) * smooth_step(speed * sine / contact_width)
+    force = 0.5 * extent * float(np.sum(weights * 2 * np.pi * profile.radius_at(s) * slope * stress))
+    face = law.static_stress + law.dynamic_density * speed**2
+    return force + math.pi * profile.tip_radius**2 * face * float(smooth_step(np.array(speed / contact_width)))
+
+
+def _axial_depth_contact(profile: Profile, law: ResistanceLaw, mass: float, speed: float, stop_speed: float,
+                         rtol: float, contact_width: float) -> tuple[float, float]:
+    def rate(t: float, y: np.ndarray) -> list[float]:
+        return [y[1], -axial_force(profile, law, y[0], y[1], contact_width) / mass]
+
+    entry = _integrate_entry(rate, profile.nose_length, speed, stop_speed, rtol)
+    if len(entry.t_events[0]) == 0:
+        return float(entry.y[0, -1]), float("nan")
+    p1, v1 = (float(v) for v in entry.y_events[0][0])
+
+    def stopped(t: float, y: np.ndarray) -> float:
+        return y[1] - stop_speed
+
+    stopped.terminal = True
+    # embedded: F depends on V alone; integrate until the speed falls to stop_speed
+    rest = integrate.solve_ivp(rate, (0.0, 1e3), [p1, v1], method="DOP853", rtol=rtol, atol=1e-14,
+                               events=[stopped])
+    return float(rest.y_events[0][0][0]) if len(rest.t_events[0]) else float(rest.y[0, -1]), v1

@@ -225,8 +225,10 @@ def test_friction_adds_the_tangential_stress_panel(tmp_path):
     ev = FieldEvaluator(run_scene(scene))
     fld = ev.at(-1)
     assert fld.tau is not None and fld.tau.max() > 0
-    # Coulomb: tau = mu sigma_n wherever the surface slips (everywhere it is loaded here)
-    np.testing.assert_allclose(fld.tau, 0.1 * fld.sigma_n, rtol=1e-12, atol=0)
+    # Coulomb: tau = mu sigma_n |s| / sqrt(|s|^2 + w^2) wherever the surface slips (everywhere it is loaded
+    # here): the slip |s| is about 1000 m/s, the contact width w 1.5 m/s, so tau = mu sigma_n to 1.2e-6
+    np.testing.assert_allclose(fld.tau, 0.1 * fld.sigma_n, rtol=2e-6, atol=0)
+    assert np.all(fld.tau <= 0.1 * fld.sigma_n)
     with FrameRenderer(ev, (480, 480), side_panel=False) as renderer:
         image = renderer.render(len(ev) - 1)
         assert renderer.scalar_bar_range("tau") == pytest.approx((fld.tau.min() * 1e-6, fld.tau.max() * 1e-6))

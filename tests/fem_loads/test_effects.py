@@ -117,21 +117,27 @@ def test_a_stiffer_layer_decelerates_faster():
     assert deceleration(layered_h)[at(layered_h)] > 1.5 * deceleration(soft_h)[at(soft_h)]
 
 
-def test_crossing_into_a_stiffer_layer_at_an_angle_turns_away_from_the_normal():
-    """At 30 degrees the lower flank of the nose meets the stiff layer first; its extra resistance
-    pushes the nose up and the path turns away from the normal.  (Right at the interface the
-    extra axial drag first pulls the velocity towards the axis, which then trails it by 0.2
-    degree; the path after the interface, start to stop, is the robust measure.)"""
-    _, homogeneous = _run("forrestal_luk_test3", *COARSE)
-    _, crossing = _run("forrestal_luk_test3", *COARSE, ("target.layers", SOFT_OVER_STIFF))
-
+def test_crossing_into_a_stiffer_layer_at_an_angle_keeps_the_path():
+    """At 30 degrees the lower flank of the nose meets the stiff layer first, but the path after the
+    interface keeps its direction: the shank rides on its contact as on a rail.  The turn the stiff
+    layer adds is a regularisation effect that vanishes with the contact width (0.044 deg at 1.5 m/s,
+    0.018 at 0.5, 0.009 at 0.25, 0.004 at 0.125 m/s).  The sharp law seemed to turn the path away
+    from the normal (0.24 deg at 2e-5 s), but its turn falls with the step (0.087 deg at 5e-6 s,
+    0.041 at 2.5e-6 s): the chatter of its switch, not physics."""
     def direction_after_interface(h):
         i = int(np.searchsorted(h["tip_depth"].to_numpy(), 2.0))
         dx = h["position_x"].iloc[-1] - h["position_x"].iloc[i]
         dz = h["position_z"].iloc[-1] - h["position_z"].iloc[i]
         return math.degrees(math.atan2(dx, -dz))  # from the downward normal
 
-    assert direction_after_interface(crossing) > direction_after_interface(homogeneous) + 0.1
+    def turn(*numerics):
+        _, homogeneous = _run("forrestal_luk_test3", *COARSE, *numerics)
+        _, crossing = _run("forrestal_luk_test3", *COARSE, *numerics, ("target.layers", SOFT_OVER_STIFF))
+        return direction_after_interface(crossing) - direction_after_interface(homogeneous)
+
+    default = turn()
+    narrow = turn(("effects.contact_width", 0.5), ("numerics.time_step", 1e-5))
+    assert 0.0 < default < 0.06 and 0.0 < narrow < 0.6 * default
 
 
 def test_free_surface_reduction_deepens_the_path():

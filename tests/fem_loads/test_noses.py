@@ -70,5 +70,6 @@ def test_blunt_normal_impact_matches_the_1d_integration():
                        {"projectile.nose": {"shape": "blunt", "crh": 3.0, "flat_radius": 0.01}})
     result = run_scene(scene)
     reference, _ = axial_depth_1d(result.prepared.profile, scene.target.build(),
-                                  result.prepared.mass.mass, 280.0, scene.numerics.stop_speed)
+                                  result.prepared.mass.mass, 280.0, scene.numerics.stop_speed,
+                                  contact_width=scene.effects.contact_width)
     assert summarise(result).depth == pytest.approx(reference, rel=1e-3)
