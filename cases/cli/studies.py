@@ -1,4 +1,4 @@
-"""``penetrate compare``, ``penetrate accuracy`` and ``penetrate paper``: studies that write reports."""
+"""``penetrate compare``, ``accuracy``, ``contact`` and ``paper``: studies that write reports."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import math
 from pathlib import Path
 
 from ..scene import InputError
-from .options import add_pool_options, add_scene_options, out_folder, overrides, pool
+from .options import add_pool_options, add_scene_options, out_folder, overrides, pool, positive_float
 
 __all__ = ["register"]
 
@@ -30,15 +30,27 @@ def register(commands) -> None:
     accuracy.add_argument("--json", action="store_true", help="print the result as one JSON object")
     accuracy.add_argument("--sizes", default="0.04,0.02,0.01,0.005", metavar="M,M,...",
                           help="mesh sizes of the mesh axis (default 0.04,0.02,0.01,0.005 m)")
-    accuracy.add_argument("--steps", default="8e-5,4e-5,2e-5,1e-5,5e-6", metavar="S,S,...",
-                          help="RK4 steps of the time axis (default 8e-5,...,5e-6 s)")
-    accuracy.add_argument("--rtols", default="1e-4,1e-6", metavar="R,R,...",
-                          help="Dormand-Prince tolerances of the time axis (default 1e-4,1e-6)")
+    accuracy.add_argument("--steps", default="2e-4,1e-4,5e-5,2.5e-5,1.25e-5,6.25e-6", metavar="S,S,...",
+                          help="RK4 steps of the time axis (default 2e-4,1e-4,...,6.25e-6 s)")
+    accuracy.add_argument("--rtols", default="1e-3,1e-4,1e-5,1e-6", metavar="R,R,...",
+                          help="Dormand-Prince tolerances of the time axis (default 1e-3,1e-4,1e-5,1e-6)")
     accuracy.add_argument("--quadrature-orders", default="4,6", metavar="Q,Q,...",
                           help="facet quadrature degrees beside the default 2, on the mesh-size axis (default 4,6)")
     accuracy.add_argument("--out", default="runs/accuracy", type=out_folder, metavar="DIR",
                           help="where to write accuracy.md, .csv and .png (default runs/accuracy)")
     accuracy.set_defaults(handler=accuracy_study)
+
+    contact = commands.add_parser("contact", help="what the contact width changes: a scene down to the sharp law")
+    add_scene_options(contact)
+    add_pool_options(contact, "runs/store")
+    contact.add_argument("--json", action="store_true", help="print the table as JSON records")
+    contact.add_argument("--widths", default="3,1.5,0.75,0.375,0.1875", metavar="W,W,...",
+                         help="contact widths (m/s) beside the sharp law's 0 (default 3,1.5,0.75,0.375,0.1875)")
+    contact.add_argument("--step", type=positive_float, default=2.5e-6, metavar="S",
+                         help="the RK4 step of every run (default 2.5e-6 s)")
+    contact.add_argument("--out", default="runs/contact", type=out_folder, metavar="DIR",
+                         help="where to write contact.md and contact.csv (default runs/contact)")
+    contact.set_defaults(handler=contact_width_study)
 
     paper = commands.add_parser("paper", help="regenerate the paper's study: tables and figures")
     paper.add_argument("--out", default="docs/paper", type=out_folder, metavar="DIR",
@@ -97,6 +109,19 @@ def accuracy_study(args: argparse.Namespace) -> int:
                           "settings": json.loads(table.to_json(orient="records"))}))
     else:
         print((Path(args.out) / "accuracy.md").read_text())
+    return 0
+
+
+def contact_width_study(args: argparse.Namespace) -> int:
+    from ..run import RunStore
+    from ..studies.contact import contact_study
+
+    table = contact_study(args.scene, overrides(args), RunStore(args.store), args.out,
+                          _numbers("--widths", args.widths), args.step, pool(args))
+    if args.json:
+        print(table.to_json(orient="records"))
+    else:
+        print((Path(args.out) / "contact.md").read_text())
     return 0
 
 

@@ -36,3 +36,18 @@ def test_normal_impact_uses_the_exact_reference(tmp_path):
     assert by[(0.02, 2, "exact", "rk4", 4e-5)] < by[(0.04, 2, "exact", "rk4", 4e-5)]
     assert table["pareto"].any()
     assert {p.name for p in (tmp_path / "out").iterdir()} == {"accuracy.md", "accuracy.csv", "accuracy.png"}
+
+
+def test_contact_width_study_tends_to_the_sharp_law(tmp_path):
+    """Test 2 on a 40 mm mesh: the depth's change from the sharp law falls as the contact width does, and
+    equals the change the independent 1-D integration gives with the same width (within 10 %)."""
+    from cases.studies.contact import contact_study
+
+    table = contact_study(scene_path("forrestal_luk_test2"), {"numerics.mesh_size": 0.04}, RunStore(tmp_path / "s"),
+                          tmp_path / "out", widths=(1.5, 0.75), step=4e-5, pool=Pool(workers=2, progress=False))
+    assert list(table["contact_width"]) == [1.5, 0.75, 0.0]
+    change = table["depth_change"].to_numpy()
+    assert change[0] > change[1] > 0 == change[2]
+    change_1d = (table["depth_1d"] - table["depth_1d"].iloc[-1]).to_numpy()
+    np.testing.assert_allclose(change[:2], change_1d[:2], rtol=0.1)
+    assert {p.name for p in (tmp_path / "out").iterdir()} == {"contact.md", "contact.csv"}
