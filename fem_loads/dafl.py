@@ -6,15 +6,20 @@ centre of mass, moving with ``u = V + omega x r``:
 * ``Vn = u . n`` (positive when the element pushes into the target);
 * ``sigma_n = f(Vn) c(Vn) e(Z)`` with ``f(Vn) = A sigma_0 + B rho_0 Vn^2``: the
   contact factor ``c`` is 0 for ``Vn <= 0`` (the target separates from surfaces
-  that move away from it) and 1 from ``Vn >= w`` (``contact_width``), the entry
+  that move away from it) and 1 from ``Vn >= W``, the contact width
+  ``W = w + delta U`` (``contact_width`` ``w``, ``contact_incidence`` ``delta``,
+  ``U = |V| + |omega| r_max`` the body's speed scale: with ``w = 0`` the factor
+  depends on the incidence ``Vn / U`` alone, so it does not fade as the body
+  slows down), the entry
   factor ``e`` is 1 for a point a distance ``l/2`` below the surface and 0 for
   one ``l/2`` above it (``l``: the point's own extent, ``entry_smoothing``
   times the square root of its quadrature weight);
 * ``dF = -sigma_n n dS``, ``F = sum dF``, ``M = sum r x dF``.
 
 Both factors are the smooth step of :mod:`fem_loads.ramps`, so the load is a
-continuous (Lipschitz, twice differentiable) function of the state; with
-``w = 0`` and ``l = 0`` they are the sharp switches of the paper's law (then a
+continuous (Lipschitz, twice differentiable) function of the state wherever
+``W > 0`` (with ``w = 0``: wherever the body moves); with ``w = delta = 0``
+and ``l = 0`` they are the sharp switches of the paper's law (then a
 point carries stress only when ``Vn > guard (|V| + |omega| r_max)``, see
 ``normal_velocity_guard``).  docs/model.md argues both widths and the
 convergence to the sharp law as they go to zero.
@@ -83,7 +88,7 @@ class DAFLLoads:
     law : ResistanceLaw or LayeredTarget
         Normal stress as a function of the normal velocity (and, for layers, of depth).
     normal_velocity_guard : float
-        Sharp contact only (``contact_width = 0``): a point carries stress only when
+        Sharp contact only (``contact_width = contact_incidence = 0``): a point carries stress only when
         ``Vn > guard * (|V| + |omega| r_max)``.  The sharp stress jumps from 0 to
         ``A sigma_0`` at ``Vn = 0``; on the shank of a projectile moving straight along
         its axis ``Vn`` is zero up to round-off, which alone would switch on a lateral
@@ -97,9 +102,14 @@ class DAFLLoads:
     free_surface : FreeSurface, optional
         Reduction of the normal stress near the surface; none by default.
     contact_width : float
-        ``w`` (m/s): the normal velocity over which a point's stress rises from 0 (at
-        ``Vn = 0``) to the full law; with friction, the slip speed below which the
-        friction stress fades (its direction is undefined at zero slip).  0: sharp.
+        ``w`` (m/s): the fixed part of the contact width ``W = w + delta U``, the normal
+        velocity over which a point's stress rises from 0 (at ``Vn = 0``) to the full law;
+        with friction, ``W`` is also the slip speed below which the friction stress fades
+        (its direction is undefined at zero slip).
+    contact_incidence : float
+        ``delta``: the part of ``W`` proportional to the body's speed scale
+        ``U = |V| + |omega| r_max``, the sine of the incidence angle over which the stress
+        rises.  ``w = delta = 0``: sharp.
     entry_smoothing : float
         ``l / sqrt(weight)``: the length over which a point enters the target (and
         crosses a layer interface), in units of the square root of its quadrature weight
@@ -109,13 +119,15 @@ class DAFLLoads:
     def __init__(self, quadrature: SurfaceQuadrature, law: ResistanceLaw | LayeredTarget,
                  normal_velocity_guard: float = 1e-9, *, friction: Friction | None = None,
                  separation: bool = True, free_surface: FreeSurface | None = None, contact_width: float = 0.0,
-                 entry_smoothing: float = 0.0) -> None:
-        if not (contact_width >= 0.0 and entry_smoothing >= 0.0):
-            raise ValueError("contact_width and entry_smoothing must be >= 0")
+                 contact_incidence: float = 0.0, entry_smoothing: float = 0.0) -> None:
+        if not (contact_width >= 0.0 and contact_incidence >= 0.0 and entry_smoothing >= 0.0):
+            raise ValueError("contact_width, contact_incidence and entry_smoothing must be >= 0")
         self.quadrature, self.law = quadrature, law
         self.normal_velocity_guard = float(normal_velocity_guard)
         self.friction, self.separation, self.free_surface = friction, separation, free_surface
         self.contact_width, self.entry_smoothing = float(contact_width), float(entry_smoothing)
+        self.contact_incidence = float(contact_incidence)
+        self._smooth_contact = self.contact_width > 0.0 or self.contact_incidence > 0.0
         q = quadrature
         # [n | r x n]: one product gives Vn = n.V + (r x n).omega, and the weighted stresses times
         # it give force and moment together; stored transposed, (6, n), for row-combining products
@@ -182,11 +194,18 @@ class DAFLLoads:
 
     # -- the factors of the switches ---------------------------------------------------------------
 
-    def _contact(self, normal_velocity: np.ndarray, guard: float) -> np.ndarray:
+    def _inverse_width(self, speed_scale: float) -> float:
+        """``1 / W``, ``W = w + delta U`` the contact width (m/s) at the body speed scale
+        ``U = |V| + |omega| r_max``; 0 for a body at rest with ``w = 0`` (every ``Vn`` is then 0,
+        and so is the factor)."""
+        width = self.contact_width + self.contact_incidence * speed_scale
+        return 1.0 / width if width > 0.0 else 0.0
+
+    def _contact(self, normal_velocity: np.ndarray, speed_scale: float) -> np.ndarray:
         """The contact factor ``c(Vn)`` at every point (any layout)."""
-        if self.contact_width:
-            return smooth_step(normal_velocity / self.contact_width)
-        return (normal_velocity > guard).astype(float)
+        if self._smooth_contact:
+            return smooth_step(normal_velocity * self._inverse_width(speed_scale))
+        return (normal_velocity > self.normal_velocity_guard * speed_scale).astype(float)
 
     def _entry(self, heights: np.ndarray) -> np.ndarray:
         """The entry factor ``e(Z)`` at every point, in point order."""
@@ -211,7 +230,7 @@ class DAFLLoads:
         angular_velocity : ndarray, shape (3,)
             Angular velocity in the body frame (rad/s).
         """
-        normal_velocity, guard = self._normal_velocity(velocity, rotation, angular_velocity, np.empty(6))
+        normal_velocity, speed_scale = self._normal_velocity(velocity, rotation, angular_velocity, np.empty(6))
         if self._images is not None:  # the same numbers as the loads, in point order
             normal_velocity = self._images.scatter(normal_velocity)
         heights = self.heights(position, rotation)
@@ -220,7 +239,7 @@ class DAFLLoads:
         else:
             static, dynamic = self.law.static_stress, self.law.dynamic_density
         if self.separation:
-            stress = (static + dynamic * np.square(normal_velocity)) * self._contact(normal_velocity, guard)
+            stress = (static + dynamic * np.square(normal_velocity)) * self._contact(normal_velocity, speed_scale)
         else:
             # contact everywhere: receding surfaces feel the static pressure less the dynamic term
             stress = np.maximum(static + dynamic * normal_velocity * np.abs(normal_velocity), 0.0)
@@ -244,7 +263,8 @@ class DAFLLoads:
 
     def _normal_velocity(self, velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray,
                          generalised: np.ndarray) -> tuple[np.ndarray, float]:
-        """``Vn`` at every point (one product with ``[n | r x n]``) and the guard below which it counts as 0.
+        """``Vn`` at every point (one product with ``[n | r x n]``) and the body's speed scale
+        ``U = |V| + |omega| r_max`` (m/s), a bound on every point's speed.
 
         ``generalised`` is a 6-vector to fill with ``(R^T V, omega)``.
         """
@@ -252,10 +272,10 @@ class DAFLLoads:
         generalised[3:] = angular_velocity
         speed = math.sqrt(float(velocity @ velocity))
         spin = math.sqrt(float(angular_velocity @ angular_velocity))
-        guard = self.normal_velocity_guard * (speed + spin * self._max_radius)
+        speed_scale = speed + spin * self._max_radius
         if self._images is None:
-            return generalised @ self._normal_arm_t, guard
-        return self._images.normal_velocity(generalised, self._normal_velocity_buffer), guard
+            return generalised @ self._normal_arm_t, speed_scale
+        return self._images.normal_velocity(generalised, self._normal_velocity_buffer), speed_scale
 
     # -- resultants ----------------------------------------------------------------------------------
 
@@ -293,17 +313,18 @@ class DAFLLoads:
         if self.fully_outside(position):
             return np.zeros(6)
         hot = self._hot
-        normal_velocity, guard = self._normal_velocity(velocity, rotation, angular_velocity, self._generalised)
+        normal_velocity, speed_scale = self._normal_velocity(velocity, rotation, angular_velocity, self._generalised)
         stress = self._stress_buffer
         np.multiply(normal_velocity, normal_velocity, out=stress)
         stress *= hot["dynamic"]
         stress += hot["static"]
         factor = self._factor_buffer
-        if self.contact_width:
-            np.multiply(normal_velocity, 1.0 / self.contact_width, out=factor)
+        if self._smooth_contact:
+            np.multiply(normal_velocity, self._inverse_width(speed_scale), out=factor)
             stress *= smooth_step(factor, out=factor)
         else:
-            np.copyto(stress, 0.0, where=np.less_equal(normal_velocity, guard, out=self._unloaded))
+            np.copyto(stress, 0.0, where=np.less_equal(normal_velocity, self.normal_velocity_guard * speed_scale,
+                                                       out=self._unloaded))
         if not self.fully_embedded(position):
             heights = (self._images.heights(position[2], rotation[2], self._height_buffer) if self._images is not None
                        else np.add(position[2], rotation[2] @ self._points_t, out=self._height_buffer))
@@ -324,8 +345,8 @@ class DAFLLoads:
 
         ``s_i = V + omega x r_i - Vn_i n_i``, with ``|s|^2 = |u|^2 - Vn^2`` and
         ``|u|^2 = |V|^2 + 2 r . (V x omega) + |omega|^2 |r|^2 - (omega . r)^2`` (no per-point
-        cross products).  With a contact width ``w`` the direction fades below ``w`` of slip,
-        ``k = 1 / sqrt(|s|^2 + w^2)``, so the stress is continuous through zero slip; sharp,
+        cross products).  With a contact width ``W`` the direction fades below ``W`` of slip,
+        ``k = 1 / sqrt(|s|^2 + W^2)``, so the stress is continuous through zero slip; sharp,
         ``k = 1/|s|`` where ``|s| > 1e-12 |V|`` and 0 elsewhere (the direction is undefined at zero).
         """
         v, w = velocity_body, angular_velocity
@@ -333,8 +354,10 @@ class DAFLLoads:
         speed2 = (float(v @ v) + 2.0 * (self._points @ np.cross(v, w)) + float(w @ w) * self._radius2
                   - r_dot_w**2 - normal_velocity**2)
         slip = np.sqrt(np.maximum(speed2, 0.0))
-        if self.contact_width:
-            return slip, 1.0 / np.sqrt(slip * slip + self.contact_width**2)
+        if self._smooth_contact:
+            inverse = self._inverse_width(math.sqrt(float(v @ v)) + math.sqrt(float(w @ w)) * self._max_radius)
+            # k = 1 / sqrt(s^2 + W^2) = (1/W) / sqrt((s/W)^2 + 1); a body at rest (W = 0) has no slip
+            return slip, inverse / np.sqrt(np.square(slip * inverse) + 1.0)
         moving = slip > 1e-12 * (math.sqrt(float(v @ v)) + 1e-300)
         return slip, np.where(moving, 1.0 / np.where(moving, slip, 1.0), 0.0)
 

@@ -1,4 +1,4 @@
-"""``penetrate compare``, ``accuracy``, ``contact`` and ``paper``: studies that write reports."""
+"""``penetrate compare``, ``accuracy``, ``contact``, ``entry`` and ``paper``: studies that write reports."""
 
 from __future__ import annotations
 
@@ -40,17 +40,29 @@ def register(commands) -> None:
                           help="where to write accuracy.md, .csv and .png (default runs/accuracy)")
     accuracy.set_defaults(handler=accuracy_study)
 
-    contact = commands.add_parser("contact", help="what the contact width changes: a scene down to the sharp law")
+    contact = commands.add_parser("contact", help="what the contact incidence changes: a scene down to the sharp law")
     add_scene_options(contact)
     add_pool_options(contact, "runs/store")
     contact.add_argument("--json", action="store_true", help="print the table as JSON records")
-    contact.add_argument("--widths", default="3,1.5,0.75,0.375,0.1875", metavar="W,W,...",
-                         help="contact widths (m/s) beside the sharp law's 0 (default 3,1.5,0.75,0.375,0.1875)")
+    contact.add_argument("--incidences", default="0.02,0.01,0.005,0.0025,0.00125", metavar="D,D,...",
+                         help="contact incidences beside the sharp law's 0 (default 0.02,0.01,0.005,0.0025,0.00125)")
     contact.add_argument("--step", type=positive_float, default=2.5e-6, metavar="S",
                          help="the RK4 step of every run (default 2.5e-6 s)")
     contact.add_argument("--out", default="runs/contact", type=out_folder, metavar="DIR",
                          help="where to write contact.md and contact.csv (default runs/contact)")
-    contact.set_defaults(handler=contact_width_study)
+    contact.set_defaults(handler=contact_incidence_study)
+
+    entry = commands.add_parser("entry", help="what the entry smoothing changes, and RK4's time error with it")
+    add_scene_options(entry)
+    add_pool_options(entry, "runs/store")
+    entry.add_argument("--json", action="store_true", help="print the table as JSON records")
+    entry.add_argument("--smoothings", default="1,2,4,8", metavar="E,E,...",
+                       help="entry smoothings (units of a point's own size; default 1,2,4,8)")
+    entry.add_argument("--steps", default="1e-4,5e-5,2.5e-5,1.25e-5,6.25e-6,3.125e-6", metavar="S,S,...",
+                       help="RK4 steps; the finest is each smoothing's reference (default 1e-4 ... 3.125e-6 s)")
+    entry.add_argument("--out", default="runs/entry", type=out_folder, metavar="DIR",
+                       help="where to write entry.md and entry.csv (default runs/entry)")
+    entry.set_defaults(handler=entry_smoothing_study)
 
     paper = commands.add_parser("paper", help="regenerate the paper's study: tables and figures")
     paper.add_argument("--out", default="docs/paper", type=out_folder, metavar="DIR",
@@ -112,16 +124,32 @@ def accuracy_study(args: argparse.Namespace) -> int:
     return 0
 
 
-def contact_width_study(args: argparse.Namespace) -> int:
+def contact_incidence_study(args: argparse.Namespace) -> int:
     from ..run import RunStore
     from ..studies.contact import contact_study
 
     table = contact_study(args.scene, overrides(args), RunStore(args.store), args.out,
-                          _numbers("--widths", args.widths), args.step, pool(args))
+                          _numbers("--incidences", args.incidences), args.step, pool(args))
     if args.json:
         print(table.to_json(orient="records"))
     else:
         print((Path(args.out) / "contact.md").read_text())
+    return 0
+
+
+def entry_smoothing_study(args: argparse.Namespace) -> int:
+    from ..run import RunStore
+    from ..studies.contact import entry_study
+
+    steps = _numbers("--steps", args.steps)
+    if len(set(steps)) < 2:
+        raise InputError(f"--steps {args.steps!r}: expected two or more different steps")
+    table = entry_study(args.scene, overrides(args), RunStore(args.store), args.out,
+                        _numbers("--smoothings", args.smoothings), steps, pool(args))
+    if args.json:
+        print(table.to_json(orient="records"))
+    else:
+        print((Path(args.out) / "entry.md").read_text())
     return 0
 
 

@@ -104,8 +104,8 @@ def step_control(scene: Scene, length: float) -> StepControl:
     projectile length (position, path), the impact speed (velocity),
     :data:`ANGLE_SCALE` (rotation) and ``ANGLE_SCALE`` times the impact speed
     over the length (angular velocity) and starts with a step of 1e-3 of the
-    length over the speed.  When the load has a sharp switch (``contact_width``
-    or ``entry_smoothing`` zero) it never shortens a step below
+    length over the speed.  When the load has a sharp switch (both contact
+    widths or ``entry_smoothing`` zero) it never shortens a step below
     ``numerics.time_step``: a step of that size that fails the tolerance is
     accepted (``forced_steps``), since across a jump of the load no step meets
     a smooth error model; with the continuous load (the default) no step is
@@ -119,7 +119,7 @@ def step_control(scene: Scene, length: float) -> StepControl:
     speed = scene.impact.speed
     rate = ANGLE_SCALE * speed / length
     scales = np.array([length] * 3 + [speed] * 3 + [ANGLE_SCALE] * 3 + [rate] * 3 + [length])
-    sharp = scene.effects.contact_width == 0.0 or numerics.entry_smoothing == 0.0
+    sharp = scene.effects.sharp_contact or numerics.entry_smoothing == 0.0
     return ErrorControl(numerics.rtol, numerics.rtol * scales, first_step=1e-3 * length / speed,
                         forced_step=numerics.time_step if sharp else 0.0, min_step=floor)
 

@@ -199,7 +199,9 @@ def _drop_replaced(data: dict[str, Any], paths: list[list[str]]) -> None:
                 del _holder(data, full)[full[-1]]
     for dotted, (tag, keys_of) in TAGGED_TABLES.items():
         base, table = table_at(dotted)
-        if table is None or base + [tag] not in paths or table.get(tag) not in keys_of:
+        # a tag that is not a known name (a list, say) is left for validation to name
+        if table is None or base + [tag] not in paths or not isinstance(table.get(tag), str) \
+                or table.get(tag) not in keys_of:
             continue
         for key in [k for k in table if k not in keys_of[table[tag]] and not touched(base + [k])]:
             del table[key]

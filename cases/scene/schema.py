@@ -60,9 +60,11 @@ class Numerics(Strict):
                                description="the run ends when the speed falls below this")
     normal_velocity_guard: Number = field(1e-9, ge=0.0, le=1e-3,
                                           description="relative guard on Vn = 0 (sharp contact only)")
-    entry_smoothing: Number = field(1.0, ge=0.0, le=10.0,
-                                    description="length over which a surface point enters the target, in units of"
-                                                " its own size (the square root of its weight); 0: sharp")
+    entry_smoothing: Number = field(4.0, ge=0.0, le=10.0,
+                                    description="length over which a surface point enters the target (and crosses a"
+                                                " layer interface), in units of its own size (the square root of its"
+                                                " weight); 4 keeps RK4's time error under the mesh error at the longest"
+                                                " stable step (docs/accuracy.md); 0: sharp")
     energy_guard: bool = field(True, description="retake shorter any step that gains kinetic energy")
 
     @model_validator(mode="after")
@@ -114,4 +116,4 @@ class Scene(Strict):
         free_surface = effects.free_surface.build() if effects.free_surface is not None else None
         return DAFLLoads(quadrature, self.target.build(), self.numerics.normal_velocity_guard,
                          friction=effects.friction.build(), separation=effects.separation, free_surface=free_surface,
-                         contact_width=effects.contact_width, entry_smoothing=self.numerics.entry_smoothing)
+                         **effects.contact, entry_smoothing=self.numerics.entry_smoothing)

@@ -139,9 +139,24 @@ class Effects(Strict):
 
     friction: FrictionSpec = FrictionSpec()
     separation: bool = field(True, description="no stress where Vn <= 0")
-    contact_width: Number = field(1.5, unit="m/s", ge=0.0, le=100.0,
-                                  description="normal velocity over which the stress rises from 0 at Vn = 0 to the"
-                                              " full law; 0: the sharp switch (docs/model.md)")
+    contact_width: Number = field(0.0, unit="m/s", ge=0.0, le=100.0,
+                                  description="fixed part of the normal velocity over which the stress rises from 0"
+                                              " at Vn = 0 to the full law (docs/model.md); with contact_incidence 0"
+                                              " too: the sharp switch")
+    contact_incidence: Number = field(0.005, ge=0.0, le=0.5,
+                                      description="part of that width proportional to the body's speed"
+                                                  " |V| + |omega| r_max: the sine of the incidence angle over which"
+                                                  " the stress rises")
     free_surface: FreeSurfaceSpec | None = None
     gravity: bool = False
     gravity_acceleration: Number = field(9.80665, unit="m/s^2", ge=0.0, le=1e3)
+
+    @property
+    def contact(self) -> dict[str, float]:
+        """``contact_width`` and ``contact_incidence``, as the load and the 1-D reference take them."""
+        return {"contact_width": self.contact_width, "contact_incidence": self.contact_incidence}
+
+    @property
+    def sharp_contact(self) -> bool:
+        """Whether the contact factor is the sharp switch at ``Vn = 0`` (both widths zero)."""
+        return self.contact_width == 0.0 and self.contact_incidence == 0.0

@@ -11,6 +11,12 @@ A scene runs over a grid of discretisation settings, each against a reference:
   cheapest setting for an accuracy lies;
 * **scene**: the scene's own numerics, to show where they sit.
 
+Beside the grid, the report gives the **time convergence on each mesh**: every
+RK4 run with the default geometry against the finest step on the same mesh (its
+time error alone), the observed order between successive halvings, and the mesh
+error of that mesh (its finest step against the reference), where the time error
+stops mattering.
+
 The reference is the independent 1-D integration with exact nose entry for a
 normal impact without disturbance or effects (its depth is exact to 1e-12);
 otherwise the finest RK4 run on the finest mesh, with a Richardson estimate of
@@ -39,7 +45,7 @@ from .reference import axial_depth_1d
 from .speeds import is_unstable
 from .sweep import Sweep, Variation, run_sweep
 
-__all__ = ["accuracy_study", "DEFAULT_SIZES", "DEFAULT_STEPS", "DEFAULT_RTOLS", "DEFAULT_QUADRATURE_ORDERS"]
+__all__ = ["accuracy_study", "time_convergence", "DEFAULT_SIZES", "DEFAULT_STEPS", "DEFAULT_RTOLS", "DEFAULT_QUADRATURE_ORDERS"]
 
 DEFAULT_SIZES = (0.04, 0.02, 0.01, 0.005)
 DEFAULT_STEPS = (2e-4, 1e-4, 5e-5, 2.5e-5, 1.25e-5, 6.25e-6)
@@ -141,13 +147,55 @@ def accuracy_study(scene: str | os.PathLike, overrides: Overrides | None, store:
     return table, reference
 
 
+def time_convergence(table: pd.DataFrame) -> pd.DataFrame:
+    """RK4's time error on each mesh: each step against the finest step on the same mesh.
+
+    Rows are the RK4 runs with the default geometry (second order, exact normals, degree-2
+    quadrature) of an accuracy table, by mesh size and decreasing step.  ``*_time_error`` is the
+    difference from the finest step of that mesh (relative for the depth, deg for the axis angle,
+    m/s for the convergence speed); ``*_order`` is ``log2`` of the ratio of successive errors (the
+    observed order of the halving that reached the row); ``mesh_error`` is the relative depth
+    error of that mesh's finest step against the study's reference, the floor below which a
+    shorter step buys nothing.
+    """
+    default = ((table["axis"] != "scene") & (table["numerics.integrator"] == "rk4")
+               & (table["numerics.geometry_order"] == 2) & (table["numerics.normals"] == "exact")
+               & (table["numerics.quadrature_order"] == 2))
+    runs = table[default].drop_duplicates("key")
+    rows = []
+    for size, group in runs.groupby("numerics.mesh_size", sort=False):
+        group = group.sort_values("numerics.time_step", ascending=False)
+        if len(group) < 2:
+            continue
+        finest = group.iloc[-1]
+        for name, column in (("depth", "depth"), ("axis_angle", "axis_angle_change"),
+                             ("convergence_speed", "convergence_speed")):
+            error = (group[column] - finest[column]).abs().to_numpy(dtype=float, copy=True)
+            if name == "depth":
+                error = error / finest["depth"]
+            error[-1] = np.nan
+            group = group.assign(**{f"{name}_time_error": error})
+            with np.errstate(divide="ignore", invalid="ignore"):
+                order = np.log2(error[:-1] / error[1:])
+            group = group.assign(**{f"{name}_order": np.concatenate([[np.nan], order])})
+        group = group.assign(mesh_error=finest["depth_error"])
+        rows.append(group.iloc[:-1])
+    columns = ["numerics.mesh_size", "numerics.time_step", "steps", "depth_time_error", "depth_order",
+               "axis_angle_time_error", "axis_angle_order", "convergence_speed_time_error",
+               "convergence_speed_order", "mesh_error", "integration_time"]
+    if not rows:
+        return pd.DataFrame(columns=columns)
+    return pd.concat(rows)[columns].sort_values(["numerics.mesh_size", "numerics.time_step"],
+                                                 ascending=[False, False]).reset_index(drop=True)
+
+
 def _reference(sweep: Sweep, finest: pd.DataFrame) -> dict:
     """The exact 1-D reference of a plain normal impact, else the finest run with a Richardson estimate."""
     base = sweep.scenes[0]
     if is_plain_normal_impact(base):
         prepared = prepare_projectile(base)
         depth, _ = axial_depth_1d(prepared.profile, base.target.build(), prepared.mass.mass, base.impact.speed,
-                                  base.numerics.stop_speed, contact_width=base.effects.contact_width)
+                                  base.numerics.stop_speed, **base.effects.contact)
         return {"kind": "1-D integration with exact nose entry and the same contact width (exact)", "depth": depth,
                 "axis_angle_change": 0.0, "convergence_speed": np.nan, "depth_uncertainty": 0.0}
     q = finest["depth"].to_numpy()
@@ -213,4 +261,30 @@ def _markdown(table: pd.DataFrame, reference: dict, scene) -> str:
                      f" {row['depth_error']:.2e} | {row['axis_angle_error']:.2e} | {row['convergence_speed_error']:.2g} |"
                      f" {row['integration_time']:.2f} | {row['wall_time']:.2f} | {'yes' if row['pareto'] else ''} |")
     lines += ["", "![depth error against integration time](accuracy.png)", ""]
+    lines += _time_convergence_markdown(time_convergence(table))
     return "\n".join(lines)
+
+
+def _time_convergence_markdown(convergence: pd.DataFrame) -> list[str]:
+    if convergence.empty:
+        return []
+    lines = ["## Time convergence on each mesh", "",
+             "RK4 with the default geometry: each step against the finest step on the same mesh (the time"
+             " error alone), the observed order of each halving, and the mesh's own depth error (its finest"
+             " step against the reference), below which a shorter step buys nothing.", "",
+             "| mesh | step (s) | steps | depth time error | order | axis angle time error (deg) | order |"
+             " convergence speed time error (m/s) | order | mesh error (depth) | integration (s) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+
+    def order(value: float) -> str:
+        return "" if not np.isfinite(value) else f"{value:.1f}"
+
+    for _, row in convergence.iterrows():
+        mesh_error = "reference" if not np.isfinite(row["mesh_error"]) else f"{row['mesh_error']:.2e}"
+        lines.append(f"| {row['numerics.mesh_size'] * 1e3:g} mm | {row['numerics.time_step']:g} | {int(row['steps'])} |"
+                     f" {row['depth_time_error']:.2e} | {order(row['depth_order'])} |"
+                     f" {row['axis_angle_time_error']:.2e} | {order(row['axis_angle_order'])} |"
+                     f" {row['convergence_speed_time_error']:.2g} | {order(row['convergence_speed_order'])} |"
+                     f" {mesh_error} | {row['integration_time']:.2f} |")
+    lines.append("")
+    return lines

@@ -1,14 +1,23 @@
-"""What the contact width changes: ``penetrate contact``.
+"""What the two switch widths change: ``penetrate contact`` and ``penetrate entry``.
 
-A scene runs with the contact width ``w`` (``effects.contact_width``: the normal velocity over which a
-surface point's stress rises from 0 to the full law) halved again and again, and with ``w = 0``, the
-sharp switch of the paper's law, all at one fine RK4 step, so that the step error is far below the
-differences shown.  The table gives, for each width, the depth, the path length, the axis turn and
-(for unstable runs) the convergence speed, and their differences from the sharp run; for a plain
-normal impact also the independent 1-D integration with the same width.  The differences fall as
-``w`` does: the continuous law converges to the sharp one.  (The sharp run's own step error is
+A scene runs with the contact incidence ``delta`` (``effects.contact_incidence``: the contact width,
+the normal velocity over which a surface point's stress rises from 0 to the full law, is ``delta``
+times the body's speed ``|V| + |omega| r_max``) halved again and again, and with the sharp switch of
+the paper's law (``delta = 0`` and ``effects.contact_width = 0``), all at one fine RK4 step, so that
+the step error is far below the differences shown.  The table gives, for each incidence, the depth,
+the path length, the axis turn and (for unstable runs) the convergence speed, and their differences
+from the sharp run; for a plain normal impact also the independent 1-D integration with the same
+contact width.  The differences fall as ``delta`` does: the continuous law converges to the sharp
+one.  (The sharp run's own step error is
 larger than the continuous runs' at the same step: its switch chatters once the attack angle has
 decayed, so its axis turn converges at first order in the step.)
+
+The entry study runs a scene at several entry smoothings (``numerics.entry_smoothing``: the length over
+which a surface point enters the target, in units of its own size) and several RK4 steps: how much
+each smoothing moves the result (its values at the finest step) and how fast RK4's time error falls
+with it (each step against the finest step at the same smoothing).  Entry switches a point's load on
+within a fraction of a step when the smoothing is short, and a step that straddles many such entries
+has an error of no clean order; a longer smoothing overlaps the entries of neighbouring points.
 """
 
 from __future__ import annotations
@@ -28,27 +37,31 @@ from .reference import axial_depth_1d
 from .speeds import is_unstable
 from .sweep import Sweep, Variation, run_sweep
 
-__all__ = ["contact_study", "DEFAULT_WIDTHS", "DEFAULT_STEP"]
+__all__ = ["contact_study", "entry_study", "DEFAULT_INCIDENCES", "DEFAULT_STEP", "DEFAULT_SMOOTHINGS",
+           "DEFAULT_ENTRY_STEPS"]
 
-DEFAULT_WIDTHS = (3.0, 1.5, 0.75, 0.375, 0.1875)
+DEFAULT_INCIDENCES = (0.02, 0.01, 0.005, 0.0025, 0.00125)
 DEFAULT_STEP = 2.5e-6
+DEFAULT_SMOOTHINGS = (1.0, 2.0, 4.0, 8.0)
+DEFAULT_ENTRY_STEPS = (1e-4, 5e-5, 2.5e-5, 1.25e-5, 6.25e-6, 3.125e-6)
 
 
 def contact_study(scene: str | os.PathLike, overrides: Overrides | None, store: RunStore, out: str | os.PathLike,
-                  widths: Sequence[float] = DEFAULT_WIDTHS, step: float = DEFAULT_STEP,
+                  incidences: Sequence[float] = DEFAULT_INCIDENCES, step: float = DEFAULT_STEP,
                   pool: Pool | None = None) -> pd.DataFrame:
-    """Run ``scene`` at each contact width and the sharp law; write ``contact.md`` and ``contact.csv``."""
-    values = [*sorted(set(widths), reverse=True), 0.0]
-    variations = [Variation({"effects.contact_width": w, "numerics.integrator": "rk4", "numerics.time_step": step})
-                  for w in values]
+    """Run ``scene`` at each contact incidence (no fixed width) and the sharp law; write ``contact.md``
+    and ``contact.csv``."""
+    values = [*sorted(set(incidences), reverse=True), 0.0]
+    variations = [Variation({"effects.contact_width": 0.0, "effects.contact_incidence": d,
+                             "numerics.integrator": "rk4", "numerics.time_step": step}) for d in values]
     sweep = Sweep.from_file(scene, overrides, variations)
     result = run_sweep(sweep, store, pool)
     rows = []
     for i, (w, run) in enumerate(zip(values, result.runs)):
         if run.failed:
-            raise RuntimeError(f"the run at contact width {w:g} m/s failed: {run.error}")
+            raise RuntimeError(f"the run at contact incidence {w:g} failed: {run.error}")
         s = run.summary
-        rows.append({"contact_width": w, "depth": s.depth, "path_length": s.path_length,
+        rows.append({"contact_incidence": w, "depth": s.depth, "path_length": s.path_length,
                      "axis_angle_change": s.axis_angle_change, "end_reason": s.end_reason, "steps": s.steps,
                      "integration_time": s.integration_time,
                      "convergence_speed": convergence_speed(result.history(i)) if is_unstable(s.axis_angle_change)
@@ -61,7 +74,7 @@ def contact_study(scene: str | os.PathLike, overrides: Overrides | None, store: 
     if is_plain_normal_impact(base):
         prepared = prepare_projectile(base)
         table["depth_1d"] = [axial_depth_1d(prepared.profile, base.target.build(), prepared.mass.mass,
-                                            base.impact.speed, base.numerics.stop_speed, contact_width=w)[0]
+                                            base.impact.speed, base.numerics.stop_speed, contact_incidence=w)[0]
                              for w in values]
     out = Path(out)
     atomic_write_text(out / "contact.csv", table.to_csv(index=False))
@@ -71,20 +84,85 @@ def contact_study(scene: str | os.PathLike, overrides: Overrides | None, store: 
 
 def _markdown(table: pd.DataFrame, name: str, step: float) -> str:
     reference = "depth_1d" in table
-    lines = [f"# Contact width: {name}", "",
-             f"RK4 at {step:g} s on the scene's mesh; the last row is the sharp law (`contact_width = 0`). Changes"
-             " are from the sharp run (m, deg, m/s).", "",
-             "| contact width (m/s) | depth (m) | change | path (m) | change | axis turn (deg) | change |"
+    lines = [f"# Contact incidence: {name}", "",
+             f"RK4 at {step:g} s on the scene's mesh, no fixed contact width; the last row is the sharp law"
+             " (`contact_incidence = 0`). Changes are from the sharp run (m, deg, m/s).", "",
+             "| contact incidence | depth (m) | change | path (m) | change | axis turn (deg) | change |"
              " convergence speed (m/s) | change |" + (" 1-D depth, same width (m) |" if reference else ""),
              "|---|---|---|---|---|---|---|---|---|" + ("---|" if reference else "")]
     for _, row in table.iterrows():
-        cells = [f"{row['contact_width']:g}", f"{row['depth']:.6f}", f"{row['depth_change']:+.2e}",
+        cells = [f"{row['contact_incidence']:g}", f"{row['depth']:.6f}", f"{row['depth_change']:+.2e}",
                  f"{row['path_length']:.6f}", f"{row['path_length_change']:+.2e}", f"{row['axis_angle_change']:.4f}",
                  f"{row['axis_angle_change_change']:+.2e}", _number(row["convergence_speed"], ".2f"),
                  _number(row["convergence_speed_change"], "+.2e")]
         if reference:
             cells.append(f"{row['depth_1d']:.6f}")
         lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def entry_study(scene: str | os.PathLike, overrides: Overrides | None, store: RunStore, out: str | os.PathLike,
+                smoothings: Sequence[float] = DEFAULT_SMOOTHINGS, steps: Sequence[float] = DEFAULT_ENTRY_STEPS,
+                pool: Pool | None = None) -> pd.DataFrame:
+    """Run ``scene`` at each entry smoothing and RK4 step; write ``entry.md`` and ``entry.csv``.
+
+    One row per (smoothing, step): the depth, path length, axis turn and (unstable runs) convergence
+    speed; ``*_time_error``: the difference from the finest step at the same smoothing (relative for
+    the depth and path); ``*_change``: the finest step's value less that of the smallest smoothing.
+    """
+    smoothings, steps = sorted(set(smoothings)), sorted(set(steps), reverse=True)
+    values = [(e, h) for e in smoothings for h in steps]
+    variations = [Variation({"numerics.entry_smoothing": e, "numerics.integrator": "rk4", "numerics.time_step": h})
+                  for e, h in values]
+    sweep = Sweep.from_file(scene, overrides, variations)
+    result = run_sweep(sweep, store, pool)
+    rows = []
+    for i, ((e, h), run) in enumerate(zip(values, result.runs)):
+        if run.failed:
+            raise RuntimeError(f"the run at entry smoothing {e:g}, step {h:g} s failed: {run.error}")
+        s = run.summary
+        rows.append({"entry_smoothing": e, "time_step": h, "depth": s.depth, "path_length": s.path_length,
+                     "axis_angle_change": s.axis_angle_change, "steps": s.steps,
+                     "energy_rejections": s.energy_rejections, "integration_time": s.integration_time,
+                     "convergence_speed": convergence_speed(result.history(i)) if is_unstable(s.axis_angle_change)
+                     else math.nan})
+    table = pd.DataFrame(rows)
+    finest = table[table["time_step"] == steps[-1]].set_index("entry_smoothing")
+    for name, relative in (("depth", True), ("path_length", True), ("axis_angle_change", False),
+                           ("convergence_speed", False)):
+        at_finest = table["entry_smoothing"].map(finest[name])
+        error = (table[name] - at_finest).abs()
+        table[f"{name}_time_error"] = error / at_finest if relative else error
+        table[f"{name}_change"] = at_finest - finest[name].iloc[0]
+    out = Path(out)
+    atomic_write_text(out / "entry.csv", table.to_csv(index=False))
+    atomic_write_text(out / "entry.md", _entry_markdown(table, sweep.scenes[0].name or Path(scene).stem))
+    return table
+
+
+def _entry_markdown(table: pd.DataFrame, name: str) -> str:
+    steps = sorted(table["time_step"].unique(), reverse=True)
+    finest = table[table["time_step"] == steps[-1]]
+    smallest = finest["entry_smoothing"].iloc[0]
+    lines = [f"# Entry smoothing: {name}", "",
+             f"RK4 on the scene's mesh. At the finest step ({steps[-1]:g} s), each smoothing's result and its"
+             f" change from smoothing {smallest:g} (m, deg, m/s):", "",
+             "| entry smoothing | depth (m) | change | path (m) | change | axis turn (deg) | change |"
+             " convergence speed (m/s) | change |", "|---|---|---|---|---|---|---|---|---|"]
+    for _, row in finest.iterrows():
+        lines.append(f"| {row['entry_smoothing']:g} | {row['depth']:.6f} | {row['depth_change']:+.2e} |"
+                     f" {row['path_length']:.6f} | {row['path_length_change']:+.2e} |"
+                     f" {row['axis_angle_change']:.4f} | {row['axis_angle_change_change']:+.2e} |"
+                     f" {_number(row['convergence_speed'], '.2f')} | {_number(row['convergence_speed_change'], '+.2e')} |")
+    lines += ["", "Time error of each step against the finest step at the same smoothing: relative depth error /"
+              " axis-turn error (deg); `*`: the energy guard retook steps.", "",
+              "| entry smoothing | " + " | ".join(f"{h:g} s" for h in steps[:-1]) + " |",
+              "|---|" + "---|" * (len(steps) - 1)]
+    for e, group in table.groupby("entry_smoothing"):
+        group = group.set_index("time_step")
+        cells = [f"{group.loc[h, 'depth_time_error']:.1e} / {group.loc[h, 'axis_angle_change_time_error']:.1e}"
+                 + ("*" if group.loc[h, "energy_rejections"] else "") for h in steps[:-1]]
+        lines.append(f"| {e:g} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
 

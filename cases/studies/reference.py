@@ -11,9 +11,9 @@ target (no friction), an element at distance ``s`` behind the tip has
 and ``G`` of the whole nose is ``pi a^2 N``.  Once the nose is embedded the
 motion has a closed form (docs/validation.md).  With a contact width ``w``
 (the stress of an element rises from 0 at ``Vn = 0`` to the full law at
-``Vn = w``, :mod:`fem_loads.ramps`) the force is
+``Vn = W = w + delta V``, :mod:`fem_loads.ramps`) the force is
 
-    F(P, V) = int_0^P' 2 pi r r' (A sigma_0 + B rho_0 V^2 sin^2) S(V sin / w) ds,
+    F(P, V) = int_0^P' 2 pi r r' (A sigma_0 + B rho_0 V^2 sin^2) S(V sin / W) ds,
 
 which is no longer separable: the whole run is integrated, the integral over
 the nose taken by Gauss-Legendre quadrature.  None of this uses the mesh.
@@ -102,13 +102,15 @@ def closed_form_depth(profile: Profile, law: ResistanceLaw, mass: float, speed: 
 
 
 def axial_depth_1d(profile: Profile, law: ResistanceLaw, mass: float, speed: float,
-                   stop_speed: float = 0.0, rtol: float = 1e-12, contact_width: float = 0.0) -> tuple[float, float]:
+                   stop_speed: float = 0.0, rtol: float = 1e-12, contact_width: float = 0.0,
+                   contact_incidence: float = 0.0) -> tuple[float, float]:
     """Tip depth (m) at which the speed falls to ``stop_speed``, with exact nose entry.
 
     Integrates ``dP/dt = V, m dV/dt = -F(P, V)`` through the nose-entry phase
     (``G`` interpolated to round-off on Chebyshev points); after full
-    embedding the closed form takes over exactly.  With ``contact_width > 0``
-    the whole run is integrated with the force of :func:`axial_force`.
+    embedding the closed form takes over exactly.  With a contact width
+    ``w + delta V > 0`` (``contact_width``, ``contact_incidence``) the whole run
+    is integrated with the force of :func:`axial_force`.
 
     Returns
     -------
@@ -117,8 +119,8 @@ def axial_depth_1d(profile: Profile, law: ResistanceLaw, mass: float, speed: flo
     embedding_speed : float
         Speed (m/s) when the nose is fully embedded.
     """
-    if contact_width > 0.0:
-        return _axial_depth_contact(profile, law, mass, speed, stop_speed, rtol, contact_width)
+    if contact_width > 0.0 or contact_incidence > 0.0:
+        return _axial_depth_contact(profile, law, mass, speed, stop_speed, rtol, contact_width, contact_incidence)
     ln = profile.nose_length
     # G is smooth on the nose: tabulate it once on Chebyshev points for a fast, exact-to-rtol integrand
     nodes = 0.5 * ln * (1 - np.cos(np.linspace(0, math.pi, 401)))
@@ -157,27 +159,30 @@ def _integrate_entry(rate, nose_length: float, speed: float, stop_speed: float, 
 _GAUSS = np.polynomial.legendre.leggauss(2000)
 
 
-def axial_force(profile: Profile, law: ResistanceLaw, depth: float, speed: float, contact_width: float) -> float:
-    """Axial force (N) with the nose embedded to ``depth`` (m) at ``speed`` (m/s), with a contact width (m/s).
+def axial_force(profile: Profile, law: ResistanceLaw, depth: float, speed: float, contact_width: float,
+                contact_incidence: float = 0.0) -> float:
+    """Axial force (N) with the nose embedded to ``depth`` (m) at ``speed`` (m/s), with the contact width
+    ``W = w + delta V`` (m/s; ``w = contact_width``, ``delta = contact_incidence``, ``W > 0``).
 
-    ``int_0^P' 2 pi r r' (A sigma_0 + B rho_0 V^2 sin^2) S(V sin / w) ds`` by 2000-point Gauss-Legendre
+    ``int_0^P' 2 pi r r' (A sigma_0 + B rho_0 V^2 sin^2) S(V sin / W) ds`` by 2000-point Gauss-Legendre
     quadrature, plus a flat front face (``sin = 1``) of a blunt nose.
     """
+    width = contact_width + contact_incidence * speed
     extent = min(max(depth, 0.0), profile.nose_length)
     x, weights = _GAUSS
     s = 0.5 * extent * (x + 1.0)
     slope = profile.slope_at(s)
     sine = slope / np.sqrt(1.0 + slope**2)
-    stress = (law.static_stress + law.dynamic_density * speed**2 * sine**2) * smooth_step(speed * sine / contact_width)
+    stress = (law.static_stress + law.dynamic_density * speed**2 * sine**2) * smooth_step(speed * sine / width)
     force = 0.5 * extent * float(np.sum(weights * 2 * np.pi * profile.radius_at(s) * slope * stress))
     face = law.static_stress + law.dynamic_density * speed**2
-    return force + math.pi * profile.tip_radius**2 * face * float(smooth_step(np.array(speed / contact_width)))
+    return force + math.pi * profile.tip_radius**2 * face * float(smooth_step(np.array(speed / width)))
 
 
 def _axial_depth_contact(profile: Profile, law: ResistanceLaw, mass: float, speed: float, stop_speed: float,
-                         rtol: float, contact_width: float) -> tuple[float, float]:
+                         rtol: float, contact_width: float, contact_incidence: float) -> tuple[float, float]:
     def rate(t: float, y: np.ndarray) -> list[float]:
-        return [y[1], -axial_force(profile, law, y[0], y[1], contact_width) / mass]
+        return [y[1], -axial_force(profile, law, y[0], y[1], contact_width, contact_incidence) / mass]
 
     entry = _integrate_entry(rate, profile.nose_length, speed, stop_speed, rtol)
     if len(entry.t_events[0]) == 0:

@@ -13,6 +13,10 @@ Workloads: ``penetrate run`` of the shipped test 2 (the whole process: start-up,
 #3 at 900 m/s on a 20 mm mesh (the whole process, and the integration time the run reports), and
 the 72-run family sweep of docs/performance.md (study numerics, every core, a fresh run store each
 time).  Workloads go through the command line because it is the interface both versions share.
+
+``--pair NAME::REV_ARGS::THIS_ARGS`` (repeatable) adds a ``penetrate run ... --json`` workload whose
+arguments differ between the sides (say, the numerics each needs for the same accuracy); it reports
+the integration time the runs report.  ``--only-pairs`` skips the fixed workloads.
 """
 
 from __future__ import annotations
@@ -62,6 +66,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--against", required=True, metavar="REV")
     parser.add_argument("--repeats", type=int, default=7)
     parser.add_argument("--skip-sweep", action="store_true")
+    parser.add_argument("--pair", action="append", default=[], metavar="NAME::REV_ARGS::THIS_ARGS",
+                        help="a run whose arguments differ between the sides (integration time compared)")
+    parser.add_argument("--only-pairs", action="store_true", help="only the --pair workloads")
     args = parser.parse_args(argv)
     commit = subprocess.run(["git", "rev-parse", args.against], cwd=ROOT, check=True, capture_output=True,
                             text=True).stdout.strip()
@@ -71,11 +78,19 @@ def main(argv: list[str] | None = None) -> int:
                    capture_output=True)
     sides = {"this": (ROOT, work / "cache-this"), "rev": (other, work / "cache-rev")}
     try:
-        workloads = {"penetrate run test 2 (process, s)": TEST2, "penetrate run #3 900 m/s 20 mm (process, s)": P3_900}
-        for checkout, cache in sides.values():  # warm the caches
-            for command in workloads.values():
+        workloads = {} if args.only_pairs else {"penetrate run test 2 (process, s)": TEST2,
+                                                "penetrate run #3 900 m/s 20 mm (process, s)": P3_900}
+        pairs = {}
+        for text in args.pair:
+            name, rev_args, this_args = text.split("::")
+            pairs[f"{name} (integration, s)"] = {"rev": ["run", *rev_args.split(), "--json"],
+                                                 "this": ["run", *this_args.split(), "--json"]}
+        for side, (checkout, cache) in sides.items():  # warm the caches
+            for command in [*workloads.values(), *(pair[side] for pair in pairs.values())]:
                 _timed(checkout, cache, command)
-        times = {name: {"this": [], "rev": []} for name in [*workloads, "#3 900 m/s: integration (s)"]}
+        times = {name: {"this": [], "rev": []} for name in [*workloads, *pairs]}
+        if not args.only_pairs:
+            times["#3 900 m/s: integration (s)"] = {"this": [], "rev": []}
         for _ in range(args.repeats):
             for side, (checkout, cache) in sides.items():
                 for name, command in workloads.items():
@@ -83,7 +98,9 @@ def main(argv: list[str] | None = None) -> int:
                     times[name][side].append(seconds)
                     if command is P3_900:
                         times["#3 900 m/s: integration (s)"][side].append(record["integration_time"])
-        if not args.skip_sweep:
+                for name, pair in pairs.items():
+                    times[name][side].append(_timed(checkout, cache, pair[side])[1]["integration_time"])
+        if not args.skip_sweep and not args.only_pairs:
             name = "72-run family sweep (s)"
             times[name] = {"this": [], "rev": []}
             for _ in range(max(3, args.repeats // 2)):

@@ -136,7 +136,7 @@ def test_crossing_into_a_stiffer_layer_at_an_angle_keeps_the_path():
         return direction_after_interface(crossing) - direction_after_interface(homogeneous)
 
     default = turn()
-    narrow = turn(("effects.contact_width", 0.5), ("numerics.time_step", 1e-5))
+    narrow = turn(("effects.contact_incidence", 0.005 / 3), ("numerics.time_step", 1e-5))
     assert 0.0 < default < 0.06 and 0.0 < narrow < 0.6 * default
 
 

@@ -71,5 +71,5 @@ def test_blunt_normal_impact_matches_the_1d_integration():
     result = run_scene(scene)
     reference, _ = axial_depth_1d(result.prepared.profile, scene.target.build(),
                                   result.prepared.mass.mass, 280.0, scene.numerics.stop_speed,
-                                  contact_width=scene.effects.contact_width)
+                                  **scene.effects.contact)
     assert summarise(result).depth == pytest.approx(reference, rel=1e-3)
