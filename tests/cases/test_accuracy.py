@@ -76,7 +76,8 @@ def test_time_convergence_orders_of_a_known_error():
     table = time_convergence(pd.DataFrame(rows))
     assert list(table["numerics.mesh_size"]) == [0.04] * 3 + [0.02] * 3
     coarse = table[table["numerics.mesh_size"] == 0.02]
-    np.testing.assert_allclose(coarse["depth_time_error"], 1e15 * (np.array([4e-5, 2e-5, 1e-5]) ** 4 - 5e-6**4) / (5.1 + 1e15 * 5e-6**4))
+    np.testing.assert_allclose(coarse["depth_time_error"],
+                               1e15 * (np.array([4e-5, 2e-5, 1e-5]) ** 4 - 5e-6**4) / (5.1 + 1e15 * 5e-6**4))
     orders = table["depth_order"].dropna().to_numpy()
     assert len(orders) == 4 and np.all((orders > 4.0) & (orders < 4.2))  # 4 plus the finest step's own error
     np.testing.assert_allclose(table["axis_angle_order"].dropna(), table["depth_order"].dropna(), rtol=1e-3)

@@ -29,8 +29,8 @@ from cases.viz.paraview import write_paraview
 from cases.viz.trajectory import render_trajectory
 from support import rss_bytes
 
-COARSE = {"numerics.mesh_size": 0.04, "numerics.time_step": 4e-5}
-COARSE_SET = ["numerics.mesh_size=0.04", "numerics.time_step=4e-5"]
+COARSE = {"numerics.mesh_size": 0.04, "numerics.integrator": "rk4", "numerics.time_step": 4e-5}
+COARSE_SET = ["numerics.mesh_size=0.04", "numerics.integrator=rk4", "numerics.time_step=4e-5"]
 
 
 @pytest.fixture(scope="module")

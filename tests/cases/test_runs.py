@@ -122,7 +122,8 @@ def test_zero_disturbance_stays_straight():
 
 
 def test_rotating_the_scene_about_the_normal_rotates_the_trajectory():
-    scene = load_scene(scene_path("forrestal_luk_test5"), {"numerics.mesh_size": 0.02})
+    # RK4: a fixed step sequence, which Dormand-Prince's error norm (per world component) would not keep
+    scene = load_scene(scene_path("forrestal_luk_test5"), {"numerics.mesh_size": 0.02, "numerics.integrator": "rk4"})
     start = initial_state(scene, prepare_projectile(scene))
     angle = math.radians(37.0)
     c, s = math.cos(angle), math.sin(angle)
@@ -142,7 +143,7 @@ def test_energy_guard_keeps_coarse_steps_dissipative():
     with the guard no accepted step gains energy and the run stops.  (The continuous default law needs
     no guard at this step: the next test.)
     """
-    coarse = [("numerics.mesh_size", 0.03), ("numerics.time_step", 1e-4), *SHARP]
+    coarse = [("numerics.mesh_size", 0.03), ("numerics.integrator", "rk4"), ("numerics.time_step", 1e-4), *SHARP]
 
     def energy(*extra):
         result, _ = _run("forrestal_luk_test5", *coarse, *extra)
@@ -159,11 +160,13 @@ def test_energy_guard_keeps_coarse_steps_dissipative():
 
 
 def test_coarse_steps_stay_right_with_the_continuous_law():
-    """Test 5 with RK4 at 1e-4 s (five times the shipped step): no retake by the energy guard, no warning,
-    and the path within 0.3 % of the run at 2e-5 s.  (The sharp law at 1e-4 s: 3945 retakes for 3841
+    """Test 5 (20 mm, 3 points per facet) with RK4 at 1e-4 s, five times the step of the paper's study: no
+    retake by the energy guard, no warning, and the path within 0.3 % of the run at 2e-5 s (measured:
+    4.99995 against 5.00009 m, turn 4.187 against 4.204 deg).  (The sharp law at 1e-4 s: 3945 retakes for 3841
     steps and the time limit at 0.2 s, the previous test.)"""
-    coarse, _ = _run("forrestal_luk_test5", ("numerics.time_step", 1e-4))
-    fine, _ = _run("forrestal_luk_test5", ("numerics.time_step", 2e-5))
+    rk4 = (("numerics.integrator", "rk4"), ("numerics.quadrature_order", 2))
+    coarse, _ = _run("forrestal_luk_test5", *rk4, ("numerics.time_step", 1e-4))
+    fine, _ = _run("forrestal_luk_test5", *rk4, ("numerics.time_step", 2e-5))
     a, b = summarise(coarse), summarise(fine)
     assert a.end_reason == b.end_reason == "stopped"
     assert a.energy_rejections == 0 and a.warnings == []
@@ -175,7 +178,8 @@ def test_runs_warn_when_the_numerics_do_not_suit_the_scene():
     """Test 5 with RK4 at 2e-4 s, twice the coarsest step its contact ramp keeps stable (docs/model.md, "Why
     delta = 0.005"): the energy guard retakes nearly every step (measured: 9101 for 9551) and the run rides
     to the time limit; the summary says both. The shipped scene itself carries no warning."""
-    coarse, _ = _run("forrestal_luk_test5", ("numerics.time_step", 2e-4))
+    coarse, _ = _run("forrestal_luk_test5", ("numerics.integrator", "rk4"), ("numerics.quadrature_order", 2),
+                     ("numerics.time_step", 2e-4))
     record = summarise(coarse)
     assert record.energy_rejections > 0.1 * record.steps
     assert any("energy guard" in text for text in record.warnings)

@@ -12,7 +12,7 @@ from cases import scene_path
 from cases.run import RunStore, convergence_speed
 from cases.studies import Pool, Sweep, find_critical_velocity, is_unstable, measure_convergent_velocity
 
-STUDY = {"numerics.mesh_size": 0.02, "numerics.time_step": 2e-5}
+STUDY = {"numerics.mesh_size": 0.02, "numerics.integrator": "rk4", "numerics.time_step": 2e-5}
 QUIET, SERIAL = Pool(workers=2, progress=False), Pool(workers=1, progress=False)
 
 

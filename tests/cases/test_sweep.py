@@ -18,8 +18,10 @@ from cases.run import RunStore
 from cases.studies import Pool, Sweep, grid, parse_grid, read_variations, run_sweep
 
 # short runs of projectile #3: coarse mesh, 4 ms of penetration
-QUICK = {"numerics.mesh_size": 0.03, "numerics.time_step": 2e-5, "numerics.time_limit": 0.004}
-QUICK_SET = ["numerics.mesh_size=0.03", "numerics.time_step=2e-5", "numerics.time_limit=0.004"]
+QUICK = {"numerics.mesh_size": 0.03, "numerics.integrator": "rk4", "numerics.time_step": 2e-5,
+         "numerics.time_limit": 0.004}
+QUICK_SET = ["numerics.mesh_size=0.03", "numerics.integrator=rk4", "numerics.time_step=2e-5",
+             "numerics.time_limit=0.004"]
 VOLATILE = ["wall_time", "integration_time"]
 
 

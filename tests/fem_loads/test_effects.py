@@ -22,7 +22,7 @@ PROFILES = {
     "Forrestal-Luk CRH 3": Profile(0.0952, 1.4, OgiveNose(3.0)),
     "cone 12.92 deg": Profile(0.155, 0.93, ConeNose(12.92)),
 }
-COARSE = (("numerics.mesh_size", 0.02),)
+COARSE = (("numerics.mesh_size", 0.02), ("numerics.quadrature_order", 2), ("numerics.integrator", "rk4"))
 
 
 @functools.lru_cache(maxsize=None)

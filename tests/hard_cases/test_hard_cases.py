@@ -66,8 +66,8 @@ def test_attack_decay_adaptive_integrator_takes_long_steps(rtol):
 
     With the continuous load the attack angle decays smoothly and the error control can take the long
     steps the smooth phases allow.  Pass: the run stops with no forced step (none accepted above the
-    tolerance) and at most 10 accepted and 5 rejected steps per simulated millisecond (measured: 2.3 and
-    1.0 at rtol 1e-4, 4.7 and 1.7 at 1e-6).  The sharp law needs the forced steps: the next test.
+    tolerance) and at most 10 accepted and 5 rejected steps per simulated millisecond (measured: 1.4 and
+    0.7 at rtol 1e-4, 2.4 and 0.8 at 1e-6: 56 and 99 steps for the whole run).  The sharp law needs the forced steps: the next test.
     """
     result, _, record = _run(FL5, *MM20, *DOPRI, f"numerics.rtol={rtol}")
     stats = result.trajectory.statistics
@@ -83,8 +83,9 @@ def test_attack_decay_sharp_law_needs_forced_steps():
     smooth error model.  Pass: the run stops (no stall, no step floor), with at most ``1 ms / time_step
     + 1`` accepted steps per simulated millisecond (the error control shortens no step below
     ``time_step``) and at most 10 rejected steps per simulated millisecond; forced steps (accepted at the
-    floor) are counted, so the chatter was met and not hidden.  Before the forced steps rtol 1e-6 took
-    about 870 steps and 80 rejections per millisecond at 10 mm (72 s).
+    floor) are counted, so the chatter was met and not hidden (measured: 49.8 steps per ms, 1 991 of
+    2 078 forced).  Before the forced steps rtol 1e-6 took about 870 steps and 80 rejections per
+    millisecond at 10 mm (72 s).
     """
     result, _, record = _run(FL5, *MM20, *DOPRI, "numerics.rtol=1e-6", *SHARP)
     stats = result.trajectory.statistics
@@ -99,25 +100,23 @@ def test_attack_decay_sharp_law_needs_forced_steps():
 
 @pytest.mark.parametrize("rtol", [1e-4, 1e-6])
 def test_attack_decay_both_integrators_agree(rtol):
-    """Dormand-Prince (rtol 1e-4, 1e-6; never below 2e-5 s) against RK4 at 5e-6 s on test 5, 20 mm.
+    """Dormand-Prince (rtol 1e-4, 1e-6) against RK4 at 5e-6 s on test 5, 20 mm.
 
-    Pass: the same end (stopped); path length and tip depth within 0.5 % of each other; axis turn
-    within 0.3 deg; the attack angle decayed below 0.2 deg in both by half the impact speed.  The
-    reference is RK4 at 5e-6 s because the turn converges at first order through the chatter
-    (3.590 deg at 2e-5 s, 3.843 at 1e-5, 3.959 at 5e-6: RK4's own error at 5e-6 s is about 0.12 deg,
-    at 2e-5 s about 0.5).  Dormand-Prince gives 4.05 (rtol 1e-6) and 4.12 (rtol 1e-4); at rtol 1e-4
-    the turn moves by 0.09 deg with a last-bit change of the quaternion normalisation (4.03 before
-    it was made mirror exact): the chatter makes it round-off sensitive at that level.  Before the
-    fix Dormand-Prince at rtol 1e-4 reached a tip depth of 5.13 m against 4.96 m (3.4 %): the
-    attack angle kept chattering at +-0.5 deg while every step passed the error test, attitude
-    errors being measured against a radian.
+    Pass: the same end (stopped); path length and tip depth within 2e-4 of each other; axis turn
+    within 0.02 deg; the attack angle decayed below 0.2 deg in both by half the impact speed.  With the
+    continuous load RK4 has converged here (path 5.000092 m, depth 4.957011 m, turn 4.2037 deg from
+    2e-5 to 2.5e-6 s) and Dormand-Prince gives the same to 2e-5 and 0.0013 deg.  The sharp law's turn
+    converged at first order through its chatter (RK4 3.590, 3.843, 3.959 deg at 2e-5, 1e-5, 5e-6 s;
+    Dormand-Prince with forced steps 4.05); before the attitude errors were measured against 0.01 rad
+    Dormand-Prince at rtol 1e-4 reached a tip depth of 5.13 m against 4.96 m (3.4 %): the attack
+    angle kept chattering at +-0.5 deg while every step passed the error test.
     """
     _, rk4_history, rk4 = _run(FL5, *MM20, "numerics.integrator=rk4", "numerics.time_step=5e-6")
     _, dopri_history, dopri = _run(FL5, *MM20, *DOPRI, f"numerics.rtol={rtol}")
     assert rk4.end_reason == dopri.end_reason == "stopped"
-    assert dopri.path_length == pytest.approx(rk4.path_length, rel=5e-3)
-    assert dopri.depth == pytest.approx(rk4.depth, rel=5e-3)
-    assert dopri.axis_angle_change == pytest.approx(rk4.axis_angle_change, abs=0.3)
+    assert dopri.path_length == pytest.approx(rk4.path_length, rel=2e-4)
+    assert dopri.depth == pytest.approx(rk4.depth, rel=2e-4)
+    assert dopri.axis_angle_change == pytest.approx(rk4.axis_angle_change, abs=0.02)
     for history in (rk4_history, dopri_history):
         speed = history["speed"].to_numpy()
         at_half = int(np.argmax(speed < 0.5 * speed[0]))
@@ -128,28 +127,27 @@ def test_attack_decay_both_integrators_agree(rtol):
 def test_attack_decay_shipped_scene_at_10_mm_agrees():
     """The same agreement at 10 mm with Dormand-Prince's default rtol (1e-6) against RK4 at 5e-6 s.
 
-    Pass: stopped; path and tip depth within 0.5 %, axis turn within 0.5 deg; at most 1 ms / 2e-5 s
-    + 1 accepted and 10 rejected steps per simulated ms.  Before the fix: 38 356 steps and 3 405
-    rejections (870 per ms) in 72 s.  The reference is RK4 at 5e-6 s because at 1e-5 s RK4 still
-    carries a step error of about 0.4 degree in the turn (3.58 deg at 1e-5 s, 3.96 at 5e-6 s,
-    Dormand-Prince 4.16; measured 2026-11-21).
+    Pass: stopped; path and tip depth within 2e-4, axis turn within 0.02 deg; at most 10 accepted and
+    5 rejected steps per simulated ms, as at 20 mm.  With the sharp law, before the forced steps:
+    38 356 steps and 3 405 rejections (870 per ms) in 72 s; with them, 1 ms / 2e-5 s + 1 steps per ms
+    and a turn 0.2-0.6 deg off RK4's (3.58 deg at 1e-5 s, 3.96 at 5e-6 s, Dormand-Prince 4.16).
     """
     mesh = ("numerics.mesh_size=0.01", "numerics.quadrature_order=2")
-    _, _, rk4 = _run(FL5, *mesh, "numerics.time_step=5e-6")
+    _, _, rk4 = _run(FL5, *mesh, "numerics.integrator=rk4", "numerics.time_step=5e-6")
     result, _, dopri = _run(FL5, *mesh, *DOPRI)
     milliseconds = dopri.final_time * 1e3
     assert rk4.end_reason == dopri.end_reason == "stopped"
-    assert dopri.path_length == pytest.approx(rk4.path_length, rel=5e-3)
-    assert dopri.depth == pytest.approx(rk4.depth, rel=5e-3)
-    assert dopri.axis_angle_change == pytest.approx(rk4.axis_angle_change, abs=0.5)
-    assert result.trajectory.statistics["steps"] / milliseconds <= 51
-    assert result.trajectory.statistics["rejected_steps"] / milliseconds <= 10
+    assert dopri.path_length == pytest.approx(rk4.path_length, rel=2e-4)
+    assert dopri.depth == pytest.approx(rk4.depth, rel=2e-4)
+    assert dopri.axis_angle_change == pytest.approx(rk4.axis_angle_change, abs=0.02)
+    assert result.trajectory.statistics["steps"] / milliseconds <= 10
+    assert result.trajectory.statistics["rejected_steps"] / milliseconds <= 5
 
 
 # ---------------------------------------------------------------------------------------------------
-# 2. just below and just above the critical speed of projectile #3 (911 m/s at 20 mm, 2e-5 s)
+# 2. just below and just above the critical speed of projectile #3 (908 m/s at 20 mm, 2e-5 s)
 
-SIDES = {"below": 900.0, "above": 920.0}  # 1.2 % and 1.0 % from 911 m/s
+SIDES = {"below": 900.0, "above": 920.0}  # 0.9 % and 1.3 % from 908 m/s
 LADDER = [(0.04, 4e-5), (0.02, 2e-5), (0.02, 1e-5)]
 LADDER_SLOW = [(0.02, 1e-5), (0.01, 2e-5), (0.01, 1e-5)]
 
@@ -180,9 +178,12 @@ def test_near_critical_speed_converges_and_keeps_its_side(side):
     ``cases.studies.is_unstable``), and each pair of neighbouring settings agrees in path length
     within 0.5 %, in the peak attack angle within 2 %, in the axis turn within 2.5 deg and in the
     speed at which the attack angle has collapsed within 1 %: well inside the jump that marks the
-    critical speed (axis turn 8 -> 103 deg, path 28 -> 22.6 m, convergence 750 -> 362 m/s).  The
-    speeds sit 1 % either side of the critical speed; closer, the side depends on the setting (the
-    critical speed itself moves by a few m/s between settings).
+    critical speed (axis turn 9 -> 104 deg, path 28.1 -> 22.4 m, convergence 737 -> 360 m/s).  The
+    speeds sit about 1 % either side of the critical speed; closer, the side depends on the setting
+    (the critical speed itself moves by a few m/s between settings).  Measured, 40 mm -> 20 mm ->
+    20 mm at 1e-5 s: 900 m/s: path 28.026, 28.075, 28.075 m, peak 2.078, 2.043, 2.043 deg, convergence
+    731.1, 736.9, 736.9 m/s; 920 m/s: path 22.271, 22.360, 22.360 m, turn 104.2, 103.8, 103.8 deg.
+    The 40 mm step uses most of the margin (path 0.4 %, peak 1.7 %, convergence 0.8 %).
     """
     _check_side(side, LADDER)
 
@@ -587,9 +588,11 @@ def test_the_moment_settles_after_convergence():
     ``moment_y`` changes sign at most 5 times and stays within 2 % of the run's peak transverse
     moment, and the resistance centre is not reported there (its lever arm means nothing once the
     transverse force is a residue).  The sharp law, the same run: the shank's ``A sigma_0`` load jumps
-    from side to side, and the moment stays at the size of its peak (measured: up to 1.0 of the peak
-    here; it alternates at every other step at 920 m/s, 479 sign changes in 751 steps, and at 10 mm and
-    1120 m/s, 916 in 1310).
+    from side to side within each step, and the recorded moment stays at the size of its peak
+    (measured: 1.0 of the peak, one sign change in the window's 750 steps; on the code before the
+    continuous load it alternated at every other step, 479 sign changes in 751 steps at 920 m/s and,
+    at 10 mm and 1120 m/s, 916 in 1310).  Measured with the continuous load: no sign change, at most
+    9.5e-5 of the peak.
     """
     for numerics, smooth in (((), True), (SHARP, False)):
         _, history, _ = _run(P3, *MM20, *RK4_2E5, "impact.speed=1120", *numerics)
@@ -609,7 +612,8 @@ def test_rk4_reaches_its_order_with_the_continuous_load():
     """Test 5, 20 mm, RK4 at 2e-5, 1e-5, 5e-6 and 2.5e-6 s.
 
     Pass: the path length, the tip depth and the axis turn converge at order 3 or more as the step
-    halves (measured: 4.8 and 4.0 for the path).  The sharp law converges at first order in the turn
+    halves (measured: 3.4, 3.6 and 3.7 for path, depth and turn from 2e-5 to 5e-6 s; the last halving
+    reaches round-off, 8-13).  The sharp law converges at first order in the turn
     (3.590, 3.843, 3.959 deg at 2e-5, 1e-5, 5e-6 s) and with no clean order in the depth: every point
     entering and every switch at Vn = 0 is a jump RK4 crosses at first order.
     """

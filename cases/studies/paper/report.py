@@ -29,12 +29,12 @@ def fmt(value, digits: int = 0) -> str:
 
 
 def numerics_text(overrides: dict) -> str:
-    """``numerics.mesh_size=0.02 numerics.time_step=2e-5``: overrides as a user would type them."""
+    """``numerics.mesh_size=0.02 numerics.integrator=rk4 ...``: overrides as a user would type them."""
     return " ".join(f"{k}={_short(v)}" for k, v in overrides.items())
 
 
-def _short(value: float) -> str:
-    return _EXPONENT.sub(r"e\g<1>\g<2>", f"{value:g}")
+def _short(value: float | str) -> str:
+    return value if isinstance(value, str) else _EXPONENT.sub(r"e\g<1>\g<2>", f"{value:g}")
 
 
 def _cell(run: PaperRun) -> str:
@@ -152,7 +152,7 @@ def _inertia_and_check(r: StudyResults) -> list[str]:
               "| impact speed (m/s) | numerics | max attack (deg) | axis turn (deg) | convergent (m/s) |",
               "|---|---|---|---|---|"]
     for fine in r.runs[("fine numerics", P3)]:
-        for name, run in (("study: 20 mm, 2e-5 s", coarse[fine.speed]), ("shipped: 10 mm, 1e-5 s", fine)):
+        for name, run in (("study: 20 mm, 2e-5 s", coarse[fine.speed]), ("fine: 10 mm, 1e-5 s", fine)):
             lines.append(f"| {fine.speed:.0f} | {name} | {run.max_attack_angle:.3f} | {run.axis_angle_change:.2f} | "
                          f"{fmt(run.convergence_speed, 1)} |")
     lines.append("")
