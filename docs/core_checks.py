@@ -67,8 +67,8 @@ def normal_impact() -> None:
     record = summarise(result)
     law = scene.target.build()
     reference, v1 = axial_depth_1d(result.prepared.profile, law, result.prepared.mass.mass, 280.0,
-                                   scene.numerics.stop_speed)
-    print(f"3-D depth {record.depth:.5f} m; 1-D with exact nose entry {reference:.5f} m;"
+                                   scene.numerics.stop_speed, **scene.effects.contact)
+    print(f"3-D depth {record.depth:.5f} m; 1-D with exact nose entry and the same contact width {reference:.5f} m;"
           f" relative difference {record.depth / reference - 1:+.2e}; speed at full embedding {v1:.3f} m/s")
     print()
 
