@@ -101,6 +101,22 @@ def test_sweep_stores_runs_and_skips_them_when_run_again(tmp_path):
     assert history["time"].iloc[-1] == pytest.approx(0.004)
 
 
+def test_rounds_of_a_study_reuse_warm_workers(tmp_path):
+    """Two rounds on two local workers (as the bisection of a critical speed runs them) go to the same
+    worker processes, which keep their imports and prepared projectiles, and give the table one worker
+    gives."""
+    from cases.studies import pool as pool_module
+
+    first = run_sweep(_sweep(speeds=(1000,)), RunStore(tmp_path / "a"), Pool(workers=2, progress=False)).table()
+    executor = pool_module._WARM[2]
+    workers = set(executor._processes)  # the pids of its worker processes
+    second = run_sweep(_sweep(speeds=(1100, 1200)), RunStore(tmp_path / "a"), Pool(workers=2, progress=False))
+    assert pool_module._WARM[2] is executor and workers <= set(executor._processes)  # started lazily, kept
+    one = run_sweep(_sweep(speeds=(1000, 1100, 1200)), RunStore(tmp_path / "b"), Pool(workers=1, progress=False))
+    pd.testing.assert_frame_equal(_stable(pd.concat([first, second.table()], ignore_index=True)),
+                                  _stable(one.table()), check_dtype=False)
+
+
 def test_a_failed_run_is_recorded_and_does_not_stop_the_others(tmp_path):
     store = RunStore(tmp_path)
     # a centre of mass the counterweight cannot reach fails at run time, in the worker
