@@ -86,18 +86,21 @@ def prepared_path(spec_json: str, numerics_json: str):
 def _prepare(spec_json: str, numerics_json: str) -> PreparedProjectile:
     spec = Projectile.model_validate_json(spec_json)
     numerics = Numerics.model_validate_json(numerics_json)
-    geometry = spec.geometry()
     path = prepared_path(spec_json, numerics_json)
-    if path.exists() and (prepared := _load(path, geometry)) is not None:
+    if path.exists() and (prepared := _load(path, spec)) is not None:
         return prepared
-    prepared = _compute(spec, numerics, geometry)
+    prepared = _compute(spec, numerics, spec.geometry())
     _save(path, prepared)
     return prepared
 
 
-def _load(path, geometry: ProjectileGeometry) -> PreparedProjectile | None:
+def _load(path, spec: Projectile) -> PreparedProjectile | None:
     try:
         with np.load(path) as data:
+            # the counterweight's span as placed when this entry was computed: the same floats, without
+            # placing it again
+            span = data["counterweight"]
+            geometry = spec.geometry(placed=(float(span[0]), float(span[1])) if span.size else None)
             mass = MassProperties(float(data["mass"]), data["centre"], data["inertia"], float(data["volume"]))
             quarters = data["mirror_quarters"]
             quadrature = SurfaceQuadrature(data["points"], data["normals"], data["weights"],
@@ -111,8 +114,10 @@ def _load(path, geometry: ProjectileGeometry) -> PreparedProjectile | None:
 def _save(path, prepared: PreparedProjectile) -> None:
     m, q = prepared.mass, prepared.quadrature
     buffer = io.BytesIO()
+    span = prepared.geometry.counterweight
     np.savez(buffer, mass=m.mass, centre=m.centre, inertia=m.inertia, volume=m.volume, points=q.points,
              normals=q.normals, weights=q.weights, n_tetra=prepared.n_tetra,
+             counterweight=np.array(span if span is not None else [], dtype=float),
              mirror_quarters=q.mirror_quarters if q.mirror_quarters is not None else np.empty(0, dtype=np.int64))
     atomic_write(path, buffer.getvalue())
 

@@ -210,10 +210,13 @@ class Projectile(Strict):
             return {**body, COUNTERWEIGHT: self.counterweight.density}
         return body
 
-    def geometry(self) -> ProjectileGeometry:
+    def geometry(self, placed: tuple[float, float] | None = None) -> ProjectileGeometry:
         """The geometry to mesh: profile, cavity and the counterweight's span (placed here when the
         mass and centre of mass place it; with ``mass_properties`` an unplaced counterweight is
-        left out, since the given properties replace the integrated ones)."""
+        left out, since the given properties replace the integrated ones).
+
+        ``placed``: the span this spec's placement gave before (read back from a cache); used instead
+        of placing the counterweight again, which takes about 0.6 s of root finding."""
         profile = self.profile()
         if self.interior is None:
             return ProjectileGeometry(profile)
@@ -223,6 +226,8 @@ class Projectile(Strict):
             return ProjectileGeometry(profile, interior)
         if weight.start is not None:
             span = (weight.start, weight.end)
+        elif placed is not None:
+            span = placed
         else:
             span = place_counterweight(profile, interior, self.body_density or DEFAULT_BODY_DENSITY, weight.density,
                                        self.mass, self.centre_target)

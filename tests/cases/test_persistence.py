@@ -87,6 +87,29 @@ def test_runs_from_the_cache_and_from_scratch_agree_bitwise():
     np.testing.assert_array_equal(cold.attitude, warm.attitude)
 
 
+def test_a_placed_counterweight_comes_back_from_the_cache_without_placing_it_again(monkeypatch):
+    """#3's counterweight is placed by root finding on the mass and centre of mass (about 0.6 s); the
+    prepared entry keeps the span it found, the very same floats, and a projectile read back from the
+    disk places nothing."""
+    import cases.scene.projectile as projectile_module
+
+    scene = load_scene(scene_path("paper_p3"), COARSE)
+    prepared_path(*preparation_key(scene)).unlink(missing_ok=True)
+    _prepare.cache_clear()
+    placed = prepare_projectile(scene).geometry
+    assert placed.counterweight is not None
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("placed again")
+
+    monkeypatch.setattr(projectile_module, "place_counterweight", refuse)
+    _prepare.cache_clear()
+    again = prepare_projectile(scene).geometry
+    assert again.counterweight == placed.counterweight and again == placed
+    with pytest.raises(AssertionError, match="placed again"):
+        scene.projectile.geometry()  # the same spec with nothing cached places it
+
+
 def test_run_store_keeps_records_under_the_scene_and_the_code(tmp_path):
     store = RunStore(tmp_path / "store")
     assert not (tmp_path / "store").exists()  # made at the first save only
