@@ -20,12 +20,12 @@ def register(commands) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..run import history_table, run_scene, summarise, write_outputs
+    from ..run import history_columns, run_scene, summarise, write_outputs
     from ..scene import load_scene
 
     scene = load_scene(args.scene, overrides(args))
     result = run_scene(scene)
-    history = history_table(result)
+    history = history_columns(result)
     summary = summarise(result, history)
     if args.out:
         write_outputs(result, args.out, scene.outputs.history_every, history)

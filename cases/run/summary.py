@@ -9,15 +9,19 @@ import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Annotated, Any
 
-import pandas as pd
+import numpy as np
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 
 from ..scene import Scene
-from .history import ATTACK_ANGLE_SPEED_FRACTION, HISTORY_UNITS, attack_angle_peak, history_csv, history_table
+from .history import ATTACK_ANGLE_SPEED_FRACTION, HISTORY_UNITS, attack_angle_peak, history_columns, history_csv
 from .persistence import atomic_write, atomic_write_text, json_safe
 from .runner import RunResult, run_scene
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = ["RunSummary", "summarise", "run_warnings", "write_outputs", "StoredRun", "simulate_record",
            "MAX_STORED_HISTORY_ROWS", "WARN_SHARE"]
@@ -86,23 +90,27 @@ class RunSummary(BaseModel):
         return json_safe(self.model_dump())
 
 
-def summarise(result: RunResult, history: pd.DataFrame | None = None) -> RunSummary:
-    """The run's :class:`RunSummary` (``history``: its :func:`~.history.history_table`, computed if not given)."""
-    h = history_table(result) if history is None else history
+def summarise(result: RunResult, history: pd.DataFrame | Mapping[str, np.ndarray] | None = None) -> RunSummary:
+    """The run's :class:`RunSummary` (``history``: its :func:`~.history.history_columns` or
+    :func:`~.history.history_table`, computed if not given)."""
+    h = history_columns(result) if history is None else history
+
+    def column(name: str) -> np.ndarray:
+        return np.asarray(h[name])
+
     mass = result.prepared.mass
     stats = result.trajectory.statistics
-    first, last = h.iloc[0], h.iloc[-1]
     return RunSummary(
         scene=result.scene.name,
-        depth=float(h["tip_depth"].max()),
-        path_length=float(last["path_length"]),
+        depth=float(np.max(column("tip_depth"))),
+        path_length=float(column("path_length")[-1]),
         end_reason=result.trajectory.end_reason,
-        final_time=float(last["time"]),
-        final_speed=float(last["speed"]),
-        final_position=[float(last[f"position_{c}"]) for c in "xyz"],
-        max_attack_angle=float(h["total_attack_angle"].iloc[attack_angle_peak(h)]),
-        final_attack_angle=float(last["attack_angle"]),
-        axis_angle_change=float(last["axis_angle"] - first["axis_angle"]),
+        final_time=float(column("time")[-1]),
+        final_speed=float(column("speed")[-1]),
+        final_position=[float(column(f"position_{c}")[-1]) for c in "xyz"],
+        max_attack_angle=float(column("total_attack_angle")[attack_angle_peak(h)]),
+        final_attack_angle=float(column("attack_angle")[-1]),
+        axis_angle_change=float(column("axis_angle")[-1] - column("axis_angle")[0]),
         wall_time=result.wall_time,
         integration_time=result.integration_time,
         mass=mass.mass,
@@ -140,7 +148,7 @@ def run_warnings(end_reason: str, statistics: dict) -> list[str]:
 
 
 def write_outputs(result: RunResult, out_dir: str | os.PathLike, every: int = 1,
-                  history: pd.DataFrame | None = None) -> dict[str, Path]:
+                  history: pd.DataFrame | Mapping[str, np.ndarray] | None = None) -> dict[str, Path]:
     """Write ``summary.json`` (with the resolved scene) and ``history.csv`` into ``out_dir``.
 
     Each file is written atomically, and ``summary.json`` last: a run killed at
@@ -151,7 +159,7 @@ def write_outputs(result: RunResult, out_dir: str | os.PathLike, every: int = 1,
     numbers are written as JSON ``null`` and as empty CSV cells.
     """
     out = Path(out_dir)
-    h = history_table(result) if history is None else history
+    h = history_columns(result) if history is None else history
     record = summarise(result, h).record()
     record["scene_resolved"] = result.scene.model_dump(mode="json")
     record["history_units"] = HISTORY_UNITS
@@ -196,12 +204,12 @@ def simulate_record(scene_json: str) -> tuple[dict, bytes | None]:
     scene = Scene.model_validate_json(scene_json)
     try:
         result = run_scene(scene)
-        history = history_table(result)
+        history = history_columns(result)
         record = summarise(result, history).record()
         record["scene_resolved"] = scene.model_dump(mode="json")
     except Exception as exc:  # recorded, so that one failure does not stop the sweep
         return {"error": f"{type(exc).__name__}: {exc}"}, None
     buffer = io.BytesIO()
     with gzip.GzipFile(fileobj=buffer, mode="wb", mtime=0) as gz:
-        gz.write(history_csv(history, max(1, len(history) // MAX_STORED_HISTORY_ROWS)))
+        gz.write(history_csv(history, max(1, len(history["time"]) // MAX_STORED_HISTORY_ROWS)))
     return record, buffer.getvalue()

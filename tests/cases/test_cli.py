@@ -82,3 +82,19 @@ def test_compare_says_where_it_wrote(tmp_path):
     bad = penetrate("compare", str(scene_path("forrestal_luk_test2")), "--laws", "soil,clay", "--out",
                     str(tmp_path / "bad"), "--store", str(tmp_path / "s2"), "--no-progress")
     assert bad.returncode == 2 and "--laws: law = 'clay'" in bad.stderr and not (tmp_path / "bad").exists()
+
+
+def test_a_run_imports_only_what_it_needs(tmp_path):
+    """``penetrate run`` of a projectile seen before (with ``--out`` too) imports neither pandas nor the
+    picture, cluster and meshing libraries: start-up is most of a short run's time (pandas alone takes
+    0.16 s to import)."""
+    assert penetrate("run", str(scene_path("forrestal_luk_test2")), *FAST, "--json").returncode == 0  # mesh it
+    code = ("import sys; from cases.cli import main; main(sys.argv[1:]); "
+            "print(sorted(m for m in ('pandas', 'pyvista', 'matplotlib', 'distributed', 'vtk', 'gmsh')"
+            " if m in sys.modules))")
+    for extra in ([], ["--out", str(tmp_path / "run")]):
+        done = subprocess.run([sys.executable, "-c", code, "run", str(scene_path("forrestal_luk_test2")), *FAST,
+                               "--json", *extra], capture_output=True, text=True, timeout=300)
+        assert done.returncode == 0, done.stderr
+        assert done.stdout.splitlines()[-1] == "[]"
+    assert (tmp_path / "run" / "history.csv").exists()
