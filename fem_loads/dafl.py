@@ -257,7 +257,7 @@ class DAFLLoads:
         sigma, normal_velocity = self.stress(position, velocity, rotation, angular_velocity)
         tau = None
         if self.friction is not None:
-            slip, scale = self._slip(normal_velocity, velocity @ rotation, angular_velocity)
+            slip, scale, _ = self._slip(normal_velocity, velocity @ rotation, angular_velocity)
             tau = self.friction.stress(sigma) * scale * slip
         return SurfaceStress(sigma, tau, normal_velocity)
 
@@ -339,9 +339,9 @@ class DAFLLoads:
         return -(self._normal_arm_t @ stress)
 
     def _slip(self, normal_velocity: np.ndarray, velocity_body: np.ndarray,
-              angular_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The slip speed ``|s_i|`` at every point and the factor ``k_i`` that gives the friction
-        stress's share along the slip: ``tau_i k_i s_i`` is the tangential stress vector.
+              angular_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The slip speed ``|s_i|`` at every point, the factor ``k_i`` that gives the friction stress's
+        share along the slip (``tau_i k_i s_i`` is the tangential stress vector) and ``r_i . omega``.
 
         ``s_i = V + omega x r_i - Vn_i n_i``, with ``|s|^2 = |u|^2 - Vn^2`` and
         ``|u|^2 = |V|^2 + 2 r . (V x omega) + |omega|^2 |r|^2 - (omega . r)^2`` (no per-point
@@ -357,9 +357,9 @@ class DAFLLoads:
         if self._smooth_contact:
             inverse = self._inverse_width(math.sqrt(float(v @ v)) + math.sqrt(float(w @ w)) * self._max_radius)
             # k = 1 / sqrt(s^2 + W^2) = (1/W) / sqrt((s/W)^2 + 1); a body at rest (W = 0) has no slip
-            return slip, inverse / np.sqrt(np.square(slip * inverse) + 1.0)
+            return slip, inverse / np.sqrt(np.square(slip * inverse) + 1.0), r_dot_w
         moving = slip > 1e-12 * (math.sqrt(float(v @ v)) + 1e-300)
-        return slip, np.where(moving, 1.0 / np.where(moving, slip, 1.0), 0.0)
+        return slip, np.where(moving, 1.0 / np.where(moving, slip, 1.0), 0.0), r_dot_w
 
     def _friction_load(self, sigma: np.ndarray, normal_velocity: np.ndarray, velocity_body: np.ndarray,
                        angular_velocity: np.ndarray) -> np.ndarray:
@@ -372,8 +372,7 @@ class DAFLLoads:
         """
         v, w = velocity_body, angular_velocity
         points = self._points
-        _, scale = self._slip(normal_velocity, v, w)
-        r_dot_w = points @ w
+        _, scale, r_dot_w = self._slip(normal_velocity, v, w)
         c = self.friction.stress(sigma) * self._weights * scale
         c_vn = c * normal_velocity
         sum_c = float(c.sum())

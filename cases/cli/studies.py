@@ -13,21 +13,28 @@ from .options import add_pool_options, add_scene_options, out_folder, overrides,
 __all__ = ["register"]
 
 
+def _study_parser(commands, name: str, help: str, writes: str,
+                  json_help: str = "print the table as JSON records") -> argparse.ArgumentParser:
+    """A study's command with what every study takes: the scene and its overrides, where the runs go,
+    ``--json`` and ``--out`` (default ``runs/NAME``; ``writes`` names what is written there)."""
+    parser = commands.add_parser(name, help=help)
+    add_scene_options(parser)
+    add_pool_options(parser, "runs/store")
+    parser.add_argument("--json", action="store_true", help=json_help)
+    parser.add_argument("--out", default=f"runs/{name}", type=out_folder, metavar="DIR",
+                        help=f"where to write {writes} (default runs/{name})")
+    return parser
+
+
 def register(commands) -> None:
-    compare = commands.add_parser("compare", help="run a scene under several resistance laws, side by side")
-    add_scene_options(compare)
-    add_pool_options(compare, "runs/store")
-    compare.add_argument("--json", action="store_true", help="print the table as JSON records")
+    compare = _study_parser(commands, "compare", "run a scene under several resistance laws, side by side",
+                            "compare.md, compare.csv and compare.png")
     compare.add_argument("--laws", required=True, metavar="A,B,...",
                          help="comma-separated law names (see docs/effects.md)")
-    compare.add_argument("--out", default="runs/compare", type=out_folder, metavar="DIR",
-                         help="where to write compare.md, compare.csv and compare.png (default runs/compare)")
     compare.set_defaults(handler=compare_laws)
 
-    accuracy = commands.add_parser("accuracy", help="what accuracy costs in time, for a scene")
-    add_scene_options(accuracy)
-    add_pool_options(accuracy, "runs/store")
-    accuracy.add_argument("--json", action="store_true", help="print the result as one JSON object")
+    accuracy = _study_parser(commands, "accuracy", "what accuracy costs in time, for a scene",
+                             "accuracy.md, .csv and .png", json_help="print the result as one JSON object")
     accuracy.add_argument("--sizes", default="0.04,0.02,0.01,0.005", metavar="M,M,...",
                           help="mesh sizes of the mesh axis (default 0.04,0.02,0.01,0.005 m)")
     accuracy.add_argument("--steps", default="2e-4,1e-4,5e-5,2.5e-5,1.25e-5,6.25e-6", metavar="S,S,...",
@@ -36,32 +43,22 @@ def register(commands) -> None:
                           help="Dormand-Prince tolerances of the time axis (default 1e-3,1e-4,1e-5,1e-6)")
     accuracy.add_argument("--quadrature-orders", default="4,6", metavar="Q,Q,...",
                           help="facet quadrature degrees beside the default 2, on the mesh-size axis (default 4,6)")
-    accuracy.add_argument("--out", default="runs/accuracy", type=out_folder, metavar="DIR",
-                          help="where to write accuracy.md, .csv and .png (default runs/accuracy)")
     accuracy.set_defaults(handler=accuracy_study)
 
-    contact = commands.add_parser("contact", help="what the contact incidence changes: a scene down to the sharp law")
-    add_scene_options(contact)
-    add_pool_options(contact, "runs/store")
-    contact.add_argument("--json", action="store_true", help="print the table as JSON records")
+    contact = _study_parser(commands, "contact", "what the contact incidence changes: a scene down to the sharp law",
+                            "contact.md and contact.csv")
     contact.add_argument("--incidences", default="0.02,0.01,0.005,0.0025,0.00125", metavar="D,D,...",
                          help="contact incidences beside the sharp law's 0 (default 0.02,0.01,0.005,0.0025,0.00125)")
     contact.add_argument("--step", type=positive_float, default=2.5e-6, metavar="S",
                          help="the RK4 step of every run (default 2.5e-6 s)")
-    contact.add_argument("--out", default="runs/contact", type=out_folder, metavar="DIR",
-                         help="where to write contact.md and contact.csv (default runs/contact)")
     contact.set_defaults(handler=contact_incidence_study)
 
-    entry = commands.add_parser("entry", help="what the entry smoothing changes, and RK4's time error with it")
-    add_scene_options(entry)
-    add_pool_options(entry, "runs/store")
-    entry.add_argument("--json", action="store_true", help="print the table as JSON records")
+    entry = _study_parser(commands, "entry", "what the entry smoothing changes, and RK4's time error with it",
+                          "entry.md and entry.csv")
     entry.add_argument("--smoothings", default="1,2,4,8", metavar="E,E,...",
                        help="entry smoothings (units of a point's own size; default 1,2,4,8)")
     entry.add_argument("--steps", default="1e-4,5e-5,2.5e-5,1.25e-5,6.25e-6,3.125e-6", metavar="S,S,...",
                        help="RK4 steps; the finest is each smoothing's reference (default 1e-4 ... 3.125e-6 s)")
-    entry.add_argument("--out", default="runs/entry", type=out_folder, metavar="DIR",
-                       help="where to write entry.md and entry.csv (default runs/entry)")
     entry.set_defaults(handler=entry_smoothing_study)
 
     paper = commands.add_parser("paper", help="regenerate the paper's study: tables and figures")
@@ -130,11 +127,7 @@ def contact_incidence_study(args: argparse.Namespace) -> int:
 
     table = contact_study(args.scene, overrides(args), RunStore(args.store), args.out,
                           _numbers("--incidences", args.incidences), args.step, pool(args))
-    if args.json:
-        print(table.to_json(orient="records"))
-    else:
-        print((Path(args.out) / "contact.md").read_text())
-    return 0
+    return _show(args, table, "contact.md")
 
 
 def entry_smoothing_study(args: argparse.Namespace) -> int:
@@ -146,10 +139,15 @@ def entry_smoothing_study(args: argparse.Namespace) -> int:
         raise InputError(f"--steps {args.steps!r}: expected two or more different steps")
     table = entry_study(args.scene, overrides(args), RunStore(args.store), args.out,
                         _numbers("--smoothings", args.smoothings), steps, pool(args))
+    return _show(args, table, "entry.md")
+
+
+def _show(args: argparse.Namespace, table, report: str) -> int:
+    """A study's table as JSON records with ``--json``, else its markdown report from ``--out``."""
     if args.json:
         print(table.to_json(orient="records"))
     else:
-        print((Path(args.out) / "entry.md").read_text())
+        print((Path(args.out) / report).read_text())
     return 0
 
 

@@ -133,7 +133,7 @@ def axial_depth_1d(profile: Profile, law: ResistanceLaw, mass: float, speed: flo
         force += law.dynamic_density * y[1] ** 2 * float(g_interp(p))
         return [y[1], -force / mass]
 
-    sol = _integrate_entry(rate, ln, speed, stop_speed, rtol)
+    sol = _integrate(rate, [0.0, speed], stop_speed, rtol, embedded_at=ln)
     if len(sol.t_events[0]) == 0:  # stopped before full embedding
         return float(sol.y[0, -1]), float("nan")
     v1 = float(sol.y_events[0][0][1])
@@ -142,18 +142,22 @@ def axial_depth_1d(profile: Profile, law: ResistanceLaw, mass: float, speed: flo
     return ln + rest, v1
 
 
-def _integrate_entry(rate, nose_length: float, speed: float, stop_speed: float, rtol: float):
-    """``solve_ivp`` of ``(P, V)`` from the surface until the nose is embedded or the speed falls to ``stop_speed``."""
-    def embedded(t: float, y: np.ndarray) -> float:
-        return y[0] - nose_length
-
+def _integrate(rate, start: list[float], stop_speed: float, rtol: float, embedded_at: float | None = None):
+    """``solve_ivp`` of ``(P, V)`` from ``start`` until the speed falls to ``stop_speed`` or, with
+    ``embedded_at`` (the nose length), the nose is embedded (events ``[embedded, stopped]``, else
+    ``[stopped]``)."""
     def stopped(t: float, y: np.ndarray) -> float:
         return y[1] - stop_speed
 
-    embedded.terminal = stopped.terminal = True
-    horizon = 10 * nose_length / speed + 1.0
-    return integrate.solve_ivp(rate, (0.0, horizon), [0.0, speed], method="DOP853", rtol=rtol, atol=1e-14,
-                               events=[embedded, stopped])
+    stopped.terminal = True
+    events, horizon = [stopped], 1e3
+    if embedded_at is not None:
+        def embedded(t: float, y: np.ndarray) -> float:
+            return y[0] - embedded_at
+
+        embedded.terminal = True
+        events, horizon = [embedded, stopped], 10 * embedded_at / start[1] + 1.0
+    return integrate.solve_ivp(rate, (0.0, horizon), start, method="DOP853", rtol=rtol, atol=1e-14, events=events)
 
 
 _GAUSS = np.polynomial.legendre.leggauss(2000)
@@ -184,16 +188,10 @@ def _axial_depth_contact(profile: Profile, law: ResistanceLaw, mass: float, spee
     def rate(t: float, y: np.ndarray) -> list[float]:
         return [y[1], -axial_force(profile, law, y[0], y[1], contact_width, contact_incidence) / mass]
 
-    entry = _integrate_entry(rate, profile.nose_length, speed, stop_speed, rtol)
+    entry = _integrate(rate, [0.0, speed], stop_speed, rtol, embedded_at=profile.nose_length)
     if len(entry.t_events[0]) == 0:
         return float(entry.y[0, -1]), float("nan")
     p1, v1 = (float(v) for v in entry.y_events[0][0])
-
-    def stopped(t: float, y: np.ndarray) -> float:
-        return y[1] - stop_speed
-
-    stopped.terminal = True
     # embedded: F depends on V alone; integrate until the speed falls to stop_speed
-    rest = integrate.solve_ivp(rate, (0.0, 1e3), [p1, v1], method="DOP853", rtol=rtol, atol=1e-14,
-                               events=[stopped])
+    rest = _integrate(rate, [p1, v1], stop_speed, rtol)
     return float(rest.y_events[0][0][0]) if len(rest.t_events[0]) else float(rest.y[0, -1]), v1
