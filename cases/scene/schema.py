@@ -66,6 +66,10 @@ class Numerics(Strict):
                                                 " weight); 4 keeps RK4's time error under the mesh error at the longest"
                                                 " stable step (docs/accuracy.md); 0: sharp")
     energy_guard: bool = field(True, description="retake shorter any step that gains kinetic energy")
+    kernel: Literal["auto", "numpy", "compiled"] = field(
+        "auto", description="how the steps are computed: numpy (the reference), compiled (numba: the whole Runge-Kutta"
+                            " step in machine code, after about 0.4 s of loading per process) or auto (compiled in"
+                            " studies, whose workers load it once, numpy for a single run)")
 
     @model_validator(mode="after")
     def _reachable_time_limit(self):
