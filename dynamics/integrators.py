@@ -72,12 +72,15 @@ class StepResult:
         The evaluation at the start of the step (reusable after a rejection).
     last : Evaluation or None
         For first-same-as-last methods, the evaluation at the end of the step.
+    evaluations : int
+        Calls of the load function the step made.
     """
 
     state: State
     error: np.ndarray | None
     first: Evaluation
     last: Evaluation | None
+    evaluations: int = 0
 
 
 def _path_increment(chord: np.ndarray, before: np.ndarray, after: np.ndarray) -> float:
@@ -154,16 +157,22 @@ class RungeKutta:
         start[POSITION], start[VELOCITY], start[ANGULAR_VELOCITY] = x0, v0, w0
         k = np.zeros((self.stages, N_INCREMENTS))  # the path column stays 0: see _path_increment
         evaluations: list[Evaluation] = []
+        calls = 0
         try:
             for i in range(self.stages):
                 if i:
                     z = start + (h * self.A[i, :i]) @ k[:i]
                     x, v, u, w = z[POSITION], z[VELOCITY], z[ROTATION], z[ANGULAR_VELOCITY]
                     e = evaluate(body, loads, x, v, compose(q0, u), w)
+                    calls += 1
                     rate = right_jacobian_inverse(u, w)
                 else:
                     x, v, w = x0, v0, w0
-                    e = first if first is not None else evaluate(body, loads, x, v, q0, w)
+                    if first is None:
+                        e = evaluate(body, loads, x, v, q0, w)
+                        calls += 1
+                    else:
+                        e = first
                     rate = w
                 evaluations.append(e)
                 row = k[i]
@@ -179,7 +188,7 @@ class RungeKutta:
             nan = np.full(3, np.nan)
             new = State(state.time + h, nan, nan, np.full(4, np.nan), nan, math.nan)
             error = np.full(N_INCREMENTS, np.inf) if self.b_error is not None else None
-            return StepResult(new, error, evaluations[0] if evaluations else first, None)
+            return StepResult(new, error, evaluations[0] if evaluations else first, None, calls)
         velocity = v0 + z[VELOCITY]
         new = State(
             time=state.time + h,
@@ -190,7 +199,7 @@ class RungeKutta:
             path_length=state.path_length + _path_increment(z[POSITION], v0, velocity),
         )
         error = h * (self.b_error @ k) if self.b_error is not None else None
-        return StepResult(new, error, evaluations[0], evaluations[-1] if self.fsal else None)
+        return StepResult(new, error, evaluations[0], evaluations[-1] if self.fsal else None, calls)
 
 
 class RK4(RungeKutta):

@@ -185,16 +185,10 @@ def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: Runge
         :data:`STEP_FLOOR` or :data:`MAX_STEPS`.  The history up to the last
         accepted step is kept whatever ended the run.
     """
-    calls = 0
-
-    def counted(*args):
-        nonlocal calls
-        calls += 1
-        return loads(*args)
-
     h = control.start(method)
     state = initial
-    first = evaluate(body, counted, state.position, state.velocity, state.attitude, state.angular_velocity)
+    first = evaluate(body, loads, state.position, state.velocity, state.attitude, state.angular_velocity)
+    calls = 1  # load evaluations: this one, those of every step taken (RETAKEn ones too) and of the event searches
     recorder = _Recorder()
     recorder.add(state, first)
     values = [event.function(state) for event in events]
@@ -210,7 +204,8 @@ def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: Runge
             end_reason = MAX_STEPS
             break
         size = min(h, remaining)
-        result = method.step(body, counted, state, size, first)
+        result = method.step(body, loads, state, size, first)
+        calls += result.evaluations
         verdict, value = control.judge(result, state, size)
         if verdict == RETAKE:
             rejected += 1
@@ -236,17 +231,21 @@ def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: Runge
         new_values = [event.function(new) for event in events]
         fired = [ev for ev, g0, g1 in zip(events, values, new_values) if ev.fired(state, new, g0, g1)]
         if fired:
-            new, end_reason = _locate(body, counted, method, state, result.first, size, fired)
+            new, end_reason, searched = _locate(body, loads, method, state, result.first, size, fired)
+            calls += searched + 1
             if guard is not None:
                 new, _ = guard.project(body, state, new)
-            last = evaluate(body, counted, new.position, new.velocity, new.attitude, new.angular_velocity)
+            last = evaluate(body, loads, new.position, new.velocity, new.attitude, new.angular_velocity)
             recorder.add(new, last)
             break
         projected = False
         if guard is not None:
             new, projected = guard.project(body, state, new)
-        first = result.last if result.last is not None and not projected else evaluate(
-            body, counted, new.position, new.velocity, new.attitude, new.angular_velocity)
+        if result.last is not None and not projected:
+            first = result.last
+        else:
+            first = evaluate(body, loads, new.position, new.velocity, new.attitude, new.angular_velocity)
+            calls += 1
         recorder.add(new, first)
         state, values = new, new_values
 
@@ -306,13 +305,21 @@ def find_root(function: Callable[[float], float], a: float, b: float, fa: float,
 
 
 def _locate(body: RigidBody, loads: LoadFunction, method: RungeKutta, state: State,
-            first: Evaluation, size: float, events: list[Event]) -> tuple[State, str]:
-    """The earliest of ``events`` inside a step of ``size`` from ``state``.
+            first: Evaluation, size: float, events: list[Event]) -> tuple[State, str, int]:
+    """The earliest of ``events`` inside a step of ``size`` from ``state``, and the load evaluations it took.
 
     Each event's locator changes sign inside the step; regula falsi finds
     the root on re-taken partial steps, and the end state is taken just past
     it, on the side where the event has happened.
     """
+    calls = 0
+
+    def partial_step(s: float) -> State:
+        nonlocal calls
+        result = method.step(body, loads, state, s, first)
+        calls += result.evaluations
+        return result.state
+
     best: tuple[float, Event] | None = None
     tolerance = max(1e-15, 1e-12 * size)
     for event in events:
@@ -320,7 +327,7 @@ def _locate(body: RigidBody, loads: LoadFunction, method: RungeKutta, state: Sta
         g_start = locator(state)
 
         def g(s: float, locator=locator, g_start=g_start) -> float:
-            return g_start if s <= 0.0 else locator(method.step(body, loads, state, s, first).state)
+            return g_start if s <= 0.0 else locator(partial_step(s))
 
         g_end = g(size)
         if g_end == 0.0 or (g_start > 0) == (g_end > 0):
@@ -333,4 +340,4 @@ def _locate(body: RigidBody, loads: LoadFunction, method: RungeKutta, state: Sta
             best = (t_cross, event)
     assert best is not None
     t_cross, event = best
-    return method.step(body, loads, state, t_cross, first).state, event.name
+    return partial_step(t_cross), event.name, calls

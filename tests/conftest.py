@@ -15,6 +15,12 @@ STEEL, TUNGSTEN = 7850.0, 18000.0
 def private_mesh_cache(tmp_path_factory):
     """Keep the tests' meshes out of the user's cache (and start from an empty one)."""
     folder = tmp_path_factory.mktemp("mesh-cache")
+    # the compiled kernels are not meshes: they stay in the user's cache (in a folder named for their code,
+    # cases/run/compiled.py), so that each test session does not compile them again (about 10 s)
+    if "NUMBA_CACHE_DIR" not in os.environ:
+        from cases.run import cache_dir
+
+        os.environ["NUMBA_CACHE_DIR"] = str(cache_dir() / "numba")
     old = os.environ.get("PENETRATE_CACHE_DIR")
     os.environ["PENETRATE_CACHE_DIR"] = str(folder)
     yield folder

@@ -135,11 +135,20 @@ def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
         Start from this state instead of the scene's impact conditions.
     """
     start = time.perf_counter()
+    scene = scene.with_kernel(many_runs=False)
     prepared = prepare_projectile(scene)
     numerics, effects = scene.numerics, scene.effects
     loads = scene.loads(prepared.quadrature)
     body = RigidBody(prepared.mass.mass, prepared.mass.inertia)
-    driving = WithGravity(loads, body.mass, effects.gravity_acceleration) if effects.gravity else loads
+    method = METHODS[numerics.integrator]()
+    lowest_height = loads.lowest_height
+    if numerics.kernel == "compiled":
+        from .compiled import compiled_step
+
+        weight = np.array([0.0, 0.0, -body.mass * effects.gravity_acceleration]) if effects.gravity else None
+        driving, method, lowest_height = compiled_step(loads, method, body, weight)
+    else:
+        driving = WithGravity(loads, body.mass, effects.gravity_acceleration) if effects.gravity else loads
     control = step_control(scene, prepared.profile.length)
     # the energy guard needs loads that only dissipate: gravity and no-separation can do work
     guard = EnergyGuard(control.min_step) if numerics.energy_guard and effects.separation and not effects.gravity \
@@ -148,14 +157,15 @@ def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
     events = [
         SpeedBelow(STOPPED, numerics.stop_speed),
         # every surface point back above the surface after having been inside
-        Event(EXITED, lambda st: loads.lowest_height(st.position, st.rotation), direction=1),
+        Event(EXITED, lambda st: lowest_height(st.position, st.rotation), direction=1),
     ]
     integrate_start = time.perf_counter()
     # one BLAS thread: the products over ~1e4 points gain nothing from threads, and threads that
     # wait for a busy core (a sweep runs one process per core) cost up to 50x; one thread also
     # fixes the summation order, so results do not depend on the machine's core count
     with threadpool_limits(limits=1, user_api="blas"):
-        trajectory = simulate(body, driving, state, METHODS[numerics.integrator](), control,
+        trajectory = simulate(body, driving, state, method, control,
                               time_limit=numerics.time_limit, events=events, guard=guard)
     end = time.perf_counter()
     return RunResult(scene, prepared, trajectory, end - start, end - integrate_start)
+

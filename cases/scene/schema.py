@@ -114,6 +114,30 @@ class Scene(Strict):
                              f" <= projectile.diameter = {p.diameter:g} m)")
         return self
 
+    @property
+    def compilable(self) -> bool:
+        """Whether the compiled kernel computes this scene's load: one law with separation, no free surface,
+        no friction (layers and those effects run on the numpy path)."""
+        effects = self.effects
+        return (self.target.layers is None and effects.separation and effects.free_surface is None
+                and effects.friction.model == "none")
+
+    def with_kernel(self, many_runs: bool) -> Scene:
+        """This scene with ``numerics.kernel`` resolved: ``auto`` is ``compiled`` in a process that runs
+        many scenes (a study's worker loads the compiled code once, about 0.4 s) when the scene is
+        :attr:`compilable`, else ``numpy``."""
+        if self.numerics.kernel != "auto":
+            return self
+        kernel = "compiled" if many_runs and self.compilable else "numpy"
+        return self.model_copy(update={"numerics": self.numerics.model_copy(update={"kernel": kernel})})
+
+    @model_validator(mode="after")
+    def _kernel_covers_scene(self):
+        if self.numerics.kernel == "compiled" and not self.compilable:
+            raise ValueError("numerics.kernel = \"compiled\": the compiled load covers one law with separation and"
+                             " no free surface or friction (allowed for this scene: \"numpy\" or \"auto\")")
+        return self
+
     def loads(self, quadrature: SurfaceQuadrature) -> DAFLLoads:
         """The DAFL load function over ``quadrature`` with exactly the effects the scene asks for."""
         effects = self.effects

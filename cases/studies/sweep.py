@@ -113,9 +113,10 @@ class Sweep:
     scenes: list[Scene] = field(init=False)
 
     def __post_init__(self) -> None:
-        # validate everything before anything runs: a typo fails the sweep at once
+        # validate everything before anything runs: a typo fails the sweep at once; the runs of a study
+        # share warm workers, so numerics.kernel = "auto" is the compiled step (Scene.with_kernel)
         self.scenes = [scene_from_dict(apply_overrides(self.base, v.values, self.source), self.source)
-                       for v in self.variations]
+                       .with_kernel(many_runs=True) for v in self.variations]
 
     @classmethod
     def from_file(cls, path: str | os.PathLike, overrides: Overrides | None = None,
@@ -130,7 +131,7 @@ class Sweep:
         sweep.base, sweep.source = {}, "scenes"
         sweep.variations = [variation for _, variation in parts]
         sweep.scenes = [scene_from_dict(apply_overrides(base.base, variation.values, base.source), base.source)
-                        for base, variation in parts]
+                        .with_kernel(many_runs=True) for base, variation in parts]
         return sweep
 
     def keys(self) -> list[str]:

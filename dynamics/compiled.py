@@ -1,0 +1,269 @@
+"""Runge-Kutta steps in compiled code (numba): the whole stage loop, for a load with a compiled kernel.
+
+:class:`CompiledRungeKutta` keeps the contract of :class:`~dynamics.integrators.RungeKutta`
+(same tableau, same Runge-Kutta-Munthe-Kaas step on ``(x, v, u, omega)``, same chord path
+increment), but one call of :func:`rk_step` does every stage of a step in machine code: the
+stage state, the attitude ``q0 * exp(u)``, the load (the kernel of a :class:`CompiledLoad`,
+called without leaving compiled code), Newton-Euler and ``dexp^-1``.  The Python driver
+(:func:`~dynamics.simulate.simulate`) is unchanged: it sees one :class:`StepResult` per step.
+
+The arithmetic is that of the Python methods, written out on floats; the sums run in another
+order, so the two agree to round-off per step, not bit for bit (tests/dynamics/test_compiled.py
+compares them on problems with exact solutions and on each other).
+
+numba compiles the functions on their first call and keeps the machine code in its cache
+(``cache=True``, beside this module or in ``NUMBA_CACHE_DIR``): the first process compiles
+(about 10 s per load kernel); later processes load the code in about 0.4 s (importing numba and
+its compiled-code registry, mostly), once per process.  That is why a single short run is faster
+on the numpy path, and a study's worker processes, which load it once for many runs, on this one.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .integrators import Evaluation, RungeKutta, StepResult
+from .rigid_body import RigidBody, State
+
+__all__ = ["CompiledLoad", "CompiledRungeKutta", "rk_step"]
+
+# layout of the array rk_step fills: the state, the error estimate, the first and last evaluations
+_X, _V, _Q, _W, _S = slice(0, 3), slice(3, 6), slice(6, 10), slice(10, 13), 13
+_ERROR = slice(14, 27)
+_FIRST, _LAST = 27, 39  # each: acceleration (3), angular acceleration (3), force (3), moment (3)
+_OUT = 51
+
+
+class CompiledLoad:
+    """A load function with a compiled kernel, callable from Python and from :func:`rk_step`.
+
+    Parameters
+    ----------
+    kernel : numba dispatcher
+        ``kernel(data, position, velocity, rotation, angular_velocity, out)`` writes the force
+        (world frame, N) into ``out[:3]`` and the moment (body frame, about the centre of mass,
+        N m) into ``out[3:6]``; arguments as for :class:`~dynamics.rigid_body.LoadFunction`.
+    data : tuple
+        The kernel's arrays and constants.
+    constant_force : ndarray, shape (3,), optional
+        A force added to the kernel's (world frame, N): the weight of the body.
+    """
+
+    def __init__(self, kernel, data: tuple, constant_force: np.ndarray | None = None) -> None:
+        self.kernel, self.data = kernel, data
+        self.constant_force = np.zeros(3) if constant_force is None else np.asarray(constant_force, dtype=float)
+
+    def __call__(self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray,
+                 angular_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        out = np.empty(6)
+        self.kernel(self.data, position, velocity, rotation, angular_velocity, out)
+        return out[:3] + self.constant_force, out[3:]
+
+
+class CompiledRungeKutta(RungeKutta):
+    """The compiled step of a Runge-Kutta method: its tableau, stepped by :func:`rk_step`.
+
+    Parameters
+    ----------
+    method : RungeKutta
+        The method whose tableau to use (:class:`~dynamics.integrators.RK4`, ...).
+
+    :meth:`step` takes a :class:`CompiledLoad` as its load function.
+    """
+
+    def __init__(self, method: RungeKutta) -> None:
+        self.A = np.ascontiguousarray(method.A, dtype=float)
+        self.b = np.ascontiguousarray(method.b, dtype=float)
+        self.c = np.ascontiguousarray(method.c, dtype=float)
+        self.b_error = None if method.b_error is None else np.ascontiguousarray(method.b_error, dtype=float)
+        self._b_error = np.zeros_like(self.b) if self.b_error is None else self.b_error
+        self.order, self.error_order, self.fsal = method.order, method.error_order, method.fsal
+        self._body: RigidBody | None = None
+        self._inertia = self._inverse = None
+
+    def _matrices(self, body: RigidBody) -> tuple[np.ndarray, np.ndarray]:
+        if body is not self._body:
+            self._body = body
+            self._inertia = np.ascontiguousarray(body.inertia, dtype=float)
+            self._inverse = np.ascontiguousarray(np.linalg.inv(self._inertia))
+        return self._inertia, self._inverse
+
+    def step(self, body: RigidBody, loads: CompiledLoad, state: State, h: float,
+             first: Evaluation | None = None) -> StepResult:
+        """Advance ``state`` by ``h`` seconds (see :class:`~dynamics.integrators.RungeKutta`)."""
+        inertia, inverse = self._matrices(body)
+        given = np.empty(12)
+        if first is not None:
+            given[0:3], given[3:6], given[6:9], given[9:12] = (first.acceleration, first.angular_acceleration,
+                                                               first.force, first.moment)
+        out = np.empty(_OUT)
+        rk_step(loads.kernel, loads.data, loads.constant_force, body.mass, inertia, inverse, self.A, self.b,
+                self._b_error, state.position, state.velocity, state.attitude, state.angular_velocity, h,
+                given, first is not None, out)
+        new = State(state.time + h, out[_X], out[_V], out[_Q], out[_W], state.path_length + out[_S])
+        error = out[_ERROR] if self.b_error is not None else None
+        evaluations = self.stages - (first is not None)
+        start = first if first is not None else _evaluation(out, _FIRST)
+        last = _evaluation(out, _LAST) if self.fsal else None
+        return StepResult(new, error, start, last, evaluations)
+
+
+def _evaluation(out: np.ndarray, at: int) -> Evaluation:
+    return Evaluation(out[at:at + 3], out[at + 3:at + 6], out[at + 6:at + 9], out[at + 9:at + 12])
+
+
+# -- compiled ---------------------------------------------------------------------------------------
+# error_model="numpy": a division by zero gives inf or nan (as numpy does) instead of raising, so a
+# state that leaves the floats comes back non-finite and the step control ends the run
+
+
+@njit(cache=True, error_model="numpy")
+def _compose(q, u, out):
+    """``out = q * exp(u)`` (:func:`dynamics.quaternion.compose`)."""
+    vx, vy, vz = u[0], u[1], u[2]
+    angle2 = vx * vx + vy * vy + vz * vz
+    angle = math.sqrt(angle2)
+    half = 0.5 * angle
+    scale = math.sin(half) / angle if angle > 1e-8 else 0.5 - angle2 / 48.0
+    qw, qx, qy, qz = math.cos(half), scale * vx, scale * vy, scale * vz
+    pw, px, py, pz = q[0], q[1], q[2], q[3]
+    out[0] = pw * qw - px * qx - py * qy - pz * qz
+    out[1] = pw * qx + px * qw + py * qz - pz * qy
+    out[2] = pw * qy - px * qz + py * qw + pz * qx
+    out[3] = pw * qz + px * qy - py * qx + pz * qw
+
+
+@njit(cache=True, error_model="numpy")
+def _rotation(q, out):
+    """Body-to-world rotation matrix (:func:`dynamics.quaternion.rotation_matrix`)."""
+    w, x, y, z = q[0], q[1], q[2], q[3]
+    ww, xx, yy, zz = w * w, x * x, y * y, z * z
+    out[0, 0], out[0, 1], out[0, 2] = (ww + xx) - (yy + zz), 2 * (x * y - w * z), 2 * (x * z + w * y)
+    out[1, 0], out[1, 1], out[1, 2] = 2 * (x * y + w * z), (ww + yy) - (xx + zz), 2 * (y * z - w * x)
+    out[2, 0], out[2, 1], out[2, 2] = 2 * (x * z - w * y), 2 * (y * z + w * x), (ww + zz) - (xx + yy)
+
+
+@njit(cache=True, error_model="numpy")
+def _rate(u, w, out):
+    """``du/dt = dexp^-1_u(omega)`` (:func:`dynamics.quaternion.right_jacobian_inverse`)."""
+    ux, uy, uz = u[0], u[1], u[2]
+    wx, wy, wz = w[0], w[1], w[2]
+    angle2 = ux * ux + uy * uy + uz * uz
+    if angle2 < 1e-6:
+        c = 1.0 / 12.0 + angle2 / 720.0 + angle2 * angle2 / 30240.0
+    else:
+        angle = math.sqrt(angle2)
+        c = (1.0 - 0.5 * angle / math.tan(0.5 * angle)) / angle2
+    ax, ay, az = uy * wz - uz * wy, uz * wx - ux * wz, ux * wy - uy * wx
+    bx, by, bz = uy * az - uz * ay, uz * ax - ux * az, ux * ay - uy * ax
+    out[0], out[1], out[2] = wx + 0.5 * ax + c * bx, wy + 0.5 * ay + c * by, wz + 0.5 * az + c * bz
+
+
+@njit(cache=True, error_model="numpy")
+def _evaluate(load, data, constant_force, mass, inertia, inverse, x, v, q, w, rotation, loads, out, at):
+    """One load evaluation and Newton-Euler; ``out[at:at + 12]`` = (a, alpha, F, M)."""
+    _rotation(q, rotation)
+    load(data, x, v, rotation, w, loads)
+    for i in range(3):
+        force = loads[i] + constant_force[i]
+        out[at + 6 + i] = force
+        out[at + 9 + i] = loads[3 + i]
+        out[at + i] = force / mass
+    w0, w1, w2 = w[0], w[1], w[2]
+    h0 = inertia[0, 0] * w0 + inertia[0, 1] * w1 + inertia[0, 2] * w2
+    h1 = inertia[1, 0] * w0 + inertia[1, 1] * w1 + inertia[1, 2] * w2
+    h2 = inertia[2, 0] * w0 + inertia[2, 1] * w1 + inertia[2, 2] * w2
+    r0 = loads[3] - (w1 * h2 - w2 * h1)
+    r1 = loads[4] - (w2 * h0 - w0 * h2)
+    r2 = loads[5] - (w0 * h1 - w1 * h0)
+    for i in range(3):
+        out[at + 3 + i] = inverse[i, 0] * r0 + inverse[i, 1] * r1 + inverse[i, 2] * r2
+
+
+@njit(cache=True, error_model="numpy")
+def _path_increment(chord, before, after):
+    """The chord lengthened by ``theta^2 / 24`` (:func:`dynamics.integrators._path_increment`)."""
+    length = math.sqrt(chord[0] * chord[0] + chord[1] * chord[1] + chord[2] * chord[2])
+    ax, ay, az = before[0], before[1], before[2]
+    bx, by, bz = after[0], after[1], after[2]
+    dot = ax * bx + ay * by + az * bz
+    cross2 = (ay * bz - az * by) ** 2 + (az * bx - ax * bz) ** 2 + (ax * by - ay * bx) ** 2
+    theta = math.atan2(math.sqrt(cross2), dot) if (dot != 0.0 or cross2 != 0.0) else 0.0
+    return length * (1.0 + theta * theta / 24.0)
+
+
+@njit(cache=True, error_model="numpy")
+def rk_step(load, data, constant_force, mass, inertia, inverse, A, b, b_error, x0, v0, q0, w0, h, given, has_given,
+            out):
+    """One explicit Runge-Kutta-Munthe-Kaas step from ``(x0, v0, q0, w0)`` by ``h`` seconds.
+
+    ``load(data, x, v, R, omega, loads6)`` is the compiled load kernel (:class:`CompiledLoad`);
+    ``given`` holds the first stage's evaluation when ``has_given``.  Fills ``out``: the new
+    position, velocity, unit attitude, angular velocity and path increment, the error estimate
+    ``h (b_error . k)`` of the increments ``(x, v, u, omega, s)``, and the first and last
+    evaluations (acceleration, angular acceleration, force, moment).
+    """
+    stages = b.shape[0]
+    k = np.zeros((stages, 13))
+    z = np.empty(13)
+    q = np.empty(4)
+    rotation = np.empty((3, 3))
+    loads = np.empty(6)
+    evaluation = np.empty(_OUT)
+    for i in range(stages):
+        if i == 0:
+            if has_given:
+                out[_FIRST:_FIRST + 12] = given
+            else:
+                _evaluate(load, data, constant_force, mass, inertia, inverse, x0, v0, q0, w0, rotation, loads,
+                          out, _FIRST)
+            for j in range(3):
+                k[0, j] = v0[j]
+                k[0, 3 + j] = out[_FIRST + j]
+                k[0, 6 + j] = w0[j]
+                k[0, 9 + j] = out[_FIRST + 3 + j]
+            if stages == 1:
+                out[_LAST:_LAST + 12] = out[_FIRST:_FIRST + 12]
+            continue
+        for j in range(13):
+            total = 0.0
+            for m in range(i):
+                total += (h * A[i, m]) * k[m, j]
+            z[j] = total
+        for j in range(3):
+            z[j] += x0[j]
+            z[3 + j] += v0[j]
+            z[9 + j] += w0[j]
+        _compose(q0, z[6:9], q)
+        at = _LAST if i == stages - 1 else 0
+        _evaluate(load, data, constant_force, mass, inertia, inverse, z[0:3], z[3:6], q, z[9:12], rotation, loads,
+                  evaluation if at == 0 else out, at)
+        source = evaluation if at == 0 else out
+        _rate(z[6:9], z[9:12], k[i, 6:9])
+        for j in range(3):
+            k[i, j] = z[3 + j]
+            k[i, 3 + j] = source[at + j]
+            k[i, 9 + j] = source[at + 3 + j]
+    increment = np.empty(13)
+    for j in range(13):
+        total = 0.0
+        error = 0.0
+        for m in range(stages):
+            total += b[m] * k[m, j]
+            error += b_error[m] * k[m, j]
+        increment[j] = h * total
+        out[_ERROR.start + j] = h * error
+    attitude = np.empty(4)
+    _compose(q0, increment[6:9], attitude)
+    w, x, y, zq = attitude[0], attitude[1], attitude[2], attitude[3]
+    norm = math.sqrt((w * w + y * y) + (x * x + zq * zq))
+    for j in range(4):
+        out[6 + j] = attitude[j] / norm
+    for j in range(3):
+        out[j] = x0[j] + increment[j]
+        out[3 + j] = v0[j] + increment[3 + j]
+        out[10 + j] = w0[j] + increment[9 + j]
+    out[_S] = _path_increment(increment[0:3], v0, out[3:6])
