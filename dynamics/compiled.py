@@ -7,7 +7,8 @@ stage state, the attitude ``q0 * exp(u)``, the load (the kernel of a :class:`Com
 called without leaving compiled code), Newton-Euler and ``dexp^-1``.  The Python driver
 (:func:`~dynamics.simulate.simulate`) is unchanged: it sees one :class:`StepResult` per step.
 
-The arithmetic is that of the Python methods, written out on floats; the sums run in another
+Each load kernel gets its own compiled step, :func:`rk_step` inlined with the kernel as a global
+(:class:`CompiledLoad`).  The arithmetic is that of the Python methods, written out on floats; the sums run in another
 order, so the two agree to round-off per step, not bit for bit (tests/dynamics/test_compiled.py
 compares them on problems with exact solutions and on each other).
 
@@ -38,7 +39,7 @@ _OUT = 51
 
 
 class CompiledLoad:
-    """A load function with a compiled kernel, callable from Python and from :func:`rk_step`.
+    """A load function with a compiled kernel, callable from Python and from the compiled step.
 
     Parameters
     ----------
@@ -48,12 +49,23 @@ class CompiledLoad:
         N m) into ``out[3:6]``; arguments as for :class:`~dynamics.rigid_body.LoadFunction`.
     data : tuple
         The kernel's arrays and constants.
+    step : numba dispatcher
+        :func:`rk_step` with this kernel, made in a module of its own by::
+
+            @njit(cache=True, error_model="numpy")
+            def step(data, constant_force, ..., out):  # every argument of rk_step after load
+                rk_step(kernel, data, constant_force, ..., out)
+
+        :func:`rk_step` is inlined into it, and the kernel is a global there, so numba can keep the
+        machine code in its cache; a step that took the kernel as an argument from Python would be
+        compiled anew by every process (numba keys such code on the kernel object's identity) and
+        would cost about 10 us per call to type the kernel argument.
     constant_force : ndarray, shape (3,), optional
         A force added to the kernel's (world frame, N): the weight of the body.
     """
 
-    def __init__(self, kernel, data: tuple, constant_force: np.ndarray | None = None) -> None:
-        self.kernel, self.data = kernel, data
+    def __init__(self, kernel, data: tuple, step, constant_force: np.ndarray | None = None) -> None:
+        self.kernel, self.data, self.step = kernel, data, step
         self.constant_force = np.zeros(3) if constant_force is None else np.asarray(constant_force, dtype=float)
 
     def __call__(self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray,
@@ -100,15 +112,16 @@ class CompiledRungeKutta(RungeKutta):
             given[0:3], given[3:6], given[6:9], given[9:12] = (first.acceleration, first.angular_acceleration,
                                                                first.force, first.moment)
         out = np.empty(_OUT)
-        rk_step(loads.kernel, loads.data, loads.constant_force, body.mass, inertia, inverse, self.A, self.b,
-                self._b_error, state.position, state.velocity, state.attitude, state.angular_velocity, h,
-                given, first is not None, out)
+        loads.step(loads.data, loads.constant_force, body.mass, inertia, inverse, self.A, self.b, self._b_error,
+                   self.fsal, state.position, state.velocity, state.attitude, state.angular_velocity, h, given, first is not None,
+                   out)
         new = State(state.time + h, out[_X], out[_V], out[_Q], out[_W], state.path_length + out[_S])
         error = out[_ERROR] if self.b_error is not None else None
-        evaluations = self.stages - (first is not None)
+        # without a first-same-as-last stage the step evaluates the end state too: the driver needs it for
+        # the next step and the history, and it costs less here than from Python
+        evaluations = self.stages - (first is not None) + (not self.fsal)
         start = first if first is not None else _evaluation(out, _FIRST)
-        last = _evaluation(out, _LAST) if self.fsal else None
-        return StepResult(new, error, start, last, evaluations)
+        return StepResult(new, error, start, _evaluation(out, _LAST), evaluations)
 
 
 def _evaluation(out: np.ndarray, at: int) -> Evaluation:
@@ -162,7 +175,7 @@ def _rate(u, w, out):
     out[0], out[1], out[2] = wx + 0.5 * ax + c * bx, wy + 0.5 * ay + c * by, wz + 0.5 * az + c * bz
 
 
-@njit(cache=True, error_model="numpy")
+@njit(inline="always", error_model="numpy")
 def _evaluate(load, data, constant_force, mass, inertia, inverse, x, v, q, w, rotation, loads, out, at):
     """One load evaluation and Newton-Euler; ``out[at:at + 12]`` = (a, alpha, F, M)."""
     _rotation(q, rotation)
@@ -195,16 +208,18 @@ def _path_increment(chord, before, after):
     return length * (1.0 + theta * theta / 24.0)
 
 
-@njit(cache=True, error_model="numpy")
-def rk_step(load, data, constant_force, mass, inertia, inverse, A, b, b_error, x0, v0, q0, w0, h, given, has_given,
-            out):
+@njit(inline="always", error_model="numpy")
+def rk_step(load, data, constant_force, mass, inertia, inverse, A, b, b_error, fsal, x0, v0, q0, w0, h, given,
+            has_given, out):
     """One explicit Runge-Kutta-Munthe-Kaas step from ``(x0, v0, q0, w0)`` by ``h`` seconds.
 
-    ``load(data, x, v, R, omega, loads6)`` is the compiled load kernel (:class:`CompiledLoad`);
+    Inlined into the step of each load kernel (:class:`CompiledLoad`, ``step``), never called alone.
+    ``load(data, x, v, R, omega, loads6)`` is the compiled load kernel;
     ``given`` holds the first stage's evaluation when ``has_given``.  Fills ``out``: the new
     position, velocity, unit attitude, angular velocity and path increment, the error estimate
     ``h (b_error . k)`` of the increments ``(x, v, u, omega, s)``, and the first and last
-    evaluations (acceleration, angular acceleration, force, moment).
+    evaluations (acceleration, angular acceleration, force, moment); the last is that of the end state
+    (the last stage's when ``fsal``, an extra evaluation otherwise).
     """
     stages = b.shape[0]
     k = np.zeros((stages, 13))
@@ -225,8 +240,6 @@ def rk_step(load, data, constant_force, mass, inertia, inverse, A, b, b_error, x
                 k[0, 3 + j] = out[_FIRST + j]
                 k[0, 6 + j] = w0[j]
                 k[0, 9 + j] = out[_FIRST + 3 + j]
-            if stages == 1:
-                out[_LAST:_LAST + 12] = out[_FIRST:_FIRST + 12]
             continue
         for j in range(13):
             total = 0.0
@@ -267,3 +280,6 @@ def rk_step(load, data, constant_force, mass, inertia, inverse, A, b, b_error, x
         out[3 + j] = v0[j] + increment[3 + j]
         out[10 + j] = w0[j] + increment[9 + j]
     out[_S] = _path_increment(increment[0:3], v0, out[3:6])
+    if not fsal:
+        _evaluate(load, data, constant_force, mass, inertia, inverse, out[_X], out[_V], out[_Q], out[_W], rotation,
+                  loads, out, _LAST)

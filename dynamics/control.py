@@ -197,6 +197,17 @@ class EnergyGuard:
         self.min_step = _positive("min_step", min_step)
         self.tolerance = tolerance
         self.rejections = self.projections = 0
+        self._energies: list[tuple[State, float]] = []  # the last states measured, each with its energy
+
+    def _energy(self, body: RigidBody, state: State) -> float:
+        """``body.kinetic_energy(state)``, remembered for the last few states: a step's end state is
+        measured by :meth:`judge` and :meth:`project` and is the next step's start."""
+        for known, energy in self._energies:
+            if known is state:
+                return energy
+        energy = body.kinetic_energy(state)
+        self._energies = [*self._energies[-3:], (state, energy)]
+        return energy
 
     def judge(self, body: RigidBody, before: State, after: State, size: float,
               truncated: bool) -> tuple[str, float | str]:
@@ -206,7 +217,7 @@ class EnergyGuard:
         half the step is below the floor (a step already shortened to end at the time limit
         is accepted instead); else ``(ACCEPT, size)``.
         """
-        if body.kinetic_energy(after) > body.kinetic_energy(before) * (1.0 + self.tolerance):
+        if self._energy(body, after) > self._energy(body, before) * (1.0 + self.tolerance):
             if 0.5 * size >= self.min_step:
                 self.rejections += 1
                 return RETAKE, 0.5 * size
@@ -223,7 +234,7 @@ class EnergyGuard:
         scaled by ``sqrt(E0 / E1)``, which keeps their directions and removes the gain, as
         the unit quaternion is renormalised after every step.
         """
-        start, end = body.kinetic_energy(before), body.kinetic_energy(after)
+        start, end = self._energy(body, before), self._energy(body, after)
         if not end > start:
             return after, False
         self.projections += 1

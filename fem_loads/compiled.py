@@ -197,10 +197,19 @@ def dafl_kernel(data, position, velocity, rotation, angular_velocity, out):
 
 
 @njit(cache=True, error_model="numpy")
-def lowest_height_kernel(data, position, rotation):
-    """``min(Z - l/2)`` over the points (m): :meth:`DAFLLoads.lowest_height` on the kernel's arrays."""
-    points, half_entry_length, point_signs = data[1], data[5], data[7]
-    up0, up1, up2 = rotation[2, 0], rotation[2, 1], rotation[2, 2]
+def lowest_height_kernel(data, position, up):
+    """``min(Z - l/2)`` over the points (m): :meth:`DAFLLoads.lowest_height` on the kernel's arrays, for
+    ``up = R[2]`` (the world's up direction in the body frame, the last row of the rotation matrix).
+
+    While every point is below the surface (the bounding sphere's top is) it returns that top,
+    ``Z_c + r_max``, a negative upper bound: the exit event needs only the sign there, and the heights
+    of every point at every step cost as much as a load evaluation.
+    """
+    points, half_entry_length, point_signs, constants = data[1], data[5], data[7], data[8]
+    top = position[2] + constants[_MAX_RADIUS]
+    if top < 0.0:
+        return top
+    up0, up1, up2 = up[0], up[1], up[2]
     lowest = math.inf
     for j in range(points.shape[1]):
         p0, p1, p2 = up0 * points[0, j], up1 * points[1, j], up2 * points[2, j]

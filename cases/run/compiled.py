@@ -1,12 +1,12 @@
 """The compiled step of a run (``numerics.kernel = "compiled"``), with numba's cache named for its code.
 
-The compiled Runge-Kutta step (:mod:`dynamics.compiled`) is specialised on the load kernel it calls
-(:mod:`fem_loads.compiled`), another package's module.  numba's documentation warns that its cache
-does not notice changes of functions defined in other files than the cached one (numba 0.68 did
-notice a changed load kernel here, but that is not promised).  So numba's cache lives in a folder
-named for the digest of both sources and numba's version, ``$PENETRATE_CACHE_DIR/numba/<digest>``
-(``$NUMBA_CACHE_DIR/<digest>`` when that is set),
-set before either module is imported: changed code gets a folder of its own and compiles afresh.
+The compiled step of the DAFL load (:mod:`.dafl_step`) inlines the Runge-Kutta step of
+:mod:`dynamics.compiled` and calls the load kernel of :mod:`fem_loads.compiled`: numba keeps its
+machine code in the cache of ``dafl_step.py`` and notices changes of that file alone, not of the
+two modules it inlines and calls.  So numba's cache lives in a folder named for the digest of the
+three sources and numba's version, ``$PENETRATE_CACHE_DIR/numba/<digest>`` (``$NUMBA_CACHE_DIR/<digest>``
+when that is set), set before any of them is imported: changed code gets a folder of its own and
+compiles afresh.
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from .persistence import cache_dir
 
 __all__ = ["compiled_step", "numba_cache_folder", "COMPILED_SOURCES"]
 
-COMPILED_SOURCES = ("dynamics.compiled", "fem_loads.compiled")
+COMPILED_SOURCES = ("dynamics.compiled", "fem_loads.compiled", "cases.run.dafl_step")
 
 
 def numba_cache_folder() -> Path:
@@ -48,14 +48,40 @@ def _import_compiled():
     return step, load
 
 
+def _dafl_step():
+    from .dafl_step import dafl_step
+
+    return dafl_step
+
+
 def compiled_step(loads, method, body, weight: np.ndarray | None):
     """The compiled load, Runge-Kutta step and exit height for a scene's loads (a ``DAFLLoads``).
 
     Returns ``(load, method, lowest_height)``: a :class:`~dynamics.compiled.CompiledLoad` (plus
     ``weight``, N, world frame, when given), the :class:`~dynamics.compiled.CompiledRungeKutta` of
-    ``method``, and ``lowest_height(position, rotation)`` for the exit event.
+    ``method``, and ``lowest_height(position, attitude)`` for the exit event.
     """
     step, load = _import_compiled()
     data = load.kernel_data(loads)
-    return (step.CompiledLoad(load.dafl_kernel, data, weight), step.CompiledRungeKutta(method),
-            lambda position, rotation: load.lowest_height_kernel(data, position, rotation))
+    compiled_load, compiled_method = step.CompiledLoad(load.dafl_kernel, data, _dafl_step(), weight), step.CompiledRungeKutta(method)
+    _warm(compiled_load, compiled_method, body, data, load.lowest_height_kernel)
+    return (compiled_load, compiled_method,
+            lambda position, attitude: load.lowest_height_kernel(data, position, _up(attitude)))
+
+
+def _up(attitude: np.ndarray) -> np.ndarray:
+    """The last row of :func:`dynamics.quaternion.rotation_matrix` (same expressions): the exit event's
+    heights need no more of the matrix."""
+    w, x, y, z = attitude.tolist()
+    return np.array([2 * (x * z - w * y), 2 * (y * z + w * x), (w * w + z * z) - (x * x + y * y)])
+
+
+def _warm(load, method, body, data, lowest_height) -> None:
+    """Call every compiled function once, far above the target (no load), so that numba's loading (or first
+    compiling) is done before a run starts its clock: a run's ``integration_time`` is the integration alone."""
+    from dynamics import State
+
+    far = State(0.0, np.array([0.0, 0.0, 1e6]), np.array([0.0, 0.0, -1.0]), np.array([1.0, 0.0, 0.0, 0.0]),
+                np.zeros(3))
+    method.step(body, load, far, 1e-9)
+    lowest_height(data, far.position, far.rotation[2])

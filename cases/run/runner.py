@@ -141,7 +141,9 @@ def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
     loads = scene.loads(prepared.quadrature)
     body = RigidBody(prepared.mass.mass, prepared.mass.inertia)
     method = METHODS[numerics.integrator]()
-    lowest_height = loads.lowest_height
+    def lowest_height(position, attitude):
+        return loads.lowest_height(position, rotation_matrix(attitude))
+
     if numerics.kernel == "compiled":
         from .compiled import compiled_step
 
@@ -157,7 +159,7 @@ def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
     events = [
         SpeedBelow(STOPPED, numerics.stop_speed),
         # every surface point back above the surface after having been inside
-        Event(EXITED, lambda st: lowest_height(st.position, st.rotation), direction=1),
+        Event(EXITED, lambda st: lowest_height(st.position, st.attitude), direction=1),
     ]
     integrate_start = time.perf_counter()
     # one BLAS thread: the products over ~1e4 points gain nothing from threads, and threads that

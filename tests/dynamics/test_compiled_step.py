@@ -31,8 +31,14 @@ def _spring_and_vane(data, position, velocity, rotation, angular_velocity, out):
     out[5] += s * up1
 
 
+@njit(cache=True, error_model="numpy")
+def _spring_and_vane_step(data, constant_force, mass, inertia, inverse, A, b, b_error, fsal, x0, v0, q0, w0, h, given, has_given, out):
+    step.rk_step(_spring_and_vane, data, constant_force, mass, inertia, inverse, A, b, b_error, fsal, x0, v0, q0, w0, h, given, has_given,
+            out)
+
+
 def _load(k=4.0e5, d=0.0, c=0.0, s=0.0):
-    return step.CompiledLoad(_spring_and_vane, (np.array([k, d, c, s]),))
+    return step.CompiledLoad(_spring_and_vane, (np.array([k, d, c, s]),), _spring_and_vane_step)
 
 
 def _start() -> State:
@@ -83,7 +89,9 @@ def test_compiled_step_equals_the_python_step(method, control, tolerance):
     assert python.end_reason == compiled.end_reason == "stopped"
     a, b = dict(python.statistics), dict(compiled.statistics)
     evaluations = a.pop("load_evaluations"), b.pop("load_evaluations")
-    assert a == b and abs(evaluations[0] - evaluations[1]) <= 4 * method().stages
+    # the compiled RK4 step also evaluates its end state (the Python driver does so after each step), so its
+    # event search's partial steps cost one evaluation more each
+    assert a == b and abs(evaluations[0] - evaluations[1]) <= 0.02 * evaluations[0]
     for name in ("position", "velocity", "attitude", "angular_velocity", "path_length", "force", "moment"):
         a, b = getattr(python, name), getattr(compiled, name)
         np.testing.assert_allclose(b, a, rtol=0, atol=tolerance * max(np.abs(a).max(), 1.0), err_msg=name)

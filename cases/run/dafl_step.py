@@ -1,0 +1,16 @@
+"""The compiled Runge-Kutta step of the DAFL load (imported through :mod:`.compiled` only, which sets
+numba's cache folder first).  The kernel is a global here, so numba can cache the step."""
+
+from numba import njit
+
+from dynamics.compiled import rk_step
+from fem_loads.compiled import dafl_kernel
+
+__all__ = ["dafl_step"]
+
+
+@njit(cache=True, error_model="numpy")
+def dafl_step(data, constant_force, mass, inertia, inverse, A, b, b_error, fsal, x0, v0, q0, w0, h, given, has_given, out):
+    """:func:`dynamics.compiled.rk_step` with the load :func:`fem_loads.compiled.dafl_kernel`."""
+    rk_step(dafl_kernel, data, constant_force, mass, inertia, inverse, A, b, b_error, fsal, x0, v0, q0, w0, h, given, has_given,
+            out)
