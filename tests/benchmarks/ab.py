@@ -16,7 +16,9 @@ time).  Workloads go through the command line because it is the interface both v
 
 ``--pair NAME::REV_ARGS::THIS_ARGS`` (repeatable) adds a ``penetrate run ... --json`` workload whose
 arguments differ between the sides (say, the numerics each needs for the same accuracy); it reports
-the integration time the runs report.  ``--only-pairs`` skips the fixed workloads.
+the integration time the runs report.  ``--process-pair NAME::REV_ARGS::THIS_ARGS`` adds a whole
+``penetrate`` command (its arguments, the command first) timed as a process; a study command gets a
+fresh ``--store`` each time (from an empty run store).  ``--only-pairs`` skips the fixed workloads.
 """
 
 from __future__ import annotations
@@ -45,6 +47,9 @@ FAMILY = ["sweep", "cases/paper_p3.toml", "--set", "numerics.mesh_size=0.02", "-
           "--grid", "impact.speed=700:1200:100", "--no-progress"]
 
 
+STUDIES = {"sweep", "critical", "convergent", "compare", "accuracy", "contact", "entry", "paper"}
+
+
 def _timed(checkout: Path, cache: Path, args: list[str]) -> tuple[float, dict | None]:
     env = dict(os.environ, PYTHONPATH=str(checkout), PENETRATE_CACHE_DIR=str(cache))
     start = time.perf_counter()
@@ -71,7 +76,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--skip-sweep", action="store_true")
     parser.add_argument("--pair", action="append", default=[], metavar="NAME::REV_ARGS::THIS_ARGS",
                         help="a run whose arguments differ between the sides (integration time compared)")
-    parser.add_argument("--only-pairs", action="store_true", help="only the --pair workloads")
+    parser.add_argument("--process-pair", action="append", default=[], metavar="NAME::REV_ARGS::THIS_ARGS",
+                        help="a whole penetrate command whose arguments differ between the sides (process time"
+                             " compared; a study command gets a fresh --store each time)")
+    parser.add_argument("--only-pairs", action="store_true", help="only the --pair and --process-pair workloads")
     args = parser.parse_args(argv)
     commit = subprocess.run(["git", "rev-parse", args.against], cwd=ROOT, check=True, capture_output=True,
                             text=True).stdout.strip()
@@ -88,10 +96,21 @@ def main(argv: list[str] | None = None) -> int:
             name, rev_args, this_args = text.split("::")
             pairs[f"{name} (integration, s)"] = {"rev": ["run", *rev_args.split(), "--json"],
                                                  "this": ["run", *this_args.split(), "--json"]}
+        processes = {}
+        for text in args.process_pair:
+            name, rev_args, this_args = text.split("::")
+            processes[f"{name} (process, s)"] = {"rev": rev_args.split(), "this": this_args.split()}
+        stores = iter(range(1_000_000))
+
+        def fresh_store(command: list[str]) -> list[str]:
+            if command[0] in STUDIES:
+                return [*command, "--store", str(work / f"store-{next(stores)}")]
+            return command
+
         for side, (checkout, cache) in sides.items():  # warm the caches
-            for command in [*workloads.values(), *(pair[side] for pair in pairs.values())]:
-                _timed(checkout, cache, command)
-        times = {name: {"this": [], "rev": []} for name in [*workloads, *pairs]}
+            for command in [*workloads.values(), *(pair[side] for pair in [*pairs.values(), *processes.values()])]:
+                _timed(checkout, cache, fresh_store(command))
+        times = {name: {"this": [], "rev": []} for name in [*workloads, *pairs, *processes]}
         if not args.only_pairs:
             times["#3 900 m/s: integration (s)"] = {"this": [], "rev": []}
         for _ in range(args.repeats):
@@ -103,6 +122,8 @@ def main(argv: list[str] | None = None) -> int:
                         times["#3 900 m/s: integration (s)"][side].append(record["integration_time"])
                 for name, pair in pairs.items():
                     times[name][side].append(_timed(checkout, cache, pair[side])[1]["integration_time"])
+                for name, pair in processes.items():
+                    times[name][side].append(_timed(checkout, cache, fresh_store(pair[side]))[0])
         if not args.skip_sweep and not args.only_pairs:
             name = "72-run family sweep (s)"
             times[name] = {"this": [], "rev": []}
