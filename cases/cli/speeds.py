@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 
 from .options import add_pool_options, add_scene_options, pool, positive_float
 
@@ -19,16 +20,34 @@ def _study_options(parser: argparse.ArgumentParser) -> None:
 def register(commands) -> None:
     critical = commands.add_parser("critical", help="find the critical impact velocity of a scene's disturbance")
     _study_options(critical)
-    critical.add_argument("--speeds", default="200:1600:100", metavar="START:STOP:STEP",
-                          help="the coarse scan of impact speeds, m/s (default 200:1600:100)")
+    critical.add_argument("--speeds", type=speed_range, default=(200.0, 1600.0), metavar="LOW:HIGH",
+                          help="the range of impact speeds searched, m/s (default 200:1600; of a list or"
+                               " START:STOP:STEP only the lowest and highest count)")
+    critical.add_argument("--guess", type=speed_range, metavar="LOW:HIGH",
+                          help="a first bracket inside the range, m/s (e.g. a neighbour's critical speed): runs"
+                               " confirm its ends, and the search widens to the range if they do not hold")
     critical.add_argument("--resolution", type=positive_float, default=5.0, metavar="M/S",
-                          help="bisect until the bracket is this narrow (default 5 m/s)")
+                          help="search until a stable and an unstable run are this close (default 5 m/s)")
     critical.set_defaults(handler=critical_speed)
     convergent = commands.add_parser("convergent", help="measure the characteristic convergent velocity")
     _study_options(convergent)
     convergent.add_argument("--threshold", type=positive_float, default=0.1, metavar="DEG",
                             help="the attack angle counts as converged below this (default 0.1 deg)")
     convergent.set_defaults(handler=convergent_speed)
+
+
+def speed_range(text: str) -> tuple[float, float]:
+    """``LOW:HIGH`` in m/s (``START:STOP:STEP`` and ``V1,V2,...`` give their lowest and highest)."""
+    parts = text.split(":")
+    try:
+        numbers = [float(p) for p in (parts if len(parts) in (2, 3) else text.split(","))]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected LOW:HIGH in m/s") from None
+    speeds = numbers[:2] if len(parts) in (2, 3) else numbers
+    low, high = min(speeds), max(speeds)
+    if not 0 < low < high < math.inf:
+        raise argparse.ArgumentTypeError(f"{text!r}: need 0 < LOW < HIGH, finite (m/s)")
+    return low, high
 
 
 def _inputs(args: argparse.Namespace):
@@ -41,11 +60,14 @@ def _inputs(args: argparse.Namespace):
 
 
 def critical_speed(args: argparse.Namespace) -> int:
-    from ..studies import find_critical_velocity, parse_grid
+    from ..scene import InputError
+    from ..studies import find_critical_velocity
 
+    if args.guess and not args.speeds[0] <= args.guess[0] < args.guess[1] <= args.speeds[1]:
+        raise InputError(f"--guess {args.guess[0]:g}:{args.guess[1]:g}: must lie inside --speeds"
+                         f" {args.speeds[0]:g}:{args.speeds[1]:g} (m/s)")
     sweep, store = _inputs(args)
-    _, speeds = parse_grid(f"impact.speed={args.speeds}")
-    search = find_critical_velocity(sweep, store, speeds, args.resolution, pool(args))
+    search = find_critical_velocity(sweep, store, args.speeds, args.resolution, pool(args), args.guess)
     if args.json:
         print(json.dumps(search.as_dict()))
         return 0 if search.critical_velocity is not None else 1
@@ -53,10 +75,11 @@ def critical_speed(args: argparse.Namespace) -> int:
         print(f"{run.speed:8.1f} m/s   max attack angle {run.max_attack_angle:8.3f} deg"
               f"   axis angle change {run.axis_angle_change:9.3f} deg   {run.end_reason}")
     if search.critical_velocity is None:
-        print(search.message)
+        print(f"{search.message} ({len(search.indicator)} runs in {search.rounds} rounds)")
         return 1
     low, high = search.bracket
-    print(f"critical impact velocity {search.critical_velocity:.1f} m/s (between {low:g} and {high:g} m/s)")
+    print(f"critical impact velocity {search.critical_velocity:.1f} m/s (between {low:g} and {high:g} m/s;"
+          f" {len(search.indicator)} runs in {search.rounds} rounds)")
     return 0
 
 

@@ -49,6 +49,12 @@ class Pool:
     scheduler: str | None = None
     progress: bool = True
 
+    @property
+    def width(self) -> int:
+        """How many runs go at once: ``workers``, else the local cores (also the default round width of a study
+        on a Dask cluster, whose size this process does not ask for)."""
+        return self.workers or os.cpu_count() or 1
+
 
 def run_job(scene_json: str) -> tuple[dict, bytes | None, str]:
     """A worker's job: run one resolved scene; its record, gzipped history and the version of the code that ran."""
@@ -95,7 +101,7 @@ def run_missing(todo: dict[str, Scene], store: RunStore, pool: Pool, total: int)
         if pool.scheduler:
             _on_dask(jobs, pool.scheduler, finish)
         else:
-            _on_processes(jobs, list(todo.values()), pool.workers or os.cpu_count() or 1, finish)
+            _on_processes(jobs, list(todo.values()), pool.width, finish)
     finally:
         bar.close()
 

@@ -9,15 +9,19 @@ Definitions (docs/studies.md):
   abrupt for a 1-degree attack angle (the largest attack angle jumps too, from
   about 2 to 15 degrees) and still a factor of four for 5 degrees, where the
   largest attack angle grows smoothly with speed and would not show it.
-* **Critical impact velocity**: a coarse scan of impact speeds brackets the
-  largest jump of ``log(indicator)`` between neighbouring speeds; bisection
-  then halves the bracket, classing the middle speed with whichever end its
-  ``log(indicator)`` lies closer to, until the bracket is no wider than the
-  resolution.  The critical velocity is the middle of the final bracket.
-* **Unstable run** (to decide whether a single run can give the convergent
-  velocity): ``|axis_angle_change| >= UNSTABLE_TURN`` (30 degrees; in every
-  run of docs/paper stable runs turn by at most 13 degrees and unstable
-  ones by at least 50).
+* **Critical impact velocity**: the speed at which runs change from stable
+  to unstable (:func:`is_unstable`), found to ``resolution``: the lowest
+  unstable run with a stable run at most ``resolution`` below it, in a range
+  of speeds.  Each round splits the bracket into equal parts with as many runs
+  as the pool has workers (k-section); the range's ends, or a guessed
+  bracket's, count only once runs confirm them.  The critical velocity is the
+  middle of the final bracket.
+* **Unstable run** (the critical speed's two sides, and whether a single run
+  can give the convergent velocity): ``|axis_angle_change| >= UNSTABLE_TURN``
+  (30 degrees).  In the paper's critical-speed searches the runs just below
+  the jump turn by up to 18 degrees and most just above it by 50 or more;
+  projectile #1 turns by 20 degrees 2.5 m/s above its jump and reaches 30
+  degrees about 7 m/s higher, so its critical speed lies there.
 * **Convergence speed** of a run: the speed at which the total attack angle,
   after its peak, first falls below ``threshold`` (default 0.1 degree),
   interpolated linearly between steps.  In an unstable run this is the
@@ -30,9 +34,8 @@ import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 
-import numpy as np
-
 from ..run import CONVERGENCE_THRESHOLD, RunStore, convergence_speed
+from ..scene import InputError
 from .pool import Pool
 from .sweep import Sweep, Variation, run_sweep
 
@@ -65,21 +68,23 @@ class ScanRun:
 
 @dataclass
 class CriticalSearch:
-    """Result of :func:`find_critical_velocity` (m/s)."""
+    """Result of :func:`find_critical_velocity` (m/s); ``rounds``: the parallel sweeps it took."""
 
     critical_velocity: float | None
     bracket: list[float] | None
     indicator: list[ScanRun] = field(default_factory=list)
     message: str = ""
+    rounds: int = 0
 
     def as_dict(self) -> dict:
         return {"critical_velocity": self.critical_velocity, "bracket": self.bracket,
-                "indicator": [asdict(run) for run in self.indicator], "message": self.message}
+                "indicator": [asdict(run) for run in self.indicator], "message": self.message,
+                "runs": len(self.indicator), "rounds": self.rounds}
 
 
 def find_critical_velocity(sweep_base: Sweep, store: RunStore, speeds: Sequence[float], resolution: float = 5.0,
-                           pool: Pool | None = None) -> CriticalSearch:
-    """Bracket the critical impact velocity by a scan over ``speeds``, then bisect.
+                           pool: Pool | None = None, guess: Sequence[float] | None = None) -> CriticalSearch:
+    """The critical impact velocity between the lowest and highest of ``speeds``, to ``resolution``.
 
     Parameters
     ----------
@@ -88,13 +93,17 @@ def find_critical_velocity(sweep_base: Sweep, store: RunStore, speeds: Sequence[
     store : RunStore
         Run store; runs done before are reused.
     speeds : sequence of float
-        The coarse scan (m/s).
+        The range searched (m/s): only its lowest and highest value count.
     resolution : float
-        Width (m/s) at which bisection stops.
+        The search stops when a stable and an unstable run are at most this far apart (m/s).
     pool : Pool, optional
-        Where the runs go.
+        Where the runs go; each round holds as many runs as it has workers (:attr:`Pool.width`).
+    guess : (low, high), optional
+        A first bracket inside the range (a neighbour's result, a prediction); its ends count only once
+        runs confirm them, and the search widens to the range when they do not.
     """
-    return find_critical_velocities([sweep_base], store, speeds, resolution, pool)[0]
+    return find_critical_velocities([sweep_base], store, speeds, resolution, pool,
+                                    None if guess is None else [guess])[0]
 
 
 def _scan(bases: Sequence[Sweep], store: RunStore, pool: Pool | None, seen: list[dict[float, ScanRun]],
@@ -112,58 +121,139 @@ def _scan(bases: Sequence[Sweep], store: RunStore, pool: Pool | None, seen: list
         seen[i][v] = ScanRun(v, s.max_attack_angle, s.axis_angle_change, s.end_reason, run.key)
 
 
+@dataclass
+class _Bracket:
+    """One search's state: the bracket ``[low, high]`` and whether a run confirms each end.
+
+    An end not confirmed is assumed (the range's, or a guess's): stable at ``low``,
+    unstable at ``high``.  ``limits`` is the range the search may widen to.
+    """
+
+    low: float
+    high: float
+    limits: tuple[float, float]
+    low_run: bool = False
+    high_run: bool = False
+    failure: str = ""
+
+    def finished(self, resolution: float) -> bool:
+        return bool(self.failure) or (self.low_run and self.high_run and self.high - self.low <= resolution * _SLACK)
+
+    def wanted(self, count: int, resolution: float) -> list[float]:
+        """The speeds to run next: up to ``count`` that split the bracket evenly on the grid of half the
+        resolution, or, once it is narrow enough, the ends not confirmed yet."""
+        low, high = self.low, self.high
+        if high - low <= resolution * _SLACK:
+            return [v for v, known in ((low, self.low_run), (high, self.high_run)) if not known][:count]
+        count = min(count, math.ceil((high - low) / resolution - 1e-9) - 1)
+        step = 0.5 * resolution
+        points = {round(round((low + j * (high - low) / (count + 1)) / step) * step, 6) for j in range(1, count + 1)}
+        return sorted(v for v in points if low < v < high)
+
+    def update(self, seen: dict[float, ScanRun]) -> None:
+        """The new bracket: the lowest unstable run from its bottom up, and the highest stable run below
+        that; an end that its run contradicts moves out to the range's end (or the search fails there)."""
+        unstable = {v for v, run in seen.items() if is_unstable(run.axis_angle_change)}
+        stable = set(seen) - unstable
+        bottom, top = self.limits
+        high = _end([v for v in unstable if v >= self.low], min, self.high, stable, top)
+        if high is None:
+            self.failure = f"every run is stable, up to {max(stable):g} m/s"
+            return
+        self.high, self.high_run = high
+        low = _end([v for v in stable if v < self.high], max, self.low, unstable, bottom)
+        if low is None:
+            self.failure = f"every run is unstable, down to {min(unstable):g} m/s"
+            return
+        self.low, self.low_run = low
+
+
+def _end(side: list[float], nearest, assumed: float, wrong_side: set[float], limit: float) -> tuple[float, bool] | None:
+    """One end of a bracket and whether a run confirms it: the ``nearest`` run on its side; else the assumed
+    end, unless its run lay on the wrong side: then the range's ``limit`` (None if that too was run and did)."""
+    if side:
+        return nearest(side), True
+    if assumed not in wrong_side:
+        return assumed, False
+    return None if limit in wrong_side else (limit, False)
+
+
+_SLACK = 1 + 1e-9  # a bracket this close to the resolution is narrow enough (rounding of the grid)
+
+
+def _shares(brackets: Sequence[_Bracket], width: int) -> list[int]:
+    """How many runs each bracket gets this round: together a whole number of rounds of ``width`` runs (at least
+    one each), the widest brackets taking what is left over."""
+    budget = width * math.ceil(len(brackets) / width)
+    share, extra = divmod(budget, len(brackets))
+    widest = sorted(range(len(brackets)), key=lambda i: brackets[i].low - brackets[i].high)
+    counts = [share] * len(brackets)
+    for i in widest[:extra]:
+        counts[i] += 1
+    return counts
+
+
+def _first_brackets(bases: Sequence[Sweep], speeds: Sequence[float],
+                    guesses: Sequence[Sequence[float] | None] | None) -> list[_Bracket]:
+    """A bracket per scene: its guess, else the range; bad input is refused before anything runs."""
+    low, high = float(min(speeds)), float(max(speeds))
+    if not 0 < low < high:
+        raise InputError(f"the range of speeds needs 0 < lowest < highest, got {low:g} and {high:g} m/s")
+    guesses = list(guesses) if guesses is not None else [None] * len(bases)
+    if len(guesses) != len(bases):
+        raise ValueError(f"{len(guesses)} guesses for {len(bases)} scenes")
+    brackets = []
+    for guess in guesses:
+        g_low, g_high = (low, high) if guess is None else (float(min(guess)), float(max(guess)))
+        if not low <= g_low < g_high <= high:
+            raise InputError(f"the guess {g_low:g} to {g_high:g} m/s must lie inside the range of speeds, {low:g} to"
+                             f" {high:g} m/s")
+        brackets.append(_Bracket(g_low, g_high, (low, high)))
+    # every speed a search may run lies in the range: a speed the scene refuses fails here, not mid-search
+    Sweep.combined([(base, Variation({**base.variations[0].values, "impact.speed": v}))
+                    for base in bases for v in (low, high)])
+    return brackets
+
+
 def find_critical_velocities(bases: Sequence[Sweep], store: RunStore, speeds: Sequence[float],
-                             resolution: float = 5.0, pool: Pool | None = None) -> list[CriticalSearch]:
+                             resolution: float = 5.0, pool: Pool | None = None,
+                             guesses: Sequence[Sequence[float] | None] | None = None) -> list[CriticalSearch]:
     """:func:`find_critical_velocity` for several scenes at once.
 
-    The searches advance in lockstep (the scans together, then one bisection
-    round for all), so every round is one parallel sweep.
+    The searches advance in lockstep, every round one parallel sweep: each
+    open search splits its bracket into equal parts with the runs it gets
+    (together a whole number of rounds of :attr:`Pool.width` runs: one
+    search alone gets every worker, a family shares them).  A run is stable
+    or unstable by :func:`is_unstable`; the new bracket is the lowest
+    unstable run and the highest stable run below it.  The range's ends and
+    a guess's are assumed until runs confirm them: an end contradicted by its
+    run widens the bracket to the range, and a range without the change says
+    so (``critical_velocity`` None).
     """
-    speeds = sorted(float(v) for v in speeds)
+    brackets = _first_brackets(bases, speeds, guesses)
+    width = (pool or Pool()).width
     seen: list[dict[float, ScanRun]] = [{} for _ in bases]
-
-    def log_indicator(i: int, v: float) -> float:
-        return math.log(max(indicator(seen[i][v].axis_angle_change), 1e-6))
-
-    _scan(bases, store, pool, seen, [speeds for _ in bases])
-    brackets: list[list[float] | None] = []
-    for i in range(len(bases)):
-        jumps = np.diff([log_indicator(i, v) for v in speeds])
-        if len(jumps) == 0 or jumps.max() < math.log(2.0):
-            brackets.append(None)
-        else:
-            k = int(np.argmax(jumps))
-            brackets.append([speeds[k], speeds[k + 1]])
-    grid_step = 0.5 * resolution  # bisect on a grid, so that runs are shared between searches
-
-    def middle(bracket: list[float]) -> float | None:
-        low, high = bracket
-        mid = round(0.5 * (low + high) / grid_step) * grid_step
-        return mid if high - low > resolution and low < mid < high else None
-
+    rounds = [0] * len(bases)
     while True:
-        wanted = [[m] if b is not None and (m := middle(b)) is not None else [] for b in brackets]
-        if not any(wanted):
+        open_ = [i for i, b in enumerate(brackets) if not b.finished(resolution)]
+        if not open_:
             break
+        counts = dict(zip(open_, _shares([brackets[i] for i in open_], width)))
+        wanted = [brackets[i].wanted(counts[i], resolution) if i in counts else [] for i in range(len(bases))]
+        if all(v in seen[i] for i in open_ for v in wanted[i]):  # cannot happen: every round runs something new
+            raise RuntimeError("the critical-speed search stalled: no new speed to run")
         _scan(bases, store, pool, seen, wanted)
-        for i, values in enumerate(wanted):
-            if not values:
-                continue
-            mid = values[0]
-            low, high = brackets[i]
-            to_low = abs(log_indicator(i, mid) - log_indicator(i, low))
-            if to_low <= abs(log_indicator(i, mid) - log_indicator(i, high)):
-                brackets[i] = [mid, high]
-            else:
-                brackets[i] = [low, mid]
+        for i in open_:
+            rounds[i] += 1
+            brackets[i].update(seen[i])
     results = []
     for i, bracket in enumerate(brackets):
         rows = sorted(seen[i].values(), key=lambda r: r.speed)
-        if bracket is None:
-            message = f"no abrupt change of the axis turn between {speeds[0]:g} and {speeds[-1]:g} m/s"
-            results.append(CriticalSearch(None, None, rows, message))
+        if bracket.failure:
+            results.append(CriticalSearch(None, None, rows, bracket.failure, rounds[i]))
         else:
-            results.append(CriticalSearch(0.5 * sum(bracket), bracket, rows, ""))
+            results.append(CriticalSearch(0.5 * (bracket.low + bracket.high), [bracket.low, bracket.high], rows, "",
+                                          rounds[i]))
     return results
 
 

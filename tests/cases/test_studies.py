@@ -39,12 +39,14 @@ def test_critical_velocity_brackets_the_jump(store):
     sweep = Sweep.from_file(scene_path("paper_p3"), STUDY)
     search = find_critical_velocity(sweep, store, [800, 1000], resolution=50.0, pool=QUIET)
     low, high = search.bracket
-    assert 800 <= low < high <= 1000 and high - low <= 50
+    assert 800 < low < high < 1000 and high - low <= 50
     by_speed = {run.speed: run for run in search.indicator}
-    # the two ends of the final bracket sit on either side of the jump
+    # the two ends of the final bracket were run and sit on either side of the jump
     assert not is_unstable(by_speed[low].axis_angle_change)
     assert is_unstable(by_speed[high].axis_angle_change)
-    assert search.as_dict()["indicator"][0]["speed"] == 800
+    # one round of two runs splits 200 m/s into three parts on the grid of 25 m/s: 875 and 925 m/s
+    record = search.as_dict()
+    assert [run["speed"] for run in record["indicator"]] == [875, 925] and record["rounds"] == 1
     assert search.critical_velocity == pytest.approx(0.5 * (low + high))
 
 

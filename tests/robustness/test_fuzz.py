@@ -510,6 +510,7 @@ def bad_command_lines(draw, files):
         poisons += [("--list", str(files["not-toml"])), ("--list", str(files["missing"]))]
     if command == "critical":
         poisons += [("--speeds", v) for v in BAD_GRID[2:7]] + [("--resolution", v) for v in BAD_NUMBER]
+        poisons += [("--guess", v) for v in ["100:300", "900", "x:1000", "1500:1700", "nan:900"]]
     if command == "convergent":
         poisons += [("--threshold", v) for v in BAD_NUMBER]
     if command == "compare":
@@ -654,6 +655,7 @@ def penetrate(*args, cwd=None):
     (["sweep", GOOD, "--grid", "impact.speed=0:inf:1"], "START:STOP:STEP must be finite numbers"),
     (["sweep", GOOD, "--workers", "0"], "argument --workers: '0': must be a whole number >= 1"),
     (["critical", GOOD, "--resolution", "nan"], "argument --resolution: 'nan': must be a finite number > 0"),
+    (["critical", GOOD, "--guess", "100:300"], "--guess 100:300: must lie inside --speeds 200:1600 (m/s)"),
 ])
 def test_real_command_bad_input(cli_files, args, expected):
     args = [a.format(**{k: str(v) for k, v in cli_files.items()}) for a in args]

@@ -1,0 +1,211 @@
+"""The critical-speed search on fake runs whose critical speed is known exactly: where it ends, how many runs
+and rounds it takes, and what it does when a guess or the range does not hold the change."""
+
+import json
+import math
+from types import SimpleNamespace
+
+import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+
+from cases import scene_path
+from cases.scene import InputError
+from cases.studies import Pool, Sweep, find_critical_velocities, find_critical_velocity, is_unstable
+from cases.studies import speeds as speeds_module
+
+RANGE = (200, 1600)  # the default range of `penetrate critical`
+
+
+def turn(speed: float, critical: float) -> float:
+    """An axis turn like the real one: rising slowly to about 12 degrees below the critical speed, 50-180 above."""
+    if speed < critical:
+        return 2.0 + 10.0 * (speed / critical) ** 8
+    return min(50.0 + 0.2 * (speed - critical), 180.0)
+
+
+def gradual_turn(speed: float, critical: float) -> float:
+    """Like projectile #1's: 11 degrees just below the jump, 20 just above it, 30 about 7 m/s and 45 about
+    50 m/s higher (docs/paper: 1570, 1575, 1580, 1600, 1620 m/s turn by 11, 20, 30, 41, 45 degrees)."""
+    if speed < critical:
+        return 2.0 + 9.0 * (speed / critical) ** 8
+    return 20.0 + 28.0 * (1.0 - math.exp(-(speed - critical) / 18.0))
+
+
+def reaches_30(jump: float) -> float:
+    """Where :func:`gradual_turn` reaches 30 degrees."""
+    return jump + 18.0 * math.log(28.0 / 18.0)
+
+
+class FakeRuns:
+    """Stands in for ``run_sweep``: the critical speed of a scene is ``critical(scene)``; records every round."""
+
+    def __init__(self, critical, turn=turn):
+        self.critical = critical
+        self.turn = turn
+        self.rounds: list[list[float]] = []
+
+    def __call__(self, sweep, store, pool=None):
+        self.rounds.append([scene.impact.speed for scene in sweep.scenes])
+        runs = []
+        for scene in sweep.scenes:
+            summary = SimpleNamespace(max_attack_angle=1.0, end_reason="stopped",
+                                      axis_angle_change=-self.turn(scene.impact.speed, self.critical(scene)))
+            runs.append(SimpleNamespace(failed=False, error=None, summary=summary,
+                                        key=f"{scene.projectile.centre_of_mass_ratio}@{scene.impact.speed}"))
+        return SimpleNamespace(runs=runs)
+
+    @property
+    def runs(self) -> int:
+        return sum(len(r) for r in self.rounds)
+
+
+@pytest.fixture(scope="module")
+def base():
+    return Sweep.from_file(scene_path("paper_p3"))
+
+
+def search(monkeypatch, base, critical: float, workers: int = 2, guess=None, speeds=RANGE, resolution=5.0):
+    fake = FakeRuns(lambda scene: critical)
+    monkeypatch.setattr(speeds_module, "run_sweep", fake)
+    result = find_critical_velocity(base, store=None, speeds=speeds, resolution=resolution,
+                                    pool=Pool(workers=workers, progress=False), guess=guess)
+    return result, fake
+
+
+def assert_confirmed(result, critical: float, resolution: float = 5.0):
+    """The bracket holds the critical speed, is no wider than the resolution, and runs at both ends confirm it."""
+    low, high = result.bracket
+    assert low < critical <= high and high - low <= resolution * (1 + 1e-9)
+    by_speed = {run.speed: run for run in result.indicator}
+    assert not is_unstable(by_speed[low].axis_angle_change) and is_unstable(by_speed[high].axis_angle_change)
+    assert result.critical_velocity == 0.5 * (low + high)
+
+
+@pytest.mark.parametrize("critical", [907.3, 201.0, 640.0, 1333.3, 1599.0])
+def test_two_workers_find_the_critical_speed_in_at_most_six_rounds_of_two_runs(monkeypatch, base, critical):
+    """1400 m/s to 5 m/s: three parts a round, 3^6 = 729 >= 280 (bisection from the scan needed 15 + 5 runs)."""
+    result, fake = search(monkeypatch, base, critical)
+    assert_confirmed(result, critical)
+    near_an_end = critical < 210 or critical > 1590  # the final bracket touches an assumed end: one more round
+    # four rounds leave at least 1400 / 3^4 = 17 m/s; the grid of 2.5 m/s sometimes saves the sixth
+    assert 5 <= result.rounds == len(fake.rounds) <= (7 if near_an_end else 6)
+    assert all(len(speeds) <= 2 for speeds in fake.rounds)
+    assert fake.runs == len(result.indicator) <= 2 * result.rounds
+    assert result.as_dict()["runs"] == fake.runs and result.as_dict()["rounds"] == result.rounds
+
+
+def test_more_workers_take_fewer_rounds(monkeypatch, base):
+    rounds = {}
+    for workers in (1, 2, 3, 4):
+        result, fake = search(monkeypatch, base, 907.3, workers=workers)
+        assert_confirmed(result, 907.3)
+        assert all(len(speeds) <= workers for speeds in fake.rounds)
+        rounds[workers] = result.rounds
+    # at most ceil(log_(w+1)(1400 / 5)) = 9, 6, 5, 5 rounds; the grid of 2.5 m/s saves one here
+    assert rounds == {1: 8, 2: 5, 3: 4, 4: 4}
+
+
+def test_a_good_guess_saves_rounds(monkeypatch, base):
+    result, _ = search(monkeypatch, base, 907.3, guess=(880, 940))
+    assert_confirmed(result, 907.3)
+    assert result.rounds == 3  # 60 m/s: 20, 7.5 (grid of 2.5), 2.5
+
+
+@pytest.mark.parametrize("guess", [(1000, 1100), (300, 600), (905, 907)])
+def test_a_guess_without_the_change_is_widened(monkeypatch, base, guess):
+    result, _ = search(monkeypatch, base, 907.3, guess=guess)
+    assert_confirmed(result, 907.3)
+    ran = {run.speed for run in result.indicator}
+    assert ran & set(guess), "the guess's end next to the change was run to confirm it, and it failed"
+
+
+@pytest.mark.parametrize("jump", [1572.3, 1347.1, 907.3, 230.0])
+def test_a_gradual_change_is_bracketed_where_the_turn_reaches_30_degrees(monkeypatch, base, jump):
+    """Stable and unstable are 30 degrees of turn apart, like everywhere else: where the turn jumps from 11 to
+    20 degrees and only reaches 30 degrees 8 m/s higher (projectile #1), the bracket holds the 30 degrees."""
+    fake = FakeRuns(lambda scene: jump, gradual_turn)
+    monkeypatch.setattr(speeds_module, "run_sweep", fake)
+    result = find_critical_velocity(base, None, RANGE, 5.0, Pool(workers=2, progress=False))
+    assert_confirmed(result, reaches_30(jump))
+    assert result.critical_velocity - jump == pytest.approx(8, abs=2.5)
+
+
+@pytest.mark.parametrize("critical, message", [(1700.0, "every run is stable, up to 1600 m/s"),
+                                               (150.0, "every run is unstable, down to 200 m/s")])
+def test_no_change_in_the_range(monkeypatch, base, critical, message):
+    result, fake = search(monkeypatch, base, critical)
+    assert result.critical_velocity is None and result.bracket is None
+    assert result.message == message
+    end = RANGE[1] if critical > RANGE[1] else RANGE[0]
+    assert end in {run.speed for run in result.indicator}  # the range's end was run: no change is a finding
+    assert result.rounds <= 7 and fake.runs <= 13  # up to six rounds to the end of the range, one to run the end
+
+
+def test_a_family_shares_the_workers_round_by_round(monkeypatch, base):
+    """Nine searches in lockstep on two workers: ten runs a round (five rounds of the workers), every search
+    bisecting and one trisecting; each ends within the resolution of its own critical speed."""
+    ratios = [0.4448, 0.4745, 0.5042, 0.5339, 0.5636, 0.5933, 0.6230, 0.56, 0.57]
+    critical = dict(zip(ratios, [1572.3, 1347.1, 1172.8, 1027.6, 907.3, 811.9, 732.2, 827.7, 1007.4]))
+    fake = FakeRuns(lambda scene: critical[scene.projectile.centre_of_mass_ratio])
+    monkeypatch.setattr(speeds_module, "run_sweep", fake)
+    bases = [Sweep.from_file(scene_path("paper_p3"), {"projectile.centre_of_mass_ratio": r}) for r in ratios]
+    results = find_critical_velocities(bases, None, list(range(400, 2001, 100)), 5.0, Pool(workers=2, progress=False))
+    for r, result in zip(ratios, results):
+        assert_confirmed(result, critical[r])
+    open_searches = [sum(result.rounds > n for result in results) for n in range(len(fake.rounds))]
+    assert all(len(speeds) <= 2 * math.ceil(n / 2) for speeds, n in zip(fake.rounds, open_searches))
+    assert [len(speeds) for speeds in fake.rounds[:8]] == [10] * 8  # no worker idles while all nine are open
+    # 81 runs in 9 rounds, 41 turns of the two workers (the old scan of 17 speeds alone: 153 runs, 77 turns)
+    assert sum(math.ceil(len(speeds) / 2) for speeds in fake.rounds) <= 41 and len(fake.rounds) <= 9
+
+
+def test_bad_ranges_and_guesses_are_refused_before_anything_runs(monkeypatch, base):
+    fake = FakeRuns(lambda scene: 900.0)
+    monkeypatch.setattr(speeds_module, "run_sweep", fake)
+    for speeds, guess in [((900, 900), None), ((0, 1600), None), (RANGE, (100, 300)), (RANGE, (900, 900)),
+                          ((200, 1e9), None)]:
+        with pytest.raises(InputError):
+            find_critical_velocity(base, None, speeds, 5.0, Pool(workers=2, progress=False), guess)
+    assert fake.rounds == []
+
+
+@settings(max_examples=400, deadline=None)
+@given(critical=st.floats(201, 1599), workers=st.integers(1, 5), resolution=st.sampled_from([1.0, 5.0, 20.0]),
+       guess=st.one_of(st.none(), st.tuples(st.floats(200, 1600), st.floats(1, 800)).map(
+           lambda g: (g[0], min(g[0] + g[1], 1600.0))).filter(lambda g: g[1] > g[0])),
+       shape=st.sampled_from([turn, gradual_turn]))
+def test_any_critical_speed_workers_resolution_and_guess(base, critical, workers, resolution, guess, shape):
+    """Whatever the guess, the bracket is confirmed and narrow; without a guess it takes no more rounds
+    than splitting the range into workers + 1 parts a round needs, plus one (the grid) and one (an end)."""
+    assume(shape is turn or reaches_30(critical) < RANGE[1])
+    fake = FakeRuns(lambda scene: critical, shape)
+    original = speeds_module.run_sweep
+    speeds_module.run_sweep = fake
+    try:
+        result = find_critical_velocity(base, None, RANGE, resolution, Pool(workers=workers, progress=False), guess)
+    finally:
+        speeds_module.run_sweep = original
+    assert_confirmed(result, critical if shape is turn else reaches_30(critical), resolution)
+    assert all(len(speeds) <= workers for speeds in fake.rounds)
+    if guess is None:
+        assert result.rounds <= math.ceil(math.log(1400 / resolution) / math.log(workers + 1)) + 2
+
+
+def test_the_command_passes_range_and_guess_and_says_runs_and_rounds(monkeypatch, capsys, tmp_path):
+    from cases.cli import main
+
+    fake = FakeRuns(lambda scene: 907.3)
+    monkeypatch.setattr(speeds_module, "run_sweep", fake)
+    scene = str(scene_path("paper_p3"))
+    common = ["--store", str(tmp_path / "store"), "--workers", "2", "--no-progress"]
+    assert main(["critical", scene, "--guess", "880:940", "--json", *common]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["bracket"] == [905.0, 907.5] and (record["runs"], record["rounds"]) == (5, 3)
+    assert min(fake.rounds[0]) > 880 and max(fake.rounds[0]) < 940  # the guess's parts, not the range's
+    assert main(["critical", scene, "--speeds", "1000:1600:100", *common]) == 1  # 907 m/s is below the range
+    assert capsys.readouterr().out.splitlines()[-1].startswith("every run is unstable, down to 1000 m/s (")
+    assert main(["critical", scene, "--speeds", "800,1000", *common]) == 0  # a list counts by its ends
+    assert capsys.readouterr().out.splitlines()[-1] == ("critical impact velocity 907.5 m/s (between 905 and 910 m/s;"
+                                                        " 7 runs in 4 rounds)")
+    assert min(fake.rounds[-4]) > 800 and max(fake.rounds[-4]) < 1000
