@@ -6,7 +6,7 @@ import argparse
 import json
 import os
 
-from .options import add_scene_options, out_folder, overrides
+from .options import add_scene_options, environment_defaults, out_folder, overrides, quiet_start
 
 __all__ = ["register", "human_summary"]
 
@@ -20,15 +20,20 @@ def register(commands) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..run import history_columns, run_scene, summarise, write_outputs
-    from ..scene import load_scene
+    # start-up is most of a short run (docs/performance.md, "Start-up"): the collector rests until the scene
+    # is read, and OpenBLAS starts no thread pool (its worker spins 60 ms of CPU after numpy's import), since
+    # a run holds BLAS at one thread anyway (cases.run.run_scene) and reads a cached projectile without BLAS
+    with quiet_start() as started, environment_defaults(OPENBLAS_NUM_THREADS="1"):
+        from ..run import history_columns, run_scene, summarise, write_outputs
+        from ..scene import load_scene
 
-    scene = load_scene(args.scene, overrides(args))
-    result = run_scene(scene)
-    history = history_columns(result)
-    summary = summarise(result, history)
-    if args.out:
-        write_outputs(result, args.out, scene.outputs.history_every, history)
+        scene = load_scene(args.scene, overrides(args))
+        started()
+        result = run_scene(scene)
+        history = history_columns(result)
+        summary = summarise(result, history)
+        if args.out:
+            write_outputs(result, args.out, scene.outputs.history_every, history)
     if args.json:
         print(json.dumps(summary.record()))
         return 0

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import gzip
 import io
 import json
 import math
@@ -209,6 +208,8 @@ def simulate_record(scene_json: str) -> tuple[dict, bytes | None]:
         record["scene_resolved"] = scene.model_dump(mode="json")
     except Exception as exc:  # recorded, so that one failure does not stop the sweep
         return {"error": f"{type(exc).__name__}: {exc}"}, None
+    import gzip  # a study's worker only
+
     buffer = io.BytesIO()
     with gzip.GzipFile(fileobj=buffer, mode="wb", mtime=0) as gz:
         gz.write(history_csv(history, max(1, len(history["time"]) // MAX_STORED_HISTORY_ROWS)))

@@ -3,14 +3,23 @@
 A scene knows no runs: this room imports ``mesh`` and ``fem_loads`` (each spec builds its own
 physics object: ``NoseSpec.build()``, ``LawSpec.build()``, ``Projectile.geometry()``,
 ``Scene.loads()``) and nothing else of ``cases``.
+
+The errors are imported with the package; the other names below on first use, so that
+``from cases.scene import InputError`` (every command of the command line, before it knows whether
+it will read a scene) costs nothing, while the schema brings numpy, pydantic and the physics.
 """
 
+from __future__ import annotations
+
 from .errors import InputError, SceneError, one_line
-from .load import (Overrides, apply_overrides, dotted_key, load_scene, parse_override, read_toml, scene_from_dict,
-                   scene_key)
-from .projectile import Projectile
-from .schema import Impact, Numerics, Outputs, Scene
-from .target import Effects, Target, build_law
+
+_EXPORTS = {
+    "Scene": "schema", "Impact": "schema", "Numerics": "schema", "Outputs": "schema",
+    "Projectile": "projectile",
+    "Target": "target", "Effects": "target", "build_law": "target",
+    "load_scene": "load", "scene_from_dict": "load", "apply_overrides": "load", "dotted_key": "load",
+    "parse_override": "load", "read_toml": "load", "scene_key": "load", "Overrides": "load",
+}
 
 __all__ = [
     "Scene", "Projectile", "Target", "Effects", "Impact", "Numerics", "Outputs", "build_law",
@@ -18,3 +27,12 @@ __all__ = [
     "Overrides",
     "InputError", "SceneError", "one_line",
 ]
+
+
+def __getattr__(name: str):
+    if name in _EXPORTS:
+        # the import statement's machinery (not importlib.import_module), so that -X importtime lists the module
+        value = getattr(__import__(f"{__name__}.{_EXPORTS[name]}", fromlist=[name]), name)
+        globals()[name] = value  # found directly from now on
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

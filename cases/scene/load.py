@@ -26,7 +26,6 @@ from typing import Any
 from pydantic import ValidationError
 
 from .errors import SceneError
-from .explain import explain
 from .projectile import NOSE_SPECS
 from .schema import Scene
 
@@ -212,6 +211,8 @@ def scene_from_dict(data: dict[str, Any], source: str = "scene") -> Scene:
     try:
         return Scene.model_validate(data)
     except ValidationError as exc:
+        from .explain import explain  # imported on bad input only: a valid scene never needs it
+
         try:
             explained = explain(exc)
         except RecursionError:

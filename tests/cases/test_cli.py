@@ -1,6 +1,10 @@
 """The penetrate command as a user runs it."""
 
+import contextlib
+import gc
+import io
 import json
+import os
 import subprocess
 import sys
 
@@ -8,6 +12,7 @@ import pandas as pd
 import pytest
 
 from cases import scene_path
+from cases.cli import main
 from cases.run import HISTORY_UNITS
 
 FAST = ["--set", "numerics.mesh_size=0.03"]
@@ -84,17 +89,50 @@ def test_compare_says_where_it_wrote(tmp_path):
     assert bad.returncode == 2 and "--laws: law = 'clay'" in bad.stderr and not (tmp_path / "bad").exists()
 
 
+# what a run of a cached projectile never imports: pictures, tables, clusters, meshing and its libraries
+# (scipy alone 0.45 s), the compiled kernel (numba, for studies), numpy.random, the e-mail parser (package
+# metadata parsed whole), the explanations of bad scenes, and a study worker's gzip
+NOT_IMPORTED_BY_A_RUN = ("pandas", "pyvista", "matplotlib", "distributed", "vtk", "gmsh", "meshio", "skfem", "scipy",
+                         "numba", "numpy.random", "email.parser", "cases.scene.explain", "gzip")
+
+
 def test_a_run_imports_only_what_it_needs(tmp_path):
-    """``penetrate run`` of a projectile seen before (with ``--out`` too) imports neither pandas nor the
-    picture, cluster and meshing libraries: start-up is most of a short run's time (pandas alone takes
-    0.16 s to import)."""
+    """``penetrate run`` of a projectile seen before (with ``--out`` too) imports none of
+    :data:`NOT_IMPORTED_BY_A_RUN`: start-up is most of a short run's time (pandas alone takes 0.16 s to
+    import, numpy.random 4-8 ms)."""
     assert penetrate("run", str(scene_path("forrestal_luk_test2")), *FAST, "--json").returncode == 0  # mesh it
     code = ("import sys; from cases.cli import main; main(sys.argv[1:]); "
-            "print(sorted(m for m in ('pandas', 'pyvista', 'matplotlib', 'distributed', 'vtk', 'gmsh')"
-            " if m in sys.modules))")
+            f"print(sorted(m for m in {NOT_IMPORTED_BY_A_RUN!r} if m in sys.modules))")
     for extra in ([], ["--out", str(tmp_path / "run")]):
         done = subprocess.run([sys.executable, "-c", code, "run", str(scene_path("forrestal_luk_test2")), *FAST,
                                "--json", *extra], capture_output=True, text=True, timeout=300)
         assert done.returncode == 0, done.stderr
         assert done.stdout.splitlines()[-1] == "[]"
     assert (tmp_path / "run" / "history.csv").exists()
+
+
+def test_the_command_line_imports_nothing_before_a_command():
+    """Importing the command line (and parsing, ``--help``) loads neither numpy nor pydantic: each command
+    imports what it uses, and ``run`` does so with the garbage collector at rest (cases.cli.options.quiet_start)."""
+    code = ("import sys; import cases.cli; "
+            "print(sorted(m for m in ('numpy', 'pydantic', 'cases.scene.load', 'cases.run') if m in sys.modules))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]"
+
+
+def test_a_run_in_process_leaves_the_process_as_it_was(monkeypatch):
+    """``main`` rests the garbage collector while a run starts and sets PYDANTIC_DISABLE_PLUGINS and
+    OPENBLAS_NUM_THREADS for the command where the user has not: afterwards all is as it was."""
+    monkeypatch.delenv("PYDANTIC_DISABLE_PLUGINS", raising=False)
+    monkeypatch.delenv("OPENBLAS_NUM_THREADS", raising=False)
+    assert gc.isenabled() and gc.get_freeze_count() == 0
+    with contextlib.redirect_stdout(io.StringIO()) as out:
+        assert main(["run", str(scene_path("forrestal_luk_test2")), *FAST, "--json"]) == 0
+    assert json.loads(out.getvalue())["end_reason"] == "stopped"
+    assert gc.isenabled() and gc.get_freeze_count() == 0
+    assert "PYDANTIC_DISABLE_PLUGINS" not in os.environ and "OPENBLAS_NUM_THREADS" not in os.environ
+    monkeypatch.setenv("PYDANTIC_DISABLE_PLUGINS", "some_plugin")  # the user's choice stands
+    with contextlib.redirect_stdout(io.StringIO()):
+        assert main(["run", str(scene_path("forrestal_luk_test2")), *FAST, "--json"]) == 0
+    assert os.environ["PYDANTIC_DISABLE_PLUGINS"] == "some_plugin"
