@@ -13,7 +13,7 @@ from ...run import CONVERGENCE_THRESHOLD
 from ..prediction import TurnBoundary
 from ..speeds import CriticalSearch
 from .analysis import PaperRun, interpolate
-from .plan import P3, PUBLISHED_TABLE4_P3, STUDY_NUMERICS, label
+from .plan import FINE_NUMERICS, P3, PUBLISHED_TABLE4_P3, STUDY_NUMERICS, label
 
 __all__ = ["StudyResults", "results_markdown", "variants_markdown", "numerics_text", "fmt"]
 
@@ -152,7 +152,8 @@ def _inertia_and_check(r: StudyResults) -> list[str]:
               "| impact speed (m/s) | numerics | max attack (deg) | axis turn (deg) | convergent (m/s) |",
               "|---|---|---|---|---|"]
     for fine in r.runs[("fine numerics", P3)]:
-        for name, run in (("study: 20 mm, 2e-5 s", coarse[fine.speed]), ("fine: 10 mm, 1e-5 s", fine)):
+        for name, run in ((f"study: `{numerics_text(STUDY_NUMERICS)}`", coarse[fine.speed]),
+                          (f"fine: `{numerics_text(FINE_NUMERICS)}`", fine)):
             lines.append(f"| {fine.speed:.0f} | {name} | {run.max_attack_angle:.3f} | {run.axis_angle_change:.2f} | "
                          f"{fmt(run.convergence_speed, 1)} |")
     lines.append("")
