@@ -1,11 +1,13 @@
 """The compiled step (numerics.kernel = "compiled") runs the scenes as the numpy reference does.
 
-Bound: 1e-9 relative in depth where the run is stable and steps by a fixed step or a tolerance whose
-decisions round-off does not flip (tests 2-6, #1).  The runs of #2-#4 turn (#3 and #4 go unstable
-and leave the target) and step by Dormand-Prince at rtol 1e-6: there a round-off difference can move
-a step-size decision, and the two paths differ by up to the integration tolerance the scene asks
-for, as the numpy path does against itself with its products summed in another order (measured, #4:
-1.1e-7 in depth between the paths; #3: 1.1e-7 between two summation orders of the numpy path).
+Bound: 1e-9 relative in depth for tests 2, 3, 4, 6 and #1 (measured: at most 5.5e-11).  Test 5 (an
+oblique impact with an attack angle) measured 8.4e-10 and #2-#4 up to 1.1e-7: their pitch motion
+amplifies the round-off in which the two loads differ (the compiled kernel sums with fused
+multiply-adds in SIMD lanes), and #3 and #4 go unstable and leave the target, where a round-off
+difference can also move a Dormand-Prince step-size decision.  The numpy path differs from itself
+by as much with its sums taken in another order (#3: 1.1e-7).  For these the bound is the scene's
+own tolerance, rtol (1e-5 for test 5, 1e-6 for #2-#4): the two paths agree to within the accuracy
+the scene asks for.
 """
 
 from __future__ import annotations
@@ -14,8 +16,7 @@ import pytest
 
 from cases import SHIPPED_SCENES, load_scene, run_scene, scene_path
 
-STABLE = {"forrestal_luk_test2", "forrestal_luk_test3", "forrestal_luk_test4", "forrestal_luk_test5",
-          "forrestal_luk_test6", "paper_p1"}
+STABLE = {"forrestal_luk_test2", "forrestal_luk_test3", "forrestal_luk_test4", "forrestal_luk_test6", "paper_p1"}
 
 
 def _depth_and_record(name: str, kernel: str, overrides: dict | None = None):
