@@ -21,6 +21,10 @@ def private_mesh_cache(tmp_path_factory):
         from cases.run import cache_dir
 
         os.environ["NUMBA_CACHE_DIR"] = str(cache_dir() / "numba")
+    # compile the compiled step here, once, before any test spawns study workers that would each compile it
+    from cases.run.compiled import precompile
+
+    precompile()
     old = os.environ.get("PENETRATE_CACHE_DIR")
     os.environ["PENETRATE_CACHE_DIR"] = str(folder)
     yield folder

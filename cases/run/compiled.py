@@ -21,7 +21,7 @@ import numpy as np
 
 from .persistence import cache_dir
 
-__all__ = ["compiled_step", "numba_cache_folder", "COMPILED_SOURCES"]
+__all__ = ["compiled_step", "precompile", "numba_cache_folder", "COMPILED_SOURCES"]
 
 COMPILED_SOURCES = ("dynamics.compiled", "fem_loads.compiled", "cases.run.dafl_step")
 
@@ -85,3 +85,20 @@ def _warm(load, method, body, data, lowest_height) -> None:
                 np.zeros(3))
     method.step(body, load, far, 1e-9)
     lowest_height(data, far.position, far.rotation[2])
+
+
+def precompile() -> None:
+    """Compile (or load) the compiled step once, on a four-point stand-in surface.
+
+    The machine code does not depend on the surface: a process that calls this before it starts
+    workers (the test session does) compiles once, and the workers load the code from the cache
+    instead of compiling it side by side.
+    """
+    from dynamics import RK4, RigidBody
+    from fem_loads import DAFLLoads, ResistanceLaw, SurfaceQuadrature
+
+    points = np.array([[0.1, 0.05, 0.05], [0.1, -0.05, 0.05], [0.1, 0.05, -0.05], [0.1, -0.05, -0.05]])
+    normals = points / np.linalg.norm(points, axis=1)[:, None]
+    loads = DAFLLoads(SurfaceQuadrature(points, normals, np.full(4, 1e-4)), ResistanceLaw(1e6, 1e3),
+                      contact_incidence=0.005, entry_smoothing=4.0)
+    compiled_step(loads, RK4(), RigidBody(1.0, np.eye(3)), None)

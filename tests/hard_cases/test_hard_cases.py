@@ -153,8 +153,10 @@ LADDER_SLOW = [(0.02, 1e-5), (0.01, 2e-5), (0.01, 1e-5)]
 
 
 def _critical_run(speed: float, size: float, step: float) -> dict:
+    # on the compiled step (the same method and load as numpy's, tests/cases/test_kernels.py): five times faster
     _, history, record = _run(P3, f"numerics.mesh_size={size}", "numerics.quadrature_order=2",
-                              *RK4_2E5[:1], f"numerics.time_step={step}", f"impact.speed={speed}")
+                              *RK4_2E5[:1], f"numerics.time_step={step}", f"impact.speed={speed}",
+                              "numerics.kernel=compiled")
     return {**record.model_dump(), "convergence_speed": convergence_speed(history)}
 
 
@@ -618,7 +620,9 @@ def test_rk4_reaches_its_order_with_the_continuous_load():
     entering and every switch at Vn = 0 is a jump RK4 crosses at first order.
     """
     steps = (2e-5, 1e-5, 5e-6, 2.5e-6)
-    records = [_run(FL5, *MM20, "numerics.integrator=rk4", f"numerics.time_step={h}")[2] for h in steps]
+    # on the compiled step, which reaches the order as the Python step does (tests/dynamics/test_compiled_step.py)
+    records = [_run(FL5, *MM20, "numerics.integrator=rk4", f"numerics.time_step={h}", "numerics.kernel=compiled")[2]
+               for h in steps]
     for quantity in ("path_length", "depth", "axis_angle_change"):
         values = np.array([getattr(r, quantity) for r in records])
         differences = np.abs(np.diff(values))
