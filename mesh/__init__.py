@@ -4,10 +4,12 @@ this project."""
 from .geometry import BODY, COUNTERWEIGHT, OUTER, ProjectileMesh, build_mesh
 from .io import read_mesh, write_mesh
 from .placement import AxisymmetricMassProperties, analytic_mass_properties, place_counterweight
-from .profile import BluntOgiveNose, ConeNose, Interior, OgiveNose, Profile, ProjectileGeometry, SecantOgiveNose
+from .profile import (BluntOgiveNose, ConeNose, Interior, OgiveNose, Profile, ProfileNose, ProjectileGeometry,
+                      SecantOgiveNose)
 
 __all__ = [
-    "Profile", "OgiveNose", "ConeNose", "SecantOgiveNose", "BluntOgiveNose", "Interior", "ProjectileGeometry",
+    "Profile", "OgiveNose", "ConeNose", "SecantOgiveNose", "BluntOgiveNose", "ProfileNose", "Interior",
+    "ProjectileGeometry",
     "ProjectileMesh", "build_mesh", "BODY", "COUNTERWEIGHT", "OUTER",
     "read_mesh", "write_mesh",
     "AxisymmetricMassProperties", "analytic_mass_properties", "place_counterweight",

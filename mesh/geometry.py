@@ -93,7 +93,13 @@ def _profile_faces(occ, geometry: ProjectileGeometry) -> tuple[list[int], list[i
         """Nose curve of the profile lowered radially by ``drop``; returns (curve, tip pt, shoulder pt)."""
         tip = occ.addPoint(tip_x, tip_r, 0.0)
         shoulder = occ.addPoint(-ln, a - drop, 0.0)
-        if arc is not None:
+        if p.curve is not None:  # a measured nose: its cubic pieces, exactly, as one B-spline
+            poles, knots, multiplicities = p.curve.bezier(-tip_x, drop)
+            inner = [occ.addPoint(-s, r, 0.0) for s, r in poles[1:-1]]
+            curve = occ.addBSpline([tip, *inner, shoulder], degree=3, knots=knots,
+                                   multiplicities=multiplicities)
+            occ.remove([(0, t) for t in inner])
+        elif arc is not None:
             s_c, r_c, _ = arc
             centre = occ.addPoint(-s_c, r_c - drop, 0.0)
             curve = occ.addCircleArc(tip, centre, shoulder)

@@ -44,13 +44,14 @@ class AxisymmetricMassProperties:
 
 def _outer_moments(profile: Profile, s0: float = 0.0, s1: float | None = None) -> RevolvedMoments:
     s1 = profile.length if s1 is None else s1
-    return revolved_moments(profile.radius_at, s0, s1, (profile.nose_length,))
+    return revolved_moments(profile.radius_at, s0, s1, profile.breakpoints, profile.curve is not None)
 
 
 def _cavity_moments(geometry: ProjectileGeometry, s0: float, s1: float) -> RevolvedMoments:
     s0 = max(s0, geometry.cavity_start)
     s1 = min(s1, geometry.cavity_end)
-    return revolved_moments(geometry.cavity_radius_at, s0, s1, (geometry.profile.nose_length,))
+    return revolved_moments(geometry.cavity_radius_at, s0, s1, geometry.profile.breakpoints,
+                            geometry.profile.curve is not None)
 
 
 def region_moments(geometry: ProjectileGeometry) -> tuple[RevolvedMoments, RevolvedMoments]:

@@ -13,16 +13,20 @@ mass properties and surface quadrature are tested.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from .measured import NoseCurve, ProfileNose
 
 __all__ = [
     "OgiveNose",
     "ConeNose",
     "SecantOgiveNose",
     "BluntOgiveNose",
+    "ProfileNose",
     "Profile",
     "Interior",
     "ProjectileGeometry",
@@ -99,7 +103,7 @@ class BluntOgiveNose:
     flat_radius: float
 
 
-Nose = OgiveNose | ConeNose | SecantOgiveNose | BluntOgiveNose
+Nose = OgiveNose | ConeNose | SecantOgiveNose | BluntOgiveNose | ProfileNose
 
 
 @dataclass(frozen=True)
@@ -112,8 +116,9 @@ class Profile:
         Shank diameter (m).
     length : float
         Overall length from nose tip to tail (m); must exceed the nose length.
-    nose : OgiveNose, ConeNose, SecantOgiveNose or BluntOgiveNose
-        Nose shape.  Every nose but the cone is a circle arc (:meth:`arc`).
+    nose : OgiveNose, ConeNose, SecantOgiveNose, BluntOgiveNose or ProfileNose
+        Nose shape.  Every nose but the cone and the measured profile is a circle arc
+        (:meth:`arc`); a measured profile is a cubic through its points (:attr:`curve`).
     """
 
     diameter: float
@@ -137,6 +142,8 @@ class Profile:
                 raise ValueError(f"nose.crh = {self.nose.crh}: must be a finite number >= 0.5")
             if not (0.0 < self.nose.flat_radius < a):
                 raise ValueError(f"nose.flat_radius = {self.nose.flat_radius}: must lie in (0, {a:.6g}) m")
+        if isinstance(self.nose, ProfileNose):
+            self.nose.check_shank(a)
         if not (self.length > self.nose_length and math.isfinite(self.length)):
             raise ValueError(
                 f"length = {self.length}: must exceed the nose length {self.nose_length:.6g} m"
@@ -152,14 +159,26 @@ class Profile:
         """Ogive radius ``R = crh * diameter`` (m); only for ogive noses."""
         return self.nose.crh * self.diameter
 
+    @functools.cached_property
+    def curve(self) -> NoseCurve | None:
+        """The interpolating curve of a measured nose (:mod:`mesh.measured`), or None."""
+        return self.nose.curve(self.radius) if isinstance(self.nose, ProfileNose) else None
+
+    @property
+    def breakpoints(self) -> tuple[float, ...]:
+        """Distances from the tip (m) where the profile's curvature jumps: the shoulder, and a measured nose's points."""
+        if self.curve is not None:
+            return tuple(float(x) for x in self.curve.x[1:])
+        return (self.nose_length,)
+
     def arc(self) -> tuple[float, float, float] | None:
-        """``(s_c, r_c, R)``: centre and radius of the nose arc in profile coordinates, or None (cone).
+        """``(s_c, r_c, R)``: centre and radius of the nose arc in profile coordinates, or None (cone, measured).
 
         The nose is ``r(s) = r_c + sqrt(R^2 - (s - s_c)^2)`` for ``0 <= s <= nose_length``.
         """
         a, d = self.radius, self.diameter
         nose = self.nose
-        if isinstance(nose, ConeNose):
+        if isinstance(nose, (ConeNose, ProfileNose)):
             return None
         if isinstance(nose, SecantOgiveNose):
             big_r, ln = nose.crh * d, nose.length * d
@@ -186,6 +205,8 @@ class Profile:
             return self.radius / math.tan(math.radians(nose.half_angle))
         if isinstance(nose, SecantOgiveNose):
             return nose.length * self.diameter
+        if isinstance(nose, ProfileNose):
+            return nose.length
         return self.arc()[0]  # a tangent ogive meets the shank at the top of its arc
 
     def radius_at(self, s: np.ndarray | float) -> np.ndarray:
@@ -193,7 +214,9 @@ class Profile:
         s = np.clip(np.asarray(s, dtype=float), 0.0, self.length)
         a, ln = self.radius, self.nose_length
         arc = self.arc()
-        if arc is None:
+        if self.curve is not None:
+            nose = self.curve.radius(s)
+        elif arc is None:
             nose = s * math.tan(math.radians(self.nose.half_angle))
         else:
             s_c, r_c, big_r = arc
@@ -205,7 +228,9 @@ class Profile:
         s = np.clip(np.asarray(s, dtype=float), 0.0, self.length)
         ln = self.nose_length
         arc = self.arc()
-        if arc is None:
+        if self.curve is not None:
+            nose = self.curve.slope(s)
+        elif arc is None:
             nose = np.full_like(s, math.tan(math.radians(self.nose.half_angle)))
         else:
             s_c, _, big_r = arc
@@ -247,7 +272,9 @@ class Profile:
 
         from scipy import integrate  # imported where used (slow to import)
 
-        lateral = integrate.quad(integrand, 0.0, self.nose_length, epsabs=0.0, epsrel=1e-12, limit=200)[0]
+        points = [p for p in self.breakpoints if p < self.nose_length] or None
+        lateral = integrate.quad(integrand, 0.0, self.nose_length, points=points, epsabs=0.0, epsrel=1e-12,
+                                 limit=200 + 4 * len(self.breakpoints))[0]
         return (math.pi * self.tip_radius**2 + lateral) / (math.pi * self.radius**2)
 
     def lateral_area(self, s0: float = 0.0, s1: float | None = None) -> float:
@@ -255,10 +282,10 @@ class Profile:
         s1 = self.length if s1 is None else s1
         from scipy import integrate
 
-        points = [p for p in (self.nose_length,) if s0 < p < s1]
+        points = [p for p in self.breakpoints if s0 < p < s1]
         value, _ = integrate.quad(
             lambda s: 2 * math.pi * float(self.radius_at(s)) * math.sqrt(1 + float(self.slope_at(s)) ** 2),
-            s0, s1, points=points or None, epsabs=0.0, epsrel=1e-12, limit=200,
+            s0, s1, points=points or None, epsabs=0.0, epsrel=1e-12, limit=200 + 4 * len(points),
         )
         return value
 
@@ -337,6 +364,8 @@ class ProjectileGeometry:
             raise ValueError("no interior")
         t = self.interior.wall_thickness
         p = self.profile
+        if p.curve is not None:
+            return p.curve.solve(t)
         arc = p.arc()
         if arc is not None:
             s_c, r_c, big_r = arc
@@ -396,23 +425,37 @@ class RevolvedMoments:
         return (self.volume, self.first_moment, self.axial_second_moment, self.transverse_second_moment)
 
 
-def revolved_moments(radius, s0: float, s1: float, breakpoints=()) -> RevolvedMoments:
+def revolved_moments(radius, s0: float, s1: float, breakpoints=(), cubic: bool = False) -> RevolvedMoments:
     """Moments of the solid of revolution of ``radius(s)`` for ``s0 <= s <= s1``.
 
     Parameters
     ----------
     radius : callable
-        ``radius(s) -> r`` (m).
+        ``radius(s) -> r`` (m), for a float or (with ``cubic``) an array ``s`` (m).
     s0, s1 : float
         Axial limits (m from the tip).
     breakpoints : sequence of float
         Points where ``radius`` has a kink, passed to the quadrature.
+    cubic : bool
+        ``radius`` is a cubic polynomial between breakpoints (a measured nose): every integrand is then
+        a polynomial of degree at most 12 there, integrated exactly by 7-point Gauss-Legendre on each piece.
     """
     if s1 <= s0:
         return RevolvedMoments(0.0, 0.0, 0.0, 0.0)
+    if cubic:
+        ends = np.array([s0, *sorted(p for p in breakpoints if s0 < p < s1), s1])
+        nodes, weights = np.polynomial.legendre.leggauss(7)
+        half = 0.5 * np.diff(ends)[:, None]
+        s = (0.5 * (ends[:-1] + ends[1:]))[:, None] + half * nodes
+        w = (half * weights).ravel()
+        s = s.ravel()
+        r2 = np.asarray(radius(s), dtype=float) ** 2
+        return RevolvedMoments(*(math.pi * float(np.dot(w, f)) for f in (r2, r2 * s, 0.5 * r2**2,
+                                                                          0.25 * r2**2 + r2 * s * s)))
     from scipy import integrate
 
     points = [p for p in breakpoints if s0 < p < s1] or None
+    limit = 200 + 4 * len(points or ())
     integrands = (
         lambda s: math.pi * float(radius(s)) ** 2,
         lambda s: math.pi * float(radius(s)) ** 2 * s,
@@ -420,7 +463,7 @@ def revolved_moments(radius, s0: float, s1: float, breakpoints=()) -> RevolvedMo
         lambda s: 0.25 * math.pi * float(radius(s)) ** 4 + math.pi * float(radius(s)) ** 2 * s * s,
     )
     values = [
-        integrate.quad(f, s0, s1, points=points, epsabs=0.0, epsrel=1e-13, limit=200)[0]
+        integrate.quad(f, s0, s1, points=points, epsabs=0.0, epsrel=1e-13, limit=limit)[0]
         for f in integrands
     ]
     return RevolvedMoments(*values)

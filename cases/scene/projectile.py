@@ -7,13 +7,13 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from mesh import (BODY, COUNTERWEIGHT, BluntOgiveNose, ConeNose, Interior, OgiveNose, Profile, ProjectileGeometry,
-                  SecantOgiveNose, place_counterweight)
+from mesh import (BODY, COUNTERWEIGHT, BluntOgiveNose, ConeNose, Interior, OgiveNose, Profile, ProfileNose,
+                  ProjectileGeometry, SecantOgiveNose, place_counterweight)
 
 from .base import Label, Number, Strict, field
 
 __all__ = ["Projectile", "NoseSpec", "OgiveNoseSpec", "ConeNoseSpec", "SecantOgiveNoseSpec", "HemisphereNoseSpec",
-           "BluntNoseSpec", "InteriorSpec", "CounterweightSpec", "MassPropertiesSpec", "DEFAULT_BODY_DENSITY",
+           "BluntNoseSpec", "ProfileNoseSpec", "InteriorSpec", "CounterweightSpec", "MassPropertiesSpec", "DEFAULT_BODY_DENSITY",
            "MIN_MEAN_DENSITY"]
 
 DEFAULT_BODY_DENSITY = 7850.0  # steel (kg/m^3)
@@ -73,9 +73,26 @@ class BluntNoseSpec(Strict):
         return BluntOgiveNose(self.crh, self.flat_radius)
 
 
-NOSE_SPECS = (OgiveNoseSpec, ConeNoseSpec, SecantOgiveNoseSpec, HemisphereNoseSpec, BluntNoseSpec)
-NoseSpec = Annotated[OgiveNoseSpec | ConeNoseSpec | SecantOgiveNoseSpec | HemisphereNoseSpec | BluntNoseSpec,
-                     Field(discriminator="shape")]
+MAX_PROFILE_POINTS = 1000
+Coordinate = Annotated[Number, Field(ge=0.0, le=100.0)]
+
+
+class ProfileNoseSpec(Strict):
+    """A measured nose: ``[x, r]`` points (m) of its half-profile, tip first, joined by a
+    shape-preserving cubic (mesh.measured); the last point meets the shank (``r = diameter / 2``)."""
+
+    shape: Literal["profile"]
+    points: list[tuple[Coordinate, Coordinate]] = field(
+        unit="m", min_length=3, max_length=MAX_PROFILE_POINTS,
+        description="[x, r] from the tip: x strictly increasing from 0, r non-decreasing from 0 to the shank radius")
+
+    def build(self) -> ProfileNose:
+        return ProfileNose(tuple(self.points))
+
+
+NOSE_SPECS = (OgiveNoseSpec, ConeNoseSpec, SecantOgiveNoseSpec, HemisphereNoseSpec, BluntNoseSpec, ProfileNoseSpec)
+NoseSpec = Annotated[OgiveNoseSpec | ConeNoseSpec | SecantOgiveNoseSpec | HemisphereNoseSpec | BluntNoseSpec
+                     | ProfileNoseSpec, Field(discriminator="shape")]
 
 
 class InteriorSpec(Strict):

@@ -135,3 +135,42 @@ def test_scene_key_follows_the_resolved_scene():
     b = scene_from_dict(apply_overrides(BASE, {"numerics.time_step": 2e-5}))  # the default, spelled out
     c = scene_from_dict(apply_overrides(BASE, {"impact.speed": 281}))
     assert scene_key(a) == scene_key(b) != scene_key(c)
+
+
+TABLE = [[0.0, 0.0], [0.05, 0.03], [0.1, 0.044], [0.15, 0.0476]]  # m: a measured nose of test 2's projectile
+
+
+def test_profile_nose_reads_from_a_file_and_builds(tmp_path):
+    text = scene_path("forrestal_luk_test2").read_text().replace(
+        'nose = { shape = "ogive", crh = 3.0 }\n', "").replace(
+        "[target]", '[projectile.nose]\nshape = "profile"\npoints = [\n'
+        + "".join(f"  [{x}, {r}],\n" for x, r in TABLE) + "]\n\n[target]")
+    path = tmp_path / "measured.toml"
+    path.write_text(text)
+    scene = load_scene(path)
+    nose = scene.projectile.nose.build()
+    assert nose.points == tuple(map(tuple, TABLE)) and scene.projectile.profile().nose_length == 0.15
+    # a new shape drops the old shape's keys; the table becomes an ogive again
+    back = load_scene(path, {"projectile.nose.shape": "ogive", "projectile.nose.crh": 3.0})
+    assert back.projectile.nose.crh == 3.0
+
+
+@pytest.mark.parametrize("points, expected", [
+    (TABLE[:2], "projectile.nose.points = [[0.0, 0.0], [0.05, 0.03]]: list should have at least 3 items"),
+    ([[0.0, 0.01]] + TABLE[1:], "projectile: nose.points[0] = [0, 0.01]: must be the tip (allowed: [0, 0]"),
+    (TABLE[:2] + [[0.05, 0.04]] + TABLE[3:], "nose.points[2] = [0.05, 0.04]: x must exceed the previous point's"
+                                             " x = 0.05 m (allowed: x strictly increasing)"),
+    (TABLE[:2] + [[0.1, 0.02]] + TABLE[3:], "nose.points[2] = [0.1, 0.02]: r must be at least the previous"
+                                            " point's r = 0.03 m (allowed: r non-decreasing)"),
+    (TABLE[:3] + [[0.15, 0.0477]], "nose.points[3]: r = 0.0477 m must be the shank radius (allowed: diameter/2"
+                                   " = 0.0476 m, within 1e-06 of it)"),
+    (TABLE[:3] + [[0.15, float("nan")]], "projectile.nose.points.3.1 = nan: must be a finite number"),
+    (TABLE[:3] + [[0.15, -1.0]], "projectile.nose.points.3.1 = -1.0: must be >= 0"),
+    (TABLE[:3] + [[0.15]], "projectile.nose.points.3.1: missing (required)"),
+    (TABLE[:3] + [[2.0, 0.0476]], "projectile: length = 1.4: must exceed the nose length 2 m"),
+])
+def test_bad_profile_noses_are_explained(points, expected):
+    with pytest.raises(SceneError) as info:
+        scene_from_dict(apply_overrides(BASE, {"projectile.nose": {"shape": "profile", "points": points}}))
+    message = str(info.value)
+    assert expected in message and "\n" not in message

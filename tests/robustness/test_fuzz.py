@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import collections
 import contextlib
+import copy
 import datetime
 import io
 import json
@@ -128,6 +129,8 @@ def check_scene(scene: Scene) -> None:
             for item in (value if isinstance(value, (tuple, list)) else [value]):
                 if isinstance(item, BaseModel):
                     walk(item, here)
+                elif isinstance(item, tuple):  # a measured nose's [x, r]: finite, in [0, 100] m
+                    assert all(isinstance(v, float) and 0.0 <= v <= 100.0 for v in item), (here, item)
                 elif isinstance(item, (int, float)) and not isinstance(item, bool):
                     assert math.isfinite(item), here
                     if value is not None and not isinstance(value, (tuple, list)):
@@ -184,7 +187,7 @@ SPECIAL = [0, 0.0, -0.0, -1, 1, -1e-300, 1e-300, 5e-324, 1e308, -1e308, 1.797693
            math.nan, math.inf, -math.inf, 2 ** 63, -(2 ** 63), 10 ** 30, 10 ** 400, 90, -90, 90.0000001,
            -90.0000001, 360, 1e4, 1e-9, 0.5, 2]
 WORDS = ["", " ", "nan", "inf", "-inf", "1e3", "true", "soil", "softer_soil", "clay", "ogive", "cone",
-         "hemisphere", "rk4", "dopri54", "euler", "exact", "mesh", "coulomb", "capped",
+         "hemisphere", "profile", "rk4", "dopri54", "euler", "exact", "mesh", "coulomb", "capped",
          "__import__('os').system('touch PWNED')", "../../etc/passwd", "/tmp/x", "a\nb", "\x1b[31mred", "\x00",
          "é", "💥", "x" * 300]
 scalars = st.one_of(
@@ -321,6 +324,52 @@ def _strip_none(value):
 @given(mutated_scenes())
 def test_mutated_scenes_validate_or_explain(data):
     outcome("mutated scene (dict)", lambda: scene_from_dict(data), "scene")
+
+
+def _ogive_table(n: int) -> list[list[float]]:
+    """``n`` points of test 2's CRH 3 ogive (m), a valid measured nose for its 95.2 mm shank."""
+    radius, big_r = 0.0476, 3 * 0.0952
+    length = math.sqrt(big_r**2 - (big_r - radius) ** 2)
+    xs = [length * k / (n - 1) for k in range(n)]
+    return [[x, radius - big_r + math.sqrt(big_r**2 - (length - x) ** 2) if k < n - 1 else radius]
+            for k, x in enumerate(xs)]
+
+
+@st.composite
+def profile_noses(draw):
+    """Test 2 with a measured nose: a valid table of 3 to 40 points with up to three defects (a point
+    dropped, swapped or duplicated, a coordinate replaced by a special, out-of-range or neighbouring
+    number, the last radius off the shank radius by a little, a point that is not a pair)."""
+    table = _ogive_table(draw(st.integers(3, 40)))
+    for _ in range(draw(st.integers(0, 3))):
+        if not table:
+            break
+        i = draw(st.integers(0, len(table) - 1))
+        action = draw(st.sampled_from(["drop", "swap", "duplicate", "coordinate", "coordinate", "shank", "shape"]))
+        if action == "drop":
+            del table[i]
+        elif action == "swap" and i + 1 < len(table):
+            table[i], table[i + 1] = table[i + 1], table[i]
+        elif action == "duplicate":
+            table.insert(i, copy.deepcopy(table[i]))
+        elif action == "coordinate" and isinstance(table[i], list) and len(table[i]) == 2:
+            j = draw(st.integers(0, 1))
+            near = [table[k][j] for k in (i - 1, i + 1) if 0 <= k < len(table) and isinstance(table[k], list)
+                    and len(table[k]) == 2]
+            table[i][j] = draw(st.one_of(st.sampled_from(SPECIAL + near), st.floats(-0.1, 2.0), scalars))
+        elif action == "shank" and isinstance(table[-1], list) and len(table[-1]) == 2:
+            table[-1][1] = 0.0476 * (1 + draw(st.sampled_from([-1e-3, -2e-6, -5e-7, 5e-7, 2e-6, 1e-3])))
+        elif action == "shape":
+            table[i] = draw(st.one_of(st.lists(st.floats(0, 0.2), max_size=3), scalars))
+    data = json.loads(json.dumps(BASES["forrestal_luk_test2"], default=str))
+    data["projectile"]["nose"] = {"shape": "profile", "points": table}
+    return data
+
+
+@fuzz(300)
+@given(profile_noses())
+def test_profile_noses_validate_or_explain(data):
+    outcome("measured nose tables", lambda: scene_from_dict(data), "scene")
 
 
 @pytest.fixture(scope="module")
@@ -479,6 +528,7 @@ def _bad_scene_files(folder: Path) -> dict[str, Path]:
 BAD_SET = ["impact.speed", "=3", "impact..speed=1", "impact.speed=-1", "impact.speed=nan", "impact.speed=true",
            "impact.attack_angle=91", "numerics.mesh_size=0", "numerics.mesh_size=1e-300", "impact.colour=1",
            "impact.speed=" + "1" * 5000, "target.law=clay", "projectile.nose.shape=sphere",
+           "projectile.nose={shape=\"profile\", points=[[0, 0], [0.1, 0.03], [0.09, 0.0476]]}",
            "projectile.name=\"a\\nb\"", "numerics.time_step=1e-300", "x=" + "[" * 3000]
 BAD_GRID = ["impact.speed", "impact.speed=", "impact.speed=3:1:1", "impact.speed=a:b:c", "impact.speed=0:inf:1",
             "impact.speed=nan:nan:1", "impact.speed=1:1e308:1e-300", "impact.speed=-5,10", "impact.bogus=1,2"]
