@@ -274,7 +274,7 @@ class Profile:
 
         points = [p for p in self.breakpoints if p < self.nose_length] or None
         lateral = integrate.quad(integrand, 0.0, self.nose_length, points=points, epsabs=0.0, epsrel=1e-12,
-                                 limit=200 + 4 * len(self.breakpoints))[0]
+                                 limit=max(200, 4 * len(self.breakpoints)))[0]
         return (math.pi * self.tip_radius**2 + lateral) / (math.pi * self.radius**2)
 
     def lateral_area(self, s0: float = 0.0, s1: float | None = None) -> float:
@@ -285,7 +285,7 @@ class Profile:
         points = [p for p in self.breakpoints if s0 < p < s1]
         value, _ = integrate.quad(
             lambda s: 2 * math.pi * float(self.radius_at(s)) * math.sqrt(1 + float(self.slope_at(s)) ** 2),
-            s0, s1, points=points or None, epsabs=0.0, epsrel=1e-12, limit=200 + 4 * len(points),
+            s0, s1, points=points or None, epsabs=0.0, epsrel=1e-12, limit=max(200, 4 * len(points)),
         )
         return value
 
@@ -455,7 +455,7 @@ def revolved_moments(radius, s0: float, s1: float, breakpoints=(), cubic: bool =
     from scipy import integrate
 
     points = [p for p in breakpoints if s0 < p < s1] or None
-    limit = 200 + 4 * len(points or ())
+    limit = max(200, 4 * len(points or ()))
     integrands = (
         lambda s: math.pi * float(radius(s)) ** 2,
         lambda s: math.pi * float(radius(s)) ** 2 * s,

@@ -66,7 +66,8 @@ def nose_factors(profile: Profile, friction: float = 0.0) -> tuple[float, float]
         return slope**2 / (1 + slope**2)
 
     area = math.pi * a**2
-    kinks = dict(points=[p for p in profile.breakpoints if p < ln] or None, limit=200 + 4 * len(profile.breakpoints))
+    kinks = dict(points=[p for p in profile.breakpoints if p < ln] or None,
+                 limit=max(200, 4 * len(profile.breakpoints)))
     side = integrate.quad(lambda s: 2 * math.pi * float(profile.radius_at(s)), 0, ln, epsrel=1e-12, **kinks)[0]
     dyn = integrate.quad(lambda s: 2 * math.pi * float(profile.radius_at(s)) * sin2(s), 0, ln, epsrel=1e-12,
                          **kinks)[0]
@@ -82,7 +83,7 @@ def _g(profile: Profile, depth: float) -> float:
     end = min(depth, profile.nose_length)
     kinks = [p for p in profile.breakpoints if 0.0 < p < end] or None  # a measured nose's points
     return math.pi * profile.tip_radius**2 + integrate.quad(
-        integrand, 0.0, end, points=kinks, epsabs=0, epsrel=1e-13, limit=200 + 4 * len(kinks or ()))[0]
+        integrand, 0.0, end, points=kinks, epsabs=0, epsrel=1e-13, limit=max(200, 4 * len(kinks or ())))[0]
 
 
 def embedded_axial_force(profile: Profile, law: ResistanceLaw, speed: float, friction: float = 0.0) -> float:
