@@ -1,0 +1,153 @@
+"""Ensembles: distributions parsed and sampled, designs, reproducibility, the interval's coverage, bins."""
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy.stats import binomtest
+
+from cases import scene_path
+from cases.scene import InputError, load_scene
+from cases.studies.ensemble import (Estimate, curve, draw, estimate, parse_bins, parse_sample, unit_points,
+                                    variations, wilson_interval)
+
+
+@pytest.fixture(scope="module")
+def base():
+    return load_scene(scene_path("forrestal_luk_test2"))
+
+
+@pytest.mark.parametrize("text, mean, sd", [
+    ("impact.speed=normal:300:10", 300.0, 10.0),
+    ("impact.speed=truncnormal:300:20:280:340", None, None),
+    ("impact.speed=uniform:250:350", 300.0, 100 / 12 ** 0.5),
+    ("impact.speed=lognormal:300:0.1", 300 * np.exp(0.005), 300 * np.sqrt((np.exp(0.01) - 1) * np.exp(0.01))),
+    ("impact.speed=choice:260,280,330", 290.0, np.std([260, 280, 330])),
+])
+def test_sample_mean_and_sd_within_two_percent(text, mean, sd):
+    dist = parse_sample(text)
+    if mean is None:  # the truncated normal's moments from scipy's closed form
+        mean, sd = dist.frozen().mean(), dist.frozen().std()
+    values = draw([dist], 10_000, seed=3)[:, 0]
+    assert values.mean() == pytest.approx(mean, rel=0.02)
+    assert values.std() == pytest.approx(sd, rel=0.02)
+
+
+def test_truncated_normal_stays_in_its_bounds():
+    values = draw([parse_sample("impact.speed=truncnormal:300:50:280:310")], 2000, seed=1)[:, 0]
+    assert values.min() >= 280 and values.max() <= 310
+
+
+def test_latin_hypercube_puts_one_point_in_each_stratum():
+    n = 64
+    points = unit_points("lhs", n, 3, seed=5)
+    for j in range(3):
+        assert sorted(np.floor(points[:, j] * n).astype(int)) == list(range(n))
+
+
+def test_sobol_is_balanced_at_powers_of_two_and_extends():
+    points = unit_points("sobol", 64, 2, seed=5)
+    for j in range(2):  # a (t, m, s)-net: each of the 64 strata of one dimension holds one point
+        assert sorted(np.floor(points[:, j] * 64).astype(int)) == list(range(64))
+    assert np.array_equal(unit_points("sobol", 10, 2, seed=5), points[:10])  # raising n keeps the first points
+
+
+def test_random_design_is_reproducible_and_extends():
+    dists = [parse_sample("impact.speed=normal:300:10"), parse_sample("impact.attack_angle=uniform:0:2")]
+    first = draw(dists, 20, seed=11)
+    assert np.array_equal(first, draw(dists, 20, seed=11))
+    assert np.array_equal(draw(dists, 50, seed=11)[:20], first)
+    assert not np.array_equal(draw(dists, 20, seed=12), first)
+
+
+def test_latin_hypercube_is_reproducible_but_not_extensible():
+    assert np.array_equal(unit_points("lhs", 16, 2, seed=2), unit_points("lhs", 16, 2, seed=2))
+    assert not np.array_equal(unit_points("lhs", 32, 2, seed=2)[:16], unit_points("lhs", 16, 2, seed=2))
+
+
+def test_variations_are_typed(base):
+    dists = [parse_sample("numerics.quadrature_order=choice:2,4", base), parse_sample("impact.speed=uniform:1:2", base)]
+    for variation in variations(dists, draw(dists, 8, seed=0)):
+        assert type(variation.values["numerics.quadrature_order"]) is int
+        assert type(variation.values["impact.speed"]) is float
+
+
+def test_wilson_interval_matches_scipy():
+    for k, n in ((0, 10), (3, 10), (10, 10), (37, 200)):
+        ci = binomtest(k, n).proportion_ci(0.95, method="wilson")
+        assert wilson_interval(k, n) == pytest.approx((ci.low, ci.high), abs=1e-12)
+    assert np.isnan(Estimate.of(0, 0).probability) and np.isnan(Estimate.of(0, 0).interval[0])
+
+
+@pytest.mark.parametrize("p, n", [(0.3, 40), (0.05, 200), (0.5, 15)])
+def test_wilson_interval_covers_about_95_percent(p, n):
+    rng = np.random.default_rng(0)
+    k = rng.binomial(n, p, size=20_000)
+    low, high = wilson_interval(k, n)
+    coverage = np.mean((low <= p) & (p <= high))
+    assert 0.92 <= coverage <= 0.98
+
+
+def test_estimates_count_failed_runs_apart():
+    table = pd.DataFrame({"unstable": [True, False, False, False], "exited": [False] * 4,
+                          "stopped": [False, True, True, False], "failed": [False, False, False, True]})
+    estimates = estimate(table)
+    assert estimates["failed"].probability == 0.25 and estimates["failed"].runs == 4
+    assert estimates["stopped"].probability == pytest.approx(2 / 3) and estimates["stopped"].runs == 3
+    assert estimates["unstable"].interval[0] < 1 / 3 < estimates["unstable"].interval[1]
+
+
+def test_curve_bins_by_a_sampled_key():
+    key, edges = parse_bins("impact.speed=200:300:50", ["impact.speed"])
+    assert key == "impact.speed" and list(edges) == [200, 250, 300]
+    assert list(parse_bins("impact.speed=0:10:4", ["impact.speed"])[1]) == [0, 4, 8, 10]
+    values = np.array([210.0, 240.0, 260.0, 300.0, 310.0])
+    table = pd.DataFrame({"unstable": [False, False, True, True, True], "exited": [False] * 5,
+                          "stopped": [True, True, False, False, False], "failed": [False] * 5})
+    bins = curve(values, table, edges)
+    assert [b["runs"] for b in bins] == [2, 2]  # 310 lies outside; 300 is in the last bin
+    assert bins[0]["unstable"] == 0.0 and bins[1]["unstable"] == 1.0
+    assert bins[1]["interval"]["unstable"][1] == 1.0 and bins[1]["bin"] == [250.0, 300.0]
+
+
+@pytest.mark.parametrize("text, message", [
+    ("impact.speed=gauss:1:2", "expected KEY=DIST with DIST one of normal:MEAN:SD"),
+    ("impact.speed=normal:300", "expected normal:MEAN:SD"),
+    ("impact.speed=uniform:1:2:3", "expected uniform:LO:HI"),
+    ("impact.speed=normal:300:0", "need SD > 0"),
+    ("impact.speed=truncnormal:300:10:320:280", "need LO < HI"),
+    ("impact.speed=uniform:5:5", "need LO < HI"),
+    ("impact.speed=lognormal:-1:0.1", "need MEDIAN > 0"),
+    ("impact.speed=normal:fast:10", "the parameters must be numbers"),
+    ("impact.speed=normal:inf:10", "must be finite numbers"),
+    ("impact.speed=choice:", "expected choice:V1,V2,..."),
+    ("impact.speed=choice:1,,2", "expected choice:V1,V2,..."),
+    ("impact.speed", "expected KEY=DIST"),
+    ("target.law=choice:1,2", "target.law is not a numeric key of the scene"),
+    ("impact.sped=normal:1:1", "impact.sped is not a numeric key of the scene"),
+    ("numerics.quadrature_order=uniform:1:4", "is a whole number; sample it with choice"),
+    ("numerics.quadrature_order=choice:2,2.5", "must be whole numbers"),
+    ("impact..speed=normal:1:1", "the key must be a dotted path"),
+])
+def test_bad_samples_are_one_line_naming_the_option(base, text, message):
+    with pytest.raises(InputError) as caught:
+        parse_sample(text, base)
+    assert str(caught.value).startswith(f"--sample {text!r}") and message in str(caught.value)
+    assert "\n" not in str(caught.value)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("impact.attack_angle=0:1:0.5", "KEY one of the sampled keys"),
+    ("impact.speed=200:300", "three finite numbers"),
+    ("impact.speed=300:200:10", "need STEP > 0 and STOP > START"),
+    ("impact.speed=200:300:0", "need STEP > 0"),
+])
+def test_bad_bins(text, message):
+    with pytest.raises(InputError, match=message):
+        parse_bins(text, ["impact.speed"])
+
+
+def test_bad_design_and_size():
+    with pytest.raises(InputError, match="--design 'halton'"):
+        unit_points("halton", 4, 1, 0)
+    with pytest.raises(InputError, match="-n"):
+        unit_points("random", 0, 1, 0)
