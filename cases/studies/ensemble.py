@@ -213,6 +213,8 @@ def unit_points(design: str, count: int, dimensions: int, seed: int) -> np.ndarr
         raise InputError(f"--design {design!r}: expected one of {', '.join(DESIGNS)}")
     if count < 1 or dimensions < 1:
         raise InputError("-n: need one or more runs and one or more --sample options")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise InputError(f"--seed {seed!r}: must be a whole number >= 0")
     if design == "random":
         points = np.array([np.random.default_rng([seed, i]).random(dimensions) for i in range(count)])
     elif design == "sobol":
@@ -256,7 +258,10 @@ def wilson_interval(successes, trials, confidence: float = CONFIDENCE) -> tuple[
         p = k / n
         centre = (p + z * z / (2 * n)) / (1 + z * z / n)
         half = z / (1 + z * z / n) * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
-    return np.clip(centre - half, 0.0, 1.0), np.clip(centre + half, 0.0, 1.0)
+    # exactly 0 (1) for no (every) success, where rounding would leave 1e-17; NaN for no trials
+    low = np.where(k == 0, 0.0, np.clip(centre - half, 0.0, 1.0))
+    high = np.where(k == n, 1.0, np.clip(centre + half, 0.0, 1.0))
+    return np.where(n > 0, low, np.nan), np.where(n > 0, high, np.nan)
 
 
 @dataclass(frozen=True)

@@ -1,5 +1,7 @@
 """Ensembles: distributions parsed and sampled, designs, reproducibility, the interval's coverage, bins."""
 
+import json
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -151,3 +153,50 @@ def test_bad_design_and_size():
         unit_points("halton", 4, 1, 0)
     with pytest.raises(InputError, match="-n"):
         unit_points("random", 0, 1, 0)
+
+
+CHEAP = ["--set", "numerics.mesh_size=0.04", "--set", "numerics.quadrature_order=2"]
+
+
+def _ensemble(tmp_path, count, *extra):
+    from cases.cli import main
+
+    return main(["ensemble", str(scene_path("forrestal_luk_test2")), *CHEAP, "--sample", "impact.speed=uniform:250:310",
+                 "-n", str(count), "--seed", "4", "--workers", "1", "--no-progress", "--store", str(tmp_path / "store"),
+                 "--out", str(tmp_path / "out"), *extra])
+
+
+def test_ensemble_command_on_test_2(tmp_path, capsys):
+    """A few runs of test 2 (280 m/s +- 30): every run stops; the outputs' structure; -n raised runs only the new."""
+    assert _ensemble(tmp_path, 5, "--by", "impact.speed=250:310:30", "--json") == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["runs"] == 5 and record["probability"]["stopped"] == 1.0
+    assert record["probability"]["unstable"] == 0.0 and record["interval"]["stopped"][1] == 1.0
+    assert [b["bin"] for b in record["curve"]] == [[250.0, 280.0], [280.0, 310.0]]
+    assert sum(b["runs"] for b in record["curve"]) == 5
+    assert all(b["stopped"] == 1.0 and len(b["interval"]["stopped"]) == 2 for b in record["curve"] if b["runs"])
+    out = tmp_path / "out"
+    assert {p.name for p in out.iterdir()} == {"ensemble.md", "ensemble.csv", "ensemble.json", "ensemble_curve.png",
+                                               "ensemble_histograms.png"}
+    assert json.loads((out / "ensemble.json").read_text()) == record
+    first = pd.read_csv(out / "ensemble.csv")
+    assert list(first.columns[:6]) == ["sample", "impact.speed", "unstable", "exited", "stopped", "failed"]
+    assert first["stopped"].all() and first["impact.speed"].between(250, 310).all()
+    assert "| stopped | 1 |" in (out / "ensemble.md").read_text()
+    assert _ensemble(tmp_path, 7) == 0
+    assert len(list((tmp_path / "store" / "run").glob("*.json"))) == 7  # two new runs, five found again
+    second = pd.read_csv(out / "ensemble.csv")
+    assert second["key"][:5].tolist() == first["key"].tolist()
+
+
+def test_ensemble_command_bad_input(tmp_path, capsys):
+    from cases.cli import main
+
+    code = main(["ensemble", str(scene_path("forrestal_luk_test2")), "--sample", "impact.speed=gauss:1:2", "-n", "3",
+                 "--out", str(tmp_path / "out"), "--store", str(tmp_path / "store")])
+    error = capsys.readouterr().err
+    assert code == 2 and "--sample 'impact.speed=gauss:1:2'" in error and len(error.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
+    code = main(["ensemble", str(scene_path("forrestal_luk_test2")), "--sample", "impact.speed=normal:10:100", "-n",
+                 "20", "--out", str(tmp_path / "out"), "--store", str(tmp_path / "store")])
+    assert code == 2 and "keep the samples in range" in capsys.readouterr().err

@@ -1,0 +1,197 @@
+"""``penetrate ensemble``: a scene's runs under sampled impact conditions, and what they show.
+
+The samples (:mod:`.ensemble`) become typed :class:`~cases.studies.sweep.Variation` objects and
+run through :func:`~cases.studies.sweep.run_sweep`, so each run is stored under its resolved
+scene's key: the same seed gives the same runs on any pool, a killed ensemble resumes, and a
+larger ``count`` (random or Sobol' design) runs only the new samples.  The study writes
+``ensemble.csv`` (a row per run: its sample, outcomes and summary), ``ensemble.json``,
+``ensemble.md`` and the figures ``ensemble_histograms.png`` and, with bins, ``ensemble_curve.png``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ..run import RunStore, atomic_write_text
+from ..scene import InputError, Overrides, one_line
+from ..viz.figures import save_figure, subplots
+from .ensemble import (OUTCOMES, Distribution, curve, draw, estimate, outcomes, parse_bins, parse_sample,
+                       summary_record, variations)
+from .pool import Pool
+from .sweep import Sweep, SweepResult, run_sweep
+
+__all__ = ["run_ensemble", "INTERVAL"]
+
+INTERVAL = "Wilson score, 95 %"
+
+
+def _distributions(samples: Sequence[str], base: Sweep) -> list[Distribution]:
+    if not samples:
+        raise InputError("--sample: give one or more KEY=DIST options, e.g. impact.speed=normal:300:10")
+    distributions = [parse_sample(text, base.scenes[0]) for text in samples]
+    keys = [d.key for d in distributions]
+    repeated = sorted({k for k in keys if keys.count(k) > 1})
+    if repeated:
+        raise InputError(f"--sample: {', '.join(repeated)} sampled more than once (allowed: one --sample per key)")
+    return distributions
+
+
+def _sweep(base: Sweep, distributions: list[Distribution], values: np.ndarray, seed: int) -> Sweep:
+    """The runs as a sweep; a sample outside the scene's allowed range is refused with its index."""
+    parts = variations(distributions, values)
+    try:
+        return Sweep(base.base, parts, base.source)
+    except InputError as exc:
+        bad = next(i for i, v in enumerate(parts) if _invalid(base, v))
+        raise InputError(f"sample {bad} of seed {seed} ({', '.join(f'{k} = {v:g}' for k, v in parts[bad].values.items())}"
+                         f"): {one_line(exc)}; keep the samples in range (truncnormal, uniform, choice)") from None
+
+
+def _invalid(base: Sweep, variation) -> bool:
+    try:
+        Sweep(base.base, [variation], base.source)
+    except InputError:
+        return True
+    return False
+
+
+def run_ensemble(scene: str | os.PathLike, overrides: Overrides | None, samples: Sequence[str], count: int,
+                 store: RunStore, out: str | os.PathLike, *, seed: int = 0, design: str = "random",
+                 by: str | None = None, pool: Pool | None = None) -> dict:
+    """Run ``count`` samples of ``scene``; write the report in ``out`` and return its JSON record.
+
+    Parameters
+    ----------
+    scene, overrides
+        The base scene file and its ``--set`` overrides.
+    samples : sequence of str
+        The ``--sample KEY=DIST`` texts (:func:`~cases.studies.ensemble.parse_sample`).
+    count : int
+        How many runs.
+    store : RunStore
+        Where runs are found and kept.
+    out : path
+        Where ``ensemble.csv``, ``.json``, ``.md`` and the figures go.
+    seed : int
+        The seed of the samples.
+    design : str
+        ``random``, ``sobol`` or ``lhs`` (:func:`~cases.studies.ensemble.unit_points`).
+    by : str, optional
+        ``KEY=START:STOP:STEP``: the outcomes' probabilities in bins of a sampled key.
+    pool : Pool, optional
+        Where the runs go.
+
+    Returns
+    -------
+    dict
+        ``{"runs", "probability", "interval", "curve", ...}``.
+    """
+    base = Sweep.from_file(scene, overrides)
+    distributions = _distributions(samples, base)
+    bins = parse_bins(by, [d.key for d in distributions]) if by else None
+    values = draw(distributions, count, seed, design)
+    result = run_sweep(_sweep(base, distributions, values, seed), store, pool)
+    table = _table(result)
+    record = summary_record(estimate(table), count)
+    record.update(interval_method=INTERVAL, design=design, seed=seed,
+                  samples={d.key: d.text for d in distributions}, finished=int((~table["failed"]).sum()))
+    if bins is not None:
+        key, edges = bins
+        record["by"] = key
+        record["curve"] = curve(table[key].to_numpy(float), table, edges)
+    out = Path(out)
+    atomic_write_text(out / "ensemble.csv", table.to_csv(index=False))
+    atomic_write_text(out / "ensemble.json", json.dumps(_json_safe(record), indent=1) + "\n")
+    atomic_write_text(out / "ensemble.md", _markdown(record, table, base.scenes[0].name or Path(scene).stem))
+    _histograms(table, distributions, out / "ensemble_histograms.png")
+    if bins is not None:
+        _curve_figure(record, out / "ensemble_curve.png")
+    return _json_safe(record)
+
+
+def _table(result: SweepResult) -> pd.DataFrame:
+    """The sweep's table with the sample index first and the outcomes after the sampled keys."""
+    table = result.table()
+    table.insert(0, "sample", range(len(table)))
+    columns = len(result.sweep.variations[0].values) + 1
+    for i, (name, column) in enumerate(outcomes(result).items()):
+        table.insert(columns + i, name, column.to_numpy())
+    return table
+
+
+def _json_safe(value):
+    """NaN (an empty bin's probability) as null: JSON has no NaN."""
+    if isinstance(value, float) and math.isnan(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_safe(v) for v in value]
+    return value
+
+
+def _cell(value) -> str:
+    return "-" if value is None or (isinstance(value, float) and math.isnan(value)) else f"{value:.3g}"
+
+
+def _markdown(record: dict, table: pd.DataFrame, name: str) -> str:
+    lines = [f"# {name}: an ensemble of {record['runs']} runs", "",
+             f"Design {record['design']}, seed {record['seed']}; {record['finished']} runs finished. Unstable: the axis"
+             " turned by at least 30 degrees (as `penetrate critical` decides). `failed` is counted over every run,"
+             f" the other outcomes over the finished runs; intervals: {INTERVAL}.", "",
+             "| sampled key | distribution | min | mean | max |", "|---|---|---|---|---|"]
+    for key, text in record["samples"].items():
+        column = table[key].astype(float)
+        lines.append(f"| {key} | {text} | {column.min():.4g} | {column.mean():.4g} | {column.max():.4g} |")
+    lines += ["", "| outcome | probability | 95 % interval |", "|---|---|---|"]
+    for outcome in OUTCOMES:
+        low, high = record["interval"][outcome]
+        lines.append(f"| {outcome} | {_cell(record['probability'][outcome])} | {_cell(low)} - {_cell(high)} |")
+    if "curve" in record:
+        lines += ["", f"By {record['by']}:", "", "| bin | runs | " + " | ".join(OUTCOMES) + " |",
+                  "|---|---|" + "---|" * len(OUTCOMES)]
+        for b in record["curve"]:
+            cells = [f"{_cell(b[o])} ({_cell(b['interval'][o][0])} - {_cell(b['interval'][o][1])})" for o in OUTCOMES]
+            lines.append(f"| {b['bin'][0]:g} - {b['bin'][1]:g} | {b['runs']} | " + " | ".join(cells) + " |")
+        lines += ["", "![probabilities by bin](ensemble_curve.png)"]
+    lines += ["", "![the samples and the depths](ensemble_histograms.png)", ""]
+    return "\n".join(lines)
+
+
+def _histograms(table: pd.DataFrame, distributions: list[Distribution], path: Path) -> None:
+    panels = [d.key for d in distributions] + (["depth"] if "depth" in table else [])
+    fig, axes = subplots(1, len(panels), figsize=(4.2 * len(panels), 3.6), squeeze=False)
+    for ax, column in zip(axes[0], panels):
+        values = table[column].dropna().astype(float)
+        ax.hist(values, bins=min(30, max(5, len(values) // 5)), color="tab:blue", alpha=0.8)
+        ax.set(xlabel="depth (m)" if column == "depth" else column, ylabel="runs")
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    save_figure(fig, path)
+
+
+def _curve_figure(record: dict, path: Path) -> None:
+    fig, ax = subplots(1, 1, figsize=(6.4, 4.2))
+    middles = [0.5 * (b["bin"][0] + b["bin"][1]) for b in record["curve"]]
+    # an outcome that no run had would only lay its band over the others: left out, and said so
+    shown = [o for o in OUTCOMES if any(b[o] for b in record["curve"] if b[o] is not None and b[o] == b[o])]
+    for outcome in shown:
+        p = [b[outcome] for b in record["curve"]]
+        low, high = ([b["interval"][outcome][i] for b in record["curve"]] for i in (0, 1))
+        line, = ax.plot(middles, p, marker="o", label=outcome)
+        ax.fill_between(middles, low, high, color=line.get_color(), alpha=0.2)
+    absent = [o for o in OUTCOMES if o not in shown]
+    ax.set(xlabel=record["by"], ylabel="probability", ylim=(-0.02, 1.02),
+           title=f"outcomes by {record['by']} ({INTERVAL} bands)"
+                 + (f"\nnever: {', '.join(absent)}" if absent else ""))
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    save_figure(fig, path)
