@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 
 from ..run import RunStore, atomic_write_text
+from ..run.persistence import json_safe
 from ..scene import InputError, Overrides, one_line
 from ..viz.figures import save_figure, subplots
 from .ensemble import (OUTCOMES, Distribution, curve, draw, estimate, outcomes, parse_bins, parse_sample,
@@ -108,12 +109,12 @@ def run_ensemble(scene: str | os.PathLike, overrides: Overrides | None, samples:
         record["curve"] = curve(table[key].to_numpy(float), table, edges)
     out = Path(out)
     atomic_write_text(out / "ensemble.csv", table.to_csv(index=False))
-    atomic_write_text(out / "ensemble.json", json.dumps(_json_safe(record), indent=1) + "\n")
+    atomic_write_text(out / "ensemble.json", json.dumps(json_safe(record), indent=1, allow_nan=False) + "\n")
     atomic_write_text(out / "ensemble.md", _markdown(record, table, base.scenes[0].name or Path(scene).stem))
     _histograms(table, distributions, out / "ensemble_histograms.png")
     if bins is not None:
         _curve_figure(record, out / "ensemble_curve.png")
-    return _json_safe(record)
+    return json_safe(record)
 
 
 def _table(result: SweepResult) -> pd.DataFrame:
@@ -124,17 +125,6 @@ def _table(result: SweepResult) -> pd.DataFrame:
     for i, (name, column) in enumerate(outcomes(result).items()):
         table.insert(columns + i, name, column.to_numpy())
     return table
-
-
-def _json_safe(value):
-    """NaN (an empty bin's probability) as null: JSON has no NaN."""
-    if isinstance(value, float) and math.isnan(value):
-        return None
-    if isinstance(value, dict):
-        return {k: _json_safe(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_json_safe(v) for v in value]
-    return value
 
 
 def _cell(value) -> str:
