@@ -1,4 +1,4 @@
-"""Studies: many runs of a scene and what they show (sweeps, characteristic speeds, accuracy, law
+"""Studies: many runs of a scene and what they show (sweeps, characteristic speeds, ensembles, accuracy, law
 comparisons, the paper).
 
 This room imports ``cases.run``, ``cases.scene``, ``cases.viz.figures`` (for its figures) and the
