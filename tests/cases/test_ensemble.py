@@ -148,11 +148,13 @@ def test_bad_bins(text, message):
         parse_bins(text, ["impact.speed"])
 
 
-def test_bad_design_and_size():
+def test_bad_design_size_and_seed():
     with pytest.raises(InputError, match="--design 'halton'"):
         unit_points("halton", 4, 1, 0)
     with pytest.raises(InputError, match="-n"):
         unit_points("random", 0, 1, 0)
+    with pytest.raises(InputError, match="--seed -1: must be a whole number >= 0"):
+        unit_points("sobol", 4, 1, -1)
 
 
 CHEAP = ["--set", "numerics.mesh_size=0.04", "--set", "numerics.quadrature_order=2"]
