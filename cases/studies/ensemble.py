@@ -239,7 +239,8 @@ def variations(distributions: Sequence[Distribution], samples: np.ndarray) -> li
 
 
 def wilson_interval(successes, trials, confidence: float = CONFIDENCE) -> tuple[np.ndarray, np.ndarray]:
-    """The Wilson score interval (no continuity correction) of a binomial proportion; NaN for no trials.
+    """The Wilson score interval (no continuity correction) of a binomial proportion, from
+    ``scipy.stats.binomtest(...).proportion_ci(method="wilson")``; NaN for no trials.
 
     Parameters
     ----------
@@ -252,15 +253,15 @@ def wilson_interval(successes, trials, confidence: float = CONFIDENCE) -> tuple[
     -------
     low, high : ndarray
     """
-    k, n = np.asarray(successes, dtype=float), np.asarray(trials, dtype=float)
-    z = stats.norm.ppf(0.5 + confidence / 2)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        p = k / n
-        centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-        half = z / (1 + z * z / n) * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
-    # exactly 0 (1) for no (every) success, where rounding would leave 1e-17; NaN for no trials
-    low = np.where(k == 0, 0.0, np.clip(centre - half, 0.0, 1.0))
-    high = np.where(k == n, 1.0, np.clip(centre + half, 0.0, 1.0))
+    k, n = np.broadcast_arrays(np.asarray(successes, dtype=int), np.asarray(trials, dtype=int))
+    low, high = np.full(k.shape, np.nan), np.full(k.shape, np.nan)
+    for index in np.ndindex(k.shape):
+        if n[index] > 0:  # scipy's Wilson interval; none for no trials
+            interval = stats.binomtest(int(k[index]), int(n[index])).proportion_ci(confidence, method="wilson")
+            low[index], high[index] = interval.low, interval.high
+    # exactly 0 (1) for no (every) success, where rounding would leave 1e-17
+    low = np.where(k == 0, 0.0, low)
+    high = np.where(k == n, 1.0, high)
     return np.where(n > 0, low, np.nan), np.where(n > 0, high, np.nan)
 
 
