@@ -4,7 +4,7 @@ The samples (:mod:`.ensemble`) become typed :class:`~cases.studies.sweep.Variati
 run through :func:`~cases.studies.sweep.run_sweep`, so each run is stored under its resolved
 scene's key: the same seed gives the same runs on any pool, a killed ensemble resumes, and a
 larger ``count`` (random or Sobol' design) runs only the new samples.  The study writes
-``ensemble.csv`` (a row per run: its sample, outcomes and summary), ``ensemble.json``,
+``ensemble.csv`` (a row per run: its sample, outcomes and summary, without the timings), ``ensemble.json``,
 ``ensemble.md`` and the figures ``ensemble_histograms.png`` and, with bins, ``ensemble_curve.png``.
 """
 
@@ -29,6 +29,8 @@ from .pool import Pool
 from .sweep import Sweep, SweepResult, run_sweep
 
 __all__ = ["run_ensemble", "INTERVAL"]
+
+VOLATILE = ("wall_time", "integration_time")  # summary fields that differ from one run of a scene to the next
 
 INTERVAL = "Wilson score, 95 %"
 
@@ -108,7 +110,9 @@ def run_ensemble(scene: str | os.PathLike, overrides: Overrides | None, samples:
         record["by"] = key
         record["curve"] = curve(table[key].to_numpy(float), table, edges)
     out = Path(out)
-    atomic_write_text(out / "ensemble.csv", table.to_csv(index=False))
+    # the runs' wall and integration times stay in the run store: without them the same seed writes the
+    # same bytes on any number of workers or on a cluster
+    atomic_write_text(out / "ensemble.csv", table.drop(columns=list(VOLATILE), errors="ignore").to_csv(index=False))
     atomic_write_text(out / "ensemble.json", json.dumps(json_safe(record), indent=1, allow_nan=False) + "\n")
     atomic_write_text(out / "ensemble.md", _markdown(record, table, base.scenes[0].name or Path(scene).stem))
     _histograms(table, distributions, out / "ensemble_histograms.png")
