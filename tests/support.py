@@ -2,8 +2,15 @@
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+from collections.abc import Iterator
 
 from mesh import ProjectileGeometry, ProjectileMesh, build_mesh
 
@@ -18,3 +25,44 @@ def rss_bytes() -> int:
     """Resident memory of this process (bytes), from ``/proc/self/statm`` (Linux)."""
     with open("/proc/self/statm") as f:
         return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+
+
+def free_port() -> int:
+    """A TCP port on the loopback that nothing listens on now."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@contextlib.contextmanager
+def dask_cluster(folder, workers: int = 2) -> Iterator[str]:
+    """A ``dask scheduler`` and ``dask worker --nworkers N`` started from the command line, as on a real
+    cluster: the workers import this project as installed (no ``PYTHONPATH``), from ``folder``.  Yields the
+    scheduler's address once the workers have joined; stops both (SIGKILL after 30 s) on leaving."""
+    import pytest
+
+    dask = shutil.which("dask", path=os.path.dirname(sys.executable))
+    if dask is None:
+        pytest.skip("no dask command beside this interpreter")
+    from distributed import Client
+
+    address = f"tcp://127.0.0.1:{free_port()}"
+    env = {**os.environ, "PYTHONPATH": ""}  # the workers find the project as installed, from another folder
+    options = {"cwd": folder, "env": env, "start_new_session": True, "stdout": subprocess.DEVNULL,
+               "stderr": subprocess.DEVNULL}
+    scheduler = subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", address.rsplit(":", 1)[1],
+                                  "--no-dashboard"], **options)
+    worker = subprocess.Popen([dask, "worker", address, "--nworkers", str(workers), "--nthreads", "1",
+                               "--no-dashboard"], **options)
+    try:
+        with Client(address, timeout=60) as client:
+            client.wait_for_workers(workers, timeout=60)
+        yield address
+    finally:
+        for proc in (worker, scheduler):
+            os.killpg(proc.pid, signal.SIGTERM)
+        for proc in (worker, scheduler):
+            try:
+                proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)

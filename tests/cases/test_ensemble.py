@@ -11,6 +11,7 @@ from cases import scene_path
 from cases.scene import InputError, load_scene
 from cases.studies.ensemble import (Estimate, curve, draw, estimate, parse_bins, parse_sample, unit_points,
                                     variations, wilson_interval)
+from support import dask_cluster
 
 
 @pytest.fixture(scope="module")
@@ -204,30 +205,12 @@ def test_ensemble_command_bad_input(tmp_path, capsys):
     assert code == 2 and "keep the samples in range" in capsys.readouterr().err
 
 
-def _free_port() -> int:
-    import socket
-
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 @pytest.mark.slow
 def test_the_same_seed_writes_the_same_csv_on_one_two_workers_and_a_dask_cluster(tmp_path):
     """Same seed, 1 local worker, 2 local workers, and a ``dask scheduler`` with ``dask worker --nworkers 2``
     started from the command line (the workers import the project themselves): byte-identical ``ensemble.csv``
     and ``ensemble.json``, each from an empty run store."""
-    import os
-    import shutil
-    import signal
-    import subprocess
-    import sys
-
     from cases.cli import main
-
-    dask = shutil.which("dask", path=os.path.dirname(sys.executable))
-    if dask is None:
-        pytest.skip("no dask command beside this interpreter")
 
     def ensemble(name, *where):
         assert main(["ensemble", str(scene_path("forrestal_luk_test2")), *CHEAP, "--sample",
@@ -237,27 +220,7 @@ def test_the_same_seed_writes_the_same_csv_on_one_two_workers_and_a_dask_cluster
         return [(tmp_path / name / f"ensemble.{kind}").read_bytes() for kind in ("csv", "json")]
 
     one, two = ensemble("one", "--workers", "1"), ensemble("two", "--workers", "2")
-    address = f"tcp://127.0.0.1:{_free_port()}"
-    env = {**os.environ, "PYTHONPATH": ""}
-    scheduler = subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", address.rsplit(":", 1)[1],
-                                  "--no-dashboard"], cwd=tmp_path, env=env, start_new_session=True,
-                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    worker = subprocess.Popen([dask, "worker", address, "--nworkers", "2", "--nthreads", "1", "--no-dashboard"],
-                              cwd=tmp_path, env=env, start_new_session=True,
-                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    try:
-        from distributed import Client
-
-        with Client(address, timeout=60) as client:
-            client.wait_for_workers(2, timeout=60)
+    with dask_cluster(tmp_path) as address:
         cluster = ensemble("cluster", "--scheduler", address)
-    finally:
-        for proc in (worker, scheduler):
-            os.killpg(proc.pid, signal.SIGTERM)
-        for proc in (worker, scheduler):
-            try:
-                proc.wait(timeout=30)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
     assert one == two == cluster
     assert b"wall_time" not in one[0] and b"integration_time" not in one[0]

@@ -3,9 +3,7 @@
 
 import json
 import os
-import shutil
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -16,6 +14,7 @@ import pytest
 from cases import InputError, SceneError, scene_path
 from cases.run import RunStore
 from cases.studies import Pool, Sweep, grid, parse_grid, read_variations, run_sweep
+from support import dask_cluster
 
 # short runs of projectile #3: coarse mesh, 4 ms of penetration
 QUICK = {"numerics.mesh_size": 0.03, "numerics.integrator": "rk4", "numerics.time_step": 2e-5,
@@ -174,45 +173,16 @@ def test_dask_local_cluster_gives_the_same_table(tmp_path):
     pd.testing.assert_frame_equal(_stable(remote), _stable(local), check_exact=True)
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 def test_dask_scheduler_and_worker_processes_give_the_same_table(tmp_path):
     """A cluster of separate ``dask scheduler`` and ``dask worker`` processes, as on a real cluster: the
     workers import this project themselves (nothing is shared with this process) and report the code
     version they ran, which must be this process's."""
     pytest.importorskip("distributed")
-    dask = shutil.which("dask", path=os.path.dirname(sys.executable))
-    if dask is None:
-        pytest.skip("no dask command beside this interpreter")
-    address = f"tcp://127.0.0.1:{_free_port()}"
-    env = {**os.environ, "PYTHONPATH": ""}  # the workers find the project as installed, from another folder
-    scheduler = subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", address.rsplit(":", 1)[1],
-                                  "--no-dashboard"], cwd=tmp_path, env=env, start_new_session=True,
-                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    worker = subprocess.Popen([dask, "worker", address, "--nworkers", "2", "--nthreads", "1", "--no-dashboard"],
-                              cwd=tmp_path, env=env, start_new_session=True,
-                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    try:
-        from distributed import Client
-
-        with Client(address, timeout=60) as client:
-            client.wait_for_workers(2, timeout=60)
+    with dask_cluster(tmp_path) as address:
         sweep = _sweep(speeds=(1000, 1200))
         remote = run_sweep(sweep, RunStore(tmp_path / "cluster"), Pool(scheduler=address, progress=False)).table()
-        local = run_sweep(sweep, RunStore(tmp_path / "local"), Pool(workers=1, progress=False)).table()
-        pd.testing.assert_frame_equal(_stable(remote), _stable(local), check_exact=True)
-    finally:
-        for proc in (worker, scheduler):
-            os.killpg(proc.pid, signal.SIGTERM)
-        for proc in (worker, scheduler):
-            try:
-                proc.wait(timeout=30)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
+    local = run_sweep(sweep, RunStore(tmp_path / "local"), Pool(workers=1, progress=False)).table()
+    pd.testing.assert_frame_equal(_stable(remote), _stable(local), check_exact=True)
 
 
 def test_a_worker_running_other_code_is_refused(tmp_path, monkeypatch):
