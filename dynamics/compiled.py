@@ -8,9 +8,11 @@ called without leaving compiled code), Newton-Euler and ``dexp^-1``.  The Python
 (:func:`~dynamics.simulate.simulate`) is unchanged: it sees one :class:`StepResult` per step.
 
 Each load kernel gets its own compiled step, :func:`rk_step` inlined with the kernel as a global
-(:class:`CompiledLoad`).  The arithmetic is that of the Python methods, written out on floats; the sums run in another
-order, so the two agree to round-off per step, not bit for bit (tests/dynamics/test_compiled.py
-compares them on problems with exact solutions and on each other).
+(:class:`CompiledLoad`).  The quaternion and path arithmetic is the Python step's own (the
+``*_scalars`` functions of :mod:`dynamics.quaternion` and :mod:`dynamics.integrators`, compiled);
+the stage sums and the load run in another order, so the two agree to round-off per step, not bit
+for bit (tests/dynamics/test_compiled_step.py compares them on problems with exact solutions and on
+each other).
 
 numba compiles the functions on their first call and keeps the machine code in its cache
 (``cache=True``, beside this module or in ``NUMBA_CACHE_DIR``): the first process compiles
@@ -26,7 +28,8 @@ import math
 import numpy as np
 from numba import njit
 
-from .integrators import Evaluation, RungeKutta, StepResult
+from .integrators import Evaluation, RungeKutta, StepResult, path_increment_scalars
+from .quaternion import dexp_inverse_scalars, exp_scalars, hamilton_scalars, rotation_scalars
 from .rigid_body import RigidBody, State
 
 __all__ = ["CompiledLoad", "CompiledRungeKutta", "rk_step"]
@@ -113,8 +116,8 @@ class CompiledRungeKutta(RungeKutta):
                                                                first.force, first.moment)
         out = np.empty(_OUT)
         loads.step(loads.data, loads.constant_force, body.mass, inertia, inverse, self.A, self.b, self._b_error,
-                   self.fsal, state.position, state.velocity, state.attitude, state.angular_velocity, h, given, first is not None,
-                   out)
+                   self.fsal, state.position, state.velocity, state.attitude, state.angular_velocity, h, given,
+                   first is not None, out)
         new = State(state.time + h, out[_X], out[_V], out[_Q], out[_W], state.path_length + out[_S])
         error = out[_ERROR] if self.b_error is not None else None
         # without a first-same-as-last stage the step evaluates the end state too: the driver needs it for
@@ -133,46 +136,34 @@ def _evaluation(out: np.ndarray, at: int) -> Evaluation:
 # state that leaves the floats comes back non-finite and the step control ends the run
 
 
-@njit(cache=True, error_model="numpy")
+# the arithmetic of the Python step (dynamics.quaternion, dynamics.integrators), compiled from the same source
+_exp_scalars = njit(inline="always", error_model="numpy")(exp_scalars)
+_hamilton_scalars = njit(inline="always", error_model="numpy")(hamilton_scalars)
+_rotation_scalars = njit(inline="always", error_model="numpy")(rotation_scalars)
+_dexp_inverse_scalars = njit(inline="always", error_model="numpy")(dexp_inverse_scalars)
+_path_increment_scalars = njit(inline="always", error_model="numpy")(path_increment_scalars)
+
+
+@njit(inline="always", error_model="numpy")
 def _compose(q, u, out):
     """``out = q * exp(u)`` (:func:`dynamics.quaternion.compose`)."""
-    vx, vy, vz = u[0], u[1], u[2]
-    angle2 = vx * vx + vy * vy + vz * vz
-    angle = math.sqrt(angle2)
-    half = 0.5 * angle
-    scale = math.sin(half) / angle if angle > 1e-8 else 0.5 - angle2 / 48.0
-    qw, qx, qy, qz = math.cos(half), scale * vx, scale * vy, scale * vz
-    pw, px, py, pz = q[0], q[1], q[2], q[3]
-    out[0] = pw * qw - px * qx - py * qy - pz * qz
-    out[1] = pw * qx + px * qw + py * qz - pz * qy
-    out[2] = pw * qy - px * qz + py * qw + pz * qx
-    out[3] = pw * qz + px * qy - py * qx + pz * qw
+    qw, qx, qy, qz = _exp_scalars(u[0], u[1], u[2])
+    out[0], out[1], out[2], out[3] = _hamilton_scalars(q[0], q[1], q[2], q[3], qw, qx, qy, qz)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(inline="always", error_model="numpy")
 def _rotation(q, out):
     """Body-to-world rotation matrix (:func:`dynamics.quaternion.rotation_matrix`)."""
-    w, x, y, z = q[0], q[1], q[2], q[3]
-    ww, xx, yy, zz = w * w, x * x, y * y, z * z
-    out[0, 0], out[0, 1], out[0, 2] = (ww + xx) - (yy + zz), 2 * (x * y - w * z), 2 * (x * z + w * y)
-    out[1, 0], out[1, 1], out[1, 2] = 2 * (x * y + w * z), (ww + yy) - (xx + zz), 2 * (y * z - w * x)
-    out[2, 0], out[2, 1], out[2, 2] = 2 * (x * z - w * y), 2 * (y * z + w * x), (ww + zz) - (xx + yy)
+    r = _rotation_scalars(q[0], q[1], q[2], q[3])
+    out[0, 0], out[0, 1], out[0, 2] = r[0], r[1], r[2]
+    out[1, 0], out[1, 1], out[1, 2] = r[3], r[4], r[5]
+    out[2, 0], out[2, 1], out[2, 2] = r[6], r[7], r[8]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(inline="always", error_model="numpy")
 def _rate(u, w, out):
     """``du/dt = dexp^-1_u(omega)`` (:func:`dynamics.quaternion.right_jacobian_inverse`)."""
-    ux, uy, uz = u[0], u[1], u[2]
-    wx, wy, wz = w[0], w[1], w[2]
-    angle2 = ux * ux + uy * uy + uz * uz
-    if angle2 < 1e-6:
-        c = 1.0 / 12.0 + angle2 / 720.0 + angle2 * angle2 / 30240.0
-    else:
-        angle = math.sqrt(angle2)
-        c = (1.0 - 0.5 * angle / math.tan(0.5 * angle)) / angle2
-    ax, ay, az = uy * wz - uz * wy, uz * wx - ux * wz, ux * wy - uy * wx
-    bx, by, bz = uy * az - uz * ay, uz * ax - ux * az, ux * ay - uy * ax
-    out[0], out[1], out[2] = wx + 0.5 * ax + c * bx, wy + 0.5 * ay + c * by, wz + 0.5 * az + c * bz
+    out[0], out[1], out[2] = _dexp_inverse_scalars(u[0], u[1], u[2], w[0], w[1], w[2])
 
 
 @njit(inline="always", error_model="numpy")
@@ -194,18 +185,6 @@ def _evaluate(load, data, constant_force, mass, inertia, inverse, x, v, q, w, ro
     r2 = loads[5] - (w0 * h1 - w1 * h0)
     for i in range(3):
         out[at + 3 + i] = inverse[i, 0] * r0 + inverse[i, 1] * r1 + inverse[i, 2] * r2
-
-
-@njit(cache=True, error_model="numpy")
-def _path_increment(chord, before, after):
-    """The chord lengthened by ``theta^2 / 24`` (:func:`dynamics.integrators._path_increment`)."""
-    length = math.sqrt(chord[0] * chord[0] + chord[1] * chord[1] + chord[2] * chord[2])
-    ax, ay, az = before[0], before[1], before[2]
-    bx, by, bz = after[0], after[1], after[2]
-    dot = ax * bx + ay * by + az * bz
-    cross2 = (ay * bz - az * by) ** 2 + (az * bx - ax * bz) ** 2 + (ax * by - ay * bx) ** 2
-    theta = math.atan2(math.sqrt(cross2), dot) if (dot != 0.0 or cross2 != 0.0) else 0.0
-    return length * (1.0 + theta * theta / 24.0)
 
 
 @njit(inline="always", error_model="numpy")
@@ -279,7 +258,8 @@ def rk_step(load, data, constant_force, mass, inertia, inverse, A, b, b_error, f
         out[j] = x0[j] + increment[j]
         out[3 + j] = v0[j] + increment[3 + j]
         out[10 + j] = w0[j] + increment[9 + j]
-    out[_S] = _path_increment(increment[0:3], v0, out[3:6])
+    out[_S] = _path_increment_scalars(increment[0], increment[1], increment[2], v0[0], v0[1], v0[2], out[3], out[4],
+                                      out[5])
     if not fsal:
         _evaluate(load, data, constant_force, mass, inertia, inverse, out[_X], out[_V], out[_Q], out[_W], rotation,
                   loads, out, _LAST)

@@ -95,13 +95,16 @@ def _path_increment(chord: np.ndarray, before: np.ndarray, after: np.ndarray) ->
     sum of their lengths, with a negative weight, then undercounts the path:
     0.35 % over Forrestal-Luk test 5 at a 1e-5 s step (docs/numerics.md, Hard cases).
     """
-    cx, cy, cz = chord.tolist()
+    return path_increment_scalars(*chord.tolist(), *before.tolist(), *after.tolist())
+
+
+def path_increment_scalars(cx: float, cy: float, cz: float, ax: float, ay: float, az: float, bx: float, by: float,
+                           bz: float) -> float:
+    """:func:`_path_increment` on the components (floats only: the compiled step compiles it too)."""
     length = math.sqrt(cx * cx + cy * cy + cz * cz)
-    ax, ay, az = before.tolist()
-    bx, by, bz = after.tolist()
     dot = ax * bx + ay * by + az * bz
     cross2 = (ay * bz - az * by) ** 2 + (az * bx - ax * bz) ** 2 + (ax * by - ay * bx) ** 2
-    theta = math.atan2(math.sqrt(cross2), dot) if dot or cross2 else 0.0
+    theta = math.atan2(math.sqrt(cross2), dot) if dot != 0.0 or cross2 != 0.0 else 0.0
     return length * (1.0 + theta * theta / 24.0)
 
 

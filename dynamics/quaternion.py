@@ -6,7 +6,9 @@ kinematics with the body-frame angular velocity ``omega`` read
 
 The functions work on 3- and 4-vectors, called several times per stage of
 every step: they unpack to Python floats (``tolist``) and build one array at
-the end, which costs about a quarter of the equivalent numpy expressions.
+the end, which costs about a quarter of the equivalent numpy expressions.  The
+arithmetic itself is in the ``*_scalars`` functions, on floats only, so that the
+compiled step (:mod:`dynamics.compiled`) compiles the very same expressions.
 """
 
 from __future__ import annotations
@@ -16,7 +18,8 @@ import math
 import numpy as np
 
 __all__ = ["multiply", "exp_map", "compose", "rotation_matrix", "from_rotation_matrix",
-           "right_jacobian_inverse", "normalize", "cross"]
+           "right_jacobian_inverse", "normalize", "cross", "hamilton_scalars", "exp_scalars", "rotation_scalars",
+           "dexp_inverse_scalars"]
 
 
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -26,15 +29,17 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
+def hamilton_scalars(pw: float, px: float, py: float, pz: float, qw: float, qx: float, qy: float,
+                     qz: float) -> tuple[float, float, float, float]:
+    """The Hamilton product ``p * q`` on the components."""
+    return (pw * qw - px * qx - py * qy - pz * qz,
+            pw * qx + px * qw + py * qz - pz * qy,
+            pw * qy - px * qz + py * qw + pz * qx,
+            pw * qz + px * qy - py * qx + pz * qw)
+
+
 def _hamilton(p: tuple[float, ...] | list[float], q: tuple[float, ...] | list[float]) -> np.ndarray:
-    pw, px, py, pz = p
-    qw, qx, qy, qz = q
-    return np.array([
-        pw * qw - px * qx - py * qy - pz * qz,
-        pw * qx + px * qw + py * qz - pz * qy,
-        pw * qy - px * qz + py * qw + pz * qx,
-        pw * qz + px * qy - py * qx + pz * qw,
-    ])
+    return np.array(hamilton_scalars(*p, *q))
 
 
 def multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -42,14 +47,18 @@ def multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     return _hamilton(p.tolist(), q.tolist())
 
 
-def _exp(rotation_vector: np.ndarray) -> tuple[float, float, float, float]:
-    vx, vy, vz = rotation_vector.tolist()
+def exp_scalars(vx: float, vy: float, vz: float) -> tuple[float, float, float, float]:
+    """The unit quaternion of the rotation vector ``(vx, vy, vz)``, as components."""
     angle2 = vx * vx + vy * vy + vz * vz
     angle = math.sqrt(angle2)
     half = 0.5 * angle
     # sin(half)/angle, with its series near zero so that the map stays smooth
     scale = math.sin(half) / angle if angle > 1e-8 else 0.5 - angle2 / 48.0
     return math.cos(half), scale * vx, scale * vy, scale * vz
+
+
+def _exp(rotation_vector: np.ndarray) -> tuple[float, float, float, float]:
+    return exp_scalars(*rotation_vector.tolist())
 
 
 def exp_map(rotation_vector: np.ndarray) -> np.ndarray:
@@ -75,18 +84,20 @@ def normalize(q: np.ndarray) -> np.ndarray:
     return q / math.sqrt((w * w + y * y) + (x * x + z * z))
 
 
-def rotation_matrix(q: np.ndarray) -> np.ndarray:
-    """Body-to-world rotation matrix of a unit quaternion."""
-    w, x, y, z = q.tolist()
+def rotation_scalars(w: float, x: float, y: float, z: float) -> tuple[float, ...]:
+    """The rotation matrix of a unit quaternion, row by row (nine components)."""
     ww, xx, yy, zz = w * w, x * x, y * y, z * z
     # the homogeneous diagonal (w^2 + x^2 - y^2 - z^2, not 1 - 2 (y^2 + z^2)): a quaternion with two
     # bitwise-equal components gives exact zeros, e.g. R[2, 2] = 0 for the nose-down attitude
     # (sqrt(1/2), 0, sqrt(1/2), 0), where the other form leaves -2.2e-16 and tilts a straight impact
-    return np.array([
-        (ww + xx) - (yy + zz), 2 * (x * y - w * z), 2 * (x * z + w * y),
-        2 * (x * y + w * z), (ww + yy) - (xx + zz), 2 * (y * z - w * x),
-        2 * (x * z - w * y), 2 * (y * z + w * x), (ww + zz) - (xx + yy),
-    ]).reshape(3, 3)
+    return ((ww + xx) - (yy + zz), 2 * (x * y - w * z), 2 * (x * z + w * y),
+            2 * (x * y + w * z), (ww + yy) - (xx + zz), 2 * (y * z - w * x),
+            2 * (x * z - w * y), 2 * (y * z + w * x), (ww + zz) - (xx + yy))
+
+
+def rotation_matrix(q: np.ndarray) -> np.ndarray:
+    """Body-to-world rotation matrix of a unit quaternion."""
+    return np.array(rotation_scalars(*q.tolist())).reshape(3, 3)
 
 
 def from_rotation_matrix(matrix: np.ndarray) -> np.ndarray:
@@ -113,15 +124,9 @@ def from_rotation_matrix(matrix: np.ndarray) -> np.ndarray:
     return q if q[0] >= 0 else -q
 
 
-def right_jacobian_inverse(u: np.ndarray, omega: np.ndarray) -> np.ndarray:
-    """``du/dt`` for ``q = q0 * exp(u)`` turning with body angular velocity ``omega``.
-
-    The inverse right Jacobian of SO(3):
-    ``omega + u x omega / 2 + c(|u|) u x (u x omega)`` with
-    ``c(t) = (1 - (t/2) cot(t/2)) / t^2``.
-    """
-    ux, uy, uz = u.tolist()
-    wx, wy, wz = omega.tolist()
+def dexp_inverse_scalars(ux: float, uy: float, uz: float, wx: float, wy: float,
+                         wz: float) -> tuple[float, float, float]:
+    """:func:`right_jacobian_inverse` on the components of ``u`` and ``omega``."""
     angle2 = ux * ux + uy * uy + uz * uz
     if angle2 < 1e-6:
         c = 1.0 / 12.0 + angle2 / 720.0 + angle2 * angle2 / 30240.0
@@ -130,4 +135,14 @@ def right_jacobian_inverse(u: np.ndarray, omega: np.ndarray) -> np.ndarray:
         c = (1.0 - 0.5 * angle / math.tan(0.5 * angle)) / angle2
     ax, ay, az = uy * wz - uz * wy, uz * wx - ux * wz, ux * wy - uy * wx  # u x omega
     bx, by, bz = uy * az - uz * ay, uz * ax - ux * az, ux * ay - uy * ax  # u x (u x omega)
-    return np.array([wx + 0.5 * ax + c * bx, wy + 0.5 * ay + c * by, wz + 0.5 * az + c * bz])
+    return wx + 0.5 * ax + c * bx, wy + 0.5 * ay + c * by, wz + 0.5 * az + c * bz
+
+
+def right_jacobian_inverse(u: np.ndarray, omega: np.ndarray) -> np.ndarray:
+    """``du/dt`` for ``q = q0 * exp(u)`` turning with body angular velocity ``omega``.
+
+    The inverse right Jacobian of SO(3):
+    ``omega + u x omega / 2 + c(|u|) u x (u x omega)`` with
+    ``c(t) = (1 - (t/2) cot(t/2)) / t^2``.
+    """
+    return np.array(dexp_inverse_scalars(*u.tolist(), *omega.tolist()))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import math
 import os
 import shutil
 import signal
@@ -66,3 +67,25 @@ def dask_cluster(folder, workers: int = 2) -> Iterator[str]:
                 proc.wait(timeout=30)
             except subprocess.TimeoutExpired:
                 os.killpg(proc.pid, signal.SIGKILL)
+
+
+MIRROR_Y = ((1.0, 0.0, 0.0), (0.0, -1.0, 0.0), (0.0, 0.0, 1.0))  # the world plane Y = 0
+
+
+def mirrored_states(rng, count: int = 20):
+    """``count`` random embedded states and their images in the world plane ``Y = 0``: pairs of
+    ``(position, velocity, rotation, spin)``.  The image reverses world Y and body y: the quaternion
+    ``(w, -x, y, -z)``, the body angular velocity ``-(M omega)``."""
+    import numpy as np
+
+    from dynamics.quaternion import rotation_matrix
+
+    mirror = np.array(MIRROR_Y)
+    for _ in range(count):
+        w, x, y, z = rng.normal(size=4)
+        q = np.array([w, x, y, z]) / math.sqrt(w * w + x * x + y * y + z * z)
+        position = np.array([0.0, 0.0, rng.uniform(-1.5, -0.2)])
+        velocity, spin = rng.normal(size=3) * 300.0, rng.normal(size=3) * 20.0
+        yield ((position, velocity, rotation_matrix(q), spin),
+               (mirror @ position, mirror @ velocity, rotation_matrix(q * np.array([1.0, -1.0, 1.0, -1.0])),
+                -(mirror @ spin)))

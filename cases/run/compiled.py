@@ -1,11 +1,12 @@
 """The compiled step of a run (``numerics.kernel = "compiled"``), with numba's cache named for its code.
 
 The compiled step of the DAFL load (:mod:`.dafl_step`) inlines the Runge-Kutta step of
-:mod:`dynamics.compiled` and calls the load kernel of :mod:`fem_loads.compiled`: numba keeps its
+:mod:`dynamics.compiled` (with the arithmetic of :mod:`dynamics.quaternion` and
+:mod:`dynamics.integrators`) and calls the load kernel of :mod:`fem_loads.compiled`: numba keeps its
 machine code in the cache of ``dafl_step.py`` and notices changes of that file alone, not of the
-two modules it inlines and calls.  So numba's cache lives in a folder named for the digest of the
-three sources and numba's version, ``$PENETRATE_CACHE_DIR/numba/<digest>`` (``$NUMBA_CACHE_DIR/<digest>``
-when that is set), set before any of them is imported: changed code gets a folder of its own and
+modules it inlines and calls.  So numba's cache lives in a folder named for the digest of all
+these sources (:data:`COMPILED_SOURCES`) and numba's version, ``$PENETRATE_CACHE_DIR/numba/<digest>``
+(``$NUMBA_CACHE_DIR/<digest>`` when that is set), set before any of them is imported: changed code gets a folder of its own and
 compiles afresh.
 """
 
@@ -23,7 +24,8 @@ from .persistence import cache_dir
 
 __all__ = ["compiled_step", "precompile", "numba_cache_folder", "COMPILED_SOURCES"]
 
-COMPILED_SOURCES = ("dynamics.compiled", "fem_loads.compiled", "cases.run.dafl_step")
+COMPILED_SOURCES = ("dynamics.compiled", "dynamics.quaternion", "dynamics.integrators", "fem_loads.compiled",
+                    "cases.run.dafl_step")
 
 
 def numba_cache_folder() -> Path:
@@ -63,7 +65,8 @@ def compiled_step(loads, method, body, weight: np.ndarray | None):
     """
     step, load = _import_compiled()
     data = load.kernel_data(loads)
-    compiled_load, compiled_method = step.CompiledLoad(load.dafl_kernel, data, _dafl_step(), weight), step.CompiledRungeKutta(method)
+    compiled_load = step.CompiledLoad(load.dafl_kernel, data, _dafl_step(), weight)
+    compiled_method = step.CompiledRungeKutta(method)
     _warm(compiled_load, compiled_method, body, data, load.lowest_height_kernel)
     return (compiled_load, compiled_method,
             lambda position, attitude: load.lowest_height_kernel(data, position, _up(attitude)))

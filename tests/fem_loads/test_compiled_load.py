@@ -13,6 +13,7 @@ from cases.run.compiled import _import_compiled
 from dynamics.quaternion import normalize, rotation_matrix
 from fem_loads import DAFLLoads, SurfaceQuadrature, resistance_law
 from fem_loads.target import Friction
+from support import MIRROR_Y, mirrored_states
 
 _, compiled = _import_compiled()  # numba's cache in the folder named for the compiled code
 
@@ -91,17 +92,11 @@ def test_symmetric_states_give_exactly_symmetric_loads(quadrature, mode):
 
 def test_mirrored_states_give_exactly_mirrored_loads(quadrature):
     loads = DAFLLoads(quadrature, SOIL, **SMOOTH)
-    mirror = np.diag([1.0, -1.0, 1.0])
-    rng = np.random.default_rng(2)
-    for _ in range(20):
-        w, x, y, z = rng.normal(size=4)
-        q = np.array([w, x, y, z]) / math.sqrt(w * w + x * x + y * y + z * z)
-        position = np.array([0.0, 0.0, rng.uniform(-1.5, -0.2)])
-        velocity, spin = rng.normal(size=3) * 300.0, rng.normal(size=3) * 20.0
-        load = _kernel_load(loads, (position, velocity, rotation_matrix(q), spin))
-        image = _kernel_load(loads, (mirror @ position, mirror @ velocity,
-                                     rotation_matrix(q * np.array([1.0, -1.0, 1.0, -1.0])), -(mirror @ spin)))
-        assert np.array_equal(image[:3], mirror @ load[:3]) and np.array_equal(image[3:], -(mirror @ load[3:]))
+    mirror = np.array(MIRROR_Y)
+    for state, image in mirrored_states(np.random.default_rng(2)):
+        load, image_load = _kernel_load(loads, state), _kernel_load(loads, image)
+        assert np.array_equal(image_load[:3], mirror @ load[:3])
+        assert np.array_equal(image_load[3:], -(mirror @ load[3:]))
 
 
 @pytest.mark.parametrize("mode", ["smooth", "sharp"])

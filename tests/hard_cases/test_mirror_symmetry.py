@@ -20,7 +20,7 @@ from fem_loads.images import MirrorImages
 from fem_loads.mass import mirror_symmetric_axes
 from fem_loads.quadrature import MIRROR_SIGNS
 from mesh import BODY, OgiveNose, Profile, ProjectileGeometry
-from support import meshed
+from support import MIRROR_Y, meshed, mirrored_states
 
 PROFILE = Profile(0.155, 0.93, OgiveNose(5.0))
 SOIL = resistance_law("soil")
@@ -165,18 +165,11 @@ def test_symmetric_states_give_exactly_symmetric_loads(reproducible):
 def test_mirrored_states_give_exactly_mirrored_loads():
     """A state and its image in the world plane Y = 0: the loads are images of each other, bitwise."""
     loads = DAFLLoads(_quadrature(2, "exact"), SOIL)
-    mirror = np.diag([1.0, -1.0, 1.0])
-    rng = np.random.default_rng(2)
-    for _ in range(20):
-        w, x, y, z = rng.normal(size=4)
-        q = np.array([w, x, y, z]) / math.sqrt(w * w + x * x + y * y + z * z)
-        position = np.array([0.0, 0.0, rng.uniform(-1.5, -0.2)])
-        velocity, spin = rng.normal(size=3) * 300.0, rng.normal(size=3) * 20.0
-        # the image: world Y and body y reversed, i.e. the quaternion (w, -x, y, -z)
-        image_rotation = rotation_matrix(q * np.array([1.0, -1.0, 1.0, -1.0]))
-        assert np.array_equal(image_rotation, mirror @ rotation_matrix(q) @ mirror)
-        force, moment = loads(position, velocity, rotation_matrix(q), spin)
-        image_force, image_moment = loads(mirror @ position, mirror @ velocity, image_rotation, -(mirror @ spin))
+    mirror = np.array(MIRROR_Y)
+    for state, image in mirrored_states(np.random.default_rng(2)):
+        assert np.array_equal(image[2], mirror @ state[2] @ mirror)  # the image quaternion's rotation, exactly
+        force, moment = loads(*state)
+        image_force, image_moment = loads(*image)
         assert np.array_equal(image_force, mirror @ force)
         assert np.array_equal(image_moment, -(mirror @ moment))
 
