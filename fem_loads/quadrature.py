@@ -17,7 +17,11 @@ built once, so each costs the same per load evaluation):
     projection, ``(r / rho) (n_mesh . e_rho) / (n_exact . e_rho)``.  The
     facets then only partition the exact surface.  The flat tail disc (and
     the flat front face of a blunt nose) are stretched radially to their
-    exact areas.
+    exact areas.  For a projectile from a CAD file (no profile) each facet
+    on a curved CAD surface gets the same rule mapped through the surface's
+    own parametrisation (:meth:`mesh.imported.CadSurface.quadrature`): points
+    on the surface, its normals, and its area element; facets on planes keep
+    their own quadrature, which is exact there.
 
 The projectile meshes are mirrored exactly about the planes ``y = 0`` and
 ``z = 0`` (:mod:`mesh.geometry`), but scikit-fem computes each facet's points
@@ -192,9 +196,73 @@ def _symmetrise(points: np.ndarray, normals: np.ndarray, weights: np.ndarray,
         weights[partner] = weights[quarter]
 
 
+def _on_cad_surface(points: np.ndarray, normals: np.ndarray, weights: np.ndarray, mesh: ProjectileMesh,
+                    intorder: int, surface) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The rule of :meth:`mesh.imported.CadSurface.quadrature` on the facets of curved CAD surfaces; the
+    facets of planes keep their own (exact) points, normals and weights."""
+    from skfem.quadrature import get_quadrature
+    from skfem.refdom import RefTri
+
+    ref_points, ref_weights = get_quadrature(RefTri, intorder)
+    corners = mesh.points[mesh.outer[:, :3]]
+    cad_points, cad_normals, cad_weights, planar = surface.quadrature(corners, mesh.outer_entity, ref_points,
+                                                                      ref_weights)
+    curved = ~np.repeat(planar, len(ref_weights))
+    cosine = np.einsum("ij,ij->i", cad_normals[curved], normals[curved])
+    points, normals, weights = points.copy(), normals.copy(), weights.copy()
+    points[curved] = cad_points[curved]
+    normals[curved] = cad_normals[curved] * np.sign(cosine)[:, None]  # CAD faces may face either way: outward
+    weights[curved] = cad_weights[curved]
+    return points, normals, weights
+
+
+def _basis_rule(mesh: ProjectileMesh, intorder: int,
+                skfem_mesh: MeshTet1 | MeshTet2 | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Points, unit normals and weights of the outer facets from scikit-fem's FacetBasis."""
+    from skfem import ElementTetP0, FacetBasis
+
+    m = to_skfem(mesh) if skfem_mesh is None else skfem_mesh
+    corners = mesh.outer[:, :3]
+    if mesh.order == 2:
+        # scikit-fem renumbers the corner nodes of a quadratic mesh first, in sorted order
+        corners = np.searchsorted(np.unique(mesh.tetra[:, :4]), corners)
+    fb = FacetBasis(m, ElementTetP0(), facets=_facet_indices(m, corners), intorder=intorder)
+    points = np.asarray(fb.global_coordinates()).reshape(3, -1).T
+    normals = np.asarray(fb.normals).reshape(3, -1).T
+    return points, normals / np.linalg.norm(normals, axis=1)[:, None], fb.dx.reshape(-1)
+
+
+def _shape_rule(mesh: ProjectileMesh, intorder: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Points, unit normals and weights of the outer facets from their own Lagrange shape functions.
+
+    The same rule as :func:`_basis_rule` (each facet's points in its own corner order, the
+    weights the area element ``|x_xi x x_eta|``, the normal along that cross product, outward as
+    ``mesh.outer`` is oriented), without FacetBasis's Newton inversion of every point into its
+    tetrahedron, which fails on some curved elements (github.com/kinnala/scikit-fem/issues/965) and which these
+    values do not need.
+    """
+    from skfem import ElementTriP1, ElementTriP2
+    from skfem.quadrature import get_quadrature
+    from skfem.refdom import RefTri
+
+    ref_points, ref_weights = get_quadrature(RefTri, intorder)
+    element = ElementTriP2() if mesh.order == 2 else ElementTriP1()
+    nodes = mesh.points[mesh.outer]                                               # (n, k, 3)
+    shapes = [element.lbasis(ref_points, i) for i in range(nodes.shape[1])]
+    phi = np.array([value for value, _ in shapes])                                # (k, q)
+    dphi = np.array([gradient for _, gradient in shapes])                         # (k, 2, q)
+    points = np.einsum("kq,nkd->nqd", phi, nodes)
+    tangents = np.einsum("kjq,nkd->nqjd", dphi, nodes)
+    cross = np.cross(tangents[:, :, 0], tangents[:, :, 1])
+    area = np.linalg.norm(cross, axis=2)
+    return (points.reshape(-1, 3), (cross / area[..., None]).reshape(-1, 3),
+            (ref_weights[None, :] * area).reshape(-1))
+
+
 def surface_quadrature(mesh: ProjectileMesh, centre: np.ndarray, profile: Profile | None = None,
                        normal_model: str = "exact", intorder: int = 2,
-                       skfem_mesh: MeshTet1 | MeshTet2 | None = None) -> SurfaceQuadrature:
+                       skfem_mesh: MeshTet1 | MeshTet2 | None = None, surface=None,
+                       facet_rule: str = "basis") -> SurfaceQuadrature:
     """Quadrature points, outward normals and weights of the outer surface.
 
     Parameters
@@ -204,33 +272,35 @@ def surface_quadrature(mesh: ProjectileMesh, centre: np.ndarray, profile: Profil
     centre : ndarray, shape (3,)
         Centre of mass in mesh coordinates (m); the result is relative to it.
     profile : Profile, optional
-        The exact outer profile; required for ``normal_model="exact"``.
+        The exact outer profile; ``normal_model="exact"`` needs it or ``surface``.
     normal_model : {"exact", "mesh"}
         See the module docstring.
     intorder : int
         Polynomial degree integrated exactly on each facet.
     skfem_mesh : MeshTet1 or MeshTet2, optional
         A scikit-fem mesh already made from ``mesh``.
+    surface : mesh.imported.CadSurface, optional
+        The exact surface of a projectile from a CAD file, for ``normal_model="exact"``
+        (``mesh.outer_entity`` names each facet's CAD surface).
+    facet_rule : {"basis", "shape"}
+        How the facets' own points, normals and weights are computed: by scikit-fem's
+        :class:`~skfem.FacetBasis` (the analytic projectiles' meshes), or from the facets'
+        Lagrange shape functions (:func:`_shape_rule`; any mesh).
     """
+    if facet_rule not in ("basis", "shape"):
+        raise ValueError(f"facet_rule = {facet_rule!r}: must be 'basis' or 'shape'")
     if normal_model not in NORMAL_MODELS:
         raise ValueError(f"normal_model = {normal_model!r}: must be one of {NORMAL_MODELS}")
-    if normal_model == "exact" and profile is None:
-        raise ValueError("normal_model = 'exact' needs the profile")
-    m = to_skfem(mesh) if skfem_mesh is None else skfem_mesh
-    corners = mesh.outer[:, :3]
-    if mesh.order == 2:
-        # scikit-fem renumbers the corner nodes of a quadratic mesh first, in sorted order
-        corners = np.searchsorted(np.unique(mesh.tetra[:, :4]), corners)
-    facets = _facet_indices(m, corners)
-    from skfem import ElementTetP0, FacetBasis
-
-    fb = FacetBasis(m, ElementTetP0(), facets=facets, intorder=intorder)
-    points = np.asarray(fb.global_coordinates()).reshape(3, -1).T
-    normals = np.asarray(fb.normals).reshape(3, -1).T
-    weights = fb.dx.reshape(-1)
-    normals = normals / np.linalg.norm(normals, axis=1)[:, None]
-    if normal_model == "exact":
+    if normal_model == "exact" and profile is None and (surface is None or mesh.outer_entity is None):
+        raise ValueError("normal_model = 'exact' needs the profile or the CAD surface")
+    if facet_rule == "basis":
+        points, normals, weights = _basis_rule(mesh, intorder, skfem_mesh)
+    else:
+        points, normals, weights = _shape_rule(mesh, intorder)
+    if normal_model == "exact" and profile is not None:
         points, normals, weights = _to_exact_surface(points, normals, weights, profile)
+    elif normal_model == "exact":
+        points, normals, weights = _on_cad_surface(points, normals, weights, mesh, intorder, surface)
     points = np.ascontiguousarray(points - centre)
     normals = np.ascontiguousarray(normals)
     weights = np.ascontiguousarray(weights)

@@ -2,6 +2,8 @@
 this project."""
 
 from .geometry import BODY, COUNTERWEIGHT, OUTER, ProjectileMesh, build_mesh
+from .files import build_file_mesh
+from .imported import BodyOutline, FileGeometry, GeometryError, body_frame
 from .io import read_mesh, write_mesh
 from .placement import AxisymmetricMassProperties, analytic_mass_properties, place_counterweight
 from .profile import (BluntOgiveNose, ConeNose, Interior, OgiveNose, Profile, ProfileNose, ProjectileGeometry,
@@ -12,5 +14,6 @@ __all__ = [
     "ProjectileGeometry",
     "ProjectileMesh", "build_mesh", "BODY", "COUNTERWEIGHT", "OUTER",
     "read_mesh", "write_mesh",
+    "FileGeometry", "GeometryError", "BodyOutline", "build_file_mesh", "body_frame",
     "AxisymmetricMassProperties", "analytic_mass_properties", "place_counterweight",
 ]

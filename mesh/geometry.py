@@ -60,6 +60,9 @@ class ProjectileMesh:
         (corners, then edge nodes in the order of :data:`TRI_EDGES`).
     order : int
         Geometry order: 1 (flat) or 2 (curved, quadratic).
+    outer_entity : ndarray, shape (n_tris,), optional
+        The CAD surface each outer triangle lies on (a file's projectile,
+        :mod:`mesh.imported`); None for the analytic projectiles.
     """
 
     points: np.ndarray
@@ -67,6 +70,7 @@ class ProjectileMesh:
     tetra_region: np.ndarray
     outer: np.ndarray
     order: int
+    outer_entity: np.ndarray | None = None
 
 
 def _edge_reorder(element_type: int, edges: tuple[tuple[int, int], ...]) -> np.ndarray:
@@ -135,87 +139,99 @@ def _profile_faces(occ, geometry: ProjectileGeometry) -> tuple[list[int], list[i
 
 
 def _mesh_quarter(geometry: ProjectileGeometry, size: float, order: int) -> ProjectileMesh:
-    """Mesh the quarter ``y >= 0, z >= 0`` of the projectile with gmsh."""
+    """Mesh the quarter ``y >= 0, z >= 0`` of the projectile in the current gmsh session."""
     import gmsh
 
-    gmsh.initialize(interruptible=False)
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.option.setNumber("General.NumThreads", 1)  # deterministic meshes
-        gmsh.model.add("projectile")
-        occ = gmsh.model.occ
-        body_faces, weight_faces = _profile_faces(occ, geometry)
-        quarter = 0.5 * math.pi
+    occ = gmsh.model.occ
+    body_faces, weight_faces = _profile_faces(occ, geometry)
+    quarter = 0.5 * math.pi
 
-        def revolve(faces: list[int]) -> list[int]:
-            out = occ.revolve([(2, f) for f in faces], 0, 0, 0, 1, 0, 0, quarter)
-            return [t for d, t in out if d == 3]
+    def revolve(faces: list[int]) -> list[int]:
+        out = occ.revolve([(2, f) for f in faces], 0, 0, 0, 1, 0, 0, quarter)
+        return [t for d, t in out if d == 3]
 
-        body_vols, weight_vols = revolve(body_faces), revolve(weight_faces)
-        if weight_vols:
-            # make the body and the counterweight share their interface
-            _, mapping = occ.fragment([(3, v) for v in body_vols], [(3, v) for v in weight_vols])
-            n_body = len(body_vols)
-            body_vols = sorted({t for m in mapping[:n_body] for _, t in m})
-            weight_vols = sorted({t for m in mapping[n_body:] for _, t in m} - set(body_vols))
-        occ.synchronize()
+    body_vols, weight_vols = revolve(body_faces), revolve(weight_faces)
+    if weight_vols:
+        # make the body and the counterweight share their interface
+        _, mapping = occ.fragment([(3, v) for v in body_vols], [(3, v) for v in weight_vols])
+        n_body = len(body_vols)
+        body_vols = sorted({t for m in mapping[:n_body] for _, t in m})
+        weight_vols = sorted({t for m in mapping[n_body:] for _, t in m} - set(body_vols))
+    occ.synchronize()
 
-        # outer surface: boundary surfaces of the union that reach the shank radius
-        # (cavity walls stop a wall thickness inside it; the symmetry planes are
-        # recognised by lying in y = 0 or z = 0)
-        a = geometry.profile.radius
-        inner = 0.0 if geometry.interior is None else geometry.interior.wall_thickness
-        boundary = gmsh.model.getBoundary([(3, v) for v in body_vols + weight_vols],
-                                          combined=True, oriented=False)
-        outer_surfaces = []
-        for _, tag in boundary:
-            xmin, ymin, zmin, xmax, ymax, zmax = gmsh.model.getBoundingBox(2, abs(tag))
-            # OpenCASCADE pads bounding boxes by its tolerance (~1e-7 m)
-            on_plane = (ymax - ymin) < 1e-3 * a or (zmax - zmin) < 1e-3 * a
-            if not on_plane and (geometry.interior is None or max(ymax, zmax) > a - 0.5 * inner):
-                outer_surfaces.append(abs(tag))
-        gmsh.model.addPhysicalGroup(3, body_vols, BODY, name="body")
-        if weight_vols:
-            gmsh.model.addPhysicalGroup(3, weight_vols, COUNTERWEIGHT, name="counterweight")
-        gmsh.model.addPhysicalGroup(2, outer_surfaces, OUTER, name="outer")
+    # outer surface: boundary surfaces of the union that reach the shank radius
+    # (cavity walls stop a wall thickness inside it; the symmetry planes are
+    # recognised by lying in y = 0 or z = 0)
+    a = geometry.profile.radius
+    inner = 0.0 if geometry.interior is None else geometry.interior.wall_thickness
+    boundary = gmsh.model.getBoundary([(3, v) for v in body_vols + weight_vols],
+                                      combined=True, oriented=False)
+    outer_surfaces = []
+    for _, tag in boundary:
+        xmin, ymin, zmin, xmax, ymax, zmax = gmsh.model.getBoundingBox(2, abs(tag))
+        # OpenCASCADE pads bounding boxes by its tolerance (~1e-7 m)
+        on_plane = (ymax - ymin) < 1e-3 * a or (zmax - zmin) < 1e-3 * a
+        if not on_plane and (geometry.interior is None or max(ymax, zmax) > a - 0.5 * inner):
+            outer_surfaces.append(abs(tag))
+    gmsh.model.addPhysicalGroup(3, body_vols, BODY, name="body")
+    if weight_vols:
+        gmsh.model.addPhysicalGroup(3, weight_vols, COUNTERWEIGHT, name="counterweight")
+    gmsh.model.addPhysicalGroup(2, outer_surfaces, OUTER, name="outer")
 
-        gmsh.option.setNumber("Mesh.MeshSizeMax", size)
-        gmsh.option.setNumber("Mesh.MeshSizeMin", 0.1 * size)
-        gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
-        gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
-        gmsh.option.setNumber("Mesh.Algorithm3D", 10)  # HXT: ~5x faster than Delaunay
-        gmsh.option.setNumber("Mesh.ElementOrder", order)
-        gmsh.option.setNumber("Mesh.SecondOrderLinear", 0)  # edge nodes on the true geometry
-        gmsh.model.mesh.generate(3)
-
-        node_tags, coords, _ = gmsh.model.mesh.getNodes()
-        index = np.zeros(int(node_tags.max()) + 1, dtype=np.int64)
-        index[node_tags.astype(np.int64)] = np.arange(len(node_tags))
-        points = coords.reshape(-1, 3)
-
-        tet_type = gmsh.model.mesh.getElementType("Tetrahedron", order)
-        tri_type = gmsh.model.mesh.getElementType("Triangle", order)
-        tet_cols = _edge_reorder(tet_type, TET_EDGES if order == 2 else ())
-        tri_cols = _edge_reorder(tri_type, TRI_EDGES if order == 2 else ())
-
-        def elements(tags: list[int], etype: int, cols: np.ndarray) -> np.ndarray:
-            blocks = []
-            for tag in tags:
-                _, nodes = gmsh.model.mesh.getElementsByType(etype, tag)
-                blocks.append(index[nodes.astype(np.int64)].reshape(-1, len(cols))[:, cols])
-            return np.concatenate(blocks) if blocks else np.zeros((0, len(cols)), dtype=np.int64)
-
-        body = elements(body_vols, tet_type, tet_cols)
-        weight = elements(weight_vols, tet_type, tet_cols)
-        outer = elements(outer_surfaces, tri_type, tri_cols)
-    finally:
-        gmsh.finalize()
+    generate(size, order)
+    points, tetrahedra, triangles = elements(order)
+    body = tetrahedra(body_vols)
+    weight = tetrahedra(weight_vols)
+    outer = triangles(outer_surfaces)
 
     tetra = np.concatenate([body, weight])
     region = np.concatenate([np.full(len(body), BODY), np.full(len(weight), COUNTERWEIGHT)])
     tetra = _orient_tetra(points, tetra)
     outer = _orient_outward(points, outer, geometry)
     return ProjectileMesh(points, tetra, region, outer, order)
+
+
+def generate(size: float, order: int) -> None:
+    """Mesh the current gmsh model with tetrahedra of size ``size`` (m) and geometry order ``order``."""
+    import gmsh
+
+    gmsh.option.setNumber("Mesh.MeshSizeMax", size)
+    gmsh.option.setNumber("Mesh.MeshSizeMin", 0.1 * size)
+    gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
+    gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
+    gmsh.option.setNumber("Mesh.Algorithm3D", 10)  # HXT: ~5x faster than Delaunay
+    gmsh.option.setNumber("Mesh.ElementOrder", order)
+    gmsh.option.setNumber("Mesh.SecondOrderLinear", 0)  # edge nodes on the true geometry
+    gmsh.model.mesh.generate(3)
+
+
+def elements(order: int):
+    """The nodes of the current gmsh mesh and two readers of its elements in our node order.
+
+    Returns ``(points, tetrahedra, triangles)``: ``tetrahedra(volume_tags)`` and
+    ``triangles(surface_tags)`` give the elements of those entities, one row each, as
+    indices into ``points``.
+    """
+    import gmsh
+
+    node_tags, coords, _ = gmsh.model.mesh.getNodes()
+    index = np.zeros(int(node_tags.max()) + 1, dtype=np.int64)
+    index[node_tags.astype(np.int64)] = np.arange(len(node_tags))
+    points = coords.reshape(-1, 3)
+
+    def reader(name: str, edges: tuple[tuple[int, int], ...]):
+        etype = gmsh.model.mesh.getElementType(name, order)
+        cols = _edge_reorder(etype, edges if order == 2 else ())
+
+        def read(tags: list[int]) -> np.ndarray:
+            blocks = []
+            for tag in tags:
+                _, nodes = gmsh.model.mesh.getElementsByType(etype, tag)
+                blocks.append(index[nodes.astype(np.int64)].reshape(-1, len(cols))[:, cols])
+            return np.concatenate(blocks) if blocks else np.zeros((0, len(cols)), dtype=np.int64)
+        return read
+
+    return points, reader("Tetrahedron", TET_EDGES), reader("Triangle", TRI_EDGES)
 
 
 def _permute(cells: np.ndarray, corner_perm: tuple[int, ...], edges: tuple[tuple[int, int], ...]) -> np.ndarray:
@@ -298,9 +314,25 @@ def build_mesh(geometry: ProjectileGeometry, size: float, order: int = 2) -> Pro
         raise ValueError(f"order = {order}: must be 1 or 2")
     if not (0.0 < size < geometry.profile.length and math.isfinite(size)):
         raise ValueError(f"mesh size = {size}: must lie in (0, {geometry.profile.length}) m")
-    with _GMSH_LOCK, _standard_output_discarded():
+    with gmsh_session("projectile"):
         quarter = _mesh_quarter(geometry, size, order)
     return _mirror(_mirror(quarter, 1), 2)
+
+
+@contextlib.contextmanager
+def gmsh_session(name: str) -> Iterator[None]:
+    """A fresh gmsh model named ``name``, one at a time per process, quiet, on one thread (deterministic meshes)."""
+    import gmsh
+
+    with _GMSH_LOCK, _standard_output_discarded():
+        gmsh.initialize(interruptible=False)
+        try:
+            gmsh.option.setNumber("General.Terminal", 0)
+            gmsh.option.setNumber("General.NumThreads", 1)
+            gmsh.model.add(name)
+            yield
+        finally:
+            gmsh.finalize()
 
 
 @contextlib.contextmanager

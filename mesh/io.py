@@ -28,12 +28,10 @@ def write_mesh(mesh: ProjectileMesh, path: str | os.PathLike) -> None:
     import meshio  # imported where used: a run from cached data never needs it
 
     tet_type, tri_type = _CELL_TYPES[mesh.order]
-    out = meshio.Mesh(
-        mesh.points,
-        [(tet_type, mesh.tetra), (tri_type, mesh.outer)],
-        cell_data={"region": [mesh.tetra_region.astype(np.int32),
-                              np.full(len(mesh.outer), OUTER, dtype=np.int32)]},
-    )
+    cell_data = {"region": [mesh.tetra_region.astype(np.int32), np.full(len(mesh.outer), OUTER, dtype=np.int32)]}
+    if mesh.outer_entity is not None:  # the CAD surface of each outer triangle
+        cell_data["entity"] = [np.zeros(len(mesh.tetra), dtype=np.int32), mesh.outer_entity.astype(np.int32)]
+    out = meshio.Mesh(mesh.points, [(tet_type, mesh.tetra), (tri_type, mesh.outer)], cell_data=cell_data)
     meshio.write(Path(path), out, file_format=MESH_FORMAT)
 
 
@@ -51,5 +49,7 @@ def read_mesh(path: str | os.PathLike) -> ProjectileMesh:
                 tetra_region=regions[tet_type].astype(np.int64),
                 outer=m.cells_dict[tri_type].astype(np.int64),
                 order=order,
+                outer_entity=(m.cell_data_dict["entity"][tri_type].astype(np.int64)
+                              if "entity" in m.cell_data_dict else None),
             )
     raise ValueError(f"{path}: no tetrahedra found")

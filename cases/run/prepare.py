@@ -20,25 +20,53 @@ import numpy as np
 
 from fem_loads import MassProperties, SurfaceQuadrature, mass_properties, surface_quadrature, to_skfem
 from mesh import Profile, ProjectileGeometry, ProjectileMesh, build_mesh, read_mesh, write_mesh
+from mesh.cad import CadSurface
+from mesh.files import build_file_mesh
+from mesh.imported import BodyOutline, FileGeometry, GeometryError, body_frame, outline
 
-from ..scene import Numerics, Projectile, Scene
+from ..scene import InputError, Numerics, Projectile, Scene
 from .persistence import ContentCache, atomic_path, atomic_write, cache_dir
 
-__all__ = ["PreparedProjectile", "prepare_projectile", "preparation_key", "cached_mesh", "prepared_path"]
+__all__ = ["PreparedProjectile", "prepare_projectile", "preparation_key", "cached_mesh", "body_mesh",
+           "prepared_path"]
 
 
 @dataclass(frozen=True)
 class PreparedProjectile:
-    """Everything about a projectile that a run needs, computed once."""
+    """Everything about a projectile that a run needs, computed once.
 
-    geometry: ProjectileGeometry
+    ``outline``: a file's body measured on its mesh (None for the analytic projectiles,
+    whose :attr:`profile` states it).
+    """
+
+    geometry: ProjectileGeometry | FileGeometry
     mass: MassProperties
     quadrature: SurfaceQuadrature
     n_tetra: int
+    outline: BodyOutline | None = None
 
     @property
     def profile(self) -> Profile:
+        """The exact profile of an analytic projectile (a file's body has none)."""
+        if isinstance(self.geometry, FileGeometry):
+            raise InputError("this needs an axisymmetric profile, and the projectile comes from"
+                             f" {self.geometry.path}: it works for the analytic projectiles only")
         return self.geometry.profile
+
+    @property
+    def length(self) -> float:
+        """Tip to tail (m)."""
+        return self.outline.length if self.outline is not None else self.geometry.profile.length
+
+    @property
+    def diameter(self) -> float:
+        """Largest diameter (m)."""
+        return self.outline.diameter if self.outline is not None else self.geometry.profile.diameter
+
+    @property
+    def nose_length(self) -> float:
+        """Tip to where the body first reaches its largest radius (m)."""
+        return self.outline.nose_length if self.outline is not None else self.geometry.profile.nose_length
 
     @property
     def tip(self) -> np.ndarray:
@@ -46,24 +74,38 @@ class PreparedProjectile:
         return -self.mass.centre
 
 
-def cached_mesh(geometry: ProjectileGeometry, size: float, order: int = 2) -> ProjectileMesh:
+def cached_mesh(geometry: ProjectileGeometry | FileGeometry, size: float, order: int = 2) -> ProjectileMesh:
     """The mesh of ``geometry`` at element size ``size`` (m), from the cache when it was made before.
 
     A sweep therefore meshes each projectile once.  Writes are atomic, so concurrent
     workers at worst mesh the same projectile twice; a corrupt entry is meshed again.
+    A file's projectile is cached in its model frame (:func:`body_mesh` moves it).
     """
-    inputs = {"geometry": dataclasses.asdict(geometry), "nose": type(geometry.profile.nose).__name__, "size": size,
-              "order": order}
+    if isinstance(geometry, FileGeometry):  # the file's digest is in the key: a changed file is meshed again
+        inputs = {"file": dataclasses.asdict(geometry), "size": size, "order": order}
+    else:
+        inputs = {"geometry": dataclasses.asdict(geometry), "nose": type(geometry.profile.nose).__name__,
+                  "size": size, "order": order}
     path = ContentCache(cache_dir()).path("mesh", inputs, ".vtu")
     if path.exists():
         try:
             return read_mesh(path)
         except Exception:
             path.unlink(missing_ok=True)
-    mesh = build_mesh(geometry, size, order)
+    if isinstance(geometry, FileGeometry):
+        mesh = build_file_mesh(geometry, size, order)
+    else:
+        mesh = build_mesh(geometry, size, order)
     with atomic_path(path) as tmp:
         write_mesh(mesh, tmp)
     return mesh
+
+
+def body_mesh(geometry: ProjectileGeometry | FileGeometry, size: float, order: int = 2) -> tuple[ProjectileMesh, float]:
+    """The cached mesh in the body frame (tip at the origin) and the model frame's x of the tip (m; 0 for the
+    analytic projectiles, which are meshed in the body frame)."""
+    mesh = cached_mesh(geometry, size, order)
+    return body_frame(mesh) if isinstance(geometry, FileGeometry) else (mesh, 0.0)
 
 
 def preparation_key(scene: Scene) -> tuple[str, str]:
@@ -89,7 +131,7 @@ def _prepare(spec_json: str, numerics_json: str) -> PreparedProjectile:
     path = prepared_path(spec_json, numerics_json)
     if path.exists() and (prepared := _load(path, spec)) is not None:
         return prepared
-    prepared = _compute(spec, numerics, spec.geometry())
+    prepared = _compute(spec, numerics, spec.shape())
     _save(path, prepared)
     return prepared
 
@@ -100,12 +142,14 @@ def _load(path, spec: Projectile) -> PreparedProjectile | None:
             # the counterweight's span as placed when this entry was computed: the same floats, without
             # placing it again
             span = data["counterweight"]
-            geometry = spec.geometry(placed=(float(span[0]), float(span[1])) if span.size else None)
+            geometry = spec.shape(placed=(float(span[0]), float(span[1])) if span.size else None)
             mass = MassProperties(float(data["mass"]), data["centre"], data["inertia"], float(data["volume"]))
             quarters = data["mirror_quarters"]
             quadrature = SurfaceQuadrature(data["points"], data["normals"], data["weights"],
                                            quarters if quarters.size else None)
-            return PreparedProjectile(geometry, mass, quadrature, int(data["n_tetra"]))
+            sizes = data["outline"]
+            body = BodyOutline(*(float(v) for v in sizes)) if sizes.size else None
+            return PreparedProjectile(geometry, mass, quadrature, int(data["n_tetra"]), body)
     except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile):
         path.unlink(missing_ok=True)  # a corrupt entry: compute again
         return None
@@ -114,10 +158,11 @@ def _load(path, spec: Projectile) -> PreparedProjectile | None:
 def _save(path, prepared: PreparedProjectile) -> None:
     m, q = prepared.mass, prepared.quadrature
     buffer = io.BytesIO()
-    span = prepared.geometry.counterweight
+    span = getattr(prepared.geometry, "counterweight", None)
     np.savez(buffer, mass=m.mass, centre=m.centre, inertia=m.inertia, volume=m.volume, points=q.points,
              normals=q.normals, weights=q.weights, n_tetra=prepared.n_tetra,
              counterweight=np.array(span if span is not None else [], dtype=float),
+             outline=np.array(dataclasses.astuple(prepared.outline) if prepared.outline else [], dtype=float),
              mirror_quarters=q.mirror_quarters if q.mirror_quarters is not None else np.empty(0, dtype=np.int64))
     atomic_write(path, buffer.getvalue())
 
@@ -135,20 +180,31 @@ def _compute(spec: Projectile, numerics: Numerics, geometry: ProjectileGeometry)
         ``projectile.transverse_inertia_scale`` makes an inertia tensor no rigid body has.
     """
     size = f"numerics.mesh_size = {numerics.mesh_size:g}"
+    from_file = isinstance(geometry, FileGeometry)
     try:
-        mesh = cached_mesh(geometry, numerics.mesh_size, numerics.geometry_order)
+        mesh, tip = body_mesh(geometry, numerics.mesh_size, numerics.geometry_order)
+    except GeometryError as exc:  # the file, not the numerics: bad input
+        raise InputError(str(exc)) from None
     except Exception as exc:  # gmsh raises bare Exceptions ("HXT 3D mesh failed", ...)
         raise RuntimeError(f"{size}: gmsh could not mesh this projectile at this size ({exc});"
                            " a finer numerics.mesh_size usually works") from exc
+    if from_file and mesh.order != numerics.geometry_order:  # a mesh file's order is its own
+        raise InputError(f"numerics.geometry_order = {numerics.geometry_order}: the mesh file has"
+                         f" {'10' if mesh.order == 2 else '4'}-node tetrahedra; set numerics.geometry_order ="
+                         f" {mesh.order}")
+    exact_cad = from_file and numerics.normals == "exact"
     try:
         fem_mesh = to_skfem(mesh)
         mass = _mass_properties(spec, mesh, fem_mesh)
-        quadrature = surface_quadrature(mesh, mass.centre, geometry.profile, numerics.normals,
-                                        numerics.quadrature_order, fem_mesh)
+        quadrature = surface_quadrature(mesh, mass.centre, None if from_file else geometry.profile,
+                                        numerics.normals, numerics.quadrature_order, fem_mesh,
+                                        surface=CadSurface(geometry, tip) if exact_cad else None,
+                                        facet_rule="shape" if from_file else "basis")
     except Exception as exc:  # scikit-fem: "Newton iteration didn't converge" on distorted curved elements
         raise RuntimeError(f"{size}: the elements of this mesh are too distorted to integrate ({exc});"
                            " a finer numerics.mesh_size, or numerics.geometry_order = 1, usually works") from exc
-    return PreparedProjectile(geometry, _scaled_inertia(spec, mass), quadrature, len(mesh.tetra))
+    return PreparedProjectile(geometry, _scaled_inertia(spec, mass), quadrature, len(mesh.tetra),
+                              outline(mesh) if from_file else None)
 
 
 def _mass_properties(spec: Projectile, mesh: ProjectileMesh, fem_mesh) -> MassProperties:

@@ -74,12 +74,15 @@ def initial_state(scene: Scene, prepared: PreparedProjectile) -> State:
     beta = math.radians(impact.oblique_angle)
     velocity = impact.speed * np.array([math.sin(beta), 0.0, -math.cos(beta)])
     position = rotation @ (-prepared.tip)  # the tip at the origin
-    # lowest point of the exact surface relative to the tip: min over s of
-    # (-s axis_Z - r(s) |transverse part of Z|)
-    profile = prepared.profile
-    s = np.linspace(0.0, profile.length, 20001)
     up = rotation[2]
-    lowest = float(np.min(-s * up[0] - profile.radius_at(s) * math.hypot(up[1], up[2])))
+    if prepared.outline is None:
+        # lowest point of the exact surface relative to the tip: min over s of
+        # (-s axis_Z - r(s) |transverse part of Z|)
+        profile = prepared.profile
+        s = np.linspace(0.0, profile.length, 20001)
+        lowest = float(np.min(-s * up[0] - profile.radius_at(s) * math.hypot(up[1], up[2])))
+    else:  # a file's body: its lowest quadrature point (on the exact surface, within a fraction of an element)
+        lowest = float(np.min((prepared.quadrature.points - prepared.tip) @ up))
     position[2] -= min(lowest, 0.0)
     return State(0.0, position, velocity, attitude, np.asarray(impact.angular_velocity, dtype=float))
 
@@ -151,7 +154,7 @@ def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
         driving, method, lowest_height = compiled_step(loads, method, body, weight)
     else:
         driving = WithGravity(loads, body.mass, effects.gravity_acceleration) if effects.gravity else loads
-    control = step_control(scene, prepared.profile.length)
+    control = step_control(scene, prepared.length)
     # the energy guard needs loads that only dissipate: gravity and no-separation can do work
     guard = EnergyGuard(control.min_step) if numerics.energy_guard and effects.separation and not effects.gravity \
         else None

@@ -1,7 +1,7 @@
 """The scene: what a scene file may say, how it is read and overridden, and the physics objects it describes.
 
 A scene knows no runs: this room imports ``mesh`` and ``fem_loads`` (each spec builds its own
-physics object: ``NoseSpec.build()``, ``LawSpec.build()``, ``Projectile.geometry()``,
+physics object: ``NoseSpec.build()``, ``LawSpec.build()``, ``Projectile.shape()``,
 ``Scene.loads()``) and nothing else of ``cases``.
 
 The errors are imported with the package; the other names below on first use, so that
@@ -18,12 +18,14 @@ _EXPORTS = {
     "Projectile": "projectile",
     "Target": "target", "Effects": "target", "build_law": "target",
     "load_scene": "load", "scene_from_dict": "load", "apply_overrides": "load", "dotted_key": "load",
-    "parse_override": "load", "read_toml": "load", "scene_key": "load", "Overrides": "load",
+    "parse_override": "load", "read_toml": "load", "read_scene_data": "load", "scene_key": "load",
+    "Overrides": "load",
 }
 
 __all__ = [
     "Scene", "Projectile", "Target", "Effects", "Impact", "Numerics", "Outputs", "build_law",
-    "load_scene", "scene_from_dict", "apply_overrides", "dotted_key", "parse_override", "read_toml", "scene_key",
+    "load_scene", "scene_from_dict", "apply_overrides", "dotted_key", "parse_override", "read_toml", "read_scene_data",
+    "scene_key",
     "Overrides",
     "InputError", "SceneError", "one_line",
 ]

@@ -29,7 +29,7 @@ from .errors import SceneError
 from .projectile import NOSE_SPECS
 from .schema import Scene
 
-__all__ = ["Overrides", "load_scene", "scene_from_dict", "apply_overrides", "parse_override", "scene_key",
+__all__ = ["Overrides", "load_scene", "read_scene_data", "anchor_files", "scene_from_dict", "apply_overrides", "parse_override", "scene_key",
            "read_toml", "read_toml_text", "dotted_key", "MAX_SCENE_BYTES", "ALTERNATIVES", "TAGGED_TABLES"]
 
 MAX_SCENE_BYTES = 1 << 20  # a scene is a few hundred bytes; anything past 1 MiB is not one
@@ -48,6 +48,9 @@ ALTERNATIVES: list[tuple[str, tuple[frozenset[str], ...], str]] = [
     ("projectile", (frozenset({"counterweight.start", "counterweight.end"}),
                     frozenset({"mass", "centre_of_mass", "centre_of_mass_ratio"})), ""),
     ("projectile", (frozenset({"mass"}), frozenset({"body_density"})), "no counterweight"),
+    ("projectile", (frozenset({"geometry"}),
+                    frozenset({"diameter", "length", "nose", "interior", "counterweight", "centre_of_mass",
+                               "centre_of_mass_ratio"})), ""),
 ]
 # Tables whose tag decides their other keys: a new tag drops the keys the new kind does not have.
 TAGGED_TABLES: dict[str, tuple[str, dict[str, frozenset[str]]]] = {
@@ -223,8 +226,28 @@ def scene_from_dict(data: dict[str, Any], source: str = "scene") -> Scene:
 
 
 def load_scene(path: str | Path, overrides: Overrides | None = None) -> Scene:
-    """Load and validate a TOML scene, with optional overrides (dotted key -> value)."""
-    return scene_from_dict(apply_overrides(read_toml(path), overrides, str(path)), str(path))
+    """Load and validate a TOML scene, with optional overrides (dotted key -> value).
+
+    A geometry file named by a relative path in the scene is found beside the scene file
+    (one named by an override, relative to the working directory).
+    """
+    return scene_from_dict(apply_overrides(read_scene_data(path), overrides, str(path)), str(path))
+
+
+def read_scene_data(path: str | Path) -> dict[str, Any]:
+    """A scene file's nested dictionaries, before overrides and validation, with its files anchored."""
+    return anchor_files(read_toml(path), Path(path).parent)
+
+
+def anchor_files(data: dict[str, Any], folder: Path) -> dict[str, Any]:
+    """``data`` with a relative ``projectile.geometry.file`` made absolute against ``folder``."""
+    geometry = data.get("projectile", {}).get("geometry") if isinstance(data.get("projectile"), dict) else None
+    if isinstance(geometry, dict) and isinstance(geometry.get("file"), str) and geometry["file"]:
+        file = Path(geometry["file"]).expanduser()
+        if not file.is_absolute():
+            data = copy.deepcopy(data)
+            data["projectile"]["geometry"]["file"] = str((folder / file).resolve())
+    return data
 
 
 def scene_key(scene: Scene) -> str:

@@ -9,10 +9,11 @@ from pydantic import Field, model_validator
 
 from mesh import (BODY, COUNTERWEIGHT, BluntOgiveNose, ConeNose, Interior, OgiveNose, Profile, ProfileNose,
                   ProjectileGeometry, SecantOgiveNose, place_counterweight)
+from mesh.imported import CAD_SUFFIXES, MATERIAL_BASE, FileGeometry, file_digest
 
 from .base import Label, Number, Strict, field
 
-__all__ = ["Projectile", "NoseSpec", "OgiveNoseSpec", "ConeNoseSpec", "SecantOgiveNoseSpec", "HemisphereNoseSpec",
+__all__ = ["Projectile", "GeometryFileSpec", "NoseSpec", "OgiveNoseSpec", "ConeNoseSpec", "SecantOgiveNoseSpec", "HemisphereNoseSpec",
            "BluntNoseSpec", "ProfileNoseSpec", "InteriorSpec", "CounterweightSpec", "MassPropertiesSpec", "DEFAULT_BODY_DENSITY",
            "MIN_MEAN_DENSITY"]
 
@@ -95,6 +96,52 @@ NoseSpec = Annotated[OgiveNoseSpec | ConeNoseSpec | SecantOgiveNoseSpec | Hemisp
                      | ProfileNoseSpec, Field(discriminator="shape")]
 
 
+MESH_SUFFIXES = (".msh", ".vtu", ".vtk", ".inp", ".med", ".xdmf", ".xmf", ".mesh", ".meshb", ".bdf", ".nas",
+                 ".h5m", ".e", ".exo", ".vol", ".ugrid", ".su2", ".avs", ".f3grid", ".mdpa", ".dat", ".tec")
+
+
+class GeometryFileSpec(Strict):
+    """A projectile read from a file: a CAD solid (STEP, BREP, IGES) that gmsh meshes, or a volume mesh of
+    tetrahedra that meshio reads.  A path relative to the scene file is found beside it."""
+
+    file: Label = field(description="the CAD or mesh file")
+    unit: Literal["m", "cm", "mm", "in"] = field("m", description="what a length of 1 in the file means")
+    axis: tuple[Number, Number, Number] = field((1.0, 0.0, 0.0), description="the file's direction from tail to tip")
+    cell_field: Label | None = field(None, description="a mesh's cell-data field that names the materials"
+                                                       " (default: the physical groups)")
+    sha256: Label | None = field(None, description="the file's digest: filled in when the scene is read; a changed"
+                                                   " file is refused by a resolved scene that holds the old one")
+
+    @model_validator(mode="after")
+    def _readable(self):
+        from pathlib import Path
+
+        path = Path(self.file)
+        suffix = path.suffix.lower()
+        if suffix not in CAD_SUFFIXES and suffix not in MESH_SUFFIXES:
+            raise ValueError(f"file = {self.file!r}: not a CAD or mesh file (allowed suffixes: CAD"
+                             f" {', '.join(sorted(CAD_SUFFIXES))}; volume meshes {', '.join(MESH_SUFFIXES)})")
+        if suffix in CAD_SUFFIXES and self.cell_field is not None:
+            raise ValueError("cell_field names the materials of a mesh file; a CAD file's solids have names")
+        try:
+            digest = file_digest(path)
+        except OSError as exc:
+            raise ValueError(f"file = {self.file!r}: cannot read it ({exc.strerror or exc})") from None
+        if self.sha256 is not None and self.sha256 != digest:
+            raise ValueError(f"file = {self.file!r}: changed since this scene was resolved (sha256 {digest[:12]}...,"
+                             f" the scene holds {self.sha256[:12]}...); drop sha256 to use the file as it is now")
+        if not any(self.axis) or math.hypot(*self.axis) < 1e-12:
+            raise ValueError(f"axis = {list(self.axis)}: must be a non-zero direction")
+        self.sha256 = digest
+        return self
+
+    @property
+    def is_cad(self) -> bool:
+        from pathlib import Path
+
+        return Path(self.file).suffix.lower() in CAD_SUFFIXES
+
+
 class InteriorSpec(Strict):
     """A cavity a wall thickness inside the outer profile."""
 
@@ -143,13 +190,19 @@ class MassPropertiesSpec(Strict):
         return self
 
 
+Density = Annotated[Number, Field(gt=0.0, le=1e5)]
+
+
 class Projectile(Strict):
-    """An axisymmetric projectile: nose, cylindrical shank and flat tail."""
+    """A projectile: an axisymmetric nose, cylindrical shank and flat tail, or any body read from a file."""
 
     name: Label = ""
-    diameter: Number = field(unit="m", gt=0.0, le=10.0)
-    length: Number = field(unit="m", gt=0.0, le=100.0, description="nose tip to tail")
-    nose: NoseSpec
+    diameter: Number | None = field(None, unit="m", gt=0.0, le=10.0)
+    length: Number | None = field(None, unit="m", gt=0.0, le=100.0, description="nose tip to tail")
+    nose: NoseSpec | None = None
+    geometry: GeometryFileSpec | None = None
+    materials: dict[Label, Density] | None = field(None, unit="kg/m^3",
+                                                   description="density of a file's named solids or groups")
     body_density: Number | None = field(None, unit="kg/m^3", gt=0.0, le=1e5)
     mass: Number | None = field(None, unit="kg", gt=0.0, le=1e6)
     centre_of_mass: Number | None = field(None, unit="m", gt=0.0, le=100.0,
@@ -161,6 +214,27 @@ class Projectile(Strict):
     mass_properties: MassPropertiesSpec | None = None
     transverse_inertia_scale: Number = field(1.0, unit="", gt=0.0, le=100.0,
                                              description="factor on both transverse moments of inertia")
+
+    @model_validator(mode="after")
+    def _shape(self):
+        if self.geometry is None:
+            missing = [k for k in ("diameter", "length", "nose") if getattr(self, k) is None]
+            if missing:
+                raise ValueError(f"give {', '.join(missing)} (an analytic projectile), or geometry = {{ file = ... }}")
+            if self.materials is not None:
+                raise ValueError("materials name the solids of a geometry file; an analytic projectile has"
+                                 " body_density and a counterweight")
+            return self
+        given = [k for k in ("diameter", "length", "nose", "interior", "counterweight", "centre_of_mass",
+                             "centre_of_mass_ratio") if getattr(self, k) is not None]
+        if given:
+            raise ValueError(f"{', '.join(given)}: the geometry file sets the shape and its materials the mass;"
+                             " drop them (or drop geometry)")
+        if self.materials is not None and len(self.materials) > 50:
+            raise ValueError(f"materials: {len(self.materials)} named; at most 50")
+        if self.materials and self.mass is not None:
+            raise ValueError("with materials the mass follows from the densities: drop mass (or materials)")
+        return self
 
     @model_validator(mode="after")
     def _consistent(self):
@@ -192,6 +266,8 @@ class Projectile(Strict):
     def _buildable(self):
         """The mesh room's own checks of the shape (nose shorter than the body, cavity inside the wall, ...),
         made here so that they fail before any meshing, naming the field."""
+        if self.geometry is not None:
+            return self  # measured when it is meshed (mesh.imported)
         span = None
         if self.counterweight is not None and self.counterweight.start is not None:
             span = (self.counterweight.start, self.counterweight.end)
@@ -221,19 +297,27 @@ class Projectile(Strict):
         return Profile(self.diameter, self.length, self.nose.build())
 
     def densities(self) -> dict[int, float]:
-        """Density (kg/m^3) of each mesh region: the body and, with a counterweight, the counterweight."""
+        """Density (kg/m^3) of each mesh region: the body and, with a counterweight, the counterweight
+        (or a geometry file's named materials)."""
         body = {BODY: self.body_density or DEFAULT_BODY_DENSITY}
+        if self.geometry is not None:
+            return {**body, **{MATERIAL_BASE + k: d for k, d in enumerate((self.materials or {}).values())}}
         if self.interior is not None and self.counterweight is not None:
             return {**body, COUNTERWEIGHT: self.counterweight.density}
         return body
 
-    def geometry(self, placed: tuple[float, float] | None = None) -> ProjectileGeometry:
+    def shape(self, placed: tuple[float, float] | None = None) -> ProjectileGeometry | FileGeometry:
         """The geometry to mesh: profile, cavity and the counterweight's span (placed here when the
         mass and centre of mass place it; with ``mass_properties`` an unplaced counterweight is
         left out, since the given properties replace the integrated ones).
 
         ``placed``: the span this spec's placement gave before (read back from a cache); used instead
-        of placing the counterweight again, which takes about 0.6 s of root finding."""
+        of placing the counterweight again, which takes about 0.6 s of root finding.
+        A geometry file gives its :class:`~mesh.imported.FileGeometry`."""
+        if self.geometry is not None:
+            g = self.geometry
+            return FileGeometry(str(g.file), g.sha256, g.unit, tuple(g.axis), tuple(self.materials or {}),
+                                g.cell_field)
         profile = self.profile()
         if self.interior is None:
             return ProjectileGeometry(profile)

@@ -104,6 +104,12 @@ class Scene(Strict):
     def _meshable(self):
         # a guard against typos (1e-5 for 1e-2) that would mesh forever: the studies' finest mesh has ~1e5 cells
         p, size = self.projectile, self.numerics.mesh_size
+        if p.geometry is not None:
+            if self.numerics.normals == "exact" and not p.geometry.is_cad:
+                raise ValueError("numerics.normals = 'exact' takes the normals from an exact surface, and a mesh file"
+                                 " has none: set numerics.normals = 'mesh' (the mesh's own; docs/geometry.md says"
+                                 " what they cost in accuracy)")
+            return self  # the file's size is known once it is read (mesh.imported checks the mesh size)
         finest = (0.25 * math.pi * p.diameter ** 2 * p.length / MAX_MESH_CELLS) ** (1 / 3)
         if size < finest:
             raise ValueError(f"numerics.mesh_size = {size:g}: too fine for this projectile (allowed: numerics.mesh_size"

@@ -25,8 +25,8 @@ from typing import Any
 import pandas as pd
 
 from ..run import RunStore, StoredRun
-from ..scene import (InputError, Overrides, Scene, apply_overrides, dotted_key, parse_override, read_toml,
-                     scene_from_dict, scene_key)
+from ..scene import (InputError, Overrides, Scene, apply_overrides, dotted_key, parse_override, read_scene_data,
+                     read_toml, scene_from_dict, scene_key)
 from .pool import Pool, run_missing
 
 __all__ = ["Variation", "grid", "parse_grid", "read_variations", "Sweep", "SweepResult", "run_sweep",
@@ -121,7 +121,7 @@ class Sweep:
     @classmethod
     def from_file(cls, path: str | os.PathLike, overrides: Overrides | None = None,
                   variations: Sequence[Variation] = ()) -> Sweep:
-        base = apply_overrides(read_toml(path), overrides, str(path))
+        base = apply_overrides(read_scene_data(path), overrides, str(path))
         return cls(base, list(variations) or [Variation({})], str(path))
 
     @classmethod

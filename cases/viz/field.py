@@ -45,7 +45,7 @@ import pandas as pd
 from dynamics.quaternion import rotation_matrix
 from fem_loads import DAFLLoads
 
-from ..run import CONVERGENCE_THRESHOLD, PreparedProjectile, RunResult, attack_angle_peak, cached_mesh, history_table
+from ..run import CONVERGENCE_THRESHOLD, PreparedProjectile, RunResult, attack_angle_peak, body_mesh, history_table
 from ..scene import InputError, Numerics
 
 __all__ = ["SurfaceMesh", "surface_mesh", "SurfaceField", "FieldEvaluator", "key_instants", "resolve_instants",
@@ -95,7 +95,7 @@ def surface_mesh(prepared: PreparedProjectile, numerics: Numerics) -> SurfaceMes
         If the quadrature does not have the same number of points on every facet, or its
         points do not lie on their facets in facet order (see the module docstring).
     """
-    mesh = cached_mesh(prepared.geometry, numerics.mesh_size, numerics.geometry_order)
+    mesh, _ = body_mesh(prepared.geometry, numerics.mesh_size, numerics.geometry_order)
     outer = np.asarray(mesh.outer, dtype=np.int64)
     n_facets = len(outer)
     n_points = len(prepared.quadrature)
@@ -192,7 +192,7 @@ class FieldEvaluator:
         self._weights = result.prepared.quadrature.weights.reshape(-1, per)
         self._areas = self._weights.sum(axis=1)
         self.rotations = np.array([rotation_matrix(a) for a in result.trajectory.attitude])
-        self.length = result.prepared.profile.length
+        self.length = result.prepared.length
 
     @property
     def friction(self) -> bool:
@@ -237,7 +237,7 @@ def _nose_embedded_index(evaluator: FieldEvaluator) -> int | None:
     prepared = evaluator.prepared
     q = prepared.quadrature
     behind_tip = prepared.tip[0] - q.points[:, 0]
-    nose = q.points[behind_tip <= prepared.profile.nose_length * (1 + 1e-9)]
+    nose = q.points[behind_tip <= prepared.nose_length * (1 + 1e-9)]
     tr = evaluator.result.trajectory
     up = evaluator.rotations[:, 2, :]  # world Z of the body axes, one row per step
     for start in range(0, len(up), 512):

@@ -200,7 +200,7 @@ class FrameRenderer:
         The body and the velocity arrow fill the left 84 % of the view (the colour bar takes the rest).
         """
         length = self.evaluator.length
-        radius = 0.5 * self.evaluator.prepared.profile.diameter
+        radius = 0.5 * self.evaluator.prepared.diameter
         speed = float(np.linalg.norm(fld.velocity))
         ahead = fld.velocity / speed if speed > 0 else fld.rotation[:, 0]
         ends = np.array([tip, tip - length * fld.rotation[:, 0], tip + 0.4 * length * ahead])[:, [0, 2]]

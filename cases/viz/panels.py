@@ -174,7 +174,7 @@ def plot_histories(history: pd.DataFrame, prepared: PreparedProjectile, path: st
     figure = new_figure((8, 8))
     centre_ax, moment_ax, angle_ax = figure.subplots(3, 1, sharex=True)
     centre = history["resistance_centre_from_tip"].to_numpy()
-    length = prepared.profile.length
+    length = prepared.length
     shown = np.where((centre > -length) & (centre < 2 * length), centre, np.nan)
     centre_ax.plot(t, shown, color="tab:purple", lw=1.0, label="resistance centre R")
     centre_ax.axhline(prepared.mass.centre_from_tip, color="black", ls="--", lw=1.0, label="centre of mass")

@@ -107,7 +107,7 @@ def test_a_placed_counterweight_comes_back_from_the_cache_without_placing_it_aga
     again = prepare_projectile(scene).geometry
     assert again.counterweight == placed.counterweight and again == placed
     with pytest.raises(AssertionError, match="placed again"):
-        scene.projectile.geometry()  # the same spec with nothing cached places it
+        scene.projectile.shape()  # the same spec with nothing cached places it
 
 
 def test_run_store_keeps_records_under_the_scene_and_the_code(tmp_path):

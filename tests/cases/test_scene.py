@@ -24,7 +24,7 @@ def test_shipped_scenes_validate(name):
 @pytest.mark.parametrize("number, ratio", [(1, 0.4448), (2, 0.5042), (3, 0.5636), (4, 0.6230)])
 def test_paper_family_scenes_place_their_counterweight(number, ratio):
     scene = load_scene(scene_path(f"paper_p{number}"))
-    props = analytic_mass_properties(scene.projectile.geometry(), *scene.projectile.densities().values())
+    props = analytic_mass_properties(scene.projectile.shape(), *scene.projectile.densities().values())
     assert props.mass == pytest.approx(75.67, rel=1e-9)
     assert props.centre_from_tip / 0.93 == pytest.approx(ratio, rel=1e-9)
     assert (scene.impact.speed, scene.impact.attack_angle, scene.impact.oblique_angle) == (1200, 1, 0)
@@ -101,10 +101,10 @@ def test_an_override_replaces_its_alternatives():
     paper = load_scene(scene_path("paper_p3"), {"projectile.counterweight.start": 0.4,
                                                 "projectile.counterweight.end": 0.6})
     assert paper.projectile.mass is None and paper.projectile.centre_of_mass_ratio is None
-    assert paper.projectile.geometry().counterweight == (0.4, 0.6)
+    assert paper.projectile.shape().counterweight == (0.4, 0.6)
     given = load_scene(scene_path("paper_p3"), {"projectile.mass_properties": {
         "mass": 75.67, "centre_of_mass": 0.52, "axial_inertia": 0.25, "transverse_inertia": 4.0}})
-    assert given.projectile.mass is None and given.projectile.geometry().counterweight is None
+    assert given.projectile.mass is None and given.projectile.shape().counterweight is None
     ratio = load_scene(scene_path("paper_p3"), {"projectile.centre_of_mass": 0.5})
     assert ratio.projectile.centre_of_mass_ratio is None and ratio.projectile.centre_target == 0.5
 
