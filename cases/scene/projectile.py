@@ -122,11 +122,12 @@ class GeometryFileSpec(Strict):
             raise ValueError(f"file = {self.file!r}: not a CAD or mesh file (allowed suffixes: CAD"
                              f" {', '.join(sorted(CAD_SUFFIXES))}; volume meshes {', '.join(MESH_SUFFIXES)})")
         if suffix in CAD_SUFFIXES and self.cell_field is not None:
-            raise ValueError("cell_field names the materials of a mesh file; a CAD file's solids have names")
+            raise ValueError("cell_field names the materials of a mesh file: drop it for a CAD file (its solids have names)")
         try:
             digest = file_digest(path)
         except OSError as exc:
-            raise ValueError(f"file = {self.file!r}: cannot read it ({exc.strerror or exc})") from None
+            raise ValueError(f"file = {self.file!r}: cannot read it ({exc.strerror or exc}); give"
+                             " a readable file, absolute or relative to the scene file's folder") from None
         if self.sha256 is not None and self.sha256 != digest:
             raise ValueError(f"file = {self.file!r}: changed since this scene was resolved (sha256 {digest[:12]}...,"
                              f" the scene holds {self.sha256[:12]}...); drop sha256 to use the file as it is now")

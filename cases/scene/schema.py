@@ -106,7 +106,7 @@ class Scene(Strict):
         p, size = self.projectile, self.numerics.mesh_size
         if p.geometry is not None:
             if self.numerics.normals == "exact" and not p.geometry.is_cad:
-                raise ValueError("numerics.normals = 'exact' takes the normals from an exact surface, and a mesh file"
+                raise ValueError("numerics.normals = 'exact' needs an exact surface to take the normals from, and a mesh file"
                                  " has none: set numerics.normals = 'mesh' (the mesh's own; docs/geometry.md says"
                                  " what they cost in accuracy)")
             return self  # the file's size is known once it is read (mesh.imported checks the mesh size)

@@ -372,6 +372,61 @@ def test_profile_noses_validate_or_explain(data):
     outcome("measured nose tables", lambda: scene_from_dict(data), "scene")
 
 
+BODY_FILES = ("step", "msh", "directory", "text", "missing", "relative")
+
+
+@pytest.fixture(scope="module")
+def body_files(tmp_path_factory) -> dict[str, str]:
+    """A real STEP body, a real mesh, a directory and a text file with a CAD suffix, made once."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+    from bodies import write_body, write_volume_mesh
+
+    folder = tmp_path_factory.mktemp("bodies")
+    (folder / "text.step").write_text("not a STEP file\n")
+    return {"step": str(write_body(folder / "body.step", scale=1e-3)), "msh": str(write_volume_mesh(
+        folder / "body.msh", 0.05)), "directory": str(folder), "text": str(folder / "text.step"),
+        "missing": str(folder / "missing.brep"), "relative": "body.step"}
+
+
+@st.composite
+def geometry_projectiles(draw):
+    """Test 2 with its projectile from a file: the geometry table's keys (file, unit, axis, cell_field)
+    drawn valid or not, with or without the mass, the materials and the analytic keys it excludes."""
+    geometry = {}
+    for key, valid in (("file", st.sampled_from([f"@{name}" for name in BODY_FILES])),
+                       ("unit", st.sampled_from(["m", "mm", "cm", "in"])),
+                       ("axis", st.lists(st.sampled_from([0.0, 1.0, -1.0, 0.5]), min_size=3, max_size=3)),
+                       ("cell_field", st.sampled_from(["material", "gmsh:physical"]))):
+        choice = draw(st.sampled_from(["valid", "valid", "absent", "garbage"]))
+        if choice == "valid" or (key == "file" and choice == "absent"):
+            geometry[key] = draw(valid)
+        elif choice == "garbage":
+            geometry[key] = draw(st.one_of(scalars, st.lists(scalars, max_size=4)))
+    projectile = {"name": "from a file", "geometry": geometry}
+    for key, values in (("mass", st.one_of(st.floats(1.0, 100.0), scalars)),
+                        ("body_density", st.one_of(st.floats(1000.0, 20000.0), scalars)),
+                        ("materials", st.one_of(st.dictionaries(st.sampled_from(["counterweight", "solid1", "body",
+                                                                                "", "é"]), scalars, max_size=2),
+                                                scalars)),
+                        ("diameter", st.floats(0.01, 0.2)), ("nose", st.just({"shape": "ogive", "crh": 3.0}))):
+        if draw(st.integers(0, 3)) == 0:
+            projectile[key] = draw(values)
+    data = json.loads(json.dumps(BASES["forrestal_luk_test2"], default=str))
+    data["projectile"] = projectile
+    if draw(st.booleans()):
+        data["numerics"]["normals"] = draw(st.sampled_from(["exact", "mesh"]))
+    return data
+
+
+@fuzz(200)
+@given(geometry_projectiles())
+def test_geometry_projectiles_validate_or_explain(body_files, data):
+    geometry = data["projectile"]["geometry"]
+    if isinstance(geometry.get("file"), str) and geometry["file"].startswith("@"):
+        geometry["file"] = body_files[geometry["file"][1:]]
+    outcome("projectile from a file", lambda: scene_from_dict(data), "scene")
+
+
 @pytest.fixture(scope="module")
 def scratch(tmp_path_factory):
     return tmp_path_factory.mktemp("fuzz")
@@ -529,7 +584,9 @@ BAD_SET = ["impact.speed", "=3", "impact..speed=1", "impact.speed=-1", "impact.s
            "impact.attack_angle=91", "numerics.mesh_size=0", "numerics.mesh_size=1e-300", "impact.colour=1",
            "impact.speed=" + "1" * 5000, "target.law=clay", "projectile.nose.shape=sphere",
            "projectile.nose={shape=\"profile\", points=[[0, 0], [0.1, 0.03], [0.09, 0.0476]]}",
-           "projectile.name=\"a\\nb\"", "numerics.time_step=1e-300", "x=" + "[" * 3000]
+           "projectile.name=\"a\\nb\"", "numerics.time_step=1e-300", "x=" + "[" * 3000,
+           "projectile.geometry={file=\"nowhere.step\"}", "projectile.geometry={file=\"body.dxf\"}",
+           "projectile.geometry.unit=yard", "projectile.materials={counterweight=-1}"]
 BAD_GRID = ["impact.speed", "impact.speed=", "impact.speed=3:1:1", "impact.speed=a:b:c", "impact.speed=0:inf:1",
             "impact.speed=nan:nan:1", "impact.speed=1:1e308:1e-300", "impact.speed=-5,10", "impact.bogus=1,2"]
 BAD_NUMBER = ["0", "-1", "nan", "inf", "x", "", "1e999", "-1e-300"]  # for float and int options
