@@ -57,8 +57,7 @@ def load_cad(geometry: FileGeometry) -> dict[int, str]:
         raise GeometryError(f"projectile.geometry.file = {geometry.path!r}: gmsh cannot read it as"
                             f" {fmt.upper()} ({reason})") from None
     if shapes and not any(d == 3 for d, _ in shapes):
-        # surfaces only (an IGES file has no solids): a solid where OpenCASCADE can sew them into one
-        occ.healShapes(shapes, tolerance=1e-8 * _extent_of(shapes), sewFaces=True, makeSolids=True)
+        _sew_solid(geometry, shapes)
     occ.synchronize()
     volumes = [t for _, t in gmsh.model.getEntities(3)]
     if not volumes:
@@ -82,6 +81,35 @@ def load_cad(geometry: FileGeometry) -> dict[int, str]:
     occ.remove([(2, t) for _, t in gmsh.model.getEntities(2) if t not in bounding], recursive=True)
     occ.synchronize()
     return {t: names.get(t, f"solid{k + 1}") for k, t in enumerate(solids)}
+
+
+def _sew_solid(geometry: FileGeometry, shapes: list[tuple[int, int]]) -> None:
+    """A solid from loose faces (an IGES file's trimmed surfaces), where they sew into one closed shell."""
+    import gmsh
+
+    occ = gmsh.model.occ
+    faces = [t for d, t in shapes if d == 2]
+    if not faces:
+        return
+    try:
+        loop = occ.addSurfaceLoop(faces, sewing=True)
+        volume = occ.addVolume([loop])
+        occ.synchronize()
+    except Exception:  # OpenCASCADE cannot make a shell of them
+        return
+    occ.remove(shapes, recursive=True)  # the loose faces: the solid has its own
+    occ.synchronize()
+    # a shell that does not close: some edge bounds only one face (a seam bounds its face twice; the
+    # degenerate edge at a pole, of length zero to the file's precision, bounds one face and closes nothing)
+    shell = gmsh.model.getBoundary([(3, volume)], combined=False, oriented=False)
+    counts: dict[int, int] = {}
+    for _, c in gmsh.model.getBoundary(shell, combined=False, oriented=False):
+        counts[abs(c)] = counts.get(abs(c), 0) + 1
+    precision = 1e-6 * _extent_of([(3, volume)])
+    open_edges = [c for c, n in counts.items() if n < 2 and occ.getMass(1, c) > precision]
+    if open_edges or occ.getMass(3, volume) <= 0.0:
+        occ.remove([(3, volume)], recursive=True)
+        occ.synchronize()
 
 
 def _plane(occ, normal: np.ndarray, half: float) -> int:

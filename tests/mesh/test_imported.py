@@ -50,7 +50,8 @@ def assert_matches_analytic(props, exact, tol: float) -> None:
 
 
 @pytest.mark.parametrize("name, unit, scale", [("ogive.step", "m", 1.0), ("ogive_mm.step", "mm", 1e-3),
-                                               ("ogive_cm.brep", "cm", 1e-2), ("ogive_in.step", "in", 0.0254)])
+                                               ("ogive_cm.brep", "cm", 1e-2), ("ogive_in.step", "in", 0.0254),
+                                               ("ogive_mm.iges", "mm", 1e-3)])
 def test_cad_formats_and_units_give_the_analytic_body(folder, name, unit, scale):
     """Each format, written in its unit's numbers and read with that unit, is the same body in metres;
     10 mm elements: the mesh's own error in the mass properties is ~1e-5."""
@@ -184,6 +185,7 @@ def test_bad_files_get_one_line_each(folder):
     occ.revolve([(1, line)], 0, 0, 0, 1, 0, 0, 2 * math.pi)
     occ.synchronize()
     gmsh.write(str(folder / "open.brep"))
+    gmsh.write(str(folder / "open.iges"))
     # two disjoint solids
     gmsh.clear()
     gmsh.model.add("two")
@@ -194,10 +196,8 @@ def test_bad_files_get_one_line_each(folder):
     gmsh.model.mesh.generate(2)  # a surface mesh only
     gmsh.write(str(folder / "surface.msh"))
     gmsh.finalize()
-    # gmsh writes IGES as loose trimmed surfaces, which OpenCASCADE does not sew into a solid here
-    iges = write_body(folder / "surfaces.iges")
     cases += [(folder / "open.brep", "no closed solid"), (folder / "two.step", "2 disjoint bodies"),
-              (folder / "surface.msh", "no tetrahedra"), (iges, "no closed solid.*export it as STEP or BREP")]
+              (folder / "surface.msh", "no tetrahedra"), (folder / "open.iges", "no closed solid.*export it as STEP or BREP")]
     for path, message in cases:
         with pytest.raises(GeometryError, match=message) as info:
             build_file_mesh(FileGeometry(str(path), "", "m"), 0.02)
