@@ -106,8 +106,7 @@ class SidePanel:
 def default_station(prepared: PreparedProjectile) -> float:
     """A station on the shank (m behind the tip): one calibre behind the end of the nose,
     or the middle of the shank if that is shorter."""
-    profile = prepared.profile
-    return min(profile.nose_length + profile.diameter, 0.5 * (profile.nose_length + profile.length))
+    return min(prepared.nose_length + prepared.diameter, 0.5 * (prepared.nose_length + prepared.length))
 
 
 def ring_stress(evaluator: FieldEvaluator, index: int, station: float, n: int = 360) -> tuple[np.ndarray, np.ndarray]:
@@ -132,9 +131,8 @@ def ring_stress(evaluator: FieldEvaluator, index: int, station: float, n: int = 
         Normal stress (Pa).
     """
     prepared = evaluator.prepared
-    profile = prepared.profile
-    if not (0.0 < station < profile.length):
-        raise InputError(f"station = {station}: must lie in (0, {profile.length:g}) m behind the tip")
+    if not (0.0 < station < prepared.length):
+        raise InputError(f"station = {station}: must lie in (0, {prepared.length:g}) m behind the tip")
     tr = evaluator.result.trajectory
     rotation = evaluator.rotations[index]
     velocity_body = tr.velocity[index] @ rotation
@@ -151,6 +149,9 @@ def ring_stress(evaluator: FieldEvaluator, index: int, station: float, n: int = 
     # e_rho = cos(theta) * reference + sin(theta) * (reference rotated by +90 deg about x)
     side = np.array([-reference[1], reference[0]])
     e_rho = np.outer(np.cos(theta), reference) + np.outer(np.sin(theta), side)
+    if prepared.outline is not None:  # a body from a file: no profile, its own surface points at the station
+        return _ring_of_points(evaluator, index, x, reference, side)
+    profile = prepared.profile
     radius = float(profile.radius_at(station))
     n_forward, n_radial = (float(v) for v in profile.outward_normal(station))
     points = np.column_stack([np.full(n, x), radius * e_rho])
@@ -160,6 +161,23 @@ def ring_stress(evaluator: FieldEvaluator, index: int, station: float, n: int = 
                      loads.normal_velocity_guard, friction=loads.friction, separation=loads.separation,
                      free_surface=loads.free_surface)
     return theta, ring.surface_stress(tr.position[index], tr.velocity[index], rotation, omega).sigma_n
+
+
+def _ring_of_points(evaluator: FieldEvaluator, index: int, x: float, reference: np.ndarray,
+                    side: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``sigma_n`` at the body's own quadrature points within half an element of the body-frame ``x``, by
+    their angle from the windward side: a body of any shape, read from a file, has no exact ring."""
+    prepared = evaluator.prepared
+    q = prepared.quadrature
+    half = 0.5 * evaluator.result.scene.numerics.mesh_size
+    band = np.flatnonzero(np.abs(q.points[:, 0] - x) <= half)  # x and the points: from the centre of mass
+    tr = evaluator.result.trajectory
+    stress = evaluator.loads.surface_stress(tr.position[index], tr.velocity[index], evaluator.rotations[index],
+                                            tr.angular_velocity[index])
+    lateral = q.points[band, 1:] - prepared.tip[1:]  # from the axis through the tip
+    theta = np.mod(np.arctan2(lateral @ side, lateral @ reference), 2 * np.pi)
+    order = np.argsort(theta)
+    return theta[order], stress.sigma_n[band][order]
 
 
 def plot_histories(history: pd.DataFrame, prepared: PreparedProjectile, path: str | os.PathLike,
