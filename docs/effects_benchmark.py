@@ -1,26 +1,31 @@
 """Measure what each optional effect costs (docs/effects.md).
 
 Run: ``.venv/bin/python docs/effects_benchmark.py`` (about a minute).  Prints, for the
-Forrestal-Luk projectile at the default 10 mm mesh (30 720 surface points):
+shipped test 5 scene (Forrestal-Luk projectile, 20 mm mesh, 14 160 surface points):
 
 * the median time of one load evaluation (15 repeats of 200 calls) at a state
   with the nose and 1 m of shank in the target, 3 degrees of attack and a pitch rate;
-* the integration time of test 5 (median of 3 runs).
+* the integration time of test 5 (median of 3 runs), its steps and path length.
 """
 
 from __future__ import annotations
 
 import statistics
+import sys
 import timeit
+from pathlib import Path
 
 import numpy as np
 
 from cases import load_scene, prepare_projectile, run_scene, scene_path
-from cases.run import initial_state
+from cases.run import initial_state, summarise
 from cases.run.runner import WithGravity
 from cases.scene import parse_override
 from dynamics.quaternion import rotation_matrix
 from fem_loads import DAFLLoads
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from measure import stamp  # noqa: E402 - docs/measure.py, beside this file
 
 EFFECTS = {
     "all effects off (scene defaults)": [],
@@ -47,23 +52,31 @@ def main() -> None:
     sharp = DAFLLoads(prepared.quadrature, scene.target.build())
     bare = DAFLLoads(prepared.quadrature, scene.target.build(), **scene.effects.contact,
                      entry_smoothing=scene.numerics.entry_smoothing)
-    print("| configuration | one load evaluation (us, median) | test 5 integration (s, median of 3) |")
-    print("|---|---|---|")
-    print(f"| sharp core (DAFLLoads with the law only: the paper's switches) | {load_timing(sharp, args):.0f} | - |")
-    print(f"| bare core (the law and the default contact and entry ramps) | {load_timing(bare, args):.0f} | - |")
-    for name, overrides in EFFECTS.items():
-        s = load_scene(scene_path("forrestal_luk_test5"), [parse_override(text) for text in overrides])
+    bare_us = load_timing(bare, args)
+    print("| configuration | one load evaluation (us, median) | against the bare core | "
+          "test 5 integration (s, median of 3) | steps | path length (m) |")
+    print("|---|---|---|---|---|---|")
+    sharp_us = load_timing(sharp, args)
+    print(f"| sharp core (DAFLLoads with the law only: the paper's switches) | {sharp_us:.0f} | "
+          f"{sharp_us / bare_us:.2f}x | - | - | - |")
+    print(f"| bare core (the law and the default contact and entry ramps) | {bare_us:.0f} | 1.00x | - | - | - |")
+    rows = [(name, load_scene(scene_path("forrestal_luk_test5"), [parse_override(text) for text in overrides]))
+            for name, overrides in EFFECTS.items()]
+    rows.append(("two layers", load_scene(scene_path("forrestal_luk_test5"),
+                                          {"target.layers": [{"thickness": 2.0, "law": "soil"},
+                                                             {"law": "softer_soil"}]})))
+    for name, s in rows:
         loads = s.loads(prepared.quadrature)
         if s.effects.gravity:
             loads = WithGravity(loads, prepared.mass.mass, s.effects.gravity_acceleration)
         per_call = load_timing(loads, args)
-        runs = [run_scene(s).integration_time for _ in range(3)]
-        print(f"| {name} | {per_call:.0f} | {statistics.median(runs):.2f} |")
-    s = load_scene(scene_path("forrestal_luk_test5"),
-                   {"target.layers": [{"thickness": 2.0, "law": "soil"}, {"law": "softer_soil"}]})
-    per_call = load_timing(s.loads(prepared.quadrature), args)
-    runs = [run_scene(s).integration_time for _ in range(3)]
-    print(f"| two layers | {per_call:.0f} | {statistics.median(runs):.2f} |")
+        results = [run_scene(s) for _ in range(3)]
+        result = summarise(results[0])
+        print(f"| {name} | {per_call:.0f} | {per_call / bare_us:.2f}x | "
+              f"{statistics.median(r.integration_time for r in results):.2f} | {result.steps} | "
+              f"{result.path_length:.2f} |")
+    print()
+    print(stamp())
 
 
 if __name__ == "__main__":

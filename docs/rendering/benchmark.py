@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import gc
 import statistics
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -27,6 +28,9 @@ from cases.viz.field import FieldEvaluator, resolve_instants
 from cases.viz.frames import FrameRenderer, render_animation, render_snapshots
 from cases.viz.paraview import write_paraview
 from cases.viz.trajectory import render_trajectory
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from measure import stamp  # noqa: E402 - docs/measure.py
 
 
 def rss_bytes() -> int:
@@ -45,8 +49,9 @@ def main() -> None:
     start = time.perf_counter()
     evaluator = FieldEvaluator(result)
     setup_seconds = time.perf_counter() - start
-    print(f"run {run_seconds:.1f} s ({len(evaluator)} steps), field evaluator {setup_seconds:.2f} s, "
-          f"{evaluator.surface.n_facets} facets, {len(evaluator.surface.triangles)} drawn triangles")
+    rows_out = [("the run and the field evaluator", f"{run_seconds:.1f} s and {setup_seconds:.2f} s "
+                 f"({len(evaluator)} recorded steps, {evaluator.surface.n_facets} facets drawn as "
+                 f"{len(evaluator.surface.triangles)} triangles)")]
 
     rows = np.linspace(0, len(evaluator) - 1, 55).astype(int)
     timings: dict[str, list[float]] = {"whole frame": [], "field evaluation": [], "side panel": []}
@@ -70,10 +75,10 @@ def main() -> None:
         after = rss_bytes()
     medians = {name: statistics.median(values) for name, values in timings.items()}
     medians["3-D view (the rest)"] = medians["whole frame"] - medians["field evaluation"] - medians["side panel"]
-    print("per frame (median of 50, 1280 x 640): " + ", ".join(
-        f"{name} {value * 1e3:.0f} ms" for name, value in medians.items()))
-    print(f"resident memory: {before / 1e6:.0f} MB before, {after / 1e6:.0f} MB after 50 frames "
-          f"({(after - before) / 1e6:+.2f} MB)")
+    rows_out.append(("one field image, 1280x640 (median of 50 frames)", ", ".join(
+        f"{name} {value * 1e3:.0f} ms" for name, value in medians.items())))
+    rows_out.append(("resident memory over those 50 frames", f"{before / 1e6:.0f} MB before, "
+                     f"{after / 1e6:.0f} MB after"))
 
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp)
@@ -88,10 +93,18 @@ def main() -> None:
         written = write_paraview(evaluator, out / "paraview", steps=100)
         t4 = time.perf_counter()
         size = sum(p.stat().st_size for p in (out / "paraview").rglob("*") if p.is_file())
-        print(f"4 snapshots {t1 - t0:.1f} s ({sum(p.stat().st_size for p in paths) / 1e3:.0f} kB), "
-              f"trajectory view {t2 - t1:.1f} s, animation {movie['frames']} frames {t3 - t2:.1f} s "
-              f"({movie['seconds_per_frame']:.2f} s per frame, {movie['bytes'] / 1e6:.2f} MB), "
-              f"ParaView {len(written['surfaces'])} steps {t4 - t3:.1f} s ({size / 1e6:.0f} MB)")
+        rows_out += [(f"the {len(paths)} field images", f"{t1 - t0:.1f} s "
+                      f"({sum(p.stat().st_size for p in paths) / 1e3:.0f} kB)"),
+                     ("the trajectory view", f"{t2 - t1:.1f} s"),
+                     (f"the animation, {movie['frames']} frames at 960x480",
+                      f"{t3 - t2:.1f} s ({movie['seconds_per_frame']:.2f} s a frame, {movie['bytes'] / 1e6:.1f} MB)"),
+                     (f"ParaView, {len(written['surfaces'])} steps", f"{t4 - t3:.1f} s ({size / 1e6:.0f} MB)")]
+    print("| what | measured |")
+    print("|---|---|")
+    for what, measured in rows_out:
+        print(f"| {what} | {measured} |")
+    print()
+    print(stamp())
 
 
 if __name__ == "__main__":
