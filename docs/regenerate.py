@@ -206,12 +206,16 @@ def regenerate(selected: list[str] | None = None) -> int:
         found = blocks(page)
         if not found:
             continue
-        lines = page.read_text().splitlines(keepends=True)
-        # rewrite from the last block up, so earlier line numbers stay valid
-        for block in reversed(found):
+        # run in page order (a block may read what an earlier one wrote), then rewrite from the
+        # last block up, so earlier line numbers stay valid
+        outputs = []
+        for block in found:
             print(f"{block.where}: {block.command}", file=sys.stderr, flush=True)
             text, seconds = run(block.command, ROOT)
             costs[block.key] = round(seconds, 1)
+            outputs.append(text)
+        lines = page.read_text().splitlines(keepends=True)
+        for block, text in zip(reversed(found), reversed(outputs)):
             old_length = len(block.text.splitlines())
             lines[block.line:block.line + old_length] = [text] if text else []
         page.write_text("".join(lines))

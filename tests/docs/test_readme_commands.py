@@ -1,0 +1,58 @@
+"""The command lines of the README are the commands' real options, and the quick ones run as written."""
+
+import json
+import re
+import shlex
+from pathlib import Path
+
+import pytest
+
+from cases.cli import build_parser, main
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def readme_commands() -> list[str]:
+    """Every ``penetrate`` command line of the README's bash blocks (continuations joined, comments cut)."""
+    blocks = re.findall(r"```bash\n(.*?)```", (ROOT / "README.md").read_text(), flags=re.S)
+    lines = []
+    for block in blocks:
+        joined = re.sub(r"\\\n\s*", " ", block)
+        for line in joined.splitlines():
+            line = line.split("  #")[0].split(" # ")[0].strip()
+            if line.startswith(".venv/bin/penetrate "):
+                lines.append(line.removeprefix(".venv/bin/penetrate "))
+    return lines
+
+
+COMMANDS = readme_commands()
+
+
+def test_the_readme_shows_commands():
+    assert len(COMMANDS) >= 10, COMMANDS
+    assert {shlex.split(line)[0] for line in COMMANDS} >= {"run", "sweep", "critical", "convergent", "paper",
+                                                          "compare", "ensemble"}
+
+
+@pytest.mark.parametrize("line", COMMANDS)
+def test_each_readme_command_parses_and_names_files_that_exist(line):
+    args = build_parser().parse_args(shlex.split(line))
+    scene = getattr(args, "scene", None)
+    if scene is not None:
+        assert (ROOT / scene).is_file(), scene
+
+
+QUICK = [line for line in COMMANDS if line.startswith("run ") and "body.step" not in line]
+
+
+@pytest.mark.parametrize("line", QUICK)
+def test_the_quick_readme_commands_run_as_written(line, tmp_path, monkeypatch, capsys):
+    (tmp_path / "cases").symlink_to(ROOT / "cases")
+    monkeypatch.chdir(tmp_path)
+    assert main(shlex.split(line)) == 0
+    printed = capsys.readouterr().out
+    if "--json" in line:
+        assert json.loads(printed)["end_reason"] in {"stopped", "exited"}
+    if "--out" in line:
+        out = Path(shlex.split(line)[shlex.split(line).index("--out") + 1])
+        assert (out / "summary.json").is_file() and (out / "history.csv").is_file()
