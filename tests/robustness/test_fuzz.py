@@ -596,7 +596,8 @@ BAD_WHOLE = BAD_NUMBER + ["2.5", "1" * 5000]  # for int options
 @st.composite
 def bad_command_lines(draw, files):
     """A command line with at least one bad input (the last word wins where options repeat)."""
-    command = draw(st.sampled_from(["run", "sweep", "critical", "convergent", "compare", "accuracy", "render"]))
+    command = draw(st.sampled_from(["run", "sweep", "critical", "convergent", "compare", "accuracy", "render", "fit",
+                                    "ensemble"]))
     # the studies set some keys themselves: a bad value there would be overridden, not rejected
     overridden = {"critical": ("impact.speed",), "convergent": ("impact.speed",), "compare": ("target.law",),
                   "accuracy": ("numerics.",)}.get(command, ())
@@ -624,6 +625,23 @@ def bad_command_lines(draw, files):
         poisons += [("--laws", v) for v in [",", "clay", "soil,clay"]]
     if command == "accuracy":
         poisons += [("--sizes", v) for v in BAD_NUMBER[:6]]
+    if command == "fit":
+        args += ["--param", "impact.speed=100:400", "--observe", "depth=5"]
+        poisons += [("--param", v) for v in ["impact.speed", "impact.speed=400:100", "impact.speed=1:nan",
+                                             "impact.speed=1:2", "target.law.B=0.3:3", "impact..speed=1:2",
+                                             "numerics.integrator=0:1", "=1:2"]]
+        poisons += [("--observe", v) for v in ["depth", "dept=5", "depth=x", "depth=5+-0", "depth=5+--1",
+                                               "missing.toml:depth=5", "depth=inf", ":=1"]]
+        poisons += [("--step", v) for v in BAD_NUMBER + ["1", "2"]] + [("--resolution", v) for v in BAD_NUMBER]
+        poisons += [("--max-evaluations", v) for v in BAD_WHOLE]
+    if command == "ensemble":
+        args += ["--sample", "impact.speed=uniform:250:300", "-n", "4"]
+        poisons += [("--sample", v) for v in ["impact.speed", "impact.speed=normal:1", "impact.speed=uniform:3:1",
+                                              "impact.speed=gamma:1:2", "impact.bogus=uniform:1:2",
+                                              "impact.speed=normal:280:-1", "impact.speed=choice:"]]
+        poisons += [("-n", v) for v in BAD_WHOLE] + [("--by", v) for v in ["impact.speed", "impact.speed=3:1:1",
+                                                                            "impact.attack_angle=0:1:0.5"]]
+        poisons += [("--design", v) for v in ["grid", ""]] + [("--seed", v) for v in ["x", "-1", "1.5"]]
     if command == "render":
         poisons += [("--size", v) for v in ["0x0", "abc", "64x", "100000x100000", "640x480x2", ""]]
         poisons += [("--steps", v) for v in ["0", "-1", "x", ""]] + [("--times", v) for v in ["x", "peak,xyz"]]
@@ -666,7 +684,9 @@ def _listing(folder: Path) -> set[str]:
 EXTRA = {"run": ["--out", "outputs"], "sweep": ["--out", "outputs/table.csv", "--store", "store", "--no-progress"],
          "critical": ["--store", "store", "--no-progress"], "convergent": ["--store", "store", "--no-progress"],
          "compare": ["--out", "outputs", "--store", "store", "--no-progress"],
-         "accuracy": ["--out", "outputs", "--store", "store", "--no-progress"], "render": ["--out", "outputs"]}
+         "accuracy": ["--out", "outputs", "--store", "store", "--no-progress"], "render": ["--out", "outputs"],
+         "fit": ["--out", "outputs", "--store", "store", "--no-progress"],
+         "ensemble": ["--out", "outputs", "--store", "store", "--no-progress"]}
 
 
 @fuzz(250)

@@ -1,0 +1,448 @@
+"""Calibration: numeric scene keys fitted to observed quantities by bounded least squares.
+
+The model maps the parameters (any numeric scene keys, each within its bounds) to the
+observations (a quantity of a run's summary, or a characteristic speed, of one or
+several scenes; the parameters apply to every scene).  The fit minimises the sum of the
+squared residuals ``(fitted - observed) / sigma`` with :func:`scipy.optimize.least_squares`
+inside the bounds.  Every model evaluation is a set of runs made through the run store
+and the worker pool (:func:`~cases.studies.sweep.run_sweep`), so a fit run again makes no
+new run and a killed fit continues where it stopped.
+
+The Jacobian is a forward difference, all its columns in one batch of runs, with a step of
+a fixed fraction of each parameter's range: small for the quantities of a run, which are
+smooth in the parameters (the load is continuous), large for the characteristic speeds,
+which a search finds only to its resolution.  The parameters' covariance is
+``(J^T J)^-1`` of the weighted Jacobian at the solution when the observations give their
+sigmas; without sigmas it is scaled by the residual variance (it then needs more
+observations than parameters).  A parameter is not identifiable when the observations do
+not move with it (a flat column) or move with a combination of the others (collinear
+columns, or fewer observations than parameters): the fit then stops with a message and no
+number, rather than return a value the data do not determine.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..run import RunStore, convergence_speed
+from ..scene import InputError, Overrides, apply_overrides, dotted_key, read_scene_data, scene_from_dict
+from .pool import Pool
+from .speeds import find_critical_velocity, measure_convergent_velocity
+from .sweep import Sweep, Variation, run_sweep
+
+__all__ = ["Parameter", "Observation", "FitResult", "NotIdentifiable", "parse_parameter", "parse_observation",
+           "fit", "write_report", "RUN_QUANTITIES", "STUDY_QUANTITIES"]
+
+#: quantities of one run (its summary, and the convergence speed of its history)
+RUN_QUANTITIES = ("depth", "path_length", "final_time", "final_speed", "max_attack_angle", "final_attack_angle",
+                  "axis_angle_change", "convergence_speed", "mass", "centre_of_mass_from_tip", "axial_inertia",
+                  "transverse_inertia")
+#: quantities of a study of the scene (penetrate critical, penetrate convergent)
+STUDY_QUANTITIES = ("critical_velocity", "characteristic_convergent_velocity")
+#: forward-difference step, as a fraction of each parameter's range
+RUN_STEP = 1e-3
+STUDY_STEP = 0.05
+#: a Jacobian whose normalised columns have a singular value below this fraction of the largest is collinear
+COLLINEAR = 1e-3
+#: a column that moves no observation by more than this (in sigmas, over the whole range) is flat
+FLAT = 1e-6
+#: least-squares stopping tolerances (scipy's): a step below 1e-4 of the parameters (in units of their
+#: ranges), or a relative fall of the cost below 1e-8, ends the fit; each iteration costs a batch of
+#: runs, and a parameter known to 1e-4 of its range is known better than the data give it
+XTOL, FTOL, GTOL = 1e-4, 1e-8, 1e-10
+#: values set in a scene keep this many significant digits, so a point reached twice is the same run
+DIGITS = 12
+
+
+class NotIdentifiable(ValueError):
+    """The observations do not determine a parameter (flat or collinear Jacobian); exit code 1."""
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """A numeric scene key fitted within ``[low, high]``; ``start`` is the scene's own value."""
+
+    key: str
+    low: float
+    high: float
+    start: float
+
+    def value(self, unit: float) -> float:
+        """The value at ``unit`` in [0, 1] of the range, to :data:`DIGITS` significant digits."""
+        return float(f"{self.low + unit * (self.high - self.low):.{DIGITS}g}")
+
+
+@dataclass(frozen=True)
+class Observation:
+    """``quantity`` of ``scene`` observed as ``value`` with standard deviation ``sigma`` (None: not given)."""
+
+    scene: str
+    quantity: str
+    value: float
+    sigma: float | None
+
+
+@dataclass
+class FitResult:
+    """The fitted parameters, their standard errors and correlation, each observation's fit, the runs used."""
+
+    parameters: dict[str, float]
+    standard_errors: dict[str, float | None]
+    correlation: list[list[float]] | None
+    observations: list[dict[str, Any]]
+    runs: int
+    new_runs: int
+    evaluations: int
+    cost: float
+    message: str = ""
+    notes: list[str] = field(default_factory=list)
+
+    def record(self) -> dict:
+        """The JSON record: parameters, standard_errors, observations, runs (and the rest)."""
+        return {"parameters": self.parameters, "standard_errors": self.standard_errors,
+                "correlation": self.correlation, "observations": self.observations, "runs": self.runs,
+                "new_runs": self.new_runs, "evaluations": self.evaluations, "cost": self.cost,
+                "message": self.message, "notes": self.notes}
+
+
+def _number(text: str, what: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value):
+        raise InputError(f"{what}: {text!r}: must be a finite number")
+    return value
+
+
+def _scene_value(data: dict, key: str) -> Any:
+    node: Any = data
+    for part in key.split("."):
+        node = node.get(part) if isinstance(node, dict) else None
+    return node
+
+
+def parse_parameter(text: str, scenes: dict[str, dict]) -> Parameter:
+    """``KEY=LO:HI`` -> :class:`Parameter`; the key must hold a number inside the bounds in every scene."""
+    what = f"--param {text!r}"
+    key, _, bounds = text.partition("=")
+    parts = bounds.split(":")
+    if not key.strip() or len(parts) != 2:
+        raise InputError(f"{what}: expected KEY=LO:HI, e.g. target.law.B=0.3:3")
+    key = ".".join(dotted_key(key, what))
+    low, high = (_number(p, what) for p in parts)
+    if not low < high:
+        raise InputError(f"{what}: need LO < HI")
+    starts = []
+    for name, data in scenes.items():
+        value = _scene_value(scene_from_dict(data, name).model_dump(), key)  # the scene's defaults count
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise InputError(f"{what}: {name} holds no number at {key}, and the key must hold one (set one first with --set {key}=VALUE;"
+                             " a law given by name needs its coefficients, e.g. --set 'target.law={A = 1.1,"
+                             " sigma_0 = 15.6e6, B = 1.2, rho_0 = 1900}')")
+        if not low <= value <= high:
+            raise InputError(f"{what}: {name} has {key} = {value:g}: the start must lie inside {low:g}:{high:g}")
+        starts.append(float(value))
+    return Parameter(key, low, high, starts[0])
+
+
+def parse_observation(text: str, default_scene: str) -> Observation:
+    """``[SCENE:]QUANTITY=VALUE[+-SIGMA]`` -> :class:`Observation` (SCENE a scene file; default the fit's own)."""
+    what = f"--observe {text!r}"
+    left, _, right = text.partition("=")
+    if not right:
+        raise InputError(f"{what}: expected [SCENE:]QUANTITY=VALUE[+-SIGMA], e.g. depth=5.5+-0.05")
+    scene, _, quantity = left.rpartition(":")
+    scene, quantity = scene.strip() or default_scene, quantity.strip()
+    known = RUN_QUANTITIES + STUDY_QUANTITIES
+    if quantity not in known:
+        raise InputError(f"{what}: unknown quantity {quantity!r} (allowed: {', '.join(known)})")
+    value_text, _, sigma_text = right.partition("+-")
+    value = _number(value_text, what)
+    sigma = None
+    if sigma_text:
+        sigma = _number(sigma_text, what)
+        if not sigma > 0:
+            raise InputError(f"{what}: the standard deviation must be > 0")
+    return Observation(scene, quantity, value, sigma)
+
+
+class _Model:
+    """The observations as a function of the parameters' unit values, through the run store (cached)."""
+
+    def __init__(self, bases: dict[str, dict], parameters: Sequence[Parameter], observations: Sequence[Observation],
+                 store: RunStore, pool: Pool | None, resolution: float) -> None:
+        self.bases, self.parameters, self.observations = bases, list(parameters), list(observations)
+        self.store, self.pool, self.resolution = store, pool, resolution
+        self.cache: dict[tuple[float, ...], np.ndarray] = {}
+        self.keys: set[str] = set()
+        self.new_runs = 0
+        self.study_evaluations = 0
+
+    def _values(self, unit: np.ndarray) -> dict[str, float]:
+        return {p.key: p.value(float(u)) for p, u in zip(self.parameters, unit)}
+
+    def __call__(self, points: Sequence[np.ndarray]) -> list[np.ndarray]:
+        """The observed quantities at each point (unit values), runs of all points in one batch."""
+        wanted = [tuple(np.round(np.asarray(p, float), DIGITS)) for p in points]
+        missing = list(dict.fromkeys(w for w in wanted if w not in self.cache))
+        if missing:
+            self._evaluate([np.array(m) for m in missing])
+        return [self.cache[w] for w in wanted]
+
+    def _evaluate(self, points: list[np.ndarray]) -> None:
+        run_observations = [(i, o) for i, o in enumerate(self.observations) if o.quantity in RUN_QUANTITIES]
+        scenes = list(dict.fromkeys(o.scene for _, o in run_observations))
+        parts = [(Sweep(self.bases[scene], [Variation({})], scene), Variation(self._values(point)))
+                 for point in points for scene in scenes]
+        results = np.full((len(points), len(self.observations)), np.nan)
+        if parts:
+            sweep = Sweep.combined(parts)
+            keys = sweep.keys()
+            before = {k for k in keys if self.store.finished(k)}
+            result = run_sweep(sweep, self.store, self.pool)
+            self.new_runs += len(set(keys) - before)
+            self.keys.update(keys)
+            for index, run in enumerate(result.runs):
+                if run.failed:
+                    raise RuntimeError(f"a run of the fit failed ({parts[index][1].values}): {run.error}")
+                point, scene = divmod(index, len(scenes))
+                for i, o in run_observations:
+                    if o.scene != scenes[scene]:
+                        continue
+                    value = (convergence_speed(result.history(index)) if o.quantity == "convergence_speed"
+                             else getattr(run.summary, o.quantity))
+                    results[point, i] = np.nan if value is None else value
+        for i, o in enumerate(self.observations):
+            if o.quantity not in STUDY_QUANTITIES:
+                continue
+            for point_index, point in enumerate(points):
+                values = self._values(point)
+                base = Sweep(apply_overrides(self.bases[o.scene], values, o.scene), [Variation({})], o.scene)
+                results[point_index, i] = self._study(o.quantity, base)
+        for point, row in zip(points, results):
+            self.cache[tuple(np.round(point, DIGITS))] = row
+
+    def _study(self, quantity: str, base: Sweep) -> float:
+        before = _stored(self.store)
+        if quantity == "critical_velocity":
+            speed = base.scenes[0].impact.speed
+            search = find_critical_velocity(base, self.store, (200.0, max(2000.0, 2 * speed)), self.resolution,
+                                            self.pool)
+            value = search.critical_velocity
+            used = {run.key for run in search.indicator}
+        else:
+            measured = measure_convergent_velocity(base, self.store, pool=self.pool)
+            value = measured.characteristic_convergent_velocity
+            start = base.variations[0].values
+            used = {Sweep(base.base, [Variation({**start, "impact.speed": run.speed})], base.source).keys()[0]
+                    for run in measured.runs}
+        # the runs a study made are the records it added to the store
+        made = _stored(self.store) - before
+        self.new_runs += len(made)
+        self.keys.update(used)
+        self.study_evaluations += 1
+        if value is None:
+            raise RuntimeError(f"{quantity} of {base.source} not found at {base.variations[0].values or 'the start'}")
+        return float(value)
+
+
+def _stored(store: RunStore) -> set[str]:
+    """The names of the run records in ``store`` (its finished and failed runs)."""
+    folder = store.record_path("probe").parent
+    return {path.name for path in folder.glob("*.json")} if folder.is_dir() else set()
+
+
+def _sigmas(observations: Sequence[Observation]) -> np.ndarray:
+    return np.array([1.0 if o.sigma is None else o.sigma for o in observations])
+
+
+def _check_identifiable(jacobian: np.ndarray, parameters: Sequence[Parameter], observations: Sequence[Observation],
+                        where: str) -> None:
+    """Refuse a flat or collinear weighted Jacobian (in unit values) with one line naming the parameters."""
+    names = [p.key for p in parameters]
+    if len(observations) < len(parameters):
+        raise NotIdentifiable(f"not identifiable: {len(parameters)} parameters ({', '.join(names)}) from "
+                              f"{len(observations)} observation{'s' if len(observations) != 1 else ''}; give at"
+                              " least as many observations as parameters, or fix a parameter with --set")
+    norms = np.linalg.norm(jacobian, axis=0)
+    for name, norm in zip(names, norms):
+        if not norm > FLAT:
+            raise NotIdentifiable(f"not identifiable: no observation changes with {name} {where} (flat Jacobian);"
+                                  " observe a quantity it moves, or fix it with --set")
+    if len(parameters) > 1:
+        singular = np.linalg.svd(jacobian / norms, compute_uv=False)
+        if singular[-1] < COLLINEAR * singular[0]:
+            correlation = np.corrcoef(jacobian.T) if jacobian.shape[0] > 1 else None
+            pair = ""
+            if correlation is not None:
+                off = np.abs(correlation - np.eye(len(names)))
+                i, j = np.unravel_index(np.nanargmax(off), off.shape)
+                pair = f" ({names[i]} and {names[j]} move the observations together)"
+            raise NotIdentifiable(f"not identifiable: the observations fix only a combination of "
+                                  f"{', '.join(names)}{pair}, collinear Jacobian {where} (singular values "
+                                  f"{singular[0]:.3g} and {singular[-1]:.3g}); add an observation that tells them"
+                                  " apart, or fix one with --set")
+
+
+def fit(scene: str | os.PathLike, overrides: Overrides | None, parameters: Sequence[str], observations: Sequence[str],
+        store: RunStore, pool: Pool | None = None, *, resolution: float = 5.0, step: float | None = None,
+        max_evaluations: int = 30, progress: Callable[[str], None] | None = None) -> FitResult:
+    """Fit ``parameters`` (``KEY=LO:HI`` texts) to ``observations`` (``[SCENE:]QUANTITY=VALUE[+-SIGMA]`` texts).
+
+    Parameters
+    ----------
+    scene, overrides
+        The fit's scene file and its ``--set`` overrides; the overrides apply to every scene an
+        observation names.
+    parameters, observations : sequence of str
+        The command line's ``--param`` and ``--observe`` texts.
+    store : RunStore
+        Where runs are found and kept.
+    pool : Pool, optional
+        Where the runs go.
+    resolution : float
+        Resolution of a critical-speed search (m/s).
+    step : float, optional
+        Forward-difference step as a fraction of each range (default :data:`RUN_STEP`, or
+        :data:`STUDY_STEP` when a characteristic speed is observed).
+    max_evaluations : int
+        Model evaluations (points) at most.
+
+    Raises
+    ------
+    InputError
+        Bad parameters or observations (exit code 2).
+    NotIdentifiable
+        A parameter the observations do not determine (exit code 1).
+    """
+    scene = str(scene)
+    if not parameters:
+        raise InputError("--param: give at least one parameter, KEY=LO:HI")
+    if not observations:
+        raise InputError("--observe: give at least one observation, [SCENE:]QUANTITY=VALUE[+-SIGMA]")
+    observed = [parse_observation(text, scene) for text in observations]
+    bases: dict[str, dict] = {}
+    for name in dict.fromkeys([scene, *(o.scene for o in observed)]):
+        if not Path(name).is_file():
+            raise InputError(f"--observe: scene file {name!r} not found (give an existing scene file before the colon)")
+        data = apply_overrides(read_scene_data(name), overrides, name)
+        scene_from_dict(data, name)  # a bad scene or override fails here, before any run
+        bases[name] = data
+    fitted = [parse_parameter(text, bases) for text in parameters]
+    if len({p.key for p in fitted}) != len(fitted):
+        raise InputError("--param: give each key once")
+    if step is None:
+        step = STUDY_STEP if any(o.quantity in STUDY_QUANTITIES for o in observed) else RUN_STEP
+    model = _Model(bases, fitted, observed, store, pool, resolution)
+    y = np.array([o.value for o in observed])
+    sigma = _sigmas(observed)
+    lengths = [0]
+
+    def residuals(unit: np.ndarray) -> np.ndarray:
+        return (model([unit])[0] - y) / sigma
+
+    def jacobian(unit: np.ndarray) -> np.ndarray:
+        # forward differences, stepping inwards at the upper bound; all columns in one batch of runs
+        steps = np.where(unit + step <= 1.0, step, -step)
+        points = [unit] + [unit + np.eye(len(unit))[k] * steps[k] for k in range(len(unit))]
+        values = model(points)
+        return np.column_stack([(values[k + 1] - values[0]) / steps[k] for k in range(len(unit))]) / sigma[:, None]
+
+    from scipy.optimize import least_squares
+
+    start = np.array([(p.start - p.low) / (p.high - p.low) for p in fitted])
+    _check_identifiable(jacobian(start), fitted, observed, "at the start")
+    solution = least_squares(residuals, start, jac=jacobian, bounds=(0.0, 1.0), method="trf",
+                             x_scale=1.0, xtol=XTOL, ftol=FTOL, gtol=GTOL,
+                             max_nfev=max_evaluations)
+    lengths.append(len(model.cache))
+    final_jacobian = jacobian(solution.x)
+    _check_identifiable(final_jacobian, fitted, observed, "at the solution")
+    fitted_values = model([solution.x])[0]
+    values = {p.key: p.value(float(u)) for p, u in zip(fitted, solution.x)}
+    widths = np.array([p.high - p.low for p in fitted])
+    jac_physical = final_jacobian / widths  # d(residual)/d(parameter)
+    notes = []
+    covariance = None
+    try:
+        covariance = np.linalg.inv(jac_physical.T @ jac_physical)
+    except np.linalg.LinAlgError:
+        notes.append("the Jacobian at the solution is singular: no standard errors")
+    if covariance is not None and any(o.sigma is None for o in observed):
+        dof = len(observed) - len(fitted)
+        if dof > 0:
+            covariance = covariance * float(solution.fun @ solution.fun) / dof
+            notes.append("no sigmas given: standard errors scaled by the residual variance"
+                         f" ({dof} degree{'s' if dof != 1 else ''} of freedom)")
+        else:
+            covariance = None
+            notes.append("no sigmas given and no more observations than parameters: no standard errors")
+    at_bound = [p.key for p, u in zip(fitted, solution.x) if u <= 1e-9 or u >= 1 - 1e-9]
+    if at_bound:
+        notes.append(f"at a bound of its range: {', '.join(at_bound)} (widen the range, or the data push it there)")
+    errors: dict[str, float | None] = {p.key: None for p in fitted}
+    correlation = None
+    if covariance is not None:
+        se = np.sqrt(np.clip(np.diag(covariance), 0, None))
+        errors = {p.key: float(s) for p, s in zip(fitted, se)}
+        correlation = (covariance / np.outer(se, se)).round(6).tolist() if np.all(se > 0) else None
+    rows = [{"scene": o.scene, "quantity": o.quantity, "observed": o.value, "sigma": o.sigma,
+             "fitted": float(f), "residual": float(f - o.value)} for o, f in zip(observed, fitted_values)]
+    return FitResult(values, errors, correlation, rows, runs=len(model.keys), new_runs=model.new_runs,
+                     evaluations=len(model.cache), cost=float(solution.cost), message=solution.message, notes=notes)
+
+
+def write_report(result: FitResult, out: Path, scene: str) -> None:
+    """``fit.json``, ``fit.md`` and ``fit.png`` (observed against fitted) in ``out``, each written atomically."""
+    import json
+
+    from ..run import atomic_write_text
+    from ..run.persistence import json_safe
+    from ..viz.figures import save_figure, subplots
+
+    out = Path(out)
+    atomic_write_text(out / "fit.json", json.dumps(json_safe(result.record()), indent=1, allow_nan=False) + "\n")
+    lines = [f"# Fit of {scene}", "", "| parameter | value | standard error |", "|---|---|---|"]
+    for key, value in result.parameters.items():
+        error = result.standard_errors[key]
+        lines.append(f"| `{key}` | {value:.6g} | {'-' if error is None else f'{error:.3g}'} |")
+    if result.correlation is not None and len(result.parameters) > 1:
+        keys = list(result.parameters)
+        lines += ["", "Correlation of the parameters:", "", "| | " + " | ".join(f"`{k}`" for k in keys) + " |",
+                  "|---|" + "---|" * len(keys)]
+        lines += [f"| `{k}` | " + " | ".join(f"{c:+.3f}" for c in row) + " |" for k, row in zip(keys, result.correlation)]
+    lines += ["", "| scene | quantity | observed | sigma | fitted | residual |", "|---|---|---|---|---|---|"]
+    for row in result.observations:
+        sigma = "-" if row["sigma"] is None else f"{row['sigma']:.4g}"
+        lines.append(f"| {row['scene']} | {row['quantity']} | {row['observed']:.6g} | {sigma} | {row['fitted']:.6g} |"
+                     f" {row['residual']:+.4g} |")
+    lines += ["", f"Runs: {result.runs} ({result.new_runs} made by this fit, the rest found in the run store); "
+              f"{result.evaluations} points of the model evaluated; least squares: {result.message}"]
+    if result.notes:
+        lines += ["", *[f"* {note}" for note in result.notes]]
+    lines += ["", "![observed against fitted](fit.png)", ""]
+    atomic_write_text(out / "fit.md", "\n".join(lines))
+    figure, axes = subplots(figsize=(5.5, 4.5))
+    observed = np.array([row["observed"] for row in result.observations])
+    fitted = np.array([row["fitted"] for row in result.observations])
+    sigma = np.array([np.nan if row["sigma"] is None else row["sigma"] for row in result.observations])
+    axes.errorbar(observed, fitted, xerr=np.nan_to_num(sigma), fmt="o", color="tab:blue", capsize=3)
+    low, high = float(min(observed.min(), fitted.min())), float(max(observed.max(), fitted.max()))
+    pad = 0.05 * (high - low or abs(high) or 1.0)
+    axes.plot([low - pad, high + pad], [low - pad, high + pad], color="grey", lw=1, ls="--")
+    for row, x, y in zip(result.observations, observed, fitted):
+        axes.annotate(f"{Path(row['scene']).stem}: {row['quantity']}", (x, y), fontsize=7,
+                      xytext=(4, 4), textcoords="offset points")
+    axes.set_xlabel("observed")
+    axes.set_ylabel("fitted")
+    axes.set_title("observed against fitted (bars: sigma)", fontsize=10)
+    figure.tight_layout()
+    save_figure(figure, out / "fit.png")
