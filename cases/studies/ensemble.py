@@ -39,6 +39,7 @@ FORMS = {
     "truncnormal": "truncnormal:MEAN:SD:LO:HI",
     "uniform": "uniform:LO:HI",
     "lognormal": "lognormal:MEDIAN:SIGMA",
+    "halfnormal": "halfnormal:SCALE",
     "choice": "choice:V1,V2,...",
 }
 DESIGNS = ("random", "sobol", "lhs")
@@ -77,6 +78,8 @@ class Distribution:
             return stats.uniform(loc=p[0], scale=p[1] - p[0])
         if self.name == "lognormal":
             return stats.lognorm(s=p[1], scale=p[0])
+        if self.name == "halfnormal":  # |N(0, SCALE)|: a disturbance of unknown sign, e.g. an attack angle
+            return stats.halfnorm(scale=p[0])
         return None
 
     def ppf(self, u: np.ndarray) -> np.ndarray:
@@ -116,6 +119,8 @@ def _check(option: str, name: str, p: tuple[float, ...]) -> None:
         raise InputError(f"{option}: need LO < HI ({FORMS[name]})")
     if name == "lognormal" and not (p[0] > 0 and p[1] > 0):
         raise InputError(f"{option}: need MEDIAN > 0 and SIGMA > 0 ({FORMS[name]})")
+    if name == "halfnormal" and not p[0] > 0:
+        raise InputError(f"{option}: need SCALE > 0 ({FORMS[name]})")
 
 
 def _base_value(option: str, key: str, base: Scene | None) -> Any:

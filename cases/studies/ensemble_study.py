@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..run import RunStore, atomic_write_text
+from ..run import CONVERGENCE_THRESHOLD, RunStore, atomic_write_text, convergence_speed
 from ..run.persistence import json_safe
 from ..scene import InputError, Overrides, one_line
 from ..viz.figures import save_figure, subplots
@@ -104,7 +104,8 @@ def run_ensemble(scene: str | os.PathLike, overrides: Overrides | None, samples:
     table = _table(result)
     record = summary_record(estimate(table), count)
     record.update(interval_method=INTERVAL, design=design, seed=seed,
-                  samples={d.key: d.text for d in distributions}, finished=int((~table["failed"]).sum()))
+                  samples={d.key: d.text for d in distributions}, finished=int((~table["failed"]).sum()),
+                  distributions=_quantiles(table))
     if bins is not None:
         key, edges = bins
         record["by"] = key
@@ -122,13 +123,36 @@ def run_ensemble(scene: str | os.PathLike, overrides: Overrides | None, samples:
 
 
 def _table(result: SweepResult) -> pd.DataFrame:
-    """The sweep's table with the sample index first and the outcomes after the sampled keys."""
+    """The sweep's table with the sample index first, the outcomes after the sampled keys, and each
+    finished run's convergence speed (from its stored history; empty where the attack angle never
+    peaked and fell below the threshold, or the run failed)."""
     table = result.table()
     table.insert(0, "sample", range(len(table)))
     columns = len(result.sweep.variations[0].values) + 1
     for i, (name, column) in enumerate(outcomes(result).items()):
         table.insert(columns + i, name, column.to_numpy())
+    # a run whose attack angle never reached the threshold had nothing to converge from
+    speeds = [convergence_speed(result.history(i))
+              if run.summary is not None and run.summary.max_attack_angle >= CONVERGENCE_THRESHOLD else None
+              for i, run in enumerate(result.runs)]
+    table["convergence_speed"] = [math.nan if v is None else float(v) for v in speeds]
     return table
+
+
+#: the distributions an ensemble reports: run quantities and their units
+DISTRIBUTED = {"depth": "m", "path_length": "m", "axis_angle_change": "deg", "convergence_speed": "m/s"}
+QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
+
+
+def _quantiles(table: pd.DataFrame) -> dict:
+    """``{quantity: {"runs": n, "mean": m, "quantiles": {"0.05": q, ...}}}`` over the runs that have it."""
+    record = {}
+    for name in DISTRIBUTED:
+        values = table[name].dropna().astype(float).to_numpy() if name in table else np.array([])
+        record[name] = {"runs": int(len(values)), "mean": float(values.mean()) if len(values) else None,
+                        "quantiles": {f"{q:g}": (float(np.quantile(values, q)) if len(values) else None)
+                                      for q in QUANTILES}}
+    return record
 
 
 def _cell(value) -> str:
@@ -144,6 +168,14 @@ def _markdown(record: dict, table: pd.DataFrame, name: str) -> str:
     for key, text in record["samples"].items():
         column = table[key].astype(float)
         lines.append(f"| {key} | {text} | {column.min():.4g} | {column.mean():.4g} | {column.max():.4g} |")
+    lines += ["", "| quantity | runs | mean | " + " | ".join(f"{q:.0%}" for q in QUANTILES) + " |",
+              "|---|---|---|" + "---|" * len(QUANTILES)]
+    for name, unit in DISTRIBUTED.items():
+        d = record["distributions"][name]
+        lines.append(f"| {name} ({unit}) | {d['runs']} | {_cell(d['mean'])} | "
+                     + " | ".join(_cell(v) for v in d["quantiles"].values()) + " |")
+    lines += ["", "(quantiles over the finished runs; the convergence speed over the runs whose attack angle"
+              " peaked and fell below 0.1 degree)"]
     lines += ["", "| outcome | probability | 95 % interval |", "|---|---|---|"]
     for outcome in OUTCOMES:
         low, high = record["interval"][outcome]
@@ -155,17 +187,21 @@ def _markdown(record: dict, table: pd.DataFrame, name: str) -> str:
             cells = [f"{_cell(b[o])} ({_cell(b['interval'][o][0])} - {_cell(b['interval'][o][1])})" for o in OUTCOMES]
             lines.append(f"| {b['bin'][0]:g} - {b['bin'][1]:g} | {b['runs']} | " + " | ".join(cells) + " |")
         lines += ["", "![probabilities by bin](ensemble_curve.png)"]
-    lines += ["", "![the samples and the depths](ensemble_histograms.png)", ""]
+    lines += ["", "![the samples and the outcomes' distributions](ensemble_histograms.png)", ""]
     return "\n".join(lines)
 
 
 def _histograms(table: pd.DataFrame, distributions: list[Distribution], path: Path) -> None:
-    panels = [d.key for d in distributions] + (["depth"] if "depth" in table else [])
-    fig, axes = subplots(1, len(panels), figsize=(4.2 * len(panels), 3.6), squeeze=False)
-    for ax, column in zip(axes[0], panels):
+    panels = [d.key for d in distributions] + [name for name in DISTRIBUTED if name in table]
+    columns = min(4, len(panels))
+    rows = -(-len(panels) // columns)
+    fig, axes = subplots(rows, columns, figsize=(4.2 * columns, 3.4 * rows), squeeze=False)
+    for ax in axes.flat[len(panels):]:
+        ax.set_visible(False)
+    for ax, column in zip(axes.flat, panels):
         values = table[column].dropna().astype(float)
         ax.hist(values, bins=min(30, max(5, len(values) // 5)), color="tab:blue", alpha=0.8)
-        ax.set(xlabel="depth (m)" if column == "depth" else column, ylabel="runs")
+        ax.set(xlabel=f"{column} ({DISTRIBUTED[column]})" if column in DISTRIBUTED else column, ylabel="runs")
         ax.grid(alpha=0.3)
     fig.tight_layout()
     save_figure(fig, path)

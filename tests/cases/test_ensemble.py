@@ -25,6 +25,8 @@ def base():
     ("impact.speed=uniform:250:350", 300.0, 100 / 12 ** 0.5),
     ("impact.speed=lognormal:300:0.1", 300 * np.exp(0.005), 300 * np.sqrt((np.exp(0.01) - 1) * np.exp(0.01))),
     ("impact.speed=choice:260,280,330", 290.0, np.std([260, 280, 330])),
+    # |N(0, s)|: mean s sqrt(2/pi), SD s sqrt(1 - 2/pi)
+    ("impact.attack_angle=halfnormal:2", 2 * np.sqrt(2 / np.pi), 2 * np.sqrt(1 - 2 / np.pi)),
 ])
 def test_sample_mean_and_sd_within_two_percent(text, mean, sd):
     dist = parse_sample(text)
@@ -120,6 +122,8 @@ def test_curve_bins_by_a_sampled_key():
     ("impact.speed=truncnormal:300:10:320:280", "need LO < HI"),
     ("impact.speed=uniform:5:5", "need LO < HI"),
     ("impact.speed=lognormal:-1:0.1", "need MEDIAN > 0"),
+    ("impact.attack_angle=halfnormal:0", "need SCALE > 0"),
+    ("impact.attack_angle=halfnormal:1:2", "expected halfnormal:SCALE"),
     ("impact.speed=normal:fast:10", "the parameters must be numbers"),
     ("impact.speed=normal:inf:10", "must be finite numbers"),
     ("impact.speed=choice:", "expected choice:V1,V2,..."),
@@ -186,6 +190,13 @@ def test_ensemble_command_on_test_2(tmp_path, capsys):
     assert list(first.columns[:6]) == ["sample", "impact.speed", "unstable", "exited", "stopped", "failed"]
     assert first["stopped"].all() and first["impact.speed"].between(250, 310).all()
     assert "| stopped | 1 |" in (out / "ensemble.md").read_text()
+    # the distributions: numpy's quantiles of the CSV's columns (no run of test 2 converges from a peak)
+    for name in ("depth", "path_length", "axis_angle_change"):
+        quantiles = record["distributions"][name]["quantiles"]
+        assert quantiles["0.5"] == pytest.approx(first[name].median(), rel=1e-12)
+        assert quantiles["0.05"] <= quantiles["0.25"] <= quantiles["0.5"] <= quantiles["0.75"] <= quantiles["0.95"]
+    assert record["distributions"]["convergence_speed"]["runs"] == first["convergence_speed"].notna().sum() == 0
+    assert "| depth (m) | 5 |" in (out / "ensemble.md").read_text()
     assert _ensemble(tmp_path, 7) == 0
     assert len(list((tmp_path / "store" / "run").glob("*.json"))) == 7  # two new runs, five found again
     second = pd.read_csv(out / "ensemble.csv")
@@ -224,3 +235,68 @@ def test_the_same_seed_writes_the_same_csv_on_one_two_workers_and_a_dask_cluster
         cluster = ensemble("cluster", "--scheduler", address)
     assert one == two == cluster
     assert b"wall_time" not in one[0] and b"integration_time" not in one[0]
+
+
+@pytest.mark.slow
+def test_a_dask_worker_killed_mid_ensemble_loses_no_run_and_changes_nothing(tmp_path):
+    """A ``dask worker`` process SIGKILLed while the ensemble runs: Dask reruns its task elsewhere (its
+    nanny starts a new worker), every finished run stays in the store, and the CSV is byte-identical to
+    an uninterrupted ensemble's."""
+    import os
+    import signal
+    import threading
+    import time
+
+    import psutil
+
+    from cases.cli import main
+
+    def ensemble(name, *where):
+        return main(["ensemble", str(scene_path("paper_p3")), *CHEAP, "--sample", "impact.speed=uniform:700:1100",
+                     "-n", "16", "--seed", "5", "--no-progress", "--store", str(tmp_path / f"store-{name}"),
+                     "--out", str(tmp_path / name), *where])
+
+    assert ensemble("quiet", "--workers", "2") == 0
+    records = tmp_path / "store-killed" / "run"
+    with dask_cluster(tmp_path) as address:
+        outcome = {}
+        thread = threading.Thread(target=lambda: outcome.setdefault("code", ensemble("killed", "--scheduler", address)))
+        thread.start()
+        deadline = time.monotonic() + 300
+        while not (records.is_dir() and list(records.glob("*.json"))) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        finished_before = {p.name: p.read_bytes() for p in records.glob("*.json")}
+        cli = [p for p in psutil.process_iter(["cmdline"]) if "worker" in " ".join(p.info["cmdline"] or [])
+               and address in " ".join(p.info["cmdline"] or [])]
+        workers = [child for process in cli for child in process.children(recursive=True)]
+        assert workers, "no dask worker process found"
+        os.kill(workers[0].pid, signal.SIGKILL)
+        thread.join(timeout=600)
+    assert outcome.get("code") == 0
+    assert 0 < len(finished_before) < 16, "the kill came before any run or after the last"
+    for name, content in finished_before.items():  # no finished run lost or rewritten
+        assert (records / name).read_bytes() == content
+    assert len(list(records.glob("*.json"))) == 16
+    for kind in ("csv", "json"):
+        assert (tmp_path / "killed" / f"ensemble.{kind}").read_bytes() == (tmp_path / "quiet" / f"ensemble.{kind}").read_bytes()
+
+
+@pytest.mark.slow
+def test_the_probability_of_instability_has_a_known_answer(tmp_path):
+    """#3 at 1 degree with the speed uniform over 850-1000 m/s: P(unstable) is the fraction of that range
+    above the critical speed that ``penetrate critical`` finds with the same numerics (a range, the search's
+    bracket); it must lie inside the ensemble's 95 % interval."""
+    from cases.run import RunStore
+    from cases.studies import Sweep, find_critical_velocity
+    from cases.studies.ensemble_study import run_ensemble
+
+    overrides = [("numerics.mesh_size", 0.04)]
+    store = RunStore(tmp_path / "store")
+    search = find_critical_velocity(Sweep.from_file(scene_path("paper_p3"), overrides), store, (850.0, 1000.0), 1.0)
+    low, high = search.bracket
+    exact = ((1000.0 - high) / 150.0, (1000.0 - low) / 150.0)
+    record = run_ensemble(scene_path("paper_p3"), overrides, ["impact.speed=uniform:850:1000"], 64, store,
+                          tmp_path / "out", seed=2, design="sobol")
+    interval = record["interval"]["unstable"]
+    assert interval[0] <= exact[0] and exact[1] <= interval[1], (record["probability"]["unstable"], interval, exact)
+    assert record["probability"]["failed"] == 0.0
