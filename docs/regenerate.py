@@ -207,7 +207,8 @@ def regenerate(selected: list[str] | None = None) -> int:
         if not found:
             continue
         # run in page order (a block may read what an earlier one wrote), then rewrite from the
-        # last block up, so earlier line numbers stay valid
+        # last block up, so earlier line numbers stay valid; the page's old costs go (commands change)
+        costs = {key: value for key, value in costs.items() if not key.startswith(f"{_shown(page)} :: ")}
         outputs = []
         for block in found:
             print(f"{block.where}: {block.command}", file=sys.stderr, flush=True)

@@ -1,7 +1,7 @@
 """The family's unknown interior calibrated on #3 alone, and the other members predicted (docs/calibration.md).
 
 Run from the repository root: ``python docs/calibration/family.py`` (several minutes from an empty
-store; runs are kept in ``runs/calibration-store``); it writes ``family.json`` beside itself, and
+store; runs are kept in ``runs/calibration-family-store``); it writes ``family.json`` beside itself, and
 ``python docs/calibration/family.py --from-json`` prints the same tables from it (docs/paper.md).  The one parameter is a common factor on the
 transverse moment of inertia, ``projectile.transverse_inertia_scale``, fitted by ``penetrate fit``'s
 own code to #3's two published numbers: its critical impact velocity (stable at 1100, unstable at
@@ -24,7 +24,7 @@ from cases.studies.fit import fit
 STUDY = [("numerics.mesh_size", 0.02), ("numerics.integrator", "dopri54"), ("numerics.rtol", 1e-8)]
 KEY = "projectile.transverse_inertia_scale"
 OBSERVED = ["critical_velocity=1110+-10", "characteristic_convergent_velocity=322+-10"]
-STORE = RunStore("runs/calibration-store")
+STORE = RunStore("runs/calibration-family-store")
 POOL = Pool(progress=False)
 RECORD = Path(__file__).with_name("family.json")
 NAMES = {0.4448: "#1", 0.5042: "#2", 0.5636: "#3", 0.623: "#4"}

@@ -1,7 +1,7 @@
 """The soil fitted to Forrestal and Luk's five measured shots (docs/calibration.md).
 
-Run from the repository root: ``python docs/calibration/soil.py`` (about a minute; runs are kept in
-``runs/calibration-store`` and found again).  Every fit is ``penetrate fit``'s own
+Run from the repository root: ``python docs/calibration/soil.py`` (about a minute from an empty store; runs are kept in
+``runs/calibration-soil-store`` and found again).  Every fit is ``penetrate fit``'s own
 (:func:`cases.studies.fit.fit`), at the shipped numerics of the five scenes; the observations are
 the measured distances travelled (path length of the centre of mass), without a stated
 uncertainty, so the standard errors come from the residual scatter.  Prints markdown: the fits
@@ -23,7 +23,7 @@ from cases.studies.fit import NotIdentifiable, fit
 MEASURED = {2: 4.98, 3: 5.18, 4: 5.18, 5: 5.02, 6: 4.82}  # m, distance travelled (path length)
 PAPER = {2: 5.05, 3: 5.00, 4: 5.05, 5: 5.01, 6: 5.00}  # m, the paper's predictions
 SOIL = {"A": 1.718, "sigma_0": 10e6, "B": 1.227, "rho_0": 1860.0}  # the paper's constants
-STORE = RunStore("runs/calibration-store")
+STORE = RunStore("runs/calibration-soil-store")
 POOL = Pool(progress=False)
 
 
