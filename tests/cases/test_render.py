@@ -297,6 +297,7 @@ def test_animation_gif(unstable, tmp_path):
     assert all(np.abs(a.astype(int) - b).mean() > 1 for a, b in zip(frames, frames[1:]))
 
 
+@pytest.mark.slow  # 9 s of frames: the second CI step
 def test_fifty_frames_keep_memory_flat(unstable):
     """Fifty frames in one renderer, and renderers opened and closed, leave the resident memory flat.
 
