@@ -57,9 +57,9 @@ def main() -> None:
           "test 5 integration (s, median of 3) | steps | path length (m) |")
     print("|---|---|---|---|---|---|")
     sharp_us = load_timing(sharp, args)
-    print(f"| sharp core (DAFLLoads with the law only: the paper's switches) | {sharp_us:.0f} | "
+    print(f"| sharp core (DAFLLoads with the law only: the paper's switches) | {sharp_us:.0f} us | "
           f"{sharp_us / bare_us:.2f}x | - | - | - |")
-    print(f"| bare core (the law and the default contact and entry ramps) | {bare_us:.0f} | 1.00x | - | - | - |")
+    print(f"| bare core (the law and the default contact and entry ramps) | {bare_us:.0f} us | 1.00x | - | - | - |")
     rows = [(name, load_scene(scene_path("forrestal_luk_test5"), [parse_override(text) for text in overrides]))
             for name, overrides in EFFECTS.items()]
     rows.append(("two layers", load_scene(scene_path("forrestal_luk_test5"),
@@ -72,8 +72,8 @@ def main() -> None:
         per_call = load_timing(loads, args)
         results = [run_scene(s) for _ in range(3)]
         result = summarise(results[0])
-        print(f"| {name} | {per_call:.0f} | {per_call / bare_us:.2f}x | "
-              f"{statistics.median(r.integration_time for r in results):.2f} | {result.steps} | "
+        print(f"| {name} | {per_call:.0f} us | {per_call / bare_us:.2f}x | "
+              f"{statistics.median(r.integration_time for r in results):.2f} s | {result.steps} | "
               f"{result.path_length:.2f} |")
     print()
     print(stamp())
