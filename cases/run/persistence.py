@@ -289,6 +289,11 @@ class RunStore:
         except (OSError, ValueError):
             return None
 
+    def records(self) -> set[str]:
+        """The file names of the records in the store (finished and failed runs), to count what a study adds."""
+        folder = self.root / "run"
+        return {path.name for path in folder.glob("*.json")} if folder.is_dir() else set()
+
     def finished(self, key: str) -> bool:
         record = self.load(key)
         return record is not None and "error" not in record

@@ -184,17 +184,22 @@ class _Model:
         self.cache: dict[tuple[float, ...], np.ndarray] = {}
         self.keys: set[str] = set()
         self.new_runs = 0
-        self.study_evaluations = 0
 
     def _values(self, unit: np.ndarray) -> dict[str, float]:
         return {p.key: p.value(float(u)) for p, u in zip(self.parameters, unit)}
 
+    @staticmethod
+    def _key(point: np.ndarray) -> tuple[float, ...]:
+        return tuple(np.round(np.asarray(point, float), DIGITS))
+
     def __call__(self, points: Sequence[np.ndarray]) -> list[np.ndarray]:
         """The observed quantities at each point (unit values), runs of all points in one batch."""
-        wanted = [tuple(np.round(np.asarray(p, float), DIGITS)) for p in points]
+        wanted = [self._key(p) for p in points]
         missing = list(dict.fromkeys(w for w in wanted if w not in self.cache))
         if missing:
+            before = self.store.records()
             self._evaluate([np.array(m) for m in missing])
+            self.new_runs += len(self.store.records() - before)  # the records this batch added
         return [self.cache[w] for w in wanted]
 
     def _evaluate(self, points: list[np.ndarray]) -> None:
@@ -205,11 +210,8 @@ class _Model:
         results = np.full((len(points), len(self.observations)), np.nan)
         if parts:
             sweep = Sweep.combined(parts)
-            keys = sweep.keys()
-            before = {k for k in keys if self.store.finished(k)}
             result = run_sweep(sweep, self.store, self.pool)
-            self.new_runs += len(set(keys) - before)
-            self.keys.update(keys)
+            self.keys.update(sweep.keys())
             for index, run in enumerate(result.runs):
                 if run.failed:
                     raise RuntimeError(f"a run of the fit failed ({parts[index][1].values}): {run.error}")
@@ -228,10 +230,9 @@ class _Model:
                 base = Sweep(apply_overrides(self.bases[o.scene], values, o.scene), [Variation({})], o.scene)
                 results[point_index, i] = self._study(o.quantity, base)
         for point, row in zip(points, results):
-            self.cache[tuple(np.round(point, DIGITS))] = row
+            self.cache[self._key(point)] = row
 
     def _study(self, quantity: str, base: Sweep) -> float:
-        before = _stored(self.store)
         if quantity == "critical_velocity":
             speed = base.scenes[0].impact.speed
             search = find_critical_velocity(base, self.store, (200.0, max(2000.0, 2 * speed)), self.resolution,
@@ -244,20 +245,10 @@ class _Model:
             start = base.variations[0].values
             used = {Sweep(base.base, [Variation({**start, "impact.speed": run.speed})], base.source).keys()[0]
                     for run in measured.runs}
-        # the runs a study made are the records it added to the store
-        made = _stored(self.store) - before
-        self.new_runs += len(made)
         self.keys.update(used)
-        self.study_evaluations += 1
         if value is None:
             raise RuntimeError(f"{quantity} of {base.source} not found at {base.variations[0].values or 'the start'}")
         return float(value)
-
-
-def _stored(store: RunStore) -> set[str]:
-    """The names of the run records in ``store`` (its finished and failed runs)."""
-    folder = store.record_path("probe").parent
-    return {path.name for path in folder.glob("*.json")} if folder.is_dir() else set()
 
 
 def _sigmas(observations: Sequence[Observation]) -> np.ndarray:
@@ -344,7 +335,6 @@ def fit(scene: str | os.PathLike, overrides: Overrides | None, parameters: Seque
     model = _Model(bases, fitted, observed, store, pool, resolution)
     y = np.array([o.value for o in observed])
     sigma = _sigmas(observed)
-    lengths = [0]
 
     def residuals(unit: np.ndarray) -> np.ndarray:
         return (model([unit])[0] - y) / sigma
@@ -363,7 +353,6 @@ def fit(scene: str | os.PathLike, overrides: Overrides | None, parameters: Seque
     solution = least_squares(residuals, start, jac=jacobian, bounds=(0.0, 1.0), method="trf",
                              x_scale=1.0, xtol=XTOL, ftol=FTOL, gtol=GTOL,
                              max_nfev=max_evaluations)
-    lengths.append(len(model.cache))
     final_jacobian = jacobian(solution.x)
     _check_identifiable(final_jacobian, fitted, observed, "at the solution")
     fitted_values = model([solution.x])[0]

@@ -20,8 +20,9 @@ from pathlib import Path
 from cases.run import RunStore
 from cases.studies import Pool, Sweep, find_critical_velocity, measure_convergent_velocity
 from cases.studies.fit import fit
+from cases.studies.paper.plan import STUDY_NUMERICS
 
-STUDY = [("numerics.mesh_size", 0.02), ("numerics.integrator", "dopri54"), ("numerics.rtol", 1e-8)]
+STUDY = list(STUDY_NUMERICS.items())  # the paper study's numerics
 KEY = "projectile.transverse_inertia_scale"
 OBSERVED = ["critical_velocity=1110+-10", "characteristic_convergent_velocity=322+-10"]
 STORE = RunStore("runs/calibration-family-store")

@@ -23,6 +23,7 @@ import pandas as pd
 from cases.run import RunStore
 from cases.studies import Pool, Sweep, find_critical_velocity
 from cases.studies.ensemble import wilson_interval
+from cases.studies.paper.plan import STUDY_NUMERICS
 from cases.studies.ensemble_study import run_ensemble
 from cases.viz.figures import save_figure, subplots
 
@@ -32,8 +33,7 @@ from measure import stamp  # noqa: E402 - docs/measure.py
 
 SCENE = "cases/paper_p3.toml"
 SOIL = {"A": 1.718, "sigma_0": 10e6, "B": 1.227, "rho_0": 1860.0}
-STUDY = [("numerics.mesh_size", 0.02), ("numerics.integrator", "dopri54"), ("numerics.rtol", 1e-8),
-         ("target.law", SOIL)]
+STUDY = [*STUDY_NUMERICS.items(), ("target.law", SOIL)]  # the paper study's numerics
 SCALES = (0.5, 1.0, 2.0)  # deg, half-normal scale of the initial attack angle
 RUNS = 512
 EDGES = np.arange(700.0, 1400.0 + 1.0, 50.0)

@@ -4,6 +4,7 @@ against an independent quadrature of the exact cut surface."""
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -20,7 +21,9 @@ SCENES = {"eroded": "cases/eroded_test2.toml", "finned": "cases/finned_test2.tom
 FILES = {"eroded": "cases/bodies/eroded_test2.step", "finned": "cases/bodies/finned_test2.step"}
 
 
+@functools.cache
 def make_bodies():
+    """The body script as a module (it is no package: cases/bodies holds files beside it)."""
     import importlib.util
 
     spec = importlib.util.spec_from_file_location("make_bodies", "cases/bodies/make_bodies.py")
