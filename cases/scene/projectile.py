@@ -223,8 +223,9 @@ class Projectile(Strict):
             if missing:
                 raise ValueError(f"give {', '.join(missing)} (an analytic projectile), or geometry = {{ file = ... }}")
             if self.materials is not None:
-                raise ValueError("materials name the solids of a geometry file; an analytic projectile has"
-                                 " body_density and a counterweight")
+                raise ValueError("materials name the solids of a geometry file: drop materials, or give"
+                                 " geometry = { file = ... } (an analytic projectile has body_density and a"
+                                 " counterweight)")
             return self
         given = [k for k in ("diameter", "length", "nose", "interior", "counterweight", "centre_of_mass",
                              "centre_of_mass_ratio") if getattr(self, k) is not None]
