@@ -13,7 +13,19 @@ import subprocess
 import sys
 from collections.abc import Iterator
 
+import pytest
+
 from mesh import ProjectileGeometry, ProjectileMesh, build_mesh
+
+
+def slow_except(values, *keep):
+    """``values`` as pytest parameters: those in ``keep`` run in the default suite, the others only in
+    CI's slow step (``-m slow``), so that each parametrised family keeps a representative in the default
+    run and its full range in CI without the default run passing five minutes."""
+    def slow(value):
+        return pytest.param(*value if isinstance(value, tuple) else (value,), marks=pytest.mark.slow)
+
+    return [value if value in keep else slow(value) for value in values]
 
 
 @functools.lru_cache(maxsize=None)

@@ -134,6 +134,7 @@ def test_flat_facets_come_with_their_error(folder):
     assert not any("flat facets" in w for w in summarise(run_scene(load_scene(TEST2))).warnings)
 
 
+@pytest.mark.slow
 def test_a_file_body_renders_its_field(folder, tmp_path):
     """Rendering needs no profile: the snapshots, the polar plot (the body's own surface points at the
     station, all round) and the ParaView files of a STEP body; on the nose in axial motion the ring's

@@ -174,6 +174,7 @@ def test_coarse_steps_stay_right_with_the_continuous_law():
     assert a.axis_angle_change == pytest.approx(b.axis_angle_change, abs=0.05)
 
 
+@pytest.mark.slow
 def test_runs_warn_when_the_numerics_do_not_suit_the_scene():
     """Test 5 with RK4 at 2e-4 s, twice the coarsest step its contact ramp keeps stable (docs/model.md, "Why
     delta = 0.005"): the energy guard retakes nearly every step (measured: 9101 for 9551) and the run rides

@@ -87,8 +87,10 @@ def test_a_failing_command_is_reported_not_raised(tmp_path, capsys, monkeypatch)
 
 
 def test_the_cheap_generated_blocks_of_the_docs_reproduce(capsys):
-    """The fast subset of `./dev docs --check` (6 s of recorded cost; every block: the slow test)."""
-    assert regenerate.check(budget=6.0) == 0, capsys.readouterr().out
+    """The fast subset of `./dev docs --check`: the blocks of at most 2 s of recorded cost in all (the
+    tables printed from the studies' JSON, the error lines, test 2's load; about 5 s here, where the test
+    session's mesh cache starts empty); every block: the slow test."""
+    assert regenerate.check(budget=2.0) == 0, capsys.readouterr().out
 
 
 @pytest.mark.slow

@@ -12,7 +12,7 @@ from cases.studies.reference import embedded_axial_force, nose_factors
 from fem_loads import DAFLLoads, mass_properties, resistance_law, surface_quadrature
 from fem_loads.target import FreeSurface, Friction, LayeredTarget
 from mesh import BODY, ConeNose, OgiveNose, Profile, ProjectileGeometry
-from support import meshed
+from support import meshed, slow_except
 
 SOIL = resistance_law("soil")
 DOWN = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
@@ -48,7 +48,7 @@ def test_friction_nose_factors_are_the_integrals(name):
     assert nose_factors(profile, 0.0) == pytest.approx((1.0, profile.nose_factor()), rel=1e-14)
 
 
-@pytest.mark.parametrize("name", PROFILES)
+@pytest.mark.parametrize("name", slow_except(PROFILES, "paper CRH 5"))
 @pytest.mark.parametrize("speed", [100.0, 1200.0])
 def test_coulomb_axial_force_matches_closed_form(name, speed):
     profile = PROFILES[name]
@@ -117,6 +117,7 @@ def test_a_stiffer_layer_decelerates_faster():
     assert deceleration(layered_h)[at(layered_h)] > 1.5 * deceleration(soft_h)[at(soft_h)]
 
 
+@pytest.mark.slow
 def test_crossing_into_a_stiffer_layer_at_an_angle_keeps_the_path():
     """At 30 degrees the lower flank of the nose meets the stiff layer first, but the path after the
     interface keeps its direction: the shank rides on its contact as on a rail.  The turn the stiff

@@ -384,7 +384,7 @@ def body_files(tmp_path_factory) -> dict[str, str]:
     folder = tmp_path_factory.mktemp("bodies")
     (folder / "text.step").write_text("not a STEP file\n")
     return {"step": str(write_body(folder / "body.step", scale=1e-3)), "msh": str(write_volume_mesh(
-        folder / "body.msh", 0.05)), "directory": str(folder), "text": str(folder / "text.step"),
+        folder / "body.msh", 0.05, order=1)), "directory": str(folder), "text": str(folder / "text.step"),
         "missing": str(folder / "missing.brep"), "relative": "body.step"}
 
 

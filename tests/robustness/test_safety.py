@@ -83,6 +83,7 @@ def check_outputs(out: Path) -> str:
 # killed at any moment
 
 
+@pytest.mark.slow
 def test_killed_runs_leave_complete_files_or_none(tmp_path):
     """SIGKILL ``penetrate run --out`` at random moments, half of them into a folder holding an older run."""
     args = _cli("run", TEST2, *_sets(TINY), "--out")
