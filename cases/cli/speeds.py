@@ -1,4 +1,5 @@
-"""``penetrate critical`` and ``penetrate convergent``: the paper's characteristic speeds of a scene."""
+"""``penetrate critical`` and ``penetrate convergent``: the paper's characteristic speeds of a scene, measured on
+trajectories; ``penetrate predict``: the same two from the reduced pitch-plane model, without a full trajectory."""
 
 from __future__ import annotations
 
@@ -34,6 +35,15 @@ def register(commands) -> None:
     convergent.add_argument("--threshold", type=positive_float, default=0.1, metavar="DEG",
                             help="the attack angle counts as converged below this (default 0.1 deg)")
     convergent.set_defaults(handler=convergent_speed)
+    predict = commands.add_parser("predict", help="predict both characteristic speeds without a full trajectory"
+                                                  " (reduced pitch-plane model, docs/theory.md)")
+    add_scene_options(predict)
+    predict.add_argument("--speeds", type=speed_range, default=(200.0, 1600.0), metavar="LOW:HIGH",
+                         help="the range the critical impact velocity is sought in, m/s (default 200:1600)")
+    predict.add_argument("--resolution", type=positive_float, default=5.0, metavar="M/S",
+                         help="bisect until a stable and an unstable reduced run are this close (default 5 m/s)")
+    predict.add_argument("--json", action="store_true", help="print the result as one JSON object")
+    predict.set_defaults(handler=predict_speeds)
 
 
 def speed_range(text: str) -> tuple[float, float]:
@@ -102,3 +112,30 @@ def convergent_speed(args: argparse.Namespace) -> int:
         return 1
     print(f"characteristic convergent velocity {result.characteristic_convergent_velocity:.1f} m/s")
     return 0
+
+
+def predict_speeds(args: argparse.Namespace) -> int:
+    from ..scene import load_scene
+    from ..studies.predict import predict
+
+    from .options import overrides
+
+    result = predict(load_scene(args.scene, overrides(args)), args.speeds, args.resolution)
+    found = result.characteristic_convergent_velocity is not None and result.critical_velocity is not None
+    if args.json:
+        print(json.dumps(result.as_dict()))
+        return 0 if found else 1
+
+    def speed(value: float | None) -> str:
+        return f"{value:.1f} m/s" if value is not None else "none"
+
+    bracket = f" (between {result.critical_bracket[0]:g} and {result.critical_bracket[1]:g} m/s)" \
+        if result.critical_bracket else ""
+    print(f"characteristic convergent velocity {speed(result.characteristic_convergent_velocity)}")
+    print(f"critical impact velocity {speed(result.critical_velocity)}{bracket}")
+    for message in result.messages:
+        print(message)
+    print(f"{result.model}; {len(result.runs)} reduced runs in {1e3 * result.prediction_time:.1f} ms"
+          f" ({result.wall_time:.2f} s with the projectile's preparation)")
+    print("assumptions: " + "; ".join(result.assumptions))
+    return 0 if found else 1

@@ -2,8 +2,10 @@
 
 The compiled step of the DAFL load (:mod:`.dafl_step`) inlines the Runge-Kutta step of
 :mod:`dynamics.compiled` (with the arithmetic of :mod:`dynamics.quaternion` and
-:mod:`dynamics.integrators`) and calls the load kernel of :mod:`fem_loads.compiled`: numba keeps its
-machine code in the cache of ``dafl_step.py`` and notices changes of that file alone, not of the
+:mod:`dynamics.integrators`) and calls the load kernel of :mod:`fem_loads.compiled`; the reduced
+pitch-plane trajectory of ``penetrate predict`` (:mod:`.pitch_plane_step`) inlines the driver of
+:mod:`dynamics.pitch_plane` and calls the ring load of :mod:`fem_loads.revolved`.  numba keeps the
+machine code in the cache of the joining file and notices changes of that file alone, not of the
 modules it inlines and calls.  So numba's cache lives in a folder named for the digest of all
 these sources (:data:`COMPILED_SOURCES`) and numba's version, ``$PENETRATE_CACHE_DIR/numba/<digest>``
 (``$NUMBA_CACHE_DIR/<digest>`` when that is set), set before any of them is imported: changed code gets a folder of its own and
@@ -22,10 +24,10 @@ import numpy as np
 
 from .persistence import cache_dir
 
-__all__ = ["compiled_step", "precompile", "numba_cache_folder", "COMPILED_SOURCES"]
+__all__ = ["compiled_step", "precompile", "numba_cache_folder", "use_numba_cache", "COMPILED_SOURCES"]
 
 COMPILED_SOURCES = ("dynamics.compiled", "dynamics.quaternion", "dynamics.integrators", "fem_loads.compiled",
-                    "cases.run.dafl_step")
+                    "cases.run.dafl_step", "dynamics.pitch_plane", "fem_loads.revolved", "cases.run.pitch_plane_step")
 
 
 def numba_cache_folder() -> Path:
@@ -39,11 +41,17 @@ def numba_cache_folder() -> Path:
     return (Path(root) if root else cache_dir() / "numba") / digest.hexdigest()[:16]
 
 
-def _import_compiled():
+def use_numba_cache() -> None:
+    """Point numba's cache at :func:`numba_cache_folder`, once per process, before any compiled module is
+    imported (numba fixes a function's cache folder when its module defines it)."""
     if not all(name in sys.modules for name in COMPILED_SOURCES):
         from numba import config
 
         config.CACHE_DIR = str(numba_cache_folder())
+
+
+def _import_compiled():
+    use_numba_cache()
     from dynamics import compiled as step
     from fem_loads import compiled as load
 

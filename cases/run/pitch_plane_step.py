@@ -1,0 +1,30 @@
+"""The compiled reduced trajectory: the pitch-plane driver of :mod:`dynamics.pitch_plane` with the ring load of
+:mod:`fem_loads.revolved` (imported through :func:`.compiled.use_numba_cache` first, which names numba's cache
+folder for this code).  The load is a global here, so numba can cache the whole trajectory."""
+
+from numba import njit
+
+from dynamics.pitch_plane import trajectory
+from fem_loads.revolved import lowest_height, pitch_plane_load
+
+__all__ = ["pitch_plane_trajectory"]
+
+
+@njit(cache=True, inline="always")
+def _load(data, height, sin_theta, cos_theta, vx, vz, q, out):
+    pitch_plane_load(data[0], data[1], height, sin_theta, cos_theta, vx, vz, q, out)
+
+
+@njit(cache=True, inline="always")
+def _lowest(data, height, sin_theta, cos_theta):
+    return lowest_height(data[2], height, sin_theta, cos_theta)
+
+
+@njit(cache=True, error_model="numpy")
+def pitch_plane_trajectory(rings, law, outline, y0, mass, inertia, gravity, rtol, scales, first_step, max_step, stop_speed,
+                           time_limit, turn_limit, threshold, peak_floor, stop_when_converged, a_matrix, b_error):
+    """:func:`dynamics.pitch_plane.trajectory` with the load :func:`fem_loads.revolved.pitch_plane_load` on ``rings``
+    under ``law`` (and the lowest point on ``outline``); returns its :data:`~dynamics.pitch_plane.OUTCOME_FIELDS`."""
+    return trajectory(_load, _lowest, (rings, law, outline), y0, mass, inertia, gravity, rtol, scales, first_step,
+                      max_step, stop_speed, time_limit, turn_limit, threshold, peak_floor, stop_when_converged,
+                      a_matrix, b_error)

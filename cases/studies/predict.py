@@ -1,0 +1,257 @@
+"""``penetrate predict``: the characteristic speeds from a reduced pitch-plane model, without a full trajectory.
+
+The model (docs/theory.md derives it and says what it neglects):
+
+* **Loads.**  The scene's DAFL (its law, contact and entry ramps, friction) integrated over the
+  exact surface of revolution ring by ring (:mod:`fem_loads.revolved`): in pitch-plane motion the
+  normal velocity and the height are linear in ``cos phi`` around each ring, so the stress is
+  integrated between the law's switches in closed form, without a mesh or its quadrature points.
+* **Motion.**  Three degrees of freedom in the vertical plane (:mod:`dynamics.pitch_plane`), the
+  mass and transverse moment of inertia of the scene's projectile.
+* **The characteristic speeds** then follow from the same definitions as the measured ones
+  (:mod:`.speeds`): the convergent velocity from a reduced run at the scene's impact speed (raised
+  by 15 % while that run is stable, as ``penetrate convergent`` does), the critical impact velocity
+  by bisection of reduced runs between a stable and an unstable impact speed, to the same 5 m/s.
+
+A reduced run costs about a millisecond where a run of the full model takes a few tenths of a second,
+so a whole prediction (ten or so reduced runs) costs about one percent of one trajectory run of the
+scene (docs/theory.md measures it).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from ..run import CONVERGENCE_THRESHOLD, PreparedProjectile, initial_state, prepare_projectile
+from ..run.compiled import use_numba_cache
+from ..scene import InputError, Scene
+from .speeds import UNSTABLE_TURN
+
+__all__ = ["ReducedModel", "ReducedRun", "Prediction", "predict", "RTOL", "RINGS"]
+
+RTOL = 1e-4  # the reduced runs' tolerance: the predicted speeds move by < 0.5 % to 1e-6 (docs/theory.md)
+RINGS = {"nose_rings": 12, "shank_rings": 8, "face_rings": 4}
+RAISE_FACTOR, MAX_SPEED = 1.15, 4000.0  # as penetrate convergent raises a stable run's impact speed
+ASSUMPTIONS = (
+    "a body of revolution moving in the vertical plane (no yaw, no roll or yaw rate)",
+    "the scene's DAFL law, ramps and friction, integrated over the exact profile instead of the mesh",
+    "a homogeneous target (no layers, no free-surface reduction), separation on",
+    "the mass and transverse moment of inertia of the scene's projectile",
+)
+
+
+@dataclass(frozen=True)
+class ReducedRun:
+    """One run of the reduced model (m/s, deg; ``end`` one of ``dynamics.pitch_plane.END_REASONS``)."""
+
+    speed: float
+    end: str
+    unstable: bool
+    axis_angle_change: float
+    max_attack_angle: float
+    convergence_speed: float | None
+    evaluations: int
+
+
+class ReducedModel:
+    """The reduced pitch-plane model of a scene's projectile and target.
+
+    Parameters
+    ----------
+    scene : Scene
+        An analytic projectile (any nose, measured profiles included) in a homogeneous target,
+        disturbed in the vertical plane only; anything else is refused with an :class:`InputError`.
+    prepared : PreparedProjectile
+        Its mass properties (the run's, :func:`cases.run.prepare_projectile`).
+    rtol : float
+        The reduced runs' relative tolerance.
+    rings : dict
+        The rings' counts (:func:`fem_loads.revolved.revolved_surface`).
+    """
+
+    def __init__(self, scene: Scene, prepared: PreparedProjectile, rtol: float = RTOL,
+                 rings: dict[str, int] | None = None) -> None:
+        _check_supported(scene)
+        use_numba_cache()
+        from dynamics.pitch_plane import TABLEAU
+        from fem_loads.revolved import law_data, revolved_surface
+
+        from ..run.pitch_plane_step import pitch_plane_trajectory
+
+        self.scene, self.prepared = scene, prepared
+        self._trajectory, self._tableau = pitch_plane_trajectory, TABLEAU
+        self.rtol = rtol
+        self.surface = revolved_surface(prepared.profile, float(prepared.tip[0]), **(rings or RINGS))
+        law, effects, numerics = scene.target.build(), scene.effects, scene.numerics
+        friction = effects.friction.build()
+        # the mesh's entry ramp: each point enters over entry_smoothing times the square root of its weight
+        entry = numerics.entry_smoothing * math.sqrt(float(np.median(prepared.quadrature.weights)))
+        self.law = law_data(law.static_stress, law.dynamic_density, effects.contact_width, effects.contact_incidence,
+                            entry, self.surface.max_radius, friction.coefficient if friction else 0.0,
+                            friction.cap if friction else None)
+        self.mass = float(prepared.mass.mass)
+        self.inertia = float(prepared.mass.inertia[1, 1])
+        self.gravity = effects.gravity_acceleration if effects.gravity else 0.0
+
+        # the run's own start (cases.run.initial_state) with its axis angle exactly (a straight impact: 0);
+        # only the velocity depends on the impact speed
+        state = initial_state(scene, prepared)
+        axis_angle = math.radians(scene.impact.oblique_angle + scene.impact.attack_angle)
+        self._start = np.array([state.position[0], state.position[2], axis_angle, state.velocity[0],
+                                state.velocity[2], state.angular_velocity[1]])
+
+    def start(self, speed: float) -> np.ndarray:
+        """The planar state ``(X, Z, phi, v_X, v_Z, q)`` at impact with ``speed`` (m/s)."""
+        state = self._start.copy()
+        state[3:5] *= speed / self.scene.impact.speed
+        return state
+
+    def run(self, speed: float, stop_when_converged: bool = True, turn_limit: float = math.inf,
+            time_limit: float | None = None) -> ReducedRun:
+        """A reduced run from impact at ``speed`` (m/s) to its end (``turn_limit``: an axis turn that ends it, deg;
+        ``time_limit``: s, the scene's by default)."""
+        length, numerics = self.prepared.length, self.scene.numerics
+        # absolute tolerances as the full model's error control sets them (cases.run.step_control)
+        scales = np.array([length, length, 0.01, speed, speed, 0.01 * speed / length])
+        outcome = self._trajectory(self.surface.rings, self.law, self.surface.outline, self.start(speed), self.mass, self.inertia,
+                                   self.gravity, self.rtol, scales, 1e-3 * length / speed, math.inf, numerics.stop_speed,
+                                   numerics.time_limit if time_limit is None else time_limit, math.radians(turn_limit),
+                                   math.radians(CONVERGENCE_THRESHOLD),
+                                   0.1 * speed, stop_when_converged, *self._tableau)
+        from dynamics.pitch_plane import END_REASONS
+
+        end, _, _, turn, peak, _, converged, _, _, evaluations = outcome
+        turn = math.degrees(turn)  # the run's axis_angle_change
+        return ReducedRun(speed, END_REASONS[end], abs(turn) >= UNSTABLE_TURN, turn, math.degrees(peak),
+                          converged if converged >= 0.0 else None, int(evaluations))
+
+
+@dataclass
+class Prediction:
+    """What :func:`predict` returns (m/s, s)."""
+
+    characteristic_convergent_velocity: float | None
+    critical_velocity: float | None
+    critical_bracket: list[float] | None
+    model: str
+    assumptions: list[str]
+    runs: list[ReducedRun] = field(default_factory=list)
+    messages: list[str] = field(default_factory=list)
+    prediction_time: float = 0.0
+    wall_time: float = 0.0
+
+    def as_dict(self) -> dict:
+        record = asdict(self)
+        record["runs"] = [asdict(run) for run in self.runs]
+        return record
+
+
+def predict(scene: Scene, speeds: tuple[float, float] = (200.0, 1600.0), resolution: float = 5.0) -> Prediction:
+    """The characteristic convergent velocity and the critical impact velocity of ``scene`` (its disturbance).
+
+    ``speeds``: the range the critical velocity is sought in, and ``resolution`` its bracket (m/s), as
+    ``penetrate critical`` takes them.  ``prediction_time`` is the model's own cost (from the prepared
+    projectile on: comparable with a run's ``integration_time``); ``wall_time`` includes preparing the
+    projectile (the mesh and mass properties a run prepares too; read from the cache when there).
+    """
+    start = time.perf_counter()
+    model = ReducedModel(scene, prepare_projectile(scene))
+    model.run(scene.impact.speed, time_limit=0.0)  # numba loads (or compiles) its code here, outside the timing
+    clock = time.perf_counter()
+    runs: list[ReducedRun] = []
+    messages: list[str] = []
+    convergent = _convergent(model, scene.impact.speed, runs, messages)
+    critical, bracket = _critical(model, speeds, resolution, runs, messages, convergent)
+    end = time.perf_counter()
+    description = (f"reduced pitch-plane model: the scene's DAFL integrated over {len(model.surface.rings)} rings of"
+                   f" the exact profile, a planar rigid body, Dormand-Prince rtol {RTOL:g} (docs/theory.md)")
+    return Prediction(convergent, critical, bracket, description, list(ASSUMPTIONS), runs, messages,
+                      end - clock, end - start)
+
+
+def _convergent(model: ReducedModel, speed: float, runs: list[ReducedRun], messages: list[str]) -> float | None:
+    """The convergence speed of the first unstable reduced run, from the scene's speed up by 15 % steps."""
+    while True:
+        run = model.run(speed)
+        runs.append(run)
+        if run.unstable:
+            break
+        if speed * RAISE_FACTOR > MAX_SPEED:
+            messages.append(f"no unstable reduced run up to {MAX_SPEED:g} m/s: no characteristic convergent velocity")
+            return None
+        speed *= RAISE_FACTOR
+    if speed != model.scene.impact.speed:
+        messages.append(f"the reduced run at {model.scene.impact.speed:g} m/s is stable; the convergent velocity is"
+                        f" that of the run at {speed:.6g} m/s")
+    if run.convergence_speed is None:
+        messages.append(f"the attack angle of the reduced run at {speed:.6g} m/s never fell below"
+                        f" {CONVERGENCE_THRESHOLD} deg")
+    return run.convergence_speed
+
+
+def _critical(model: ReducedModel, speeds: tuple[float, float], resolution: float, runs: list[ReducedRun],
+              messages: list[str], convergent: float | None) -> tuple[float | None, list[float] | None]:
+    """Bisection of reduced runs between a stable and an unstable impact speed in ``speeds`` (each run stops
+    at the 30-degree turn that makes it unstable, or once its attack angle has converged).
+
+    The first bracket uses what the convergent velocity's runs showed: an unstable run there is an
+    upper end, and no run below the convergent velocity can turn unstable (its attack angle collapses
+    at once), so that is a lower end.  An end no run has confirmed is run before the result counts.
+    """
+    low, high = float(min(speeds)), float(max(speeds))
+    known = {run.speed: run.unstable for run in runs if run.speed >= low}
+    unstable_seen = [v for v, unstable in known.items() if unstable and v <= high]
+    stable_seen = [v for v, unstable in known.items() if not unstable and v <= high]
+    high_checked = bool(unstable_seen)
+    if unstable_seen:
+        high = min(unstable_seen)
+    if stable_seen and max(stable_seen) < high:
+        low = max(low, max(stable_seen))
+    low_checked = bool(stable_seen) and low == max(stable_seen)
+    if not low_checked and convergent is not None and low < convergent < high:
+        low = convergent
+
+    def unstable(speed: float) -> bool:
+        run = model.run(speed, turn_limit=UNSTABLE_TURN)
+        runs.append(run)
+        return run.unstable
+
+    if not high_checked and not unstable(high):
+        messages.append(f"no unstable reduced run up to {high:g} m/s: no critical impact velocity in the range")
+        return None, None
+    while high - low > resolution:
+        middle = 0.5 * (low + high)
+        if unstable(middle):
+            high = middle
+        else:
+            low, low_checked = middle, True
+    if not low_checked and unstable(low):
+        if low > min(speeds):  # the guess from the convergent velocity did not hold: search the whole range
+            return _critical(model, (min(speeds), low), resolution, runs, messages, None)
+        messages.append(f"the reduced run at {low:g} m/s is already unstable: the critical impact velocity lies below"
+                        " the range")
+        return None, None
+    return 0.5 * (low + high), [low, high]
+
+
+def _check_supported(scene: Scene) -> None:
+    """One line naming what the reduced model cannot take, with what it needs."""
+    projectile, effects, impact = scene.projectile, scene.effects, scene.impact
+    if projectile.geometry is not None:
+        raise InputError("projectile.geometry: penetrate predict needs a body of revolution given by its profile"
+                         " (diameter, length, nose); a projectile read from a file is run by penetrate critical")
+    from fem_loads.target import LayeredTarget
+
+    if isinstance(scene.target.build(), LayeredTarget):
+        raise InputError("target.layers: penetrate predict needs a homogeneous target (one law); drop the layers")
+    if effects.free_surface is not None:
+        raise InputError("effects.free_surface: penetrate predict has no free-surface reduction; drop it")
+    if not effects.separation:
+        raise InputError("effects.separation = false: penetrate predict needs separation (the DAFL's default)")
+    if impact.yaw_angle != 0.0 or impact.angular_velocity[0] != 0.0 or impact.angular_velocity[2] != 0.0:
+        raise InputError("impact.yaw_angle and impact.angular_velocity[0], [2] must be 0: penetrate predict models"
+                         " motion in the vertical plane (attack angle, oblique angle, pitch rate)")

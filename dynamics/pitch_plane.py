@@ -1,0 +1,170 @@
+"""Rigid-body motion in a plane through the body's axis, compiled: Dormand-Prince 5(4) with its events.
+
+The reduced model of ``penetrate predict`` (docs/theory.md) moves a body of revolution in the
+vertical plane only: three degrees of freedom instead of six, so neither quaternions nor the
+Munthe-Kaas step of :mod:`dynamics.integrators` are needed.  The state is
+
+    ``y = (X, Z, phi, v_X, v_Z, q)``
+
+with the centre of mass at ``(X, Z)`` (m, world frame, ``Z`` up), the axis angle ``phi`` (rad: the
+body axis from the downward vertical towards ``+X``, the paper's angle; the axis points along
+``(sin phi, -cos phi)`` in ``X, Z``), the velocity ``(v_X, v_Z)`` (m/s) and the pitch rate ``q``
+about the body's y axis (rad/s; ``d phi / dt = -q``).  Newton-Euler: ``m dv/dt = R F - m g e_Z``,
+``I dq/dt = M_y``, with ``F = (F_x, F_z)`` and ``M_y`` from a load kernel in the body frame.  The
+body is turned by ``theta = pi/2 - phi`` about the world ``Y`` axis; a straight downward axis is
+``phi = 0`` exactly, so its sine and cosine are exact and a symmetric start stays exactly straight.
+
+A load kernel is a compiled function ``load(data, height, sin_theta, cos_theta, v_x, v_z, q, out)``
+writing ``F_x``, ``F_z`` (N) and ``M_y`` (N m) into ``out`` (:func:`fem_loads.revolved.pitch_plane_load`),
+with ``lowest(data, height, sin_theta, cos_theta)`` the height of the body's lowest point.  As in
+:mod:`dynamics.compiled`, :func:`trajectory` takes them as arguments and is inlined into a
+function of the caller's module that names them as globals, so numba can cache the machine code.
+
+:func:`trajectory` only steps and watches events, like :func:`dynamics.simulate`: the Dormand-Prince
+tableau is :class:`~dynamics.integrators.DormandPrince54`'s, the step control the same
+error-per-step rule as :class:`~dynamics.control.ErrorControl` (root mean square of the error over
+``atol + rtol |y|``, next step ``0.9 error^(-1/5)``, within a factor 0.2 to 5).  It ends when the
+body stops (speed below ``stop_speed``), leaves the target (lowest point back above the surface
+after having been in), its axis has turned by ``turn_limit``, the time limit passes, or, when asked,
+the attack angle has converged (fallen below ``threshold`` after its peak).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .integrators import DormandPrince54
+
+__all__ = ["trajectory", "TABLEAU", "STOPPED", "EXITED", "TURNED", "TIME_LIMIT", "CONVERGED", "END_REASONS",
+           "OUTCOME_FIELDS"]
+
+STOPPED, EXITED, TURNED, TIME_LIMIT, CONVERGED = 0, 1, 2, 3, 4
+END_REASONS = ("stopped", "exited", "turned", "time_limit", "converged")
+#: what :func:`trajectory` returns, in order
+OUTCOME_FIELDS = ("end", "time", "final_speed", "axis_turn", "max_attack_angle", "speed_at_max_attack",
+                  "convergence_speed", "steps", "rejected_steps", "evaluations")
+TABLEAU = (np.ascontiguousarray(DormandPrince54.A), np.ascontiguousarray(DormandPrince54.b_error))
+_STATES = 6
+
+
+@njit(cache=True, inline="always")
+def _derivative(load, data, y, mass, inertia, gravity, out, loads) -> None:
+    """``dy/dt`` at ``y`` into ``out`` (``loads``: a 3-vector to use for the body-frame load)."""
+    sin_t, cos_t = math.cos(y[2]), math.sin(y[2])  # theta = pi/2 - phi
+    vx = cos_t * y[3] - sin_t * y[4]  # body frame: R^T v
+    vz = sin_t * y[3] + cos_t * y[4]
+    load(data, y[1], sin_t, cos_t, vx, vz, y[5], loads)
+    out[0] = y[3]
+    out[1] = y[4]
+    out[2] = -y[5]
+    out[3] = (cos_t * loads[0] + sin_t * loads[1]) / mass
+    out[4] = (-sin_t * loads[0] + cos_t * loads[1]) / mass - gravity
+    out[5] = loads[2] / inertia
+
+
+@njit(cache=True, inline="always")
+def _attack_angle(y) -> float:
+    """The angle between the body axis and the velocity (rad, >= 0)."""
+    sin_t, cos_t = math.cos(y[2]), math.sin(y[2])
+    return abs(math.atan2(sin_t * y[3] + cos_t * y[4], cos_t * y[3] - sin_t * y[4]))
+
+
+@njit(cache=True, inline="always")
+def trajectory(load, lowest, data, y0, mass, inertia, gravity, rtol, scales, first_step, max_step, stop_speed,
+               time_limit, turn_limit, threshold, peak_floor, stop_when_converged, a_matrix, b_error):
+    """Integrate from ``y0`` to an end; returns the :data:`OUTCOME_FIELDS` (SI units, angles in rad).
+
+    Parameters
+    ----------
+    load, lowest : compiled functions
+        The load kernel and the lowest point's height (module docstring), both given ``data``.
+    y0 : ndarray, shape (6,)
+        ``(X, Z, phi, v_X, v_Z, q)`` at the start.
+    mass, inertia : float
+        Mass (kg) and transverse moment of inertia about the centre of mass (kg m^2).
+    gravity : float
+        Downward acceleration (m/s^2; 0 without gravity).
+    rtol : float
+        Relative tolerance; ``scales`` (shape (6,)) times it are the absolute tolerances.
+    first_step, max_step, stop_speed, time_limit : float
+        s, s, m/s, s.  Events are not located: a run ends at the first step past one, and the convergence
+        speed is interpolated linearly between the two steps around it, so ``max_step`` bounds how far
+        past an event a run may go.
+    turn_limit, threshold : float
+        The axis turn ``|phi - phi_0|`` that ends the run (rad), and the attack angle below which, after its peak,
+        the run counts as converged (rad).
+    peak_floor : float
+        The peak is sought while the speed is at least this (m/s), as
+        :func:`cases.run.convergence_speed` seeks it above a tenth of the impact speed.
+    stop_when_converged : bool
+        End the run at convergence (nothing after changes the convergence speed or the turn much).
+    a_matrix, b_error : ndarray
+        :data:`TABLEAU`.
+    """
+    k = np.empty((7, _STATES))
+    y = y0.copy()
+    trial = np.empty(_STATES)
+    loads = np.empty(3)
+    _derivative(load, data, y, mass, inertia, gravity, k[0], loads)
+    evaluations, steps, rejected = 1, 0, 0
+    t, h = 0.0, min(first_step, max_step)
+    speed = math.hypot(y[3], y[4])
+    attack = _attack_angle(y)
+    peak, speed_at_peak, converged_at = attack, speed, -1.0
+    entered = lowest(data, y[1], math.cos(y[2]), math.sin(y[2])) < 0.0
+    end = TIME_LIMIT
+    while t < time_limit:
+        for stage in range(1, 7):
+            for i in range(_STATES):
+                total = 0.0
+                for j in range(stage):
+                    total += a_matrix[stage, j] * k[j, i]
+                trial[i] = y[i] + h * total
+            _derivative(load, data, trial, mass, inertia, gravity, k[stage], loads)
+        evaluations += 6
+        error = 0.0
+        for i in range(_STATES):
+            estimate = 0.0
+            for j in range(7):
+                estimate += b_error[j] * k[j, i]
+            scaled = h * estimate / (rtol * (scales[i] + abs(y[i])))
+            error += scaled * scaled
+        error = math.sqrt(error / _STATES)
+        if not error <= 1.0:  # NaN fails too
+            rejected += 1
+            h *= max(0.2, 0.9 * error ** -0.2) if error == error else 0.2
+            continue
+        t += h
+        steps += 1
+        y[:] = trial  # the last stage is the solution (first same as last)
+        k[0, :] = k[6, :]
+        h = min(h * (min(5.0, 0.9 * error ** -0.2) if error > 0.0 else 5.0), max_step)
+        h = min(h, time_limit - t) if time_limit > t else h
+        previous_attack, previous_speed = attack, speed
+        speed = math.hypot(y[3], y[4])
+        attack = _attack_angle(y)
+        if attack > peak and speed >= peak_floor:
+            peak, speed_at_peak, converged_at = attack, speed, -1.0
+        elif converged_at < 0.0 and peak >= threshold and attack < threshold <= previous_attack:
+            converged_at = previous_speed + (speed - previous_speed) * (threshold - previous_attack) / (
+                attack - previous_attack)
+        low = lowest(data, y[1], math.cos(y[2]), math.sin(y[2]))
+        if low < 0.0:
+            entered = True
+        elif entered:
+            end = EXITED
+            break
+        if speed < stop_speed:
+            end = STOPPED
+            break
+        if abs(y[2] - y0[2]) >= turn_limit:
+            end = TURNED
+            break
+        if stop_when_converged and converged_at >= 0.0:
+            end = CONVERGED
+            break
+    return (end, t, math.hypot(y[3], y[4]), y[2] - y0[2], peak, speed_at_peak, converged_at, steps, rejected,
+            evaluations)

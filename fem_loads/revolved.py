@@ -1,0 +1,354 @@
+"""The DAFL load of a body of revolution moving in a plane through its axis, integrated ring by ring.
+
+A body of revolution is a stack of rings: the ring at ``x`` (m, along the axis, forward of the
+centre of mass) has radius ``rho``, outward normal ``(n_axial, n_radial cos phi ...)`` at the angle
+``phi`` around it and the area weight ``w`` per radian of ``phi`` (:class:`RevolvedSurface`).  In a
+motion in the body's x-z plane (velocity ``(v_x, 0, v_z)`` and pitch rate ``q`` about the body y
+axis, body frame; the axis tilted by ``theta`` about the world Y axis) everything the law needs is
+linear in ``c = cos phi`` around a ring:
+
+* the normal velocity ``Vn = a + b c``, ``a = n_axial v_x``, ``b = n_radial v_z + q (rho n_axial - x n_radial)``;
+* the height ``H = h0 + h1 c`` above the target surface, ``h0 = Z - x sin theta``, ``h1 = rho cos theta``.
+
+So each switch of the law is one value of ``c``: separation (``Vn = 0``), the end of the contact
+ramp (``Vn = W``), the waterline (``H = 0``, or ``H = -+ l/2`` at the ends of the entry ramp) and
+the friction cap.  Between consecutive switches the stress is a polynomial in ``c``: where the
+full law holds and the ring is wholly inside, ``sigma = A sigma_0 + B rho_0 (a + b c)^2`` and the
+integrals of ``sigma cos^k phi`` are closed forms in ``acos c`` and ``sqrt(1 - c^2)``; on the arcs of
+a ramp (``0 < Vn < W``, or partly embedded within ``l/2`` of the surface) and wherever friction acts
+the integrand is smooth and Gauss-Legendre in ``phi`` integrates it.  The load is the DAFL of
+:mod:`fem_loads.dafl` with the same law, switches and friction, evaluated on the exact surface
+instead of a mesh's quadrature points; in the plane of motion the body's mirror symmetry halves
+the ring (``0 <= phi <= pi``, doubled).  One evaluation costs about a microsecond for a few
+dozen rings (numba, compiled once and cached like :mod:`fem_loads.compiled`), so a reduced model
+can call it thousands of times in the time a mesh load takes a hundred.
+
+This module is compiled code and its builder; it knows nothing of time integration.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from mesh import Profile
+
+__all__ = ["RevolvedSurface", "revolved_surface", "law_data", "pitch_plane_load", "lowest_height",
+           "PitchPlaneLoad", "LAW_FIELDS"]
+
+#: the layout of the law array the kernel takes (:func:`law_data`)
+LAW_FIELDS = ("static_stress", "dynamic_density", "contact_width", "contact_incidence", "entry_length",
+              "friction_coefficient", "friction_cap", "max_radius")
+_RAMP_X, _RAMP_W = np.polynomial.legendre.leggauss(4)  # arcs of a ramp: the integrand is a smooth polynomial
+_FRICTION_X, _FRICTION_W = np.polynomial.legendre.leggauss(6)  # arcs with friction: its slip direction too
+OUTLINE_POINTS = 257  # samples of the profile where the lowest point is sought: 4 mm apart on a 1 m body
+_PANEL = 0.25 * math.pi  # the longest arc one Gauss-Legendre rule covers (rad)
+
+
+@dataclass(frozen=True)
+class RevolvedSurface:
+    """The rings of a body of revolution about its centre of mass.
+
+    Attributes
+    ----------
+    rings : ndarray, shape (n, 5)
+        Per ring: ``x`` (m, forward of the centre of mass), ``rho`` (m), ``n_axial``, ``n_radial``
+        (the outward unit normal's components along the axis and outward from it) and ``w`` (m^2
+        per radian: the ring's area is ``2 pi w``).
+    outline : ndarray, shape (m, 2)
+        ``(x, rho)`` along the profile from the tip to the tail's edge (its corners exactly): where the
+        body's lowest point is sought (:func:`lowest_height`).
+    """
+
+    rings: np.ndarray
+    outline: np.ndarray
+
+    @property
+    def area(self) -> float:
+        """Total area (m^2)."""
+        return float(2.0 * math.pi * self.rings[:, 4].sum())
+
+    @property
+    def max_radius(self) -> float:
+        """Largest distance of a surface point from the centre of mass (m)."""
+        return float(np.hypot(self.rings[:, 0], self.rings[:, 1]).max())
+
+    def enclosed_volume(self) -> float:
+        """``integral (r . n) dS / 3`` (m^3): the volume the surface encloses."""
+        x, rho, n_axial, n_radial, w = self.rings.T
+        return float(2.0 * math.pi * np.sum((x * n_axial + rho * n_radial) * w) / 3.0)
+
+
+def revolved_surface(profile: Profile, tip_from_centre: float, nose_rings: int = 12, shank_rings: int = 8,
+                     face_rings: int = 4) -> RevolvedSurface:
+    """Rings at Gauss-Legendre stations of each smooth piece of ``profile``, and of its flat faces.
+
+    Parameters
+    ----------
+    profile : Profile
+        The outer profile (any analytic or measured nose).
+    tip_from_centre : float
+        Distance from the centre of mass forward to the nose tip (m).
+    nose_rings : int
+        Stations along the nose (shared among a measured nose's pieces, at least 4 each).
+    shank_rings, face_rings : int
+        Stations along the shank, and across the tail (and a blunt nose's flat tip) in radius.
+    """
+    length, nose = profile.length, profile.nose_length
+    pieces = [0.0, *[b for b in profile.breakpoints if 0.0 < b < length], length]
+    nose_pieces = max(1, sum(1 for a in pieces[:-1] if a < nose - 1e-12))
+    rows = []
+    for start, end in zip(pieces[:-1], pieces[1:]):
+        count = shank_rings if start >= nose - 1e-12 else max(4, nose_rings // nose_pieces)
+        nodes, weights = np.polynomial.legendre.leggauss(count)
+        s = start + (end - start) * (nodes + 1.0) / 2.0  # distance from the tip
+        ds = (end - start) / 2.0 * weights
+        radius, slope = profile.radius_at(s), profile.slope_at(s)
+        n_axial, n_radial = profile.outward_normal(s)
+        rows.append(np.stack([tip_from_centre - s, radius, n_axial, n_radial, radius * np.sqrt(1.0 + slope**2) * ds],
+                             axis=1))
+    for x, n_axial, outer in ((tip_from_centre - length, -1.0, profile.radius),
+                              (tip_from_centre, 1.0, profile.tip_radius)):
+        if outer > 0.0:  # a flat face: rings of radius rho, area rho d rho d phi
+            nodes, weights = np.polynomial.legendre.leggauss(face_rings)
+            rho = outer * (nodes + 1.0) / 2.0
+            rows.append(np.stack([np.full(face_rings, x), rho, np.full(face_rings, n_axial), np.zeros(face_rings),
+                                  rho * outer / 2.0 * weights], axis=1))
+    s = np.unique(np.concatenate([np.linspace(0.0, length, OUTLINE_POINTS), pieces]))
+    outline = np.stack([tip_from_centre - s, profile.radius_at(s)], axis=1)
+    outline = np.vstack([[tip_from_centre, 0.0], outline])  # the tip's centre (a blunt nose's face)
+    return RevolvedSurface(np.ascontiguousarray(np.concatenate(rows)), np.ascontiguousarray(outline))
+
+
+def law_data(static_stress: float, dynamic_density: float, contact_width: float, contact_incidence: float,
+             entry_length: float, max_radius: float, friction_coefficient: float = 0.0,
+             friction_cap: float | None = None) -> np.ndarray:
+    """The law, its switches and friction as the kernel takes them (:data:`LAW_FIELDS`; SI units).
+
+    ``contact_width`` ``w`` (m/s) and ``contact_incidence`` ``delta`` give the contact ramp's width
+    ``W = w + delta (|V| + |q| max_radius)``; ``entry_length`` ``l`` (m) the entry ramp's (0: sharp).
+    """
+    return np.array([static_stress, dynamic_density, contact_width, contact_incidence, entry_length,
+                     friction_coefficient, friction_cap or 0.0, max_radius], dtype=float)
+
+
+@njit(cache=True, inline="always")
+def _smooth_step(t: float) -> float:
+    """The C2 quintic step of :mod:`fem_loads.ramps`, ``S(clip(t, 0, 1))``."""
+    if t <= 0.0:
+        return 0.0
+    if t >= 1.0:
+        return 1.0
+    return t * t * t * (10.0 + t * (6.0 * t - 15.0))
+
+
+@njit(cache=True, inline="always")
+def _add_switch(switches, count: int, value: float) -> int:
+    if -1.0 < value < 1.0:
+        switches[count] = value
+        count += 1
+    return count
+
+
+@njit(cache=True, inline="always")
+def _switches(switches, a, b, h0, h1, width, entry, cap_speed) -> int:
+    """The values of ``c = cos phi`` where the law switches around one ring, with -1 and 1, sorted."""
+    switches[0] = -1.0
+    count = 1
+    if b != 0.0:
+        count = _add_switch(switches, count, -a / b)  # separation, Vn = 0
+        count = _add_switch(switches, count, (width - a) / b)  # the contact ramp's end, Vn = W
+        if cap_speed < 1.0:
+            count = _add_switch(switches, count, (cap_speed - a) / b)  # friction reaches its cap
+    if h1 != 0.0:
+        count = _add_switch(switches, count, (-0.5 * entry - h0) / h1)  # wholly inside below this height
+        if entry > 0.0:
+            count = _add_switch(switches, count, (0.5 * entry - h0) / h1)  # nothing above this one
+    switches[count] = 1.0
+    count += 1
+    for m in range(1, count):  # insertion sort: at most eight values
+        value = switches[m]
+        n = m - 1
+        while n >= 0 and switches[n] > value:
+            switches[n + 1] = switches[n]
+            n -= 1
+        switches[n + 1] = value
+    return count
+
+
+@njit(cache=True, inline="always")
+def _closed_arc(low, high, a, b, static, dynamic):
+    """Integrals of ``sigma`` and ``sigma cos phi`` over the arc ``low < cos phi < high`` at the full law."""
+    s_low = math.sqrt(max(1.0 - low * low, 0.0))
+    s_high = math.sqrt(max(1.0 - high * high, 0.0))
+    i0 = math.acos(low) - math.acos(high)  # integrals of cos^k phi, k = 0..3
+    i1 = s_low - s_high
+    i2 = 0.5 * (i0 + s_low * low - s_high * high)
+    i3 = i1 - (s_low * s_low * s_low - s_high * s_high * s_high) / 3.0
+    return (static * i0 + dynamic * (a * a * i0 + 2.0 * a * b * i1 + b * b * i2),
+            static * i1 + dynamic * (a * a * i1 + 2.0 * a * b * i2 + b * b * i3))
+
+
+@njit(cache=True, inline="always")
+def _slip_factor(slip2, width, speed2) -> float:
+    """``k`` of :meth:`fem_loads.dafl.DAFLLoads._slip`: the friction stress along the slip is ``tau k s``."""
+    if width > 0.0:
+        return 1.0 / math.sqrt(slip2 + width * width)
+    if slip2 > 1e-24 * speed2:
+        return 1.0 / math.sqrt(slip2)
+    return 0.0
+
+
+@njit(cache=True, inline="always")
+def _gauss_arc(low, high, a, b, h0, h1, x, rho, n_axial, n_radial, vx, vz, q, law, width):
+    """Integrals over the arc ``low < cos phi < high`` by Gauss-Legendre panels of at most 45 degrees (6 points
+    integrate cos^4 over one to 1e-9, where over a half ring they would err by 1e-4): ``sigma``,
+    ``sigma cos phi``, and the friction stress's x and z components and its moment arm."""
+    static, dynamic, entry, mu, cap = law[0], law[1], law[4], law[5], law[6]
+    j0 = j1 = jx = jz = jm = 0.0
+    phi_low, phi_high = math.acos(high), math.acos(low)
+    panels = int(math.ceil((phi_high - phi_low) / _PANEL))
+    half = 0.5 * (phi_high - phi_low) / panels
+    nodes, weights = (_FRICTION_X, _FRICTION_W) if mu > 0.0 else (_RAMP_X, _RAMP_W)
+    for g in range(panels * nodes.shape[0]):
+        phi = phi_low + (2 * (g // nodes.shape[0]) + 1) * half + half * nodes[g % nodes.shape[0]]
+        c = math.cos(phi)
+        vn = a + b * c
+        if vn <= 0.0:
+            continue
+        sigma = static + dynamic * vn * vn
+        if width > 0.0:
+            sigma *= _smooth_step(vn / width)
+        if entry > 0.0:
+            sigma *= _smooth_step(0.5 - (h0 + h1 * c) / entry)
+        elif h0 + h1 * c >= 0.0:
+            continue
+        weight = half * weights[g % nodes.shape[0]]
+        j0 += sigma * weight
+        j1 += sigma * c * weight
+        if mu > 0.0:
+            tau = min(mu * sigma, cap) if cap > 0.0 else mu * sigma
+            # the slip: the point's velocity u = (vx + q rho c, 0, vz - q x) less its normal part
+            sx = vx + q * rho * c - vn * n_axial
+            sy = -vn * n_radial * math.sin(phi)
+            sz = vz - q * x - vn * n_radial * c
+            k = _slip_factor(sx * sx + sy * sy + sz * sz, width, vx * vx + vz * vz)
+            jx += tau * k * sx * weight
+            jz += tau * k * sz * weight
+            jm += tau * k * (rho * c * sx - x * sz) * weight
+    return j0, j1, jx, jz, jm
+
+
+@njit(cache=True, inline="always")
+def _uniform_ring(a, h0, vx, n_axial, n_radial, law, width):
+    """A ring loaded the same all round (``b = 0``, ``h1 = 0``: axial motion, the axis vertical): ``sigma`` over
+    the half ring, and the friction's axial part (the slip along the meridian); no side load, exactly."""
+    static, dynamic, entry, mu, cap = law[0], law[1], law[4], law[5], law[6]
+    if a <= 0.0 or h0 >= 0.5 * entry:
+        return 0.0, 0.0
+    sigma = static + dynamic * a * a
+    if width > 0.0:
+        sigma *= _smooth_step(a / width)
+    if entry > 0.0:
+        sigma *= _smooth_step(0.5 - h0 / entry)
+    elif h0 >= 0.0:
+        return 0.0, 0.0
+    jx = 0.0
+    if mu > 0.0:
+        tau = min(mu * sigma, cap) if cap > 0.0 else mu * sigma
+        sx = vx - a * n_axial
+        jx = math.pi * tau * _slip_factor(sx * sx + (a * n_radial) ** 2, width, vx * vx) * sx
+    return math.pi * sigma, jx
+
+
+@njit(cache=True)
+def pitch_plane_load(rings, law, height, sin_theta, cos_theta, vx, vz, q, out) -> None:
+    """Force ``(F_x, F_z)`` (body frame, N) and pitch moment ``M_y`` (N m, about the centre of mass) into ``out``.
+
+    ``height`` is the centre of mass's height above the target surface (m; the target is below),
+    ``theta`` the body's rotation about the world Y axis (body x in the world: ``(cos, -sin)`` in X, Z),
+    ``vx``, ``vz`` the velocity in the body frame (m/s), ``q`` the pitch rate (rad/s).
+    """
+    static, dynamic, entry, mu, cap = law[0], law[1], law[4], law[5], law[6]
+    width = law[2] + law[3] * (math.sqrt(vx * vx + vz * vz) + abs(q) * law[7])
+    cap_speed = 2.0  # a normal velocity beyond any: no cap
+    if mu > 0.0 and cap > mu * static and dynamic > 0.0:
+        cap_speed = math.sqrt((cap / mu - static) / dynamic)
+    fx = fz = my = 0.0
+    switches = np.empty(8)
+    for i in range(rings.shape[0]):
+        x, rho, n_axial, n_radial, w = rings[i, 0], rings[i, 1], rings[i, 2], rings[i, 3], rings[i, 4]
+        a = n_axial * vx
+        b = n_radial * vz + q * (rho * n_axial - x * n_radial)
+        h0 = height - sin_theta * x
+        h1 = cos_theta * rho
+        if h0 - abs(h1) >= 0.5 * entry or a + abs(b) <= 0.0:
+            continue  # wholly out of the target, or wholly moving away from it
+        j0 = j1 = jx = jz = jm = 0.0
+        if mu == 0.0 and a - abs(b) >= width and h0 + abs(h1) <= -0.5 * entry:
+            # wholly pressing at the full law and wholly inside: I0 = pi, I1 = 0, I2 = pi/2, I3 = 0
+            j0 = math.pi * (static + dynamic * (a * a + 0.5 * b * b))
+            j1 = math.pi * dynamic * a * b
+        elif b == 0.0 and h1 == 0.0 and (mu == 0.0 or q == 0.0):
+            j0, jx = _uniform_ring(a, h0, vx, n_axial, n_radial, law, width)
+        else:
+            count = _switches(switches, a, b, h0, h1, width, entry, cap_speed)
+            for m in range(count - 1):
+                low, high = switches[m], switches[m + 1]
+                middle = 0.5 * (low + high)
+                speed_middle, height_middle = a + b * middle, h0 + h1 * middle
+                if high <= low or speed_middle <= 0.0 or height_middle >= 0.5 * entry:
+                    continue  # the arc moves away from the target, or lies outside it
+                if mu == 0.0 and speed_middle >= width and height_middle <= -0.5 * entry:
+                    d0, d1 = _closed_arc(low, high, a, b, static, dynamic)
+                    j0 += d0
+                    j1 += d1
+                else:
+                    d0, d1, dx, dz, dm = _gauss_arc(low, high, a, b, h0, h1, x, rho, n_axial, n_radial, vx, vz, q,
+                                                    law, width)
+                    j0, j1, jx, jz, jm = j0 + d0, j1 + d1, jx + dx, jz + dz, jm + dm
+        # both halves of the ring: dF = -(sigma n + tau t) w dphi, dM = r x dF
+        fx -= 2.0 * w * (n_axial * j0 + jx)
+        fz -= 2.0 * w * (n_radial * j1 + jz)
+        my -= 2.0 * w * ((rho * n_axial - x * n_radial) * j1 + jm)
+    out[0] = fx
+    out[1] = fz
+    out[2] = my
+
+
+@njit(cache=True)
+def lowest_height(outline, height, sin_theta, cos_theta) -> float:
+    """Height (m) of the body's lowest point on its ``outline`` (:attr:`RevolvedSurface.outline`; negative
+    once any point is inside)."""
+    lowest = math.inf
+    for i in range(outline.shape[0]):
+        value = height - sin_theta * outline[i, 0] - abs(cos_theta * outline[i, 1])
+        if value < lowest:
+            lowest = value
+    return lowest
+
+
+class PitchPlaneLoad:
+    """:func:`pitch_plane_load` callable from Python, in the DAFL load's terms.
+
+    Parameters
+    ----------
+    surface : RevolvedSurface
+    law : ndarray
+        :func:`law_data`.
+    """
+
+    def __init__(self, surface: RevolvedSurface, law: np.ndarray) -> None:
+        self.surface, self.law = surface, np.asarray(law, dtype=float)
+
+    def __call__(self, height: float, theta: float, velocity_body: tuple[float, float],
+                 pitch_rate: float) -> np.ndarray:
+        """``(F_x, F_z, M_y)`` in the body frame (N, N m) at ``height`` (m), ``theta`` (rad), ``(v_x, v_z)`` (m/s)
+        and ``pitch_rate`` (rad/s)."""
+        out = np.empty(3)
+        pitch_plane_load(self.surface.rings, self.law, float(height), math.sin(theta), math.cos(theta),
+                         float(velocity_body[0]), float(velocity_body[1]), float(pitch_rate), out)
+        return out
