@@ -129,7 +129,7 @@ def predict_speeds(args: argparse.Namespace) -> int:
     def speed(value: float | None) -> str:
         return f"{value:.1f} m/s" if value is not None else "none"
 
-    bracket = f" (between {result.critical_bracket[0]:g} and {result.critical_bracket[1]:g} m/s)" \
+    bracket = f" (between {result.critical_bracket[0]:.1f} and {result.critical_bracket[1]:.1f} m/s)" \
         if result.critical_bracket else ""
     print(f"characteristic convergent velocity {speed(result.characteristic_convergent_velocity)}")
     print(f"critical impact velocity {speed(result.critical_velocity)}{bracket}")

@@ -1,11 +1,12 @@
-"""Studies: many runs of a scene and what they show (sweeps, characteristic speeds, ensembles, accuracy, law
-comparisons, the paper).
+"""Studies: many runs of a scene and what they show (sweeps, characteristic speeds, their prediction by a reduced
+model, ensembles, accuracy, law comparisons, the paper).
 
 This room imports ``cases.run``, ``cases.scene``, ``cases.viz.figures`` (for its figures) and the
 physics; nothing imports it but the command line.
 """
 
 from .pool import Pool
+from .predict import Prediction, predict
 from .speeds import (CriticalSearch, ConvergentResult, find_critical_velocities, find_critical_velocity, is_unstable,
                      measure_convergent_velocity)
 from .sweep import Sweep, SweepResult, Variation, grid, parse_grid, read_variations, run_sweep
@@ -13,5 +14,5 @@ from .sweep import Sweep, SweepResult, Variation, grid, parse_grid, read_variati
 __all__ = [
     "Pool", "Sweep", "SweepResult", "Variation", "grid", "parse_grid", "read_variations", "run_sweep",
     "find_critical_velocity", "find_critical_velocities", "CriticalSearch", "measure_convergent_velocity",
-    "ConvergentResult", "is_unstable",
+    "ConvergentResult", "is_unstable", "predict", "Prediction",
 ]

@@ -150,16 +150,17 @@ class Prediction:
         return record
 
 
-def predict(scene: Scene, speeds: tuple[float, float] = (200.0, 1600.0), resolution: float = 5.0) -> Prediction:
+def predict(scene: Scene, speeds: tuple[float, float] = (200.0, 1600.0), resolution: float = 5.0,
+            rtol: float = RTOL, rings: dict[str, int] | None = None) -> Prediction:
     """The characteristic convergent velocity and the critical impact velocity of ``scene`` (its disturbance).
 
     ``speeds``: the range the critical velocity is sought in, and ``resolution`` its bracket (m/s), as
-    ``penetrate critical`` takes them.  ``prediction_time`` is the model's own cost (from the prepared
+    ``penetrate critical`` takes them; ``rtol`` and ``rings``: the model's numerics (:class:`ReducedModel`).  ``prediction_time`` is the model's own cost (from the prepared
     projectile on: comparable with a run's ``integration_time``); ``wall_time`` includes preparing the
     projectile (the mesh and mass properties a run prepares too; read from the cache when there).
     """
     start = time.perf_counter()
-    model = ReducedModel(scene, prepare_projectile(scene))
+    model = ReducedModel(scene, prepare_projectile(scene), rtol, rings)
     model.run(scene.impact.speed, time_limit=0.0)  # numba loads (or compiles) its code here, outside the timing
     clock = time.perf_counter()
     runs: list[ReducedRun] = []
@@ -168,7 +169,7 @@ def predict(scene: Scene, speeds: tuple[float, float] = (200.0, 1600.0), resolut
     critical, bracket = _critical(model, speeds, resolution, runs, messages, convergent)
     end = time.perf_counter()
     description = (f"reduced pitch-plane model: the scene's DAFL integrated over {len(model.surface.rings)} rings of"
-                   f" the exact profile, a planar rigid body, Dormand-Prince rtol {RTOL:g} (docs/theory.md)")
+                   f" the exact profile, a planar rigid body, Dormand-Prince rtol {rtol:g} (docs/theory.md)")
     return Prediction(convergent, critical, bracket, description, list(ASSUMPTIONS), runs, messages,
                       end - clock, end - start)
 
