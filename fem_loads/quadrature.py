@@ -139,7 +139,7 @@ def _to_exact_surface(points: np.ndarray, normals: np.ndarray, weights: np.ndarr
     weights[lateral] *= (r / rho[lateral]) * n_mesh_radial[lateral] / n_radial
     # the tail disc (and a flat front face) are planar, but a flat mesh bounds them by a
     # polygon: stretch each radially onto its exact disc (uniformly)
-    for disc, radius in ((~lateral & (normals[:, 0] < 0), profile.radius),
+    for disc, radius in ((~lateral & (normals[:, 0] < 0), profile.tail_radius),
                          (~lateral & (normals[:, 0] > 0), profile.tip_radius)):
         if disc.any() and radius > 0:
             stretch = np.pi * radius**2 / weights[disc].sum()

@@ -110,7 +110,7 @@ def revolved_surface(profile: Profile, tip_from_centre: float, nose_rings: int =
         n_axial, n_radial = profile.outward_normal(s)
         rows.append(np.stack([tip_from_centre - s, radius, n_axial, n_radial, radius * np.sqrt(1.0 + slope**2) * ds],
                              axis=1))
-    for x, n_axial, outer in ((tip_from_centre - length, -1.0, profile.radius),
+    for x, n_axial, outer in ((tip_from_centre - length, -1.0, profile.tail_radius),
                               (tip_from_centre, 1.0, profile.tip_radius)):
         if outer > 0.0:  # a flat face: rings of radius rho, area rho d rho d phi
             nodes, weights = np.polynomial.legendre.leggauss(face_rings)

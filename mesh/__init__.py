@@ -6,11 +6,11 @@ from .files import build_file_mesh
 from .imported import BodyOutline, FileGeometry, GeometryError, body_frame
 from .io import read_mesh, write_mesh
 from .placement import AxisymmetricMassProperties, analytic_mass_properties, place_counterweight
-from .profile import (BluntOgiveNose, ConeNose, Interior, OgiveNose, Profile, ProfileNose, ProjectileGeometry,
-                      SecantOgiveNose)
+from .profile import (BluntOgiveNose, ConeNose, Interior, OgiveNose, Profile, ProfileBody, ProfileNose,
+                      ProjectileGeometry, SecantOgiveNose)
 
 __all__ = [
-    "Profile", "OgiveNose", "ConeNose", "SecantOgiveNose", "BluntOgiveNose", "ProfileNose", "Interior",
+    "Profile", "OgiveNose", "ConeNose", "SecantOgiveNose", "BluntOgiveNose", "ProfileNose", "ProfileBody", "Interior",
     "ProjectileGeometry",
     "ProjectileMesh", "build_mesh", "BODY", "COUNTERWEIGHT", "OUTER",
     "read_mesh", "write_mesh",

@@ -112,11 +112,26 @@ def _profile_faces(occ, geometry: ProjectileGeometry) -> tuple[list[int], list[i
             curve = occ.addLine(tip, shoulder)
         return curve, tip, shoulder
 
+    def body_curves(shoulder: int, drop: float, end_x: float) -> tuple[list[int], int]:
+        """The shank (and a measured body, exactly, as one B-spline) from the shoulder to ``end_x``, lowered by
+        ``drop``; returns (curves, the corner point at ``end_x``)."""
+        end = -end_x
+        corner = occ.addPoint(end_x, float(p.radius_at(end)) - drop, 0.0)
+        if p.body is None or end <= p.body.start:
+            return [occ.addLine(shoulder, corner)], corner
+        poles, knots, multiplicities = p.body_curve.bezier(p.body.start, drop, end)
+        start = occ.addPoint(-p.body.start, a - drop, 0.0)
+        inner = [occ.addPoint(-s, r, 0.0) for s, r in poles[1:-1]]
+        curve = occ.addBSpline([start, *inner, corner], degree=3, knots=knots, multiplicities=multiplicities)
+        occ.remove([(0, t) for t in inner])
+        curves = [curve] if p.body.start <= ln else [occ.addLine(shoulder, start), curve]
+        return curves, corner
+
     def closed_face(tip_x: float, tip_r: float, drop: float, end_x: float) -> int:
         curve, tip, shoulder = nose_curve(tip_x, tip_r, drop)
-        corner = occ.addPoint(end_x, a - drop, 0.0)
+        shank, corner = body_curves(shoulder, drop, end_x)
         axis_end = occ.addPoint(end_x, 0.0, 0.0)
-        curves = [curve, occ.addLine(shoulder, corner), occ.addLine(corner, axis_end)]
+        curves = [curve, *shank, occ.addLine(corner, axis_end)]
         if tip_r > 0.0:  # a flat front face
             axis_tip = occ.addPoint(tip_x, 0.0, 0.0)
             curves += [occ.addLine(axis_end, axis_tip), occ.addLine(axis_tip, tip)]
@@ -132,7 +147,7 @@ def _profile_faces(occ, geometry: ProjectileGeometry) -> tuple[list[int], list[i
         body, _ = occ.cut([(2, outer)], [(2, cavity)])
         return [t for _, t in body], []
     x1, x2 = geometry.counterweight
-    slab = occ.addRectangle(-x2, 0.0, 0.0, x2 - x1, a)
+    slab = occ.addRectangle(-x2, 0.0, 0.0, x2 - x1, p.largest_radius)
     weight, _ = occ.intersect([(2, cavity)], [(2, slab)], removeObject=False)
     body, _ = occ.cut([(2, outer)], [(2, cavity)])
     return [t for _, t in body], [t for _, t in weight]
@@ -159,10 +174,11 @@ def _mesh_quarter(geometry: ProjectileGeometry, size: float, order: int) -> Proj
         weight_vols = sorted({t for m in mapping[n_body:] for _, t in m} - set(body_vols))
     occ.synchronize()
 
-    # outer surface: boundary surfaces of the union that reach the shank radius
-    # (cavity walls stop a wall thickness inside it; the symmetry planes are
-    # recognised by lying in y = 0 or z = 0)
-    a = geometry.profile.radius
+    # outer surface: boundary surfaces of the union that reach the outer profile's radius over their span
+    # (cavity walls stop a wall thickness inside it; the symmetry planes are recognised by lying in y = 0
+    # or z = 0)
+    profile = geometry.profile
+    a = profile.radius
     inner = 0.0 if geometry.interior is None else geometry.interior.wall_thickness
     boundary = gmsh.model.getBoundary([(3, v) for v in body_vols + weight_vols],
                                       combined=True, oriented=False)
@@ -171,7 +187,8 @@ def _mesh_quarter(geometry: ProjectileGeometry, size: float, order: int) -> Proj
         xmin, ymin, zmin, xmax, ymax, zmax = gmsh.model.getBoundingBox(2, abs(tag))
         # OpenCASCADE pads bounding boxes by its tolerance (~1e-7 m)
         on_plane = (ymax - ymin) < 1e-3 * a or (zmax - zmin) < 1e-3 * a
-        if not on_plane and (geometry.interior is None or max(ymax, zmax) > a - 0.5 * inner):
+        reach = float(profile.radius_at(np.linspace(max(-xmax, 0.0), min(-xmin, profile.length), 65)).max())
+        if not on_plane and (geometry.interior is None or max(ymax, zmax) > reach - 0.5 * inner):
             outer_surfaces.append(abs(tag))
     gmsh.model.addPhysicalGroup(3, body_vols, BODY, name="body")
     if weight_vols:

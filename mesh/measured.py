@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["ProfileNose", "NoseCurve", "MIN_POINTS", "SHANK_RTOL"]
+__all__ = ["ProfileNose", "ProfileBody", "NoseCurve", "MIN_POINTS", "SHANK_RTOL"]
 
 MIN_POINTS = 3
 SHANK_RTOL = 1e-6  # the last radius may differ from the shank radius by this fraction of it (then set to it)
@@ -88,8 +88,73 @@ class ProfileNose:
         return NoseCurve(x, r)
 
 
+@dataclass(frozen=True)
+class ProfileBody:
+    """The body behind the nose given by measured points of its half-profile: a boat tail, a flare.
+
+    Between the nose's shoulder and the first point the body is the shank's cylinder; from the first
+    point to the tail it is the same shape-preserving cubic as a measured nose's (module docstring).
+
+    Parameters
+    ----------
+    points : sequence of (x, r)
+        Distance from the tip ``x`` (m) and radius ``r`` (m) of each point: at least 2, all finite, ``x``
+        strictly increasing, ``r > 0``; the first on the shank (its radius the shank radius, ``x`` at or
+        behind the nose's end), the last at the tail (``x`` the projectile's length):
+        :class:`~mesh.profile.Profile` checks those two.
+    """
+
+    points: tuple[tuple[float, float], ...]
+
+    def __post_init__(self) -> None:
+        try:
+            points = tuple((float(x), float(r)) for x, r in self.points)
+        except (TypeError, ValueError):
+            raise ValueError("body.points: must be a list of [x, r] pairs of numbers (m)") from None
+        object.__setattr__(self, "points", points)
+        if len(points) < 2:
+            raise ValueError(f"body.points: {len(points)} points given (allowed: at least 2, from the shank to the"
+                             " tail)")
+        for i, (x, r) in enumerate(points):
+            if not (math.isfinite(x) and math.isfinite(r)):
+                raise ValueError(f"body.points[{i}] = [{x}, {r}]: must be finite numbers (m)")
+            if not r > 0.0:
+                raise ValueError(f"body.points[{i}] = [{x:g}, {r:g}]: r must be > 0 m (a body with a hole in its"
+                                 " profile is two bodies)")
+            if i and not x > points[i - 1][0]:
+                raise ValueError(f"body.points[{i}] = [{x:g}, {r:g}]: x must exceed the previous point's x ="
+                                 f" {points[i - 1][0]:g} m (allowed: x strictly increasing)")
+
+    @property
+    def start(self) -> float:
+        """Where the body leaves the cylinder (m from the tip)."""
+        return self.points[0][0]
+
+    def check(self, radius: float, nose_length: float, length: float) -> None:
+        """Raise ValueError unless the points start on the shank behind the nose and end at the tail."""
+        x0, r0 = self.points[0]
+        if not abs(r0 - radius) <= SHANK_RTOL * radius:
+            raise ValueError(f"body.points[0]: r = {r0:g} m must be the shank radius (allowed: diameter/2 ="
+                             f" {radius:g} m, within {SHANK_RTOL:g} of it)")
+        if not x0 >= nose_length * (1 - 1e-12):
+            raise ValueError(f"body.points[0]: x = {x0:g} m lies on the nose (allowed: x >= the nose length,"
+                             f" {nose_length:g} m)")
+        last = self.points[-1][0]
+        if not abs(last - length) <= 1e-9 * length:
+            raise ValueError(f"body.points[{len(self.points) - 1}]: x = {last:g} m must be the tail (allowed:"
+                             f" the projectile's length, {length:g} m)")
+
+    def curve(self, radius: float, length: float) -> NoseCurve:
+        """The interpolating curve, its first radius set to the shank ``radius`` and its end to ``length`` (m)."""
+        x = np.array([p[0] for p in self.points])
+        r = np.array([p[1] for p in self.points])
+        r[0], x[-1] = radius, length
+        return NoseCurve(x, r)
+
+
 class NoseCurve:
-    """The shape-preserving cubic Hermite interpolant ``r(s)`` through a nose's points (module docstring).
+    """The shape-preserving cubic Hermite interpolant ``r(s)`` through a nose's (or a body's) points (module
+    docstring).
 
     Parameters
     ----------
@@ -107,16 +172,16 @@ class NoseCurve:
 
     @property
     def length(self) -> float:
-        """Nose length (m)."""
+        """Where the curve ends (m from the tip): the nose's length, or the tail."""
         return float(self.x[-1])
 
     def radius(self, s: np.ndarray) -> np.ndarray:
-        """``r(s)`` (m) for ``0 <= s <= length`` (clipped to it)."""
-        return self._radius(np.clip(s, 0.0, self.length))
+        """``r(s)`` (m) for ``x[0] <= s <= length`` (clipped to it)."""
+        return self._radius(np.clip(s, self.x[0], self.length))
 
     def slope(self, s: np.ndarray) -> np.ndarray:
-        """``dr/ds`` for ``0 <= s <= length`` (clipped to it)."""
-        return self._slope(np.clip(s, 0.0, self.length))
+        """``dr/ds`` for ``x[0] <= s <= length`` (clipped to it)."""
+        return self._slope(np.clip(s, self.x[0], self.length))
 
     def solve(self, radius: float) -> float:
         """The distance from the tip (m) where the curve first exceeds ``radius`` (m), ``0 < radius < r(length)``."""
@@ -128,8 +193,10 @@ class NoseCurve:
             return lo
         return optimize.brentq(lambda s: float(self.radius(s)) - radius, lo, hi, xtol=1e-15, rtol=1e-15)
 
-    def bezier(self, start: float, drop: float = 0.0) -> tuple[list[tuple[float, float]], list[float], list[int]]:
-        """The curve from ``start`` to the shoulder, lowered by ``drop`` (m), as one cubic B-spline.
+    def bezier(self, start: float, drop: float = 0.0,
+               end: float | None = None) -> tuple[list[tuple[float, float]], list[float], list[int]]:
+        """The curve from ``start`` to ``end`` (default: its end, the shoulder of a nose), lowered by ``drop`` (m),
+        as one cubic B-spline.
 
         Returns
         -------
@@ -141,7 +208,8 @@ class NoseCurve:
             own continuity).
         """
         tol = 1e-9 * self.length
-        ends = [start] + [float(v) for v in self.x if v > start + tol]
+        end = self.length if end is None else end
+        ends = [start] + [float(v) for v in self.x if start + tol < v < end - tol] + [end]
         poles = [(start, float(self.radius(start)) - drop)]
         for u, v in zip(ends[:-1], ends[1:]):
             h = v - u

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .measured import NoseCurve, ProfileNose
+from .measured import NoseCurve, ProfileBody, ProfileNose
 
 __all__ = [
     "OgiveNose",
@@ -27,6 +27,7 @@ __all__ = [
     "SecantOgiveNose",
     "BluntOgiveNose",
     "ProfileNose",
+    "ProfileBody",
     "Profile",
     "Interior",
     "ProjectileGeometry",
@@ -108,7 +109,7 @@ Nose = OgiveNose | ConeNose | SecantOgiveNose | BluntOgiveNose | ProfileNose
 
 @dataclass(frozen=True)
 class Profile:
-    """Outer profile: a nose, a cylindrical shank and a flat tail.
+    """Outer profile: a nose, a cylindrical shank (or a measured body: a boat tail, a flare) and a flat tail.
 
     Parameters
     ----------
@@ -119,11 +120,15 @@ class Profile:
     nose : OgiveNose, ConeNose, SecantOgiveNose, BluntOgiveNose or ProfileNose
         Nose shape.  Every nose but the cone and the measured profile is a circle arc
         (:meth:`arc`); a measured profile is a cubic through its points (:attr:`curve`).
+    body : ProfileBody, optional
+        Where the body leaves the shank's cylinder and how it runs to the tail (measured points;
+        :attr:`body_curve`); the tail is then a flat disc of radius :attr:`tail_radius`.
     """
 
     diameter: float
     length: float
     nose: Nose
+    body: ProfileBody | None = None
 
     def __post_init__(self) -> None:
         if not (self.diameter > 0 and math.isfinite(self.diameter)):
@@ -148,6 +153,8 @@ class Profile:
             raise ValueError(
                 f"length = {self.length}: must exceed the nose length {self.nose_length:.6g} m"
             )
+        if self.body is not None:
+            self.body.check(a, self.nose_length, self.length)
 
     @property
     def radius(self) -> float:
@@ -164,12 +171,29 @@ class Profile:
         """The interpolating curve of a measured nose (:mod:`mesh.measured`), or None."""
         return self.nose.curve(self.radius) if isinstance(self.nose, ProfileNose) else None
 
+    @functools.cached_property
+    def body_curve(self) -> NoseCurve | None:
+        """The interpolating curve of a measured body, from where it leaves the cylinder to the tail, or None."""
+        return self.body.curve(self.radius, self.length) if self.body is not None else None
+
+    @property
+    def tail_radius(self) -> float:
+        """Radius (m) of the flat tail disc: the shank's, or a measured body's last."""
+        return float(self.body_curve.r[-1]) if self.body is not None else self.radius
+
+    @property
+    def largest_radius(self) -> float:
+        """The profile's largest radius (m): the shank's, or a flare's (the cubic never overshoots its points)."""
+        return max(self.radius, float(self.body_curve.r.max())) if self.body is not None else self.radius
+
     @property
     def breakpoints(self) -> tuple[float, ...]:
-        """Distances from the tip (m) where the profile's curvature jumps: the shoulder, and a measured nose's points."""
-        if self.curve is not None:
-            return tuple(float(x) for x in self.curve.x[1:])
-        return (self.nose_length,)
+        """Distances from the tip (m) where the profile's curvature jumps: the shoulder, a measured nose's points,
+        and a measured body's points before the tail."""
+        nose = tuple(float(x) for x in self.curve.x[1:]) if self.curve is not None else (self.nose_length,)
+        if self.body is None:
+            return nose
+        return nose + tuple(float(x) for x in self.body_curve.x[:-1] if x > self.nose_length)
 
     def arc(self) -> tuple[float, float, float] | None:
         """``(s_c, r_c, R)``: centre and radius of the nose arc in profile coordinates, or None (cone, measured).
@@ -221,7 +245,13 @@ class Profile:
         else:
             s_c, r_c, big_r = arc
             nose = r_c + np.sqrt(np.maximum(big_r**2 - (s - s_c) ** 2, 0.0))
-        return np.where(s < ln, np.maximum(nose, 0.0), a)
+        return np.where(s < ln, np.maximum(nose, 0.0), self._body(s, a, self.body_curve.radius if self.body else None))
+
+    def _body(self, s: np.ndarray, shank: float, of_body) -> np.ndarray:
+        """Behind the nose: ``shank`` on the cylinder, ``of_body(s)`` on a measured body."""
+        if of_body is None:
+            return shank
+        return np.where(s < self.body.start, shank, of_body(s))
 
     def slope_at(self, s: np.ndarray | float) -> np.ndarray:
         """``dr/ds`` of the outer profile (zero on the shank)."""
@@ -236,7 +266,7 @@ class Profile:
             s_c, _, big_r = arc
             u = s_c - s
             nose = u / np.sqrt(np.maximum(big_r**2 - u**2, 1e-300))
-        return np.where(s < ln, nose, 0.0)
+        return np.where(s < ln, nose, self._body(s, 0.0, self.body_curve.slope if self.body else None))
 
     def outward_normal(self, s: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
         """Exact outward normal of the lateral surface at ``s``.
@@ -291,7 +321,7 @@ class Profile:
 
     def surface_area(self) -> float:
         """Total outer area (m^2): lateral surface, flat tail disc and flat front face."""
-        return self.lateral_area() + math.pi * (self.radius**2 + self.tip_radius**2)
+        return self.lateral_area() + math.pi * (self.tail_radius**2 + self.tip_radius**2)
 
 
 @dataclass(frozen=True)
@@ -349,6 +379,14 @@ class ProjectileGeometry:
             raise ValueError(
                 f"interior.tail_thickness = {tail}: must lie in (0, {hi - lo:.6g}) m"
             )
+        body = self.profile.body
+        if body is not None and body.start < self.cavity_end:
+            # a boat tail narrows the body: the wall must leave a cavity all the way to its end
+            s = np.linspace(body.start, self.cavity_end, 401)
+            narrowest = float(self.profile.radius_at(s).min())
+            if not t < narrowest:
+                raise ValueError(f"interior.wall_thickness = {t}: must be less than the body's narrowest radius"
+                                 f" before the tail plate, {narrowest:.6g} m (a thinner wall or a thicker tail plate)")
         if self.counterweight is not None:
             x1, x2 = self.counterweight
             if not (self.cavity_start <= x1 < x2 <= self.cavity_end):

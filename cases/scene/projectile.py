@@ -7,14 +7,14 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from mesh import (BODY, COUNTERWEIGHT, BluntOgiveNose, ConeNose, Interior, OgiveNose, Profile, ProfileNose,
-                  ProjectileGeometry, SecantOgiveNose, place_counterweight)
+from mesh import (BODY, COUNTERWEIGHT, BluntOgiveNose, ConeNose, Interior, OgiveNose, Profile, ProfileBody,
+                  ProfileNose, ProjectileGeometry, SecantOgiveNose, place_counterweight)
 from mesh.imported import CAD_SUFFIXES, MATERIAL_BASE, FileGeometry, file_digest
 
 from .base import Label, Number, Strict, field
 
 __all__ = ["Projectile", "GeometryFileSpec", "NoseSpec", "OgiveNoseSpec", "ConeNoseSpec", "SecantOgiveNoseSpec", "HemisphereNoseSpec",
-           "BluntNoseSpec", "ProfileNoseSpec", "InteriorSpec", "CounterweightSpec", "MassPropertiesSpec", "DEFAULT_BODY_DENSITY",
+           "BluntNoseSpec", "ProfileNoseSpec", "BodySpec", "InteriorSpec", "CounterweightSpec", "MassPropertiesSpec", "DEFAULT_BODY_DENSITY",
            "MIN_MEAN_DENSITY"]
 
 DEFAULT_BODY_DENSITY = 7850.0  # steel (kg/m^3)
@@ -89,6 +89,20 @@ class ProfileNoseSpec(Strict):
 
     def build(self) -> ProfileNose:
         return ProfileNose(tuple(self.points))
+
+
+class BodySpec(Strict):
+    """A measured body behind the nose (a boat tail, a flare): ``[x, r]`` points (m from the tip) from where it
+    leaves the shank's cylinder (``r = diameter / 2``) to the tail (``x = length``), joined by the same
+    shape-preserving cubic as a measured nose (mesh.measured)."""
+
+    points: list[tuple[Coordinate, Coordinate]] = field(
+        unit="m", min_length=2, max_length=MAX_PROFILE_POINTS,
+        description="[x, r] from the tip: x strictly increasing from the shank (r = diameter / 2) to the tail"
+                    " (x = length), r > 0")
+
+    def build(self) -> ProfileBody:
+        return ProfileBody(tuple(self.points))
 
 
 NOSE_SPECS = (OgiveNoseSpec, ConeNoseSpec, SecantOgiveNoseSpec, HemisphereNoseSpec, BluntNoseSpec, ProfileNoseSpec)
@@ -201,6 +215,8 @@ class Projectile(Strict):
     diameter: Number | None = field(None, unit="m", gt=0.0, le=10.0)
     length: Number | None = field(None, unit="m", gt=0.0, le=100.0, description="nose tip to tail")
     nose: NoseSpec | None = None
+    body: BodySpec | None = field(None, description="a measured body behind the nose (a boat tail, a flare);"
+                                                    " default: the cylinder to the tail")
     geometry: GeometryFileSpec | None = None
     materials: dict[Label, Density] | None = field(None, unit="kg/m^3",
                                                    description="density of a file's named solids or groups")
@@ -227,7 +243,7 @@ class Projectile(Strict):
                                  " geometry = { file = ... } (an analytic projectile has body_density and a"
                                  " counterweight)")
             return self
-        given = [k for k in ("diameter", "length", "nose", "interior", "counterweight", "centre_of_mass",
+        given = [k for k in ("diameter", "length", "nose", "body", "interior", "counterweight", "centre_of_mass",
                              "centre_of_mass_ratio") if getattr(self, k) is not None]
         if given:
             raise ValueError(f"{', '.join(given)}: the geometry file sets the shape and its materials the mass;"
@@ -296,7 +312,7 @@ class Projectile(Strict):
 
     def profile(self) -> Profile:
         """The outer profile (mesh room)."""
-        return Profile(self.diameter, self.length, self.nose.build())
+        return Profile(self.diameter, self.length, self.nose.build(), self.body.build() if self.body else None)
 
     def densities(self) -> dict[int, float]:
         """Density (kg/m^3) of each mesh region: the body and, with a counterweight, the counterweight

@@ -41,7 +41,7 @@ from ..run import RunStore, atomic_write_text, convergence_speed, prepare_projec
 from ..scene import Overrides
 from ..viz.figures import save_figure, subplots
 from .pool import Pool
-from .reference import axial_depth_1d
+from .reference import axial_depth_1d, check_nose_alone_presses
 from .speeds import is_unstable
 from .sweep import Sweep, Variation, run_sweep
 
@@ -54,12 +54,19 @@ DEFAULT_QUADRATURE_ORDERS = (4, 6)
 
 
 def is_plain_normal_impact(scene) -> bool:
-    """A normal impact with no disturbance, one law and no effect: the 1-D integration is its exact reference."""
+    """A normal impact with no disturbance, one law and no effect, of a body of revolution whose nose alone
+    presses (no flare): the 1-D integration is its exact reference."""
     impact, effects = scene.impact, scene.effects
-    return (impact.oblique_angle == 0 and impact.attack_angle == 0 and impact.yaw_angle == 0
-            and not any(impact.angular_velocity) and scene.target.layers is None
-            and effects.friction.model == "none" and effects.separation and effects.free_surface is None
-            and not effects.gravity)
+    plain = (impact.oblique_angle == 0 and impact.attack_angle == 0 and impact.yaw_angle == 0
+             and not any(impact.angular_velocity) and scene.target.layers is None
+             and effects.friction.model == "none" and effects.separation and effects.free_surface is None
+             and not effects.gravity and scene.projectile.geometry is None)
+    if plain and scene.projectile.body is not None:
+        try:
+            check_nose_alone_presses(scene.projectile.profile())
+        except ValueError:
+            return False
+    return plain
 
 
 def _settings(sizes: Sequence[float], steps: Sequence[float], rtols: Sequence[float],

@@ -17,6 +17,10 @@ motion has a closed form (docs/validation.md).  With a contact width ``w``
 
 which is no longer separable: the whole run is integrated, the integral over
 the nose taken by Gauss-Legendre quadrature.  None of this uses the mesh.
+
+A measured body behind the nose (``projectile.body``) is covered when it only narrows (a boat tail:
+its surface faces backward and never presses in axial motion); a flare faces forward and presses,
+and these references refuse it (:func:`check_nose_alone_presses`).
 """
 
 from __future__ import annotations
@@ -31,7 +35,20 @@ from fem_loads.ramps import smooth_step
 from fem_loads.resistance import ResistanceLaw
 from mesh.profile import ConeNose, OgiveNose, Profile
 
-__all__ = ["embedded_axial_force", "closed_form_depth", "axial_depth_1d", "axial_force", "nose_factors"]
+__all__ = ["embedded_axial_force", "closed_form_depth", "axial_depth_1d", "axial_force", "nose_factors",
+           "check_nose_alone_presses"]
+
+
+def check_nose_alone_presses(profile: Profile) -> None:
+    """Raise ValueError when anything behind the nose faces forward (a flare): these references load the nose
+    and the tip face only."""
+    if profile.body is None:
+        return
+    curve = profile.body_curve
+    s = np.linspace(profile.body.start, profile.length, 2001)
+    if float(curve.slope(s).max()) > 0.0 or float(curve.r.max()) > profile.radius:
+        raise ValueError("projectile.body: a flare presses in axial motion, and the 1-D references load the nose"
+                         " alone (a boat tail, which only narrows, is covered)")
 
 
 def nose_factors(profile: Profile, friction: float = 0.0) -> tuple[float, float]:
@@ -49,6 +66,7 @@ def nose_factors(profile: Profile, friction: float = 0.0) -> tuple[float, float]
     * cone of half-angle ``theta``: ``N1 = 1 + mu cot(theta)``,
       ``N2 = sin^2(theta) + mu sin(theta) cos(theta)``.
     """
+    check_nose_alone_presses(profile)
     a, ln = profile.radius, profile.nose_length
     if isinstance(profile.nose, OgiveNose):
         psi, big_r = profile.nose.crh, profile.ogive_radius
@@ -100,6 +118,7 @@ def closed_form_depth(profile: Profile, law: ResistanceLaw, mass: float, speed: 
 
     ``P = m / (2 pi a^2 N B rho_0) ln(1 + N B rho_0 V1^2 / (A sigma_0))``.
     """
+    check_nose_alone_presses(profile)
     area = math.pi * profile.radius**2
     n_b = profile.nose_factor() * law.dynamic_density
     return mass / (2 * area * n_b) * math.log1p(n_b * speed**2 / law.static_stress)
@@ -123,6 +142,7 @@ def axial_depth_1d(profile: Profile, law: ResistanceLaw, mass: float, speed: flo
     embedding_speed : float
         Speed (m/s) when the nose is fully embedded.
     """
+    check_nose_alone_presses(profile)
     if contact_width > 0.0 or contact_incidence > 0.0:
         return _axial_depth_contact(profile, law, mass, speed, stop_speed, rtol, contact_width, contact_incidence)
     ln = profile.nose_length

@@ -372,6 +372,38 @@ def test_profile_noses_validate_or_explain(data):
     outcome("measured nose tables", lambda: scene_from_dict(data), "scene")
 
 
+@st.composite
+def measured_bodies(draw):
+    """Test 2 with a measured body behind its nose: a valid boat tail or flare of 2 to 12 points from the shank
+    (r = 47.6 mm, at or behind the nose's end) to the tail (x = 1.4 m), with up to three defects as above, or the
+    body set beside a file's geometry."""
+    n = draw(st.integers(2, 12))
+    start = draw(st.floats(0.3, 1.3))
+    end_radius = draw(st.floats(0.01, 0.08))
+    table = [[start + (1.4 - start) * k / (n - 1), 0.0476 + (end_radius - 0.0476) * k / (n - 1)] for k in range(n)]
+    for _ in range(draw(st.integers(0, 3))):
+        i = draw(st.integers(0, len(table) - 1))
+        action = draw(st.sampled_from(["drop", "swap", "coordinate", "coordinate", "shape"]))
+        if action == "drop" and len(table) > 1:
+            del table[i]
+        elif action == "swap" and i + 1 < len(table):
+            table[i], table[i + 1] = table[i + 1], table[i]
+        elif action == "coordinate" and isinstance(table[i], list) and len(table[i]) == 2:
+            table[i][draw(st.integers(0, 1))] = draw(st.one_of(st.sampled_from(SPECIAL), st.floats(-0.1, 2.0),
+                                                               scalars))
+        elif action == "shape":
+            table[i] = draw(st.one_of(st.lists(st.floats(0, 0.2), max_size=3), scalars))
+    data = json.loads(json.dumps(BASES["forrestal_luk_test2"], default=str))
+    data["projectile"]["body"] = draw(st.one_of(st.just({"points": table}), scalars, st.just({"points": []})))
+    return data
+
+
+@fuzz(200)
+@given(measured_bodies())
+def test_measured_bodies_validate_or_explain(data):
+    outcome("measured body tables", lambda: scene_from_dict(data), "scene")
+
+
 BODY_FILES = ("step", "msh", "directory", "text", "missing", "relative")
 
 
