@@ -19,9 +19,11 @@ are the project's).  Usage (``./dev docs`` runs this file)::
 What ``--check`` compares.  Text and numbers must match as printed, except
 the volatile figures: a number followed by a unit of time (``s``, ``ms``,
 ``us``, ``min``, ``h``) or memory (``kB``, ``MB``, ``GB``), or a ratio written
-``2.9x``, and the stamp line ``_measured ... _`` that states the machine and
-the date.  Those vary from one machine and one moment to the next, so they
-are stamped and skipped: a regenerated block may differ in them and pass.
+``2.9x``, a number written ``~1e-9`` (a figure of round-off, or of a fit that
+a change below its data's accuracy moves: the command says which), and the
+stamp line ``_measured ... _`` that states the machine and the date.  Those
+vary from one machine and one moment to the next, so they are stamped and
+skipped: a regenerated block may differ in them and pass.
 Every other digit is a physics figure, a count or a table entry and must
 reproduce exactly.  A block that differs is reported as ``FILE:LINE`` with
 the first difference, and the exit code is 1.
@@ -57,7 +59,7 @@ BUDGET_SECONDS = 60.0
 
 #: a number, with the unit that may follow it (volatile units are skipped by --check)
 _VALUE = r"\d[\d,]*(?:\.\d+)?(?:e[-+]?\d+)?"
-NUMBER = re.compile(rf"{_VALUE}(?:-{_VALUE})?"  # a value or a range ``4.15-4.75``; a sign stays text
+NUMBER = re.compile(rf"(?P<approx>~[-+]?)?{_VALUE}(?:-{_VALUE})?"  # a value or a range ``4.15-4.75``; a sign stays text
                     r"(?P<unit>\s?(?:ms|us|µs|min|s|h|kB|KB|MB|GB|MiB|GiB)\b|x\b|×)?")
 STAMP = re.compile(r"^_measured .*_\s*$")
 
@@ -150,7 +152,7 @@ def _tokens(text: str) -> list[tuple[str, str]]:
         else:
             if before.strip():
                 out.append(("text", " ".join(before.split())))
-            out.append(("volatile" if match["unit"] else "number", match.group()))
+            out.append(("volatile" if match["unit"] or match["approx"] else "number", match.group()))
         position = match.end()
     if kept[position:].strip():
         out.append(("text", " ".join(kept[position:].split())))

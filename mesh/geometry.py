@@ -341,7 +341,7 @@ def gmsh_session(name: str) -> Iterator[None]:
     """A fresh gmsh model named ``name``, one at a time per process, quiet, on one thread (deterministic meshes)."""
     import gmsh
 
-    with _GMSH_LOCK, _standard_output_discarded():
+    with _GMSH_LOCK, standard_output_discarded():
         gmsh.initialize(interruptible=False)
         try:
             gmsh.option.setNumber("General.Terminal", 0)
@@ -353,7 +353,7 @@ def gmsh_session(name: str) -> Iterator[None]:
 
 
 @contextlib.contextmanager
-def _standard_output_discarded() -> Iterator[None]:
+def standard_output_discarded() -> Iterator[None]:
     """Discard what C code prints on file descriptor 1 meanwhile.
 
     ``General.Terminal = 0`` silences gmsh's own messages, but its HXT mesher prints
@@ -371,6 +371,7 @@ def _standard_output_discarded() -> Iterator[None]:
             os.dup2(devnull.fileno(), 1)
         yield
     finally:
+        sys.stdout.flush()  # and Python's: a library's print() goes with it
         with contextlib.suppress(OSError, AttributeError):
             ctypes.CDLL(None).fflush(None)  # C's buffered printf output goes to the discarded descriptor
         os.dup2(saved, 1)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .geometry import TET_EDGES, TRI_EDGES, ProjectileMesh, _orient_tetra
+from .geometry import TET_EDGES, TRI_EDGES, ProjectileMesh, _orient_tetra, standard_output_discarded
 from .imported import (FileGeometry, GeometryError, TET_FACES, check_size, components, face_table, model_frame,
                        orient_by_volume, regions)
 
@@ -35,7 +35,8 @@ def read_volume_mesh(geometry: FileGeometry) -> ProjectileMesh:
     import meshio
 
     try:
-        m = meshio.read(geometry.path)
+        with standard_output_discarded():  # meshio prints an empty line reading a gmsh 4 file: stdout is the caller's
+            m = meshio.read(geometry.path)
     except Exception as exc:  # meshio raises ReadError, KeyError, ValueError, ... on files it cannot parse
         raise GeometryError(f"projectile.geometry.file = {geometry.path!r}: meshio cannot read it"
                             f" ({type(exc).__name__}: {exc})") from None

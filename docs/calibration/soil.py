@@ -39,12 +39,12 @@ def run_fit(parameters: list[str], tests, overrides=()) -> object:
     return fit(scene(2), [("target.law", SOIL), *overrides], parameters, observations(tests), STORE, POOL)
 
 
-def fitted_cells(result) -> str:
-    return ", ".join(f"{row['fitted']:.3f}" for row in result.observations)
+def fitted_cells(result, mark: str = "") -> str:
+    return ", ".join(f"{mark}{row['fitted']:.3f}" for row in result.observations)
 
 
-def residual_cells(result) -> str:
-    return ", ".join(f"{row['residual']:+.3f}" for row in result.observations)
+def residual_cells(result, mark: str = "") -> str:
+    return ", ".join(f"{mark}{row['residual']:+.3f}" for row in result.observations)
 
 
 def main() -> None:
@@ -53,12 +53,15 @@ def main() -> None:
           "| RMS (m) | runs |")
     print("|---|---|---|---|---|---|---|")
     try:
+        # the two are nearly collinear on these shots: where along the valley the fit stops moves with changes
+        # far below the runs' accuracy (another machine's round-off), so its figures are marked ~ (not compared
+        # by docs/regenerate.py --check); docs/calibration.md says so
         both = run_fit(["target.law.A=0.5:4", "target.law.B=0.3:3"], tests)
-        values = "; ".join(f"{k.rsplit('.', 1)[1]} = {v:.3f} +- {both.standard_errors[k]:.3f}"
+        values = "; ".join(f"{k.rsplit('.', 1)[1]} = ~{v:.3f} +- ~{both.standard_errors[k]:.3f}"
                            for k, v in both.parameters.items())
-        print(f"| A and B | `A`, `B` | {values} (correlation {both.correlation[0][1]:+.3f}) | "
-              f"{fitted_cells(both)} | {residual_cells(both)} | "
-              f"{_rms(both):.3f} | {both.runs} |")
+        print(f"| A and B | `A`, `B` | {values} (correlation ~{both.correlation[0][1]:+.3f}) | "
+              f"{fitted_cells(both, '~')} | {residual_cells(both, '~')} | "
+              f"~{_rms(both):.3f} | ~{both.runs} |")
     except NotIdentifiable as error:
         print(f"| A and B | `A`, `B` | not identifiable: {error} | - | - | - | - |")
     for name, parameters, overrides in (

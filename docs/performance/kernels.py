@@ -7,7 +7,9 @@ Usage (from the repository root; about a minute once the meshes are cached)::
 For each scene of ``cases/*.toml`` at its shipped numerics: the integration time of one run in
 process with ``numerics.kernel = "numpy"`` and ``"compiled"`` (the minimum of ``--repeats``, after
 a first run that prepares the projectile and loads the compiled code), their ratio, the steps and
-load evaluations of each, and the relative difference of depth and path length between the two.
+load evaluations of each, and the relative difference of depth and path length between the two,
+as its power of ten, marked ``~`` (the two sum in another order, so the last bits differ from one
+machine to the next; docs/numerics.md, "The compiled step").
 """
 
 from __future__ import annotations
@@ -19,6 +21,16 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 
 from cases import SHIPPED_SCENES, load_scene, run_scene, scene_path  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from measure import stamp  # noqa: E402
+
+
+def _below(difference: float) -> str:
+    """``~1e-k`` (docs/regenerate.py: round-off, not compared), the power of ten nearest ``difference``."""
+    import math
+
+    return "0" if difference == 0.0 else f"~1e{round(math.log10(difference)):d}"
 
 
 def _timed(name: str, kernel: str, repeats: int):
@@ -32,15 +44,18 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args(argv)
-    print("| scene | numpy (s) | compiled (s) | ratio | steps | load evaluations | depth difference | path difference |")
+    print("| scene | numpy | compiled | ratio | steps (numpy / compiled) | load evaluations | depth difference |"
+          " path difference |")
     print("|---|---|---|---|---|---|---|---|")
     for name in SHIPPED_SCENES:
         (slow, a), (fast, b) = (_timed(name, kernel, args.repeats) for kernel in ("numpy", "compiled"))
         depth_a, depth_b = abs(a.position[-1][2]), abs(b.position[-1][2])
         path_a, path_b = a.path_length[-1], b.path_length[-1]
-        print(f"| {name} | {slow:.3f} | {fast:.3f} | {slow / fast:.1f} | {a.statistics['steps']} /"
+        print(f"| {name} | {slow:.3f} s | {fast:.3f} s | {slow / fast:.1f}x | {a.statistics['steps']} /"
               f" {b.statistics['steps']} | {a.statistics['load_evaluations']} / {b.statistics['load_evaluations']} |"
-              f" {abs(depth_a - depth_b) / depth_a:.1e} | {abs(path_a - path_b) / path_a:.1e} |", flush=True)
+              f" {_below(abs(depth_a - depth_b) / depth_a)} | {_below(abs(path_a - path_b) / path_a)} |", flush=True)
+    print()
+    print(stamp())
     return 0
 
 

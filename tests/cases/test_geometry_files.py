@@ -161,3 +161,17 @@ def test_a_file_body_renders_its_field(folder, tmp_path):
                      "--times", "embedded,end", "--out", str(out), "--paraview", "--steps", "3")
     assert done.returncode == 0, done.stderr
     assert {"field_nose_embedded.png", "field_end.png", "polar.png", "paraview"} <= {p.name for p in out.iterdir()}
+
+
+def test_a_mesh_file_run_prints_nothing_but_its_json(folder):
+    """meshio prints an empty line reading a gmsh 4 file; `penetrate run --json` keeps it off the standard output,
+    which holds exactly the JSON object."""
+    import json
+
+    path = write_volume_mesh(folder / "quiet.msh", 0.05, order=1)
+    done = subprocess.run([sys.executable, "-m", "cases.cli", "run", str(TEST2), "--json", "--set",
+                           f"projectile.geometry={{file = '{path}'}}", "--set", "numerics.normals=mesh", "--set",
+                           "numerics.geometry_order=1", "--set", "numerics.mesh_size=0.05"],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith("{") and json.loads(done.stdout)["depth"] > 0
