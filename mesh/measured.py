@@ -30,6 +30,22 @@ MIN_POINTS = 3
 SHANK_RTOL = 1e-6  # the last radius may differ from the shank radius by this fraction of it (then set to it)
 
 
+def _finite_pairs(table, key: str, least: int, where: str) -> tuple[tuple[float, float], ...]:
+    """``table.points`` as float pairs, set back on the (frozen) table: at least ``least``, all finite, else a
+    ValueError naming ``KEY.points``."""
+    try:
+        points = tuple((float(x), float(r)) for x, r in table.points)
+    except (TypeError, ValueError):
+        raise ValueError(f"{key}.points: must be a list of [x, r] pairs of numbers (m)") from None
+    object.__setattr__(table, "points", points)
+    if len(points) < least:
+        raise ValueError(f"{key}.points: {len(points)} points given (allowed: at least {least}{where})")
+    for i, (x, r) in enumerate(points):
+        if not (math.isfinite(x) and math.isfinite(r)):
+            raise ValueError(f"{key}.points[{i}] = [{x}, {r}]: must be finite numbers (m)")
+    return points
+
+
 @dataclass(frozen=True)
 class ProfileNose:
     """A nose given by measured points of its half-profile.
@@ -46,16 +62,7 @@ class ProfileNose:
     points: tuple[tuple[float, float], ...]
 
     def __post_init__(self) -> None:
-        try:
-            points = tuple((float(x), float(r)) for x, r in self.points)
-        except (TypeError, ValueError):
-            raise ValueError("nose.points: must be a list of [x, r] pairs of numbers (m)") from None
-        object.__setattr__(self, "points", points)
-        if len(points) < MIN_POINTS:
-            raise ValueError(f"nose.points: {len(points)} points given (allowed: at least {MIN_POINTS})")
-        for i, (x, r) in enumerate(points):
-            if not (math.isfinite(x) and math.isfinite(r)):
-                raise ValueError(f"nose.points[{i}] = [{x}, {r}]: must be finite numbers (m)")
+        points = _finite_pairs(self, "nose", MIN_POINTS, "")
         if points[0] != (0.0, 0.0):
             raise ValueError(f"nose.points[0] = [{points[0][0]:g}, {points[0][1]:g}]: must be the tip"
                              " (allowed: [0, 0], x = 0 and r = 0)")
@@ -107,17 +114,8 @@ class ProfileBody:
     points: tuple[tuple[float, float], ...]
 
     def __post_init__(self) -> None:
-        try:
-            points = tuple((float(x), float(r)) for x, r in self.points)
-        except (TypeError, ValueError):
-            raise ValueError("body.points: must be a list of [x, r] pairs of numbers (m)") from None
-        object.__setattr__(self, "points", points)
-        if len(points) < 2:
-            raise ValueError(f"body.points: {len(points)} points given (allowed: at least 2, from the shank to the"
-                             " tail)")
+        points = _finite_pairs(self, "body", 2, ", from the shank to the tail")
         for i, (x, r) in enumerate(points):
-            if not (math.isfinite(x) and math.isfinite(r)):
-                raise ValueError(f"body.points[{i}] = [{x}, {r}]: must be finite numbers (m)")
             if not r > 0.0:
                 raise ValueError(f"body.points[{i}] = [{x:g}, {r:g}]: r must be > 0 m (a body with a hole in its"
                                  " profile is two bodies)")

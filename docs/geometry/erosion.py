@@ -20,7 +20,6 @@ exact normals of the CAD surfaces.
 from __future__ import annotations
 
 import importlib.util
-import json
 import math
 import sys
 from pathlib import Path
@@ -33,6 +32,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 from cases.run import RunStore, atomic_write_text, prepare_projectile  # noqa: E402
 from cases.studies import Pool, Sweep, Variation, find_critical_velocities, run_sweep  # noqa: E402
 from cases.studies.paper.plan import STUDY_NUMERICS  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from record import study_main  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -151,14 +153,7 @@ def _save(fig, name: str) -> None:
 
 
 def main() -> None:
-    path = HERE / "erosion.json"
-    if sys.argv[1:] == ["--from-json"]:
-        record = json.loads(path.read_text())
-    else:
-        record = study()
-        atomic_write_text(path, json.dumps(record, indent=1) + "\n")
-        figures(record)
-    report(record)
+    study_main(HERE / "erosion.json", study, figures, report)
 
 
 if __name__ == "__main__":

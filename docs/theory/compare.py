@@ -32,12 +32,15 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from cases import load_scene, run_scene, scene_path  # noqa: E402
-from cases.run import RunStore, atomic_write_text, prepare_projectile  # noqa: E402
+from cases.run import RunStore, prepare_projectile  # noqa: E402
 from cases.studies import (Pool, Sweep, find_critical_velocities, measure_convergent_velocity,  # noqa: E402
                            run_sweep)
 from cases.studies.predict import RINGS  # noqa: E402
 from cases.studies.paper.plan import PAPER_RATIOS, STUDY_NUMERICS, VARIANTS, study_base  # noqa: E402
 from cases.studies.predict import predict  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from record import study_main  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 STORE = RunStore("runs/theory-store")
@@ -250,13 +253,7 @@ def main() -> None:
     if sys.argv[1:] == ["--fold"]:
         fold()
         return
-    if sys.argv[1:] == ["--from-json"]:
-        record = json.loads(path.read_text())
-    else:
-        record = measure_and_predict()
-        atomic_write_text(path, json.dumps(record, indent=1) + "\n")
-        figure(record)
-    report(record)
+    study_main(path, measure_and_predict, figure, report)
 
 
 if __name__ == "__main__":
