@@ -8,6 +8,7 @@ output in the page's generated block.  Run from the repository root::
     python docs/measure.py load cases/forrestal_luk_test2.toml
     python docs/measure.py tests
     python docs/measure.py command -- python docs/core_checks.py
+    python docs/measure.py command -- penetrate critical cases/paper_p3.toml --store EMPTY_DIR
 
 Wall times are medians over the repeats, memory the peak resident set of the
 measured process (``ru_maxrss`` of the child, which counts its whole life).
@@ -23,6 +24,7 @@ import re
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
 import timeit
 from pathlib import Path
@@ -120,10 +122,17 @@ def tests() -> None:
           f"{counts['slow']} slow ones with `./dev test -m slow`.")
 
 
+#: an argument of ``command`` replaced by a fresh empty directory, shown as a
+#: user would type it (a temporary path in the page would change on every run)
+EMPTY_DIR = "EMPTY_DIR"
+
+
 def command(arguments: list[str]) -> None:
     """Wall time and peak memory of any command (run once)."""
-    wall, peak, _ = timed_process(arguments)
-    print(f"`{' '.join(arguments)}` takes {wall:.0f} s wall and peaks at {peak:.0f} MB resident.")
+    with tempfile.TemporaryDirectory(prefix="measure-") as empty:
+        wall, peak, _ = timed_process([empty if a == EMPTY_DIR else a for a in arguments])
+    shown = " ".join("$(mktemp -d)" if a == EMPTY_DIR else a for a in arguments)
+    print(f"`{shown}` takes {wall:.0f} s wall and peaks at {peak:.0f} MB resident.")
     print()
     print(stamp())
 
@@ -138,6 +147,7 @@ def main(argv: list[str] | None = None) -> None:
     p = sub.add_parser("load", help="one load evaluation")
     p.add_argument("scene")
     sub.add_parser("tests", help="the test counts")
+    sub.add_parser("stamp", help="only the stamp line (after a command that prints its own timings)")
     p = sub.add_parser("command", help="any command's wall time and memory")
     p.add_argument("arguments", nargs=argparse.REMAINDER)
     options = parser.parse_args(argv)
@@ -147,6 +157,8 @@ def main(argv: list[str] | None = None) -> None:
         load(options.scene)
     elif options.what == "tests":
         tests()
+    elif options.what == "stamp":
+        print(stamp())
     else:
         arguments = options.arguments[1:] if options.arguments[:1] == ["--"] else options.arguments
         command(arguments)
