@@ -30,10 +30,11 @@ the first difference, and the exit code is 1.
 
 A block whose command runs pytest (the suite's own time) is stamped and not re-run by ``--check``,
 which the suite itself calls.  ``--check`` runs the commands in a temporary copy of the working tree, so
-the figures they write do not touch the checkout; the cost of each block,
-measured by the last full regeneration, is kept in ``docs/generated.json``
-and picks the blocks that fit the budget (blocks never measured count as
-expensive).  Regenerating twice changes nothing but the volatile figures.
+the figures they write do not touch the checkout.  The cost of each block, the
+largest a regeneration or a check has measured (a check's copy has no run stores,
+as CI's clean checkout has none, and pays a study whole), is kept in
+``docs/generated.json`` and picks the blocks that fit the budget (blocks never
+measured count as expensive).  Regenerating twice changes nothing but the volatile figures.
 """
 
 from __future__ import annotations
@@ -188,6 +189,12 @@ def _costs() -> dict[str, float]:
     return json.loads(COSTS.read_text()) if COSTS.exists() else {}
 
 
+def _record(costs: dict[str, float], key: str, seconds: float) -> None:
+    """Keep the largest cost seen: a block that reuses a run store in the checkout is cheap here,
+    but the check runs in a fresh copy (no stores, as in CI's clean checkout) and pays it whole."""
+    costs[key] = max(round(seconds, 1), costs.get(key, 0.0))
+
+
 def _working_copy(into: Path) -> Path:
     """A copy of the checkout's files (tracked and untracked, not ignored) with .venv linked."""
     listed = subprocess.run(["git", "ls-files", "-co", "--exclude-standard", "-z"], cwd=ROOT,
@@ -210,13 +217,16 @@ def regenerate(selected: list[str] | None = None) -> int:
         if not found:
             continue
         # run in page order (a block may read what an earlier one wrote), then rewrite from the
-        # last block up, so earlier line numbers stay valid; the page's old costs go (commands change)
-        costs = {key: value for key, value in costs.items() if not key.startswith(f"{_shown(page)} :: ")}
+        # last block up, so earlier line numbers stay valid; the costs of blocks no longer on the
+        # page go (commands change)
+        keys = {block.key for block in found}
+        costs = {key: value for key, value in costs.items()
+                 if not key.startswith(f"{_shown(page)} :: ") or key in keys}
         outputs = []
         for block in found:
             print(f"{block.where}: {block.command}", file=sys.stderr, flush=True)
             text, seconds = run(block.command, ROOT)
-            costs[block.key] = round(seconds, 1)
+            _record(costs, block.key, seconds)
             outputs.append(text)
         lines = page.read_text().splitlines(keepends=True)
         for block, text in zip(reversed(found), reversed(outputs)):
@@ -251,7 +261,8 @@ def check(selected: list[str] | None = None, everything: bool = False,
         copy = _working_copy(Path(scratch))
         for block in found:
             try:
-                text, _ = run(block.command, copy)
+                text, seconds = run(block.command, copy)
+                _record(costs, block.key, seconds)
             except DocsError as error:
                 print(f"{block.where}: {error}")
                 failures += 1
@@ -260,6 +271,7 @@ def check(selected: list[str] | None = None, everything: bool = False,
             if differs is not None:
                 print(f"{block.where}: the block differs from its command's output: {differs}")
                 failures += 1
+    COSTS.write_text(json.dumps(dict(sorted(costs.items())), indent=1) + "\n")
     print(f"{len(found)} blocks checked, {failures} differ" + (f", {skipped} over the {budget:.0f} s budget not run"
                                                              if skipped else ""), file=sys.stderr)
     return 1 if failures else 0

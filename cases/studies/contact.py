@@ -86,15 +86,16 @@ def _markdown(table: pd.DataFrame, name: str, step: float) -> str:
     reference = "depth_1d" in table
     lines = [f"# Contact incidence: {name}", "",
              f"RK4 at {step:g} s on the scene's mesh, no fixed contact width; the last row is the sharp law"
-             " (`contact_incidence = 0`). Changes are from the sharp run (m, deg, m/s).", "",
+             " (`contact_incidence = 0`). Changes are from the sharp run (m, deg, m/s);"
+             " changes below round-off (1e-12 of the value) are 0.", "",
              "| contact incidence | depth (m) | change | path (m) | change | axis turn (deg) | change |"
              " convergence speed (m/s) | change |" + (" 1-D depth, same width (m) |" if reference else ""),
              "|---|---|---|---|---|---|---|---|---|" + ("---|" if reference else "")]
     for _, row in table.iterrows():
-        cells = [f"{row['contact_incidence']:g}", f"{row['depth']:.6f}", f"{row['depth_change']:+.2e}",
-                 f"{row['path_length']:.6f}", f"{row['path_length_change']:+.2e}", f"{row['axis_angle_change']:.4f}",
-                 f"{row['axis_angle_change_change']:+.2e}", _number(row["convergence_speed"], ".2f"),
-                 _number(row["convergence_speed_change"], "+.2e")]
+        cells = [f"{row['contact_incidence']:g}", f"{row['depth']:.6f}", _change(row, "depth"),
+                 f"{row['path_length']:.6f}", _change(row, "path_length"), f"{row['axis_angle_change']:.4f}",
+                 _change(row, "axis_angle_change"), _number(row["convergence_speed"], ".2f"),
+                 _change(row, "convergence_speed")]
         if reference:
             cells.append(f"{row['depth_1d']:.6f}")
         lines.append("| " + " | ".join(cells) + " |")
@@ -150,10 +151,10 @@ def _entry_markdown(table: pd.DataFrame, name: str) -> str:
              "| entry smoothing | depth (m) | change | path (m) | change | axis turn (deg) | change |"
              " convergence speed (m/s) | change |", "|---|---|---|---|---|---|---|---|---|"]
     for _, row in finest.iterrows():
-        lines.append(f"| {row['entry_smoothing']:g} | {row['depth']:.6f} | {row['depth_change']:+.2e} |"
-                     f" {row['path_length']:.6f} | {row['path_length_change']:+.2e} |"
-                     f" {row['axis_angle_change']:.4f} | {row['axis_angle_change_change']:+.2e} |"
-                     f" {_number(row['convergence_speed'], '.2f')} | {_number(row['convergence_speed_change'], '+.2e')} |")
+        lines.append(f"| {row['entry_smoothing']:g} | {row['depth']:.6f} | {_change(row, 'depth')} |"
+                     f" {row['path_length']:.6f} | {_change(row, 'path_length')} |"
+                     f" {row['axis_angle_change']:.4f} | {_change(row, 'axis_angle_change')} |"
+                     f" {_number(row['convergence_speed'], '.2f')} | {_change(row, 'convergence_speed')} |")
     lines += ["", "Time error of each step against the finest step at the same smoothing: relative depth error /"
               " axis-turn error (deg); `*`: the energy guard retook steps.", "",
               "| entry smoothing | " + " | ".join(f"{h:g} s" for h in steps[:-1]) + " |",
@@ -164,6 +165,19 @@ def _entry_markdown(table: pd.DataFrame, name: str) -> str:
                  + ("*" if group.loc[h, "energy_rejections"] else "") for h in steps[:-1]]
         lines.append(f"| {e:g} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+#: a change below this fraction of the value is round-off (the summation order of two runs of one
+#: setting), shown as 0: its digits would differ between machines and mean nothing
+ROUND_OFF = 1e-12
+
+
+def _change(row: pd.Series, name: str) -> str:
+    """``row[name + '_change']`` to three digits, 0 where it is at the level of round-off."""
+    change = row[f"{name}_change"]
+    if isinstance(change, float) and not math.isnan(change) and abs(change) <= ROUND_OFF * abs(row[name]):
+        change = 0.0
+    return _number(change, "+.2e")
 
 
 def _number(value: float, spec: str) -> str:

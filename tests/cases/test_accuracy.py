@@ -1,6 +1,7 @@
 """The accuracy study on a tiny grid: references, errors and the Pareto front."""
 
 import numpy as np
+import pandas as pd
 
 from cases import scene_path
 from cases.run import RunStore
@@ -102,3 +103,15 @@ def test_entry_study_tables_each_smoothing_against_its_own_finest_step(tmp_path)
     assert 0 < abs(finest["depth_change"].iloc[1]) < 1e-4 * finest["depth"].iloc[1]
     assert (table["depth_time_error"].iloc[[0, 1, 3, 4]] > 0).all()
     assert "| 4 |" in (tmp_path / "out" / "entry.md").read_text()
+
+
+def test_a_change_at_round_off_is_reported_as_zero():
+    """Two runs of one setting summed in another order differ by ~1e-16 of the value: shown as 0,
+    while a real change, however small against the value's unit, keeps its digits."""
+    from cases.studies.contact import _change
+
+    row = pd.Series({"depth": 5.039502, "depth_change": 2.66e-15, "path_length": 5.0, "path_length_change": 8.3e-8,
+                     "convergence_speed": float("nan"), "convergence_speed_change": float("nan")})
+    assert _change(row, "depth") == "+0.00e+00"
+    assert _change(row, "path_length") == "+8.30e-08"
+    assert _change(row, "convergence_speed") == "-"
