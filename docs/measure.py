@@ -127,6 +127,18 @@ def tests() -> None:
 EMPTY_DIR = "EMPTY_DIR"
 
 
+def environment() -> None:
+    """The disk size of the Python environment ``.venv``, and of VTK in it."""
+    def megabytes(path: Path) -> float:
+        return sum(f.stat().st_size for f in path.rglob("*") if f.is_file() and not f.is_symlink()) / 1e6
+
+    venv = (ROOT / ".venv").resolve()  # the docs check links it into its copy
+    site = next((venv / "lib").glob("python3*/site-packages"))
+    vtk = sum(megabytes(site / name) for name in ("vtkmodules", "vtk.libs") if (site / name).exists())
+    print(f"Set up, the Python environment `.venv` takes {megabytes(venv):.0f} MB on disk, "
+          f"VTK alone {vtk:.0f} MB.")
+
+
 def command(arguments: list[str]) -> None:
     """Wall time and peak memory of any command (run once)."""
     with tempfile.TemporaryDirectory(prefix="measure-") as empty:
@@ -148,6 +160,7 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("scene")
     sub.add_parser("tests", help="the test counts")
     sub.add_parser("stamp", help="only the stamp line (after a command that prints its own timings)")
+    sub.add_parser("environment", help="the disk size of .venv and of VTK in it")
     p = sub.add_parser("command", help="any command's wall time and memory")
     p.add_argument("arguments", nargs=argparse.REMAINDER)
     options = parser.parse_args(argv)
@@ -159,6 +172,8 @@ def main(argv: list[str] | None = None) -> None:
         tests()
     elif options.what == "stamp":
         print(stamp())
+    elif options.what == "environment":
+        environment()
     else:
         arguments = options.arguments[1:] if options.arguments[:1] == ["--"] else options.arguments
         command(arguments)
