@@ -191,8 +191,12 @@ def _costs() -> dict[str, float]:
 
 def _record(costs: dict[str, float], key: str, seconds: float) -> None:
     """Keep the largest cost seen: a block that reuses a run store in the checkout is cheap here,
-    but the check runs in a fresh copy (no stores, as in CI's clean checkout) and pays it whole."""
-    costs[key] = max(round(seconds, 1), costs.get(key, 0.0))
+    but the check runs in a fresh copy (no stores, as in CI's clean checkout) and pays it whole.
+    A cost moves only when it grows by half (a cold store, a slower command), not with the noise of
+    timing, so that a check leaves the file as it was."""
+    old = costs.get(key)
+    if old is None or seconds > 1.5 * old:
+        costs[key] = round(seconds, 1)
 
 
 def _working_copy(into: Path) -> Path:
