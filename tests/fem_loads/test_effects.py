@@ -90,6 +90,7 @@ STIFF = (("A", 5.0), ("sigma_0", 10.0e6), ("B", 3.0), ("rho_0", 1860.0))
 SOFT_OVER_STIFF = ((("thickness", 2.0), ("law", "soil")), (("law", STIFF),))
 
 
+@pytest.mark.slow  # 5 s; the Coulomb force's closed form stays in the default run
 def test_friction_lowers_depth():
     plain = summarise(*_run("forrestal_luk_test2", *COARSE))
     rough = summarise(*_run("forrestal_luk_test2", *COARSE, ("effects.friction.model", "coulomb")))
