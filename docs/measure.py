@@ -159,7 +159,6 @@ def main(argv: list[str] | None = None) -> None:
     p = sub.add_parser("load", help="one load evaluation")
     p.add_argument("scene")
     sub.add_parser("tests", help="the test counts")
-    sub.add_parser("stamp", help="only the stamp line (after a command that prints its own timings)")
     sub.add_parser("environment", help="the disk size of .venv and of VTK in it")
     p = sub.add_parser("command", help="any command's wall time and memory")
     p.add_argument("arguments", nargs=argparse.REMAINDER)
@@ -170,8 +169,6 @@ def main(argv: list[str] | None = None) -> None:
         load(options.scene)
     elif options.what == "tests":
         tests()
-    elif options.what == "stamp":
-        print(stamp())
     elif options.what == "environment":
         environment()
     else:

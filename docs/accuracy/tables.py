@@ -28,8 +28,14 @@ sys.path.insert(0, str(ROOT / "docs"))
 from cases.studies.accuracy import time_convergence  # noqa: E402
 from measure import stamp  # noqa: E402
 
-#: facet quadrature degree -> points per triangle (scikit-fem's rules)
-POINTS_PER_FACET = {2: 3, 4: 6, 6: 12}
+
+
+def _points_per_facet(degree: float) -> int:
+    """Points per triangle of the facet quadrature of ``degree``: scikit-fem's rule, as fem_loads.quadrature uses."""
+    from skfem.quadrature import get_quadrature
+    from skfem.refdom import RefTri
+
+    return get_quadrature(RefTri, int(degree))[0].shape[1]
 
 
 def _read(study: Path) -> tuple[pd.DataFrame, str]:
@@ -58,8 +64,9 @@ def mesh(study: Path) -> None:
     rows = table[table["axis"].isin(["mesh", "quadrature"])]
     sizes = sorted(rows["numerics.mesh_size"].unique(), reverse=True)
     step = rows["numerics.time_step"].iloc[0]
+    turns = _turns(table)
     print(f"{reference} Each cell: the setting's relative depth error at RK4 {step:g} s"
-          + ("; in brackets, its axis-turn error (deg)." if _turns(table) else "."))
+          + ("; in brackets, its axis-turn error (deg)." if turns else "."))
     print()
     print("| normals, order, points per facet | " + " | ".join(f"{s * 1e3:g} mm" for s in sizes) + " | order |")
     print("|---|" + "---|" * (len(sizes) + 1))
@@ -77,9 +84,9 @@ def mesh(study: Path) -> None:
                 cells.append("reference")
             else:
                 cells.append(_error(d) + (f" ({_error(float(by_size.loc[s, 'axis_angle_error']))})"
-                                          if _turns(table) else ""))
+                                          if turns else ""))
         label = (f"{normals}, P{int(geometry)}" + (" (flat facets)" if geometry == 1 and normals == "mesh" else "")
-                 + f", {POINTS_PER_FACET.get(int(quadrature), '?')}")
+                 + f", {_points_per_facet(quadrature)}")
         # flat facets with their own normals do not converge to the exact surface: no order
         orders = "" if (geometry == 1 and normals == "mesh") else _orders(depth)
         print(f"| {label} | " + " | ".join(cells) + f" | {orders} |")
@@ -144,7 +151,7 @@ def shipped(studies: list[Path]) -> None:
         table, _ = _read(study)
         row = table[table["axis"] == "scene"].iloc[0]
         numerics = (f"{float(row['numerics.mesh_size']) * 1e3:g} mm, P{int(float(row['numerics.geometry_order']))}, "
-                    f"{row['numerics.normals']} normals, {POINTS_PER_FACET.get(int(float(row['numerics.quadrature_order'])), '?')}"
+                    f"{row['numerics.normals']} normals, {_points_per_facet(float(row['numerics.quadrature_order']))}"
                     " points per facet, ")
         numerics += (f"Dormand-Prince rtol {float(row['numerics.rtol']):g}" if row["numerics.integrator"] == "dopri54"
                      else f"RK4 {float(row['numerics.time_step']):g} s")

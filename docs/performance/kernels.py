@@ -15,6 +15,7 @@ machine to the next; docs/numerics.md, "The compiled step").
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
@@ -28,8 +29,6 @@ from measure import stamp  # noqa: E402
 
 def _below(difference: float) -> str:
     """``~1e-k`` (docs/regenerate.py: round-off, not compared), the power of ten nearest ``difference``."""
-    import math
-
     return "0" if difference == 0.0 else f"~1e{round(math.log10(difference)):d}"
 
 

@@ -67,9 +67,8 @@ def _timed(checkout: Path, cache: Path, args: list[str]) -> tuple[float, dict | 
 
 def _row(name: str, a: list[float], b: list[float]) -> str:
     ma, mb = statistics.median(a), statistics.median(b)
-    # units on every figure: the docs check (docs/regenerate.py) skips timings by their unit
-    return (f"| {name} | {mb:.3f} s ({min(b):.3f}-{max(b):.3f} s) | {ma:.3f} s ({min(a):.3f}-{max(a):.3f} s) |"
-            f" {ma / mb:.3f}x |")
+    return (f"| {name} | {mb:.3f} ({min(b):.3f}-{max(b):.3f}) | {ma:.3f} ({min(a):.3f}-{max(a):.3f}) |"
+            f" {ma / mb:.3f} |")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -136,7 +135,6 @@ def main(argv: list[str] | None = None) -> int:
                     store = work / f"store-{side}-{len(times[name][side])}"
                     times[name][side].append(_timed(checkout, cache, [*FAMILY, "--store", str(store)])[0])
         print(f"this checkout against {commit[:12]}, {args.repeats} alternating repeats (medians, spread):")
-        print()
         print(f"| workload | {commit[:12]} | this checkout | ratio |")
         print("|---|---|---|---|")
         for name, result in times.items():
