@@ -75,6 +75,7 @@ def test_an_override_replaces_the_scene_files_alternative(tmp_path):
     assert json.loads(done.stdout)["depth"] > plain["depth"]  # the softer soil below 2 m
 
 
+@pytest.mark.slow  # 3 s of runs; the compare study's own tests stay in the default run
 def test_compare_says_where_it_wrote(tmp_path):
     out = tmp_path / "cmp"
     done = penetrate("compare", str(scene_path("forrestal_luk_test2")), *FAST, "--set", "numerics.time_limit=0.002",

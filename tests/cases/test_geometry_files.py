@@ -123,6 +123,7 @@ def test_exact_normals_need_a_cad_file(folder):
         prepare_projectile(from_file({"file": str(path)}))
 
 
+@pytest.mark.slow  # 7 s: three meshes and runs
 def test_flat_facets_come_with_their_error(folder):
     """A first-order mesh with its own (flat-facet) normals runs, and its summary says what that costs; the
     statement's figure for 20 mm facets (7 % short on test 2) is held to what a run measures."""
@@ -163,6 +164,7 @@ def test_a_file_body_renders_its_field(folder, tmp_path):
     assert {"field_nose_embedded.png", "field_end.png", "polar.png", "paraview"} <= {p.name for p in out.iterdir()}
 
 
+@pytest.mark.slow  # 4 s: a whole penetrate process
 def test_a_mesh_file_run_prints_nothing_but_its_json(folder):
     """meshio prints an empty line reading a gmsh 4 file; `penetrate run --json` keeps it off the standard output,
     which holds exactly the JSON object."""

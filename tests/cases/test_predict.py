@@ -101,6 +101,7 @@ def cli(*args):
     return subprocess.run([sys.executable, "-m", "cases.cli", *args], capture_output=True, text=True, timeout=300)
 
 
+@pytest.mark.slow  # 4.5 s: the command; predict() is tested in the default run
 def test_predict_command():
     done = cli("predict", str(scene_path("paper_p3")), "--set", "numerics.mesh_size=0.02", "--json")
     assert done.returncode == 0, done.stderr

@@ -355,6 +355,7 @@ def test_ring_stress_on_the_nose_is_the_closed_form_and_the_shank_windward(axial
         ring_stress(ev, 0, 2.0)
 
 
+@pytest.mark.slow  # 5 s: the whole command; the snapshots are tested in the default run
 def test_render_command(tmp_path):
     out = tmp_path / "render"
     args = [sys.executable, "-m", "cases.cli", "render", str(scene_path("paper_p3")), "--set", "impact.speed=1120",
