@@ -16,9 +16,17 @@ SCENE_DIR = Path(__file__).parent
 SHIPPED_SCENES = sorted(p.stem for p in SCENE_DIR.glob("*.toml"))
 
 _EXPORTS = {
-    "Scene": "scene", "SceneError": "scene", "InputError": "scene", "load_scene": "scene",
-    "run_scene": "run", "RunResult": "run", "RunSummary": "run", "summarise": "run", "history_table": "run",
-    "write_outputs": "run", "prepare_projectile": "run",
+    "Scene": "scene",
+    "SceneError": "scene",
+    "InputError": "scene",
+    "load_scene": "scene",
+    "run_scene": "run",
+    "RunResult": "run",
+    "RunSummary": "run",
+    "summarise": "run",
+    "history_table": "run",
+    "write_outputs": "run",
+    "prepare_projectile": "run",
 }
 __all__ = ["scene_path", "SHIPPED_SCENES", *_EXPORTS]
 

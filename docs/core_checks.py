@@ -16,8 +16,17 @@ import numpy as np
 from cases import history_table, load_scene, run_scene, scene_path, summarise
 from cases.studies.reference import axial_depth_1d, embedded_axial_force
 from fem_loads import DAFLLoads, mass_properties, resistance_law, surface_quadrature
-from mesh import (BODY, COUNTERWEIGHT, Interior, OgiveNose, Profile, ProjectileGeometry,
-                  analytic_mass_properties, build_mesh, place_counterweight)
+from mesh import (
+    BODY,
+    COUNTERWEIGHT,
+    Interior,
+    OgiveNose,
+    Profile,
+    ProjectileGeometry,
+    analytic_mass_properties,
+    build_mesh,
+    place_counterweight,
+)
 
 
 def mass_table() -> None:
@@ -26,15 +35,22 @@ def mass_table() -> None:
     paper = Profile(0.155, 0.93, OgiveNose(5.0))
     interior = Interior(0.01, 0.02)
     span = place_counterweight(paper, interior, 7850, 18000, 75.67, 0.5636 * 0.93)
-    bodies = {"#3 with counterweight": ProjectileGeometry(paper, interior, span),
-              "solid ogive CRH 5": ProjectileGeometry(paper)}
+    bodies = {
+        "#3 with counterweight": ProjectileGeometry(paper, interior, span),
+        "solid ogive CRH 5": ProjectileGeometry(paper),
+    }
     for name, geometry in bodies.items():
         exact = analytic_mass_properties(geometry, 7850, 18000)
         for h in (0.02, 0.01, 0.005):
             mesh = build_mesh(geometry, h, 2)
             fem = mass_properties(mesh, {BODY: 7850.0, COUNTERWEIGHT: 18000.0})
-            errs = [fem.volume / exact.volume, fem.mass / exact.mass, fem.centre_from_tip / exact.centre_from_tip,
-                    fem.axial_inertia / exact.axial_inertia, fem.transverse_inertia / exact.transverse_inertia]
+            errs = [
+                fem.volume / exact.volume,
+                fem.mass / exact.mass,
+                fem.centre_from_tip / exact.centre_from_tip,
+                fem.axial_inertia / exact.axial_inertia,
+                fem.transverse_inertia / exact.transverse_inertia,
+            ]
             cells = " | ".join(f"{e - 1:+.1e}" for e in errs)
             # gmsh's HXT mesher can differ by a few tetrahedra from one process to another
             print(f"| {name} | {h} | {len(mesh.tetra) / 1000:.0f} | {cells} |")
@@ -57,8 +73,10 @@ def surface_table() -> None:
                 axial = force[2] / embedded_axial_force(profile, law, 1200.0) - 1
                 # below 1e-12 the closure is round-off, whose digits vary with the machine
                 shown = f"{closure:.1e}" if closure > 1e-12 else "< 1e-12"
-                print(f"| {order} | {model} | {h} | {len(q)} | {shown} | {q.enclosed_volume() / volume - 1:+.1e}"
-                      f" | {q.area / profile.surface_area() - 1:+.1e} | {axial:+.2e} |")
+                print(
+                    f"| {order} | {model} | {h} | {len(q)} | {shown} | {q.enclosed_volume() / volume - 1:+.1e}"
+                    f" | {q.area / profile.surface_area() - 1:+.1e} | {axial:+.2e} |"
+                )
 
 
 def normal_impact() -> None:
@@ -66,10 +84,18 @@ def normal_impact() -> None:
     result = run_scene(scene)
     record = summarise(result)
     law = scene.target.build()
-    reference, v1 = axial_depth_1d(result.prepared.profile, law, result.prepared.mass.mass, 280.0,
-                                   scene.numerics.stop_speed, **scene.effects.contact)
-    print(f"3-D depth {record.depth:.5f} m; 1-D with exact nose entry and the same contact width {reference:.5f} m;"
-          f" relative difference {record.depth / reference - 1:+.2e}; speed at full embedding {v1:.3f} m/s")
+    reference, v1 = axial_depth_1d(
+        result.prepared.profile,
+        law,
+        result.prepared.mass.mass,
+        280.0,
+        scene.numerics.stop_speed,
+        **scene.effects.contact,
+    )
+    print(
+        f"3-D depth {record.depth:.5f} m; 1-D with exact nose entry and the same contact width {reference:.5f} m;"
+        f" relative difference {record.depth / reference - 1:+.2e}; speed at full embedding {v1:.3f} m/s"
+    )
 
 
 def table3() -> None:
@@ -79,8 +105,10 @@ def table3() -> None:
     for test, (measured, paper) in published.items():
         result = run_scene(load_scene(scene_path(f"forrestal_luk_test{test}")))
         record = summarise(result, history_table(result))
-        print(f"| {test} | {measured} | {paper} | {record.path_length:.3f} | {record.path_length / paper - 1:+.2%}"
-              f" | {record.depth:.3f} |")
+        print(
+            f"| {test} | {measured} | {paper} | {record.path_length:.3f} | {record.path_length / paper - 1:+.2%}"
+            f" | {record.depth:.3f} |"
+        )
 
 
 SECTIONS = {"mass": mass_table, "surface": surface_table, "impact": normal_impact, "table3": table3}

@@ -50,21 +50,37 @@ def main() -> None:
     position = state.position + np.array([0.0, 0.0, -(0.16 + 1.0)])
     args = (position, state.velocity, rotation, np.array([0.0, 2.0, 0.0]))
     sharp = DAFLLoads(prepared.quadrature, scene.target.build())
-    bare = DAFLLoads(prepared.quadrature, scene.target.build(), **scene.effects.contact,
-                     entry_smoothing=scene.numerics.entry_smoothing)
+    bare = DAFLLoads(
+        prepared.quadrature,
+        scene.target.build(),
+        **scene.effects.contact,
+        entry_smoothing=scene.numerics.entry_smoothing,
+    )
     bare_us = load_timing(bare, args)
-    print("| configuration | one load evaluation (us, median) | against the bare core | "
-          "test 5 integration (s, median of 3) | steps | path length (m) |")
+    print(
+        "| configuration | one load evaluation (us, median) | against the bare core | "
+        "test 5 integration (s, median of 3) | steps | path length (m) |"
+    )
     print("|---|---|---|---|---|---|")
     sharp_us = load_timing(sharp, args)
-    print(f"| sharp core (DAFLLoads with the law only: the paper's switches) | {sharp_us:.0f} us | "
-          f"{sharp_us / bare_us:.2f}x | - | - | - |")
+    print(
+        f"| sharp core (DAFLLoads with the law only: the paper's switches) | {sharp_us:.0f} us | "
+        f"{sharp_us / bare_us:.2f}x | - | - | - |"
+    )
     print(f"| bare core (the law and the default contact and entry ramps) | {bare_us:.0f} us | 1.00x | - | - | - |")
-    rows = [(name, load_scene(scene_path("forrestal_luk_test5"), [parse_override(text) for text in overrides]))
-            for name, overrides in EFFECTS.items()]
-    rows.append(("two layers", load_scene(scene_path("forrestal_luk_test5"),
-                                          {"target.layers": [{"thickness": 2.0, "law": "soil"},
-                                                             {"law": "softer_soil"}]})))
+    rows = [
+        (name, load_scene(scene_path("forrestal_luk_test5"), [parse_override(text) for text in overrides]))
+        for name, overrides in EFFECTS.items()
+    ]
+    rows.append(
+        (
+            "two layers",
+            load_scene(
+                scene_path("forrestal_luk_test5"),
+                {"target.layers": [{"thickness": 2.0, "law": "soil"}, {"law": "softer_soil"}]},
+            ),
+        )
+    )
     for name, s in rows:
         loads = s.loads(prepared.quadrature)
         if s.effects.gravity:
@@ -72,9 +88,11 @@ def main() -> None:
         per_call = load_timing(loads, args)
         results = [run_scene(s) for _ in range(3)]
         result = summarise(results[0])
-        print(f"| {name} | {per_call:.0f} us | {per_call / bare_us:.2f}x | "
-              f"{statistics.median(r.integration_time for r in results):.2f} s | {result.steps} | "
-              f"{result.path_length:.2f} |")
+        print(
+            f"| {name} | {per_call:.0f} us | {per_call / bare_us:.2f}x | "
+            f"{statistics.median(r.integration_time for r in results):.2f} s | {result.steps} | "
+            f"{result.path_length:.2f} |"
+        )
     print()
     print(stamp())
 

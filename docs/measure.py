@@ -43,7 +43,8 @@ def stamp() -> str:
                 break
     except OSError:
         pass
-    return f"_measured {datetime.date.today().isoformat()} on {os.cpu_count()} cores ({model}), Python {platform.python_version()}_"
+    today = datetime.date.today().isoformat()
+    return f"_measured {today} on {os.cpu_count()} cores ({model}), Python {platform.python_version()}_"
 
 
 def timed_process(arguments: list[str]) -> tuple[float, float, str]:
@@ -73,11 +74,13 @@ def process(scene: str, repeat: int, overrides: list[str]) -> None:
         peaks.append(peak)
         summary = json.loads(output)
     shown = " ".join(["penetrate run", scene, *[f"--set {o}" for o in overrides]])
-    print(f"`{shown}` takes a median {statistics.median(walls):.2f} s wall for the whole process "
-          f"({repeat} runs, {min(walls):.2f}-{max(walls):.2f} s; peak memory {statistics.median(peaks):.0f} MB) "
-          f"once the mesh is cached; of that, the integration takes {summary['integration_time']:.3f} s "
-          f"({summary['steps']} steps, {summary['load_evaluations']} load evaluations) and the rest is Python "
-          "start-up, imports and preparing the projectile from its cached mesh.")
+    print(
+        f"`{shown}` takes a median {statistics.median(walls):.2f} s wall for the whole process "
+        f"({repeat} runs, {min(walls):.2f}-{max(walls):.2f} s; peak memory {statistics.median(peaks):.0f} MB) "
+        f"once the mesh is cached; of that, the integration takes {summary['integration_time']:.3f} s "
+        f"({summary['steps']} steps, {summary['load_evaluations']} load evaluations) and the rest is Python "
+        "start-up, imports and preparing the projectile from its cached mesh."
+    )
     print()
     print(stamp())
 
@@ -101,9 +104,12 @@ def load(scene: str) -> None:
     loads(*args)
     times = np.array(timeit.repeat(lambda: loads(*args), number=200, repeat=9)) / 200 * 1e6
     points = len(prepared.quadrature.weights)
-    print(f"One load evaluation of `{scene}` over its {format(points, ',').replace(',', ' ')} surface points (fully embedded, 3 degrees "
-          f"of attack, pitching) takes a median {np.median(times):.0f} us (9 repeats of 200, "
-          f"{times.min():.0f}-{times.max():.0f} us).")
+    print(
+        f"One load evaluation of `{scene}` over its {format(points, ',').replace(',', ' ')} surface points "
+        f"(fully embedded, 3 degrees "
+        f"of attack, pitching) takes a median {np.median(times):.0f} us (9 repeats of 200, "
+        f"{times.min():.0f}-{times.max():.0f} us)."
+    )
     print()
     print(stamp())
 
@@ -112,14 +118,20 @@ def tests() -> None:
     """How many tests the default run and the slow run collect."""
     counts = {}
     for marker in ("not slow", "slow"):
-        done = subprocess.run([PYTHON, "-m", "pytest", "--collect-only", "-q", "-m", marker, "-p", "no:cacheprovider"],
-                              cwd=ROOT, capture_output=True, text=True)
+        done = subprocess.run(
+            [PYTHON, "-m", "pytest", "--collect-only", "-q", "-m", marker, "-p", "no:cacheprovider"],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+        )
         match = re.search(r"(\d+)(?:/\d+)? tests? (?:collected|selected)", done.stdout)
         if match is None:
             raise SystemExit(f"measure: pytest collected nothing for -m '{marker}': {done.stdout[-300:]}")
         counts[marker] = int(match.group(1))
-    print(f"`./dev test` runs the default suite of {counts['not slow']} tests; CI then runs the "
-          f"{counts['slow']} slow ones with `./dev test -m slow`.")
+    print(
+        f"`./dev test` runs the default suite of {counts['not slow']} tests; CI then runs the "
+        f"{counts['slow']} slow ones with `./dev test -m slow`."
+    )
 
 
 #: an argument of ``command`` replaced by a fresh empty directory, shown as a
@@ -129,14 +141,14 @@ EMPTY_DIR = "EMPTY_DIR"
 
 def environment() -> None:
     """The disk size of the Python environment ``.venv``, and of VTK in it."""
+
     def megabytes(path: Path) -> float:
         return sum(f.stat().st_size for f in path.rglob("*") if f.is_file() and not f.is_symlink()) / 1e6
 
     venv = (ROOT / ".venv").resolve()  # the docs check links it into its copy
     site = next((venv / "lib").glob("python3*/site-packages"))
     vtk = sum(megabytes(site / name) for name in ("vtkmodules", "vtk.libs") if (site / name).exists())
-    print(f"Set up, the Python environment `.venv` takes {megabytes(venv):.0f} MB on disk, "
-          f"VTK alone {vtk:.0f} MB.")
+    print(f"Set up, the Python environment `.venv` takes {megabytes(venv):.0f} MB on disk, VTK alone {vtk:.0f} MB.")
 
 
 def command(arguments: list[str]) -> None:

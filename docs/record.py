@@ -15,8 +15,13 @@ from pathlib import Path
 from cases.run import atomic_write_text
 
 
-def study_main(record_path: Path, compute: Callable[[], dict], draw: Callable[[dict], None],
-               report: Callable[[dict], None], argv: list[str] | None = None) -> None:
+def study_main(
+    record_path: Path,
+    compute: Callable[[], dict],
+    draw: Callable[[dict], None],
+    report: Callable[[dict], None],
+    argv: list[str] | None = None,
+) -> None:
     """Run ``compute`` and keep its record in ``record_path`` (JSON, atomically) and its figures (``draw``), or with
     ``--from-json`` read the record back; then ``report`` it."""
     argv = sys.argv[1:] if argv is None else argv

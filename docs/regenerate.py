@@ -40,7 +40,6 @@ measured count as expensive).  Regenerating twice changes nothing but the volati
 from __future__ import annotations
 
 import argparse
-import difflib
 import json
 import os
 import re
@@ -60,8 +59,10 @@ BUDGET_SECONDS = 60.0
 
 #: a number, with the unit that may follow it (volatile units are skipped by --check)
 _VALUE = r"\d[\d,]*(?:\.\d+)?(?:e[-+]?\d+)?"
-NUMBER = re.compile(rf"(?P<approx>~[-+]?)?{_VALUE}(?:-{_VALUE})?"  # a value or a range ``4.15-4.75``; a sign stays text
-                    r"(?P<unit>\s?(?:ms|us|µs|min|s|h|kB|KB|MB|GB|MiB|GiB)\b|x\b|×)?")
+NUMBER = re.compile(
+    rf"(?P<approx>~[-+]?)?{_VALUE}(?:-{_VALUE})?"  # a value or a range ``4.15-4.75``; a sign stays text
+    r"(?P<unit>\s?(?:ms|us|µs|min|s|h|kB|KB|MB|GB|MiB|GiB)\b|x\b|×)?"
+)
 STAMP = re.compile(r"^_measured .*_\s*$")
 
 
@@ -120,7 +121,7 @@ def blocks(page: Path) -> list[Block]:
                 raise DocsError(f"{_shown(page)}:{i + 1}: block not closed before the next one")
         else:
             raise DocsError(f"{_shown(page)}:{i + 1}: block not closed with '{END}'")
-        found.append(Block(page, i + 1, match["command"], "".join(lines[i + 1:j])))
+        found.append(Block(page, i + 1, match["command"], "".join(lines[i + 1 : j])))
         i = j + 1
     return found
 
@@ -146,7 +147,7 @@ def _tokens(text: str) -> list[tuple[str, str]]:
     out: list[tuple[str, str]] = []
     position = 0
     for match in NUMBER.finditer(kept):
-        before = kept[position:match.start()]
+        before = kept[position : match.start()]
         # a digit glued to a word (``p3``, ``CRH3``, ``L2``) is part of a name: keep it as text
         if before and (before[-1].isalpha() or before[-1] == "_"):
             out.append(("text", " ".join((before + match.group()).split())))
@@ -180,7 +181,7 @@ def difference(printed: str, regenerated: str) -> str | None:
             return f"printed {a!r}, regenerated {b!r}"
     if len(old) != len(new):
         longer, which = (old, "printed") if len(old) > len(new) else (new, "regenerated")
-        extra = " ".join(t for _, t in longer[min(len(old), len(new)):])[:80]
+        extra = " ".join(t for _, t in longer[min(len(old), len(new)) :])[:80]
         return f"only the {which} text has {extra!r}"
     return None
 
@@ -201,8 +202,9 @@ def _record(costs: dict[str, float], key: str, seconds: float) -> None:
 
 def _working_copy(into: Path) -> Path:
     """A copy of the checkout's files (tracked and untracked, not ignored) with .venv linked."""
-    listed = subprocess.run(["git", "ls-files", "-co", "--exclude-standard", "-z"], cwd=ROOT,
-                            capture_output=True, text=True, check=True).stdout.split("\0")
+    listed = subprocess.run(
+        ["git", "ls-files", "-co", "--exclude-standard", "-z"], cwd=ROOT, capture_output=True, text=True, check=True
+    ).stdout.split("\0")
     copy = into / "checkout"
     for name in filter(None, listed):
         source = ROOT / name
@@ -224,8 +226,7 @@ def regenerate(selected: list[str] | None = None) -> int:
         # last block up, so earlier line numbers stay valid; the costs of blocks no longer on the
         # page go (commands change)
         keys = {block.key for block in found}
-        costs = {key: value for key, value in costs.items()
-                 if not key.startswith(f"{_shown(page)} :: ") or key in keys}
+        costs = {key: value for key, value in costs.items() if not key.startswith(f"{_shown(page)} :: ") or key in keys}
         outputs = []
         for block in found:
             print(f"{block.where}: {block.command}", file=sys.stderr, flush=True)
@@ -235,14 +236,13 @@ def regenerate(selected: list[str] | None = None) -> int:
         lines = page.read_text().splitlines(keepends=True)
         for block, text in zip(reversed(found), reversed(outputs)):
             old_length = len(block.text.splitlines())
-            lines[block.line:block.line + old_length] = [text] if text else []
+            lines[block.line : block.line + old_length] = [text] if text else []
         page.write_text("".join(lines))
     COSTS.write_text(json.dumps(dict(sorted(costs.items())), indent=1) + "\n")
     return 0
 
 
-def check(selected: list[str] | None = None, everything: bool = False,
-          budget: float = BUDGET_SECONDS) -> int:
+def check(selected: list[str] | None = None, everything: bool = False, budget: float = BUDGET_SECONDS) -> int:
     """Re-run the blocks (the cheap ones unless ``everything``) and report those that differ."""
     costs = _costs()
     found = [block for page in pages(selected) for block in blocks(page)]
@@ -276,8 +276,11 @@ def check(selected: list[str] | None = None, everything: bool = False,
                 print(f"{block.where}: the block differs from its command's output: {differs}")
                 failures += 1
     COSTS.write_text(json.dumps(dict(sorted(costs.items())), indent=1) + "\n")
-    print(f"{len(found)} blocks checked, {failures} differ" + (f", {skipped} over the {budget:.0f} s budget not run"
-                                                             if skipped else ""), file=sys.stderr)
+    print(
+        f"{len(found)} blocks checked, {failures} differ"
+        + (f", {skipped} over the {budget:.0f} s budget not run" if skipped else ""),
+        file=sys.stderr,
+    )
     return 1 if failures else 0
 
 
@@ -286,8 +289,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("pages", nargs="*", help="only these pages (default: README.md and docs/**/*.md)")
     parser.add_argument("--check", action="store_true", help="compare instead of rewriting; exit 1 on a difference")
     parser.add_argument("--all", action="store_true", help="with --check: every block, not only the cheap ones")
-    parser.add_argument("--budget", type=float, default=BUDGET_SECONDS,
-                        help="with --check: seconds of recorded cost to spend (default %(default)s)")
+    parser.add_argument(
+        "--budget",
+        type=float,
+        default=BUDGET_SECONDS,
+        help="with --check: seconds of recorded cost to spend (default %(default)s)",
+    )
     options = parser.parse_args(argv)
     try:
         if options.check:

@@ -10,8 +10,24 @@ from .rigid_body import LoadFunction, RigidBody, State
 from .simulate import MAX_STEPS, NON_FINITE, STEP_FLOOR, TIME_LIMIT, Event, SpeedBelow, Trajectory, simulate
 
 __all__ = [
-    "RigidBody", "State", "LoadFunction",
-    "RungeKutta", "RK4", "DormandPrince54", "METHODS",
-    "StepControl", "FixedStep", "ErrorControl", "EnergyGuard", "ENERGY_TOLERANCE",
-    "Event", "SpeedBelow", "Trajectory", "simulate", "TIME_LIMIT", "NON_FINITE", "MAX_STEPS", "STEP_FLOOR",
+    "RigidBody",
+    "State",
+    "LoadFunction",
+    "RungeKutta",
+    "RK4",
+    "DormandPrince54",
+    "METHODS",
+    "StepControl",
+    "FixedStep",
+    "ErrorControl",
+    "EnergyGuard",
+    "ENERGY_TOLERANCE",
+    "Event",
+    "SpeedBelow",
+    "Trajectory",
+    "simulate",
+    "TIME_LIMIT",
+    "NON_FINITE",
+    "MAX_STEPS",
+    "STEP_FLOOR",
 ]

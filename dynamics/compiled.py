@@ -71,8 +71,9 @@ class CompiledLoad:
         self.kernel, self.data, self.step = kernel, data, step
         self.constant_force = np.zeros(3) if constant_force is None else np.asarray(constant_force, dtype=float)
 
-    def __call__(self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray,
-                 angular_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def __call__(
+        self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         out = np.empty(6)
         self.kernel(self.data, position, velocity, rotation, angular_velocity, out)
         return out[:3] + self.constant_force, out[3:]
@@ -106,18 +107,39 @@ class CompiledRungeKutta(RungeKutta):
             self._inverse = np.ascontiguousarray(np.linalg.inv(self._inertia))
         return self._inertia, self._inverse
 
-    def step(self, body: RigidBody, loads: CompiledLoad, state: State, h: float,
-             first: Evaluation | None = None) -> StepResult:
+    def step(
+        self, body: RigidBody, loads: CompiledLoad, state: State, h: float, first: Evaluation | None = None
+    ) -> StepResult:
         """Advance ``state`` by ``h`` seconds (see :class:`~dynamics.integrators.RungeKutta`)."""
         inertia, inverse = self._matrices(body)
         given = np.empty(12)
         if first is not None:
-            given[0:3], given[3:6], given[6:9], given[9:12] = (first.acceleration, first.angular_acceleration,
-                                                               first.force, first.moment)
+            given[0:3], given[3:6], given[6:9], given[9:12] = (
+                first.acceleration,
+                first.angular_acceleration,
+                first.force,
+                first.moment,
+            )
         out = np.empty(_OUT)
-        loads.step(loads.data, loads.constant_force, body.mass, inertia, inverse, self.A, self.b, self._b_error,
-                   self.fsal, state.position, state.velocity, state.attitude, state.angular_velocity, h, given,
-                   first is not None, out)
+        loads.step(
+            loads.data,
+            loads.constant_force,
+            body.mass,
+            inertia,
+            inverse,
+            self.A,
+            self.b,
+            self._b_error,
+            self.fsal,
+            state.position,
+            state.velocity,
+            state.attitude,
+            state.angular_velocity,
+            h,
+            given,
+            first is not None,
+            out,
+        )
         new = State(state.time + h, out[_X], out[_V], out[_Q], out[_W], state.path_length + out[_S])
         error = out[_ERROR] if self.b_error is not None else None
         # without a first-same-as-last stage the step evaluates the end state too: the driver needs it for
@@ -128,7 +150,7 @@ class CompiledRungeKutta(RungeKutta):
 
 
 def _evaluation(out: np.ndarray, at: int) -> Evaluation:
-    return Evaluation(out[at:at + 3], out[at + 3:at + 6], out[at + 6:at + 9], out[at + 9:at + 12])
+    return Evaluation(out[at : at + 3], out[at + 3 : at + 6], out[at + 6 : at + 9], out[at + 9 : at + 12])
 
 
 # -- compiled ---------------------------------------------------------------------------------------
@@ -188,8 +210,9 @@ def _evaluate(load, data, constant_force, mass, inertia, inverse, x, v, q, w, ro
 
 
 @njit(inline="always", error_model="numpy")
-def rk_step(load, data, constant_force, mass, inertia, inverse, A, b, b_error, fsal, x0, v0, q0, w0, h, given,
-            has_given, out):
+def rk_step(
+    load, data, constant_force, mass, inertia, inverse, A, b, b_error, fsal, x0, v0, q0, w0, h, given, has_given, out
+):
     """One explicit Runge-Kutta-Munthe-Kaas step from ``(x0, v0, q0, w0)`` by ``h`` seconds.
 
     Inlined into the step of each load kernel (:class:`CompiledLoad`, ``step``), never called alone.
@@ -210,10 +233,11 @@ def rk_step(load, data, constant_force, mass, inertia, inverse, A, b, b_error, f
     for i in range(stages):
         if i == 0:
             if has_given:
-                out[_FIRST:_FIRST + 12] = given
+                out[_FIRST : _FIRST + 12] = given
             else:
-                _evaluate(load, data, constant_force, mass, inertia, inverse, x0, v0, q0, w0, rotation, loads,
-                          out, _FIRST)
+                _evaluate(
+                    load, data, constant_force, mass, inertia, inverse, x0, v0, q0, w0, rotation, loads, out, _FIRST
+                )
             for j in range(3):
                 k[0, j] = v0[j]
                 k[0, 3 + j] = out[_FIRST + j]
@@ -231,8 +255,22 @@ def rk_step(load, data, constant_force, mass, inertia, inverse, A, b, b_error, f
             z[9 + j] += w0[j]
         _compose(q0, z[6:9], q)
         at = _LAST if i == stages - 1 else 0
-        _evaluate(load, data, constant_force, mass, inertia, inverse, z[0:3], z[3:6], q, z[9:12], rotation, loads,
-                  evaluation if at == 0 else out, at)
+        _evaluate(
+            load,
+            data,
+            constant_force,
+            mass,
+            inertia,
+            inverse,
+            z[0:3],
+            z[3:6],
+            q,
+            z[9:12],
+            rotation,
+            loads,
+            evaluation if at == 0 else out,
+            at,
+        )
         source = evaluation if at == 0 else out
         _rate(z[6:9], z[9:12], k[i, 6:9])
         for j in range(3):
@@ -258,8 +296,23 @@ def rk_step(load, data, constant_force, mass, inertia, inverse, A, b, b_error, f
         out[j] = x0[j] + increment[j]
         out[3 + j] = v0[j] + increment[3 + j]
         out[10 + j] = w0[j] + increment[9 + j]
-    out[_S] = _path_increment_scalars(increment[0], increment[1], increment[2], v0[0], v0[1], v0[2], out[3], out[4],
-                                      out[5])
+    out[_S] = _path_increment_scalars(
+        increment[0], increment[1], increment[2], v0[0], v0[1], v0[2], out[3], out[4], out[5]
+    )
     if not fsal:
-        _evaluate(load, data, constant_force, mass, inertia, inverse, out[_X], out[_V], out[_Q], out[_W], rotation,
-                  loads, out, _LAST)
+        _evaluate(
+            load,
+            data,
+            constant_force,
+            mass,
+            inertia,
+            inverse,
+            out[_X],
+            out[_V],
+            out[_Q],
+            out[_W],
+            rotation,
+            loads,
+            out,
+            _LAST,
+        )

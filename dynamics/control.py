@@ -19,8 +19,18 @@ import numpy as np
 from .integrators import RungeKutta, StepResult
 from .rigid_body import RigidBody, State
 
-__all__ = ["StepControl", "FixedStep", "ErrorControl", "EnergyGuard", "ACCEPT", "RETAKE", "END",
-           "NON_FINITE", "STEP_FLOOR", "ENERGY_TOLERANCE"]
+__all__ = [
+    "StepControl",
+    "FixedStep",
+    "ErrorControl",
+    "EnergyGuard",
+    "ACCEPT",
+    "RETAKE",
+    "END",
+    "NON_FINITE",
+    "STEP_FLOOR",
+    "ENERGY_TOLERANCE",
+]
 
 # the verdicts on a trial step
 ACCEPT, RETAKE, END = "accept", "retake", "end"
@@ -127,8 +137,16 @@ class ErrorControl(StepControl):
         the step collapses at every jump and the cost has no bound.  0: none.
     """
 
-    def __init__(self, rtol: float, atol: np.ndarray | float | None = None, *, first_step: float = 1e-6,
-                 min_step: float = 1e-10, forced_step: float = 0.0, max_step: float = math.inf) -> None:
+    def __init__(
+        self,
+        rtol: float,
+        atol: np.ndarray | float | None = None,
+        *,
+        first_step: float = 1e-6,
+        min_step: float = 1e-10,
+        forced_step: float = 0.0,
+        max_step: float = math.inf,
+    ) -> None:
         self.rtol = _positive("rtol", rtol)
         self.atol = np.broadcast_to(np.asarray(rtol if atol is None else atol, dtype=float), (13,))
         self.min_step = _positive("min_step", min_step)
@@ -147,13 +165,15 @@ class ErrorControl(StepControl):
     def norm(self, result: StepResult, before: State) -> float:
         """RMS of the error estimate scaled by ``atol + rtol |value|``."""
         after = result.state
-        magnitude = np.concatenate([
-            np.maximum(np.abs(before.position), np.abs(after.position)),
-            np.maximum(np.abs(before.velocity), np.abs(after.velocity)),
-            np.zeros(3),  # the rotation increment starts from zero: absolute tolerance only
-            np.maximum(np.abs(before.angular_velocity), np.abs(after.angular_velocity)),
-            [max(before.path_length, after.path_length)],
-        ])
+        magnitude = np.concatenate(
+            [
+                np.maximum(np.abs(before.position), np.abs(after.position)),
+                np.maximum(np.abs(before.velocity), np.abs(after.velocity)),
+                np.zeros(3),  # the rotation increment starts from zero: absolute tolerance only
+                np.maximum(np.abs(before.angular_velocity), np.abs(after.angular_velocity)),
+                [max(before.path_length, after.path_length)],
+            ]
+        )
         scaled = result.error / (self.atol + self.rtol * magnitude)
         return float(np.sqrt(np.mean(scaled * scaled)))
 
@@ -162,7 +182,7 @@ class ErrorControl(StepControl):
         norm = self.norm(result, state) if finite else math.inf
         if not norm <= 1.0 and (size > self.forced_step or not finite):
             # reject: shorten by the usual factor (a fifth for a non-finite trial)
-            factor = 0.9 * norm ** self._exponent if math.isfinite(norm) else 0.2
+            factor = 0.9 * norm**self._exponent if math.isfinite(norm) else 0.2
             shorter = size * min(1.0, max(0.2, factor))
             if finite:
                 shorter = max(shorter, self.forced_step)
@@ -170,7 +190,7 @@ class ErrorControl(StepControl):
                 return END, (STEP_FLOOR if finite else NON_FINITE)
             return RETAKE, shorter
         self.forced_steps += norm > 1.0
-        factor = 0.9 * norm ** self._exponent if norm > 0 else 5.0
+        factor = 0.9 * norm**self._exponent if norm > 0 else 5.0
         return ACCEPT, min(self.max_step, max(self.min_step, self.forced_step, size * min(5.0, max(0.2, factor))))
 
 
@@ -209,8 +229,9 @@ class EnergyGuard:
         self._energies = [*self._energies[-3:], (state, energy)]
         return energy
 
-    def judge(self, body: RigidBody, before: State, after: State, size: float,
-              truncated: bool) -> tuple[str, float | str]:
+    def judge(
+        self, body: RigidBody, before: State, after: State, size: float, truncated: bool
+    ) -> tuple[str, float | str]:
         """The verdict on an accepted step of ``size``; ``truncated``: shortened to end at the time limit.
 
         ``(RETAKE, size / 2)`` for a gain above the tolerance; ``(END, STEP_FLOOR)`` when
@@ -240,9 +261,8 @@ class EnergyGuard:
         self.projections += 1
         scale = math.sqrt(start / end) if end > 0 else 0.0
         for _ in range(4):  # the scaled energy may still exceed the start by an ulp
-            projected = replace(after, velocity=after.velocity * scale,
-                                angular_velocity=after.angular_velocity * scale)
+            projected = replace(after, velocity=after.velocity * scale, angular_velocity=after.angular_velocity * scale)
             if body.kinetic_energy(projected) <= start:
                 break
-            scale *= 1.0 - 2.0 ** -52
+            scale *= 1.0 - 2.0**-52
         return projected, True

@@ -32,7 +32,12 @@ __all__ = ["RungeKutta", "RK4", "DormandPrince54", "Evaluation", "StepResult", "
 
 # layout of the increment vector z = (x, v, u, omega, s) used inside a step
 POSITION, VELOCITY, ROTATION, ANGULAR_VELOCITY, PATH = (
-    slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12), slice(12, 13))
+    slice(0, 3),
+    slice(3, 6),
+    slice(6, 9),
+    slice(9, 12),
+    slice(12, 13),
+)
 N_INCREMENTS = 13
 
 
@@ -49,8 +54,14 @@ class Evaluation(NamedTuple):
     moment: np.ndarray  # body frame, about the centre of mass (N m)
 
 
-def evaluate(body: RigidBody, loads: LoadFunction, position: np.ndarray, velocity: np.ndarray,
-             attitude: np.ndarray, angular_velocity: np.ndarray) -> Evaluation:
+def evaluate(
+    body: RigidBody,
+    loads: LoadFunction,
+    position: np.ndarray,
+    velocity: np.ndarray,
+    attitude: np.ndarray,
+    angular_velocity: np.ndarray,
+) -> Evaluation:
     """Call the load function once and apply Newton-Euler."""
     force, moment = loads(position, velocity, rotation_matrix(attitude), angular_velocity)
     acceleration, angular_acceleration = body.accelerations(force, moment, angular_velocity)
@@ -98,8 +109,9 @@ def _path_increment(chord: np.ndarray, before: np.ndarray, after: np.ndarray) ->
     return path_increment_scalars(*chord.tolist(), *before.tolist(), *after.tolist())
 
 
-def path_increment_scalars(cx: float, cy: float, cz: float, ax: float, ay: float, az: float, bx: float, by: float,
-                           bz: float) -> float:
+def path_increment_scalars(
+    cx: float, cy: float, cz: float, ax: float, ay: float, az: float, bx: float, by: float, bz: float
+) -> float:
     """:func:`_path_increment` on the components (floats only: the compiled step compiles it too)."""
     length = math.sqrt(cx * cx + cy * cy + cz * cz)
     dot = ax * bx + ay * by + az * bz
@@ -151,8 +163,9 @@ class RungeKutta:
     def stages(self) -> int:
         return len(self.b)
 
-    def step(self, body: RigidBody, loads: LoadFunction, state: State, h: float,
-             first: Evaluation | None = None) -> StepResult:
+    def step(
+        self, body: RigidBody, loads: LoadFunction, state: State, h: float, first: Evaluation | None = None
+    ) -> StepResult:
         """Advance ``state`` by ``h`` seconds."""
         x0, v0, q0, w0 = state.position, state.velocity, state.attitude, state.angular_velocity
         # the increments' start (x0, v0, 0, omega0, 0): one add per stage gives every stage state
@@ -217,19 +230,20 @@ class RK4(RungeKutta):
 class DormandPrince54(RungeKutta):
     """Dormand-Prince 5(4) with first-same-as-last stage (adaptive step)."""
 
-    A = np.array([
-        [0, 0, 0, 0, 0, 0, 0],
-        [1 / 5, 0, 0, 0, 0, 0, 0],
-        [3 / 40, 9 / 40, 0, 0, 0, 0, 0],
-        [44 / 45, -56 / 15, 32 / 9, 0, 0, 0, 0],
-        [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0, 0, 0],
-        [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656, 0, 0],
-        [35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0],
-    ])
+    A = np.array(
+        [
+            [0, 0, 0, 0, 0, 0, 0],
+            [1 / 5, 0, 0, 0, 0, 0, 0],
+            [3 / 40, 9 / 40, 0, 0, 0, 0, 0],
+            [44 / 45, -56 / 15, 32 / 9, 0, 0, 0, 0],
+            [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0, 0, 0],
+            [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656, 0, 0],
+            [35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0],
+        ]
+    )
     b = np.array([35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0])
     c = np.array([0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1, 1])
-    b_error = b - np.array([5179 / 57600, 0, 7571 / 16695, 393 / 640, -92097 / 339200,
-                            187 / 2100, 1 / 40])
+    b_error = b - np.array([5179 / 57600, 0, 7571 / 16695, 393 / 640, -92097 / 339200, 187 / 2100, 1 / 40])
     order = 5
     error_order = 4
     fsal = True

@@ -38,14 +38,33 @@ from numba import njit
 
 from .integrators import DormandPrince54
 
-__all__ = ["trajectory", "TABLEAU", "STOPPED", "EXITED", "TURNED", "TIME_LIMIT", "CONVERGED", "END_REASONS",
-           "OUTCOME_FIELDS"]
+__all__ = [
+    "trajectory",
+    "TABLEAU",
+    "STOPPED",
+    "EXITED",
+    "TURNED",
+    "TIME_LIMIT",
+    "CONVERGED",
+    "END_REASONS",
+    "OUTCOME_FIELDS",
+]
 
 STOPPED, EXITED, TURNED, TIME_LIMIT, CONVERGED = 0, 1, 2, 3, 4
 END_REASONS = ("stopped", "exited", "turned", "time_limit", "converged")
 #: what :func:`trajectory` returns, in order
-OUTCOME_FIELDS = ("end", "time", "final_speed", "axis_turn", "max_attack_angle", "speed_at_max_attack",
-                  "convergence_speed", "steps", "rejected_steps", "evaluations")
+OUTCOME_FIELDS = (
+    "end",
+    "time",
+    "final_speed",
+    "axis_turn",
+    "max_attack_angle",
+    "speed_at_max_attack",
+    "convergence_speed",
+    "steps",
+    "rejected_steps",
+    "evaluations",
+)
 TABLEAU = (np.ascontiguousarray(DormandPrince54.A), np.ascontiguousarray(DormandPrince54.b_error))
 _STATES = 6
 
@@ -73,8 +92,27 @@ def _attack_angle(y) -> float:
 
 
 @njit(cache=True, inline="always")
-def trajectory(load, lowest, data, y0, mass, inertia, gravity, rtol, scales, first_step, max_step, stop_speed,
-               time_limit, turn_limit, threshold, peak_floor, stop_when_converged, a_matrix, b_error):
+def trajectory(
+    load,
+    lowest,
+    data,
+    y0,
+    mass,
+    inertia,
+    gravity,
+    rtol,
+    scales,
+    first_step,
+    max_step,
+    stop_speed,
+    time_limit,
+    turn_limit,
+    threshold,
+    peak_floor,
+    stop_when_converged,
+    a_matrix,
+    b_error,
+):
     """Integrate from ``y0`` to an end; returns the :data:`OUTCOME_FIELDS` (SI units, angles in rad).
 
     Parameters
@@ -135,13 +173,13 @@ def trajectory(load, lowest, data, y0, mass, inertia, gravity, rtol, scales, fir
         error = math.sqrt(error / _STATES)
         if not error <= 1.0:  # NaN fails too
             rejected += 1
-            h *= max(0.2, 0.9 * error ** -0.2) if error == error else 0.2
+            h *= max(0.2, 0.9 * error**-0.2) if error == error else 0.2
             continue
         t += h
         steps += 1
         y[:] = trial  # the last stage is the solution (first same as last)
         k[0, :] = k[6, :]
-        h = min(h * (min(5.0, 0.9 * error ** -0.2) if error > 0.0 else 5.0), max_step)
+        h = min(h * (min(5.0, 0.9 * error**-0.2) if error > 0.0 else 5.0), max_step)
         h = min(h, time_limit - t) if time_limit > t else h
         previous_attack, previous_speed = attack, speed
         speed = math.hypot(y[3], y[4])
@@ -150,7 +188,8 @@ def trajectory(load, lowest, data, y0, mass, inertia, gravity, rtol, scales, fir
             peak, speed_at_peak, converged_at = attack, speed, -1.0
         elif converged_at < 0.0 and peak >= threshold and attack < threshold <= previous_attack:
             converged_at = previous_speed + (speed - previous_speed) * (threshold - previous_attack) / (
-                attack - previous_attack)
+                attack - previous_attack
+            )
         low = lowest(data, y[1], math.cos(y[2]), math.sin(y[2]))
         if low < 0.0:
             entered = True
@@ -166,5 +205,15 @@ def trajectory(load, lowest, data, y0, mass, inertia, gravity, rtol, scales, fir
         if stop_when_converged and converged_at >= 0.0:
             end = CONVERGED
             break
-    return (end, t, math.hypot(y[3], y[4]), y[2] - y0[2], peak, speed_at_peak, converged_at, steps, rejected,
-            evaluations)
+    return (
+        end,
+        t,
+        math.hypot(y[3], y[4]),
+        y[2] - y0[2],
+        peak,
+        speed_at_peak,
+        converged_at,
+        steps,
+        rejected,
+        evaluations,
+    )

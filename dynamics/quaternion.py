@@ -17,9 +17,20 @@ import math
 
 import numpy as np
 
-__all__ = ["multiply", "exp_map", "compose", "rotation_matrix", "from_rotation_matrix",
-           "right_jacobian_inverse", "normalize", "cross", "hamilton_scalars", "exp_scalars", "rotation_scalars",
-           "dexp_inverse_scalars"]
+__all__ = [
+    "multiply",
+    "exp_map",
+    "compose",
+    "rotation_matrix",
+    "from_rotation_matrix",
+    "right_jacobian_inverse",
+    "normalize",
+    "cross",
+    "hamilton_scalars",
+    "exp_scalars",
+    "rotation_scalars",
+    "dexp_inverse_scalars",
+]
 
 
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -29,13 +40,16 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
-def hamilton_scalars(pw: float, px: float, py: float, pz: float, qw: float, qx: float, qy: float,
-                     qz: float) -> tuple[float, float, float, float]:
+def hamilton_scalars(
+    pw: float, px: float, py: float, pz: float, qw: float, qx: float, qy: float, qz: float
+) -> tuple[float, float, float, float]:
     """The Hamilton product ``p * q`` on the components."""
-    return (pw * qw - px * qx - py * qy - pz * qz,
-            pw * qx + px * qw + py * qz - pz * qy,
-            pw * qy - px * qz + py * qw + pz * qx,
-            pw * qz + px * qy - py * qx + pz * qw)
+    return (
+        pw * qw - px * qx - py * qy - pz * qz,
+        pw * qx + px * qw + py * qz - pz * qy,
+        pw * qy - px * qz + py * qw + pz * qx,
+        pw * qz + px * qy - py * qx + pz * qw,
+    )
 
 
 def _hamilton(p: tuple[float, ...] | list[float], q: tuple[float, ...] | list[float]) -> np.ndarray:
@@ -90,9 +104,17 @@ def rotation_scalars(w: float, x: float, y: float, z: float) -> tuple[float, ...
     # the homogeneous diagonal (w^2 + x^2 - y^2 - z^2, not 1 - 2 (y^2 + z^2)): a quaternion with two
     # bitwise-equal components gives exact zeros, e.g. R[2, 2] = 0 for the nose-down attitude
     # (sqrt(1/2), 0, sqrt(1/2), 0), where the other form leaves -2.2e-16 and tilts a straight impact
-    return ((ww + xx) - (yy + zz), 2 * (x * y - w * z), 2 * (x * z + w * y),
-            2 * (x * y + w * z), (ww + yy) - (xx + zz), 2 * (y * z - w * x),
-            2 * (x * z - w * y), 2 * (y * z + w * x), (ww + zz) - (xx + yy))
+    return (
+        (ww + xx) - (yy + zz),
+        2 * (x * y - w * z),
+        2 * (x * z + w * y),
+        2 * (x * y + w * z),
+        (ww + yy) - (xx + zz),
+        2 * (y * z - w * x),
+        2 * (x * z - w * y),
+        2 * (y * z + w * x),
+        (ww + zz) - (xx + yy),
+    )
 
 
 def rotation_matrix(q: np.ndarray) -> np.ndarray:
@@ -108,8 +130,7 @@ def from_rotation_matrix(matrix: np.ndarray) -> np.ndarray:
     k = int(np.argmax(candidates))
     if k == 0:
         w = 0.5 * math.sqrt(1.0 + trace)
-        q = np.array([w, (m[2, 1] - m[1, 2]) / (4 * w), (m[0, 2] - m[2, 0]) / (4 * w),
-                      (m[1, 0] - m[0, 1]) / (4 * w)])
+        q = np.array([w, (m[2, 1] - m[1, 2]) / (4 * w), (m[0, 2] - m[2, 0]) / (4 * w), (m[1, 0] - m[0, 1]) / (4 * w)])
     else:
         i = k - 1
         j, n = (i + 1) % 3, (i + 2) % 3
@@ -124,8 +145,9 @@ def from_rotation_matrix(matrix: np.ndarray) -> np.ndarray:
     return q if q[0] >= 0 else -q
 
 
-def dexp_inverse_scalars(ux: float, uy: float, uz: float, wx: float, wy: float,
-                         wz: float) -> tuple[float, float, float]:
+def dexp_inverse_scalars(
+    ux: float, uy: float, uz: float, wx: float, wy: float, wz: float
+) -> tuple[float, float, float]:
     """:func:`right_jacobian_inverse` on the components of ``u`` and ``omega``."""
     angle2 = ux * ux + uy * uy + uz * uz
     if angle2 < 1e-6:

@@ -23,8 +23,9 @@ class LoadFunction(Protocol):
     of mass in the body frame (N m).
     """
 
-    def __call__(self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray,
-                 angular_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
+    def __call__(
+        self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]: ...
 
 
 @dataclass(frozen=True)
@@ -57,8 +58,9 @@ class RigidBody:
         object.__setattr__(self, "_inertia_rows", tuple(tuple(row) for row in inertia.tolist()))
         object.__setattr__(self, "_inverse_rows", tuple(tuple(row) for row in self._inertia_inverse.tolist()))
 
-    def accelerations(self, force: np.ndarray, moment: np.ndarray,
-                      angular_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def accelerations(
+        self, force: np.ndarray, moment: np.ndarray, angular_velocity: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Linear acceleration (world) and angular acceleration (body) from Newton-Euler."""
         w0, w1, w2 = angular_velocity.tolist()
         h0, h1, h2 = (a * w0 + b * w1 + c * w2 for a, b, c in self._inertia_rows)  # I omega
@@ -112,5 +114,14 @@ class State:
         return float(np.sqrt(self.velocity @ self.velocity))
 
     def is_finite(self) -> bool:
-        return all(map(math.isfinite, [*self.position.tolist(), *self.velocity.tolist(),
-                                       *self.attitude.tolist(), *self.angular_velocity.tolist()]))
+        return all(
+            map(
+                math.isfinite,
+                [
+                    *self.position.tolist(),
+                    *self.velocity.tolist(),
+                    *self.attitude.tolist(),
+                    *self.angular_velocity.tolist(),
+                ],
+            )
+        )

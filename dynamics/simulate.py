@@ -20,8 +20,17 @@ from .control import END, NON_FINITE, RETAKE, STEP_FLOOR, EnergyGuard, StepContr
 from .integrators import Evaluation, RungeKutta, evaluate
 from .rigid_body import LoadFunction, RigidBody, State
 
-__all__ = ["Event", "SpeedBelow", "Trajectory", "simulate", "find_root", "TIME_LIMIT", "NON_FINITE", "MAX_STEPS",
-           "STEP_FLOOR"]
+__all__ = [
+    "Event",
+    "SpeedBelow",
+    "Trajectory",
+    "simulate",
+    "find_root",
+    "TIME_LIMIT",
+    "NON_FINITE",
+    "MAX_STEPS",
+    "STEP_FLOOR",
+]
 
 TIME_LIMIT, MAX_STEPS = "time_limit", "max_steps"
 
@@ -118,8 +127,14 @@ class Trajectory:
     statistics: dict = field(default_factory=dict)
 
     def state(self, index: int = -1) -> State:
-        return State(float(self.time[index]), self.position[index], self.velocity[index],
-                     self.attitude[index], self.angular_velocity[index], float(self.path_length[index]))
+        return State(
+            float(self.time[index]),
+            self.position[index],
+            self.velocity[index],
+            self.attitude[index],
+            self.angular_velocity[index],
+            float(self.path_length[index]),
+        )
 
 
 class _Recorder:
@@ -146,9 +161,18 @@ class _Recorder:
         )
 
 
-def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: RungeKutta, control: StepControl, *,
-             time_limit: float, events: Sequence[Event] = (), guard: EnergyGuard | None = None,
-             max_steps: int = 5_000_000) -> Trajectory:
+def simulate(
+    body: RigidBody,
+    loads: LoadFunction,
+    initial: State,
+    method: RungeKutta,
+    control: StepControl,
+    *,
+    time_limit: float,
+    events: Sequence[Event] = (),
+    guard: EnergyGuard | None = None,
+    max_steps: int = 5_000_000,
+) -> Trajectory:
     """Integrate the motion of ``body`` under ``loads`` from ``initial``.
 
     The driver only loops: ``control`` sizes and judges every trial step
@@ -249,16 +273,21 @@ def simulate(body: RigidBody, loads: LoadFunction, initial: State, method: Runge
         recorder.add(new, first)
         state, values = new, new_values
 
-    statistics = {"steps": steps, "rejected_steps": rejected, "forced_steps": int(control.forced_steps),
-                  "energy_rejections": guard.rejections if guard else 0,
-                  "energy_projections": guard.projections if guard else 0,
-                  "load_evaluations": calls,
-                  "smallest_step": smallest if math.isfinite(smallest) else None}
+    statistics = {
+        "steps": steps,
+        "rejected_steps": rejected,
+        "forced_steps": int(control.forced_steps),
+        "energy_rejections": guard.rejections if guard else 0,
+        "energy_projections": guard.projections if guard else 0,
+        "load_evaluations": calls,
+        "smallest_step": smallest if math.isfinite(smallest) else None,
+    }
     return recorder.trajectory(end_reason, statistics)
 
 
-def find_root(function: Callable[[float], float], a: float, b: float, fa: float, fb: float,
-              xtol: float, max_iterations: int = 200) -> float:
+def find_root(
+    function: Callable[[float], float], a: float, b: float, fa: float, fb: float, xtol: float, max_iterations: int = 200
+) -> float:
     """A root of ``function`` in ``[a, b]``, where ``fa`` and ``fb`` have opposite signs.
 
     The Illinois variant of regula falsi, with a bisection step whenever the
@@ -304,8 +333,15 @@ def find_root(function: Callable[[float], float], a: float, b: float, fa: float,
     return 0.5 * (a + b)
 
 
-def _locate(body: RigidBody, loads: LoadFunction, method: RungeKutta, state: State,
-            first: Evaluation, size: float, events: list[Event]) -> tuple[State, str, int]:
+def _locate(
+    body: RigidBody,
+    loads: LoadFunction,
+    method: RungeKutta,
+    state: State,
+    first: Evaluation,
+    size: float,
+    events: list[Event],
+) -> tuple[State, str, int]:
     """The earliest of ``events`` inside a step of ``size`` from ``state``, and the load evaluations it took.
 
     Each event's locator changes sign inside the step; regula falsi finds

@@ -10,8 +10,17 @@ from .quadrature import NORMAL_MODELS, SurfaceQuadrature, mirror_quarters, surfa
 from .resistance import NAMED_LAWS, ResistanceLaw, UnknownLawError, resistance_law
 
 __all__ = [
-    "MassProperties", "mass_properties", "to_skfem",
-    "SurfaceQuadrature", "surface_quadrature", "mirror_quarters", "NORMAL_MODELS",
-    "ResistanceLaw", "NAMED_LAWS", "resistance_law", "UnknownLawError",
-    "DAFLLoads", "SurfaceStress",
+    "MassProperties",
+    "mass_properties",
+    "to_skfem",
+    "SurfaceQuadrature",
+    "surface_quadrature",
+    "mirror_quarters",
+    "NORMAL_MODELS",
+    "ResistanceLaw",
+    "NAMED_LAWS",
+    "resistance_law",
+    "UnknownLawError",
+    "DAFLLoads",
+    "SurfaceStress",
 ]

@@ -33,8 +33,9 @@ from .images import IMAGE_SIGNS, POINT_SIGNS
 __all__ = ["dafl_kernel", "lowest_height_kernel", "kernel_data", "supports"]
 
 # the constants of kernel_data's last array
-(_MAX_RADIUS, _HALF_ENTRY, _CONTACT_WIDTH, _CONTACT_INCIDENCE, _GUARD, _SMOOTH_CONTACT, _SMOOTH_ENTRY,
- _N_CONSTANTS) = range(8)
+(_MAX_RADIUS, _HALF_ENTRY, _CONTACT_WIDTH, _CONTACT_INCIDENCE, _GUARD, _SMOOTH_CONTACT, _SMOOTH_ENTRY, _N_CONSTANTS) = (
+    range(8)
+)
 
 
 def supports(loads: DAFLLoads) -> bool:
@@ -51,8 +52,9 @@ def kernel_data(loads: DAFLLoads) -> tuple:
     ``B rho_0 w``, ``1 / l`` and ``l / 2``, the images' signs and the scalars.
     """
     if not supports(loads):
-        raise ValueError("the compiled load covers one resistance law with separation, without free surface or"
-                         " friction")
+        raise ValueError(
+            "the compiled load covers one resistance law with separation, without free surface or friction"
+        )
     quadrature = loads.quadrature
     if quadrature.mirror_quarters is not None:
         index = quadrature.mirror_quarters[0]
@@ -76,10 +78,17 @@ def kernel_data(loads: DAFLLoads) -> tuple:
     def contiguous(array):
         return np.ascontiguousarray(array, dtype=float)
 
-    return (contiguous(loads._normal_arm_t[:, index]), contiguous(loads._points_t[:, index]),
-            contiguous(law.static_stress * weights), contiguous(law.dynamic_density * weights),
-            contiguous(inverse_entry), contiguous(0.5 * entry_length), contiguous(image_signs),
-            contiguous(point_signs), constants)
+    return (
+        contiguous(loads._normal_arm_t[:, index]),
+        contiguous(loads._points_t[:, index]),
+        contiguous(law.static_stress * weights),
+        contiguous(law.dynamic_density * weights),
+        contiguous(inverse_entry),
+        contiguous(0.5 * entry_length),
+        contiguous(image_signs),
+        contiguous(point_signs),
+        constants,
+    )
 
 
 @njit(cache=True, inline="always")
@@ -108,7 +117,8 @@ def _smooth_sums(normal_arm, points, static, dynamic, inverse_entry, g, up, heig
             n3, n4, n5 = normal_arm[3, j], normal_arm[4, j], normal_arm[5, j]
             normal_velocity = g0 * n0 + g1 * n1 + g2 * n2 + g3 * n3 + g4 * n4 + g5 * n5
             stress = (normal_velocity * normal_velocity * dynamic[j] + static[j]) * _smooth_step(
-                normal_velocity * inverse_width)
+                normal_velocity * inverse_width
+            )
             if not embedded:
                 z = height + (up0 * points[0, j] + up1 * points[1, j] + up2 * points[2, j])
                 stress *= _smooth_step(0.5 - z * inverse_entry[j])
@@ -122,8 +132,22 @@ def _smooth_sums(normal_arm, points, static, dynamic, inverse_entry, g, up, heig
 
 
 @njit(cache=True, error_model="numpy")
-def _sharp_sums(normal_arm, points, static, dynamic, inverse_entry, g, up, height, inverse_width, guard,
-                smooth_contact, smooth_entry, embedded, sums):
+def _sharp_sums(
+    normal_arm,
+    points,
+    static,
+    dynamic,
+    inverse_entry,
+    g,
+    up,
+    height,
+    inverse_width,
+    guard,
+    smooth_contact,
+    smooth_entry,
+    embedded,
+    sums,
+):
     """:func:`_smooth_sums` with either switch sharp (for comparisons with the paper's law)."""
     for k in range(sums.shape[0]):
         for j in range(static.shape[0]):
@@ -166,8 +190,9 @@ def dafl_kernel(data, position, velocity, rotation, angular_velocity, out):
     up = np.empty((images, 3))
     for k in range(images):
         for c in range(3):
-            g[k, c] = (rotation[0, c] * velocity[0] + rotation[1, c] * velocity[1] + rotation[2, c] * velocity[2]) \
-                * image_signs[k, c]
+            g[k, c] = (
+                rotation[0, c] * velocity[0] + rotation[1, c] * velocity[1] + rotation[2, c] * velocity[2]
+            ) * image_signs[k, c]
             g[k, 3 + c] = angular_velocity[c] * image_signs[k, 3 + c]
             up[k, c] = rotation[2, c] * point_signs[k, c]
     speed = math.sqrt(velocity[0] * velocity[0] + velocity[1] * velocity[1] + velocity[2] * velocity[2])
@@ -181,8 +206,22 @@ def dafl_kernel(data, position, velocity, rotation, angular_velocity, out):
     if smooth_contact and smooth_entry:
         _smooth_sums(normal_arm, points, static, dynamic, inverse_entry, g, up, height, inverse_width, embedded, sums)
     else:
-        _sharp_sums(normal_arm, points, static, dynamic, inverse_entry, g, up, height, inverse_width,
-                    constants[_GUARD] * speed_scale, smooth_contact, smooth_entry, embedded, sums)
+        _sharp_sums(
+            normal_arm,
+            points,
+            static,
+            dynamic,
+            inverse_entry,
+            g,
+            up,
+            height,
+            inverse_width,
+            constants[_GUARD] * speed_scale,
+            smooth_contact,
+            smooth_entry,
+            embedded,
+            sums,
+        )
     body = np.empty(6)
     for c in range(6):
         if images == 4:

@@ -116,10 +116,19 @@ class DAFLLoads:
         (about its own size).  0: sharp.
     """
 
-    def __init__(self, quadrature: SurfaceQuadrature, law: ResistanceLaw | LayeredTarget,
-                 normal_velocity_guard: float = 1e-9, *, friction: Friction | None = None,
-                 separation: bool = True, free_surface: FreeSurface | None = None, contact_width: float = 0.0,
-                 contact_incidence: float = 0.0, entry_smoothing: float = 0.0) -> None:
+    def __init__(
+        self,
+        quadrature: SurfaceQuadrature,
+        law: ResistanceLaw | LayeredTarget,
+        normal_velocity_guard: float = 1e-9,
+        *,
+        friction: Friction | None = None,
+        separation: bool = True,
+        free_surface: FreeSurface | None = None,
+        contact_width: float = 0.0,
+        contact_incidence: float = 0.0,
+        entry_smoothing: float = 0.0,
+    ) -> None:
         if not (contact_width >= 0.0 and contact_incidence >= 0.0 and entry_smoothing >= 0.0):
             raise ValueError("contact_width, contact_incidence and entry_smoothing must be >= 0")
         self.quadrature, self.law = quadrature, law
@@ -215,8 +224,9 @@ class DAFLLoads:
 
     # -- per point ---------------------------------------------------------------------------------
 
-    def stress(self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray,
-               angular_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def stress(
+        self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Normal stress ``sigma_n`` (Pa) and normal velocity ``Vn`` (m/s) at every point.
 
         Parameters
@@ -247,8 +257,9 @@ class DAFLLoads:
             stress = stress * self.free_surface.factor(-heights)
         return stress * self._entry(heights), normal_velocity
 
-    def surface_stress(self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray,
-                       angular_velocity: np.ndarray) -> SurfaceStress:
+    def surface_stress(
+        self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray
+    ) -> SurfaceStress:
         """``sigma_n``, ``tau`` and ``Vn`` at every quadrature point, in point order (see :meth:`stress`).
 
         The same numbers the load sums: renderings and field plots take them from here
@@ -261,8 +272,9 @@ class DAFLLoads:
             tau = self.friction.stress(sigma) * scale * slip
         return SurfaceStress(sigma, tau, normal_velocity)
 
-    def _normal_velocity(self, velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray,
-                         generalised: np.ndarray) -> tuple[np.ndarray, float]:
+    def _normal_velocity(
+        self, velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray, generalised: np.ndarray
+    ) -> tuple[np.ndarray, float]:
         """``Vn`` at every point (one product with ``[n | r x n]``) and the body's speed scale
         ``U = |V| + |omega| r_max`` (m/s), a bound on every point's speed.
 
@@ -279,8 +291,9 @@ class DAFLLoads:
 
     # -- resultants ----------------------------------------------------------------------------------
 
-    def __call__(self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray,
-                 angular_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def __call__(
+        self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Resultant load.
 
         Returns
@@ -302,8 +315,9 @@ class DAFLLoads:
             load += self._friction_load(sigma, normal_velocity, velocity @ rotation, angular_velocity)
         return rotation @ load[:3], load[3:]
 
-    def _plain_load(self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray,
-                    angular_velocity: np.ndarray) -> np.ndarray:
+    def _plain_load(
+        self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray
+    ) -> np.ndarray:
         """Force and moment (body frame) of one law with separation: the hot path.
 
         The same sums as :meth:`stress` then ``-sum sigma w [n | r x n]``, with ``A sigma_0 w`` and
@@ -323,11 +337,17 @@ class DAFLLoads:
             np.multiply(normal_velocity, self._inverse_width(speed_scale), out=factor)
             stress *= smooth_step(factor, out=factor)
         else:
-            np.copyto(stress, 0.0, where=np.less_equal(normal_velocity, self.normal_velocity_guard * speed_scale,
-                                                       out=self._unloaded))
+            np.copyto(
+                stress,
+                0.0,
+                where=np.less_equal(normal_velocity, self.normal_velocity_guard * speed_scale, out=self._unloaded),
+            )
         if not self.fully_embedded(position):
-            heights = (self._images.heights(position[2], rotation[2], self._height_buffer) if self._images is not None
-                       else np.add(position[2], rotation[2] @ self._points_t, out=self._height_buffer))
+            heights = (
+                self._images.heights(position[2], rotation[2], self._height_buffer)
+                if self._images is not None
+                else np.add(position[2], rotation[2] @ self._points_t, out=self._height_buffer)
+            )
             if self.entry_smoothing:
                 np.multiply(heights, hot["inverse_entry"], out=factor)
                 np.subtract(0.5, factor, out=factor)
@@ -338,8 +358,9 @@ class DAFLLoads:
             return self._images.negative_resultant(stress)
         return -(self._normal_arm_t @ stress)
 
-    def _slip(self, normal_velocity: np.ndarray, velocity_body: np.ndarray,
-              angular_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _slip(
+        self, normal_velocity: np.ndarray, velocity_body: np.ndarray, angular_velocity: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The slip speed ``|s_i|`` at every point, the factor ``k_i`` that gives the friction stress's
         share along the slip (``tau_i k_i s_i`` is the tangential stress vector) and ``r_i . omega``.
 
@@ -351,8 +372,13 @@ class DAFLLoads:
         """
         v, w = velocity_body, angular_velocity
         r_dot_w = self._points @ w
-        speed2 = (float(v @ v) + 2.0 * (self._points @ np.cross(v, w)) + float(w @ w) * self._radius2
-                  - r_dot_w**2 - normal_velocity**2)
+        speed2 = (
+            float(v @ v)
+            + 2.0 * (self._points @ np.cross(v, w))
+            + float(w @ w) * self._radius2
+            - r_dot_w**2
+            - normal_velocity**2
+        )
         slip = np.sqrt(np.maximum(speed2, 0.0))
         if self._smooth_contact:
             inverse = self._inverse_width(math.sqrt(float(v @ v)) + math.sqrt(float(w @ w)) * self._max_radius)
@@ -361,8 +387,9 @@ class DAFLLoads:
         moving = slip > 1e-12 * (math.sqrt(float(v @ v)) + 1e-300)
         return slip, np.where(moving, 1.0 / np.where(moving, slip, 1.0), 0.0), r_dot_w
 
-    def _friction_load(self, sigma: np.ndarray, normal_velocity: np.ndarray, velocity_body: np.ndarray,
-                       angular_velocity: np.ndarray) -> np.ndarray:
+    def _friction_load(
+        self, sigma: np.ndarray, normal_velocity: np.ndarray, velocity_body: np.ndarray, angular_velocity: np.ndarray
+    ) -> np.ndarray:
         """Force and moment (body frame) of the tangential stress, opposite to the local slip.
 
         With ``c_i = tau_i k_i w_i`` (:meth:`_slip`) and the slip ``s_i``, ``F = -sum c_i s_i`` and
@@ -378,6 +405,7 @@ class DAFLLoads:
         sum_c = float(c.sum())
         sum_cr = c @ points
         force = v * sum_c + np.cross(w, sum_cr) - c_vn @ self._normals
-        moment = (np.cross(sum_cr, v) + w * float(c @ self._radius2) - (c * r_dot_w) @ points
-                  - c_vn @ self._normal_arm[:, 3:])
+        moment = (
+            np.cross(sum_cr, v) + w * float(c @ self._radius2) - (c * r_dot_w) @ points - c_vn @ self._normal_arm[:, 3:]
+        )
         return -np.concatenate([force, moment])

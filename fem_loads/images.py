@@ -63,8 +63,11 @@ def _products_reproducible(arm: np.ndarray, points: np.ndarray) -> bool:
     normal_velocity = _generic_factors(6, 0) @ np.tile(arm, 4)
     heights = _generic_factors(3, 6) @ np.tile(points, 4)
     resultant = arm @ np.tile(_generic_factors(m, 9), (4, 1)).T
-    return all(np.array_equal(a[0], a[k]) for a in (normal_velocity.reshape(4, m), heights.reshape(4, m), resultant.T)
-               for k in (1, 2, 3))
+    return all(
+        np.array_equal(a[0], a[k])
+        for a in (normal_velocity.reshape(4, m), heights.reshape(4, m), resultant.T)
+        for k in (1, 2, 3)
+    )
 
 
 class MirrorImages:
@@ -140,5 +143,4 @@ class MirrorImages:
                 np.matmul(self.normal_arm, weighted_stress[image], out=products[:, image])
         # the fold on Python floats: four tiny numpy operations cost more than the arithmetic
         p0, p1, p2, p3 = products.T.tolist()
-        return np.array([-((a + y * b) + z * (c + y * d))
-                         for a, b, c, d, y, z in zip(p0, p1, p2, p3, _Y, _Z)])
+        return np.array([-((a + y * b) + z * (c + y * d)) for a, b, c, d, y, z in zip(p0, p1, p2, p3, _Y, _Z)])

@@ -10,9 +10,9 @@ break the mirror symmetry of the motion.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # scikit-fem is imported where it is used: a run from cached data never needs it
     from skfem import MeshTet1, MeshTet2
@@ -65,11 +65,16 @@ class MassProperties:
         return MassProperties(self.mass, self.centre, inertia, self.volume)
 
     @classmethod
-    def axisymmetric(cls, mass: float, centre_from_tip: float, axial_inertia: float,
-                     transverse_inertia: float) -> MassProperties:
+    def axisymmetric(
+        cls, mass: float, centre_from_tip: float, axial_inertia: float, transverse_inertia: float
+    ) -> MassProperties:
         """Mass properties given directly (no mesh integration)."""
-        return cls(mass, np.array([-centre_from_tip, 0.0, 0.0]),
-                   np.diag([axial_inertia, transverse_inertia, transverse_inertia]), float("nan"))
+        return cls(
+            mass,
+            np.array([-centre_from_tip, 0.0, 0.0]),
+            np.diag([axial_inertia, transverse_inertia, transverse_inertia]),
+            float("nan"),
+        )
 
 
 def to_skfem(mesh: ProjectileMesh) -> MeshTet1 | MeshTet2:
@@ -84,9 +89,15 @@ def to_skfem(mesh: ProjectileMesh) -> MeshTet1 | MeshTet2:
 # per-element integrals of the monomials up to degree two
 _MONOMIALS = (
     lambda x: 1.0 + 0.0 * x[0],
-    lambda x: x[0], lambda x: x[1], lambda x: x[2],
-    lambda x: x[0] * x[0], lambda x: x[1] * x[1], lambda x: x[2] * x[2],
-    lambda x: x[0] * x[1], lambda x: x[0] * x[2], lambda x: x[1] * x[2],
+    lambda x: x[0],
+    lambda x: x[1],
+    lambda x: x[2],
+    lambda x: x[0] * x[0],
+    lambda x: x[1] * x[1],
+    lambda x: x[2] * x[2],
+    lambda x: x[0] * x[1],
+    lambda x: x[0] * x[2],
+    lambda x: x[1] * x[2],
 )
 
 
@@ -115,8 +126,9 @@ def mirror_symmetric_axes(mesh: ProjectileMesh) -> tuple[int, ...]:
     return tuple(axes)
 
 
-def mass_properties(mesh: ProjectileMesh, densities: dict[int, float],
-                    skfem_mesh: MeshTet1 | MeshTet2 | None = None) -> MassProperties:
+def mass_properties(
+    mesh: ProjectileMesh, densities: dict[int, float], skfem_mesh: MeshTet1 | MeshTet2 | None = None
+) -> MassProperties:
     """Integrate the mass properties of a multi-material mesh.
 
     Parameters

@@ -36,9 +36,9 @@ that a symmetric state gives an exactly symmetric load.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
-from typing import TYPE_CHECKING
 
 from mesh.geometry import ProjectileMesh
 from mesh.profile import Profile
@@ -118,8 +118,9 @@ def _facet_indices(m: MeshTet1 | MeshTet2, triangles: np.ndarray) -> np.ndarray:
     return found
 
 
-def _to_exact_surface(points: np.ndarray, normals: np.ndarray, weights: np.ndarray,
-                      profile: Profile) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _to_exact_surface(
+    points: np.ndarray, normals: np.ndarray, weights: np.ndarray, profile: Profile
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Carry a facet quadrature (mesh coordinates, tip at origin) onto the exact surface."""
     s = -points[:, 0]
     rho = np.hypot(points[:, 1], points[:, 2])
@@ -139,8 +140,10 @@ def _to_exact_surface(points: np.ndarray, normals: np.ndarray, weights: np.ndarr
     weights[lateral] *= (r / rho[lateral]) * n_mesh_radial[lateral] / n_radial
     # the tail disc (and a flat front face) are planar, but a flat mesh bounds them by a
     # polygon: stretch each radially onto its exact disc (uniformly)
-    for disc, radius in ((~lateral & (normals[:, 0] < 0), profile.tail_radius),
-                         (~lateral & (normals[:, 0] > 0), profile.tip_radius)):
+    for disc, radius in (
+        (~lateral & (normals[:, 0] < 0), profile.tail_radius),
+        (~lateral & (normals[:, 0] > 0), profile.tip_radius),
+    ):
         if disc.any() and radius > 0:
             stretch = np.pi * radius**2 / weights[disc].sum()
             weights[disc] *= stretch
@@ -185,8 +188,7 @@ def mirror_quarters(points: np.ndarray, rtol: float = 1e-9) -> np.ndarray | None
     return images
 
 
-def _symmetrise(points: np.ndarray, normals: np.ndarray, weights: np.ndarray,
-                images: np.ndarray) -> None:
+def _symmetrise(points: np.ndarray, normals: np.ndarray, weights: np.ndarray, images: np.ndarray) -> None:
     """Rewrite the other three quarters from the first by exact sign changes (in place)."""
     quarter = images[0]
     for partner, (sign_y, sign_z) in zip(images[1:], MIRROR_SIGNS[1:]):
@@ -196,8 +198,9 @@ def _symmetrise(points: np.ndarray, normals: np.ndarray, weights: np.ndarray,
         weights[partner] = weights[quarter]
 
 
-def _on_cad_surface(points: np.ndarray, normals: np.ndarray, weights: np.ndarray, mesh: ProjectileMesh,
-                    intorder: int, surface) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _on_cad_surface(
+    points: np.ndarray, normals: np.ndarray, weights: np.ndarray, mesh: ProjectileMesh, intorder: int, surface
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The rule of :meth:`mesh.imported.CadSurface.quadrature` on the facets of curved CAD surfaces; the
     facets of planes keep their own (exact) points, normals and weights."""
     from skfem.quadrature import get_quadrature
@@ -205,8 +208,9 @@ def _on_cad_surface(points: np.ndarray, normals: np.ndarray, weights: np.ndarray
 
     ref_points, ref_weights = get_quadrature(RefTri, intorder)
     corners = mesh.points[mesh.outer[:, :3]]
-    cad_points, cad_normals, cad_weights, planar = surface.quadrature(corners, mesh.outer_entity, ref_points,
-                                                                      ref_weights)
+    cad_points, cad_normals, cad_weights, planar = surface.quadrature(
+        corners, mesh.outer_entity, ref_points, ref_weights
+    )
     curved = ~np.repeat(planar, len(ref_weights))
     cosine = np.einsum("ij,ij->i", cad_normals[curved], normals[curved])
     points, normals, weights = points.copy(), normals.copy(), weights.copy()
@@ -216,8 +220,9 @@ def _on_cad_surface(points: np.ndarray, normals: np.ndarray, weights: np.ndarray
     return points, normals, weights
 
 
-def _basis_rule(mesh: ProjectileMesh, intorder: int,
-                skfem_mesh: MeshTet1 | MeshTet2 | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _basis_rule(
+    mesh: ProjectileMesh, intorder: int, skfem_mesh: MeshTet1 | MeshTet2 | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Points, unit normals and weights of the outer facets from scikit-fem's FacetBasis."""
     from skfem import ElementTetP0, FacetBasis
 
@@ -247,22 +252,27 @@ def _shape_rule(mesh: ProjectileMesh, intorder: int) -> tuple[np.ndarray, np.nda
 
     ref_points, ref_weights = get_quadrature(RefTri, intorder)
     element = ElementTriP2() if mesh.order == 2 else ElementTriP1()
-    nodes = mesh.points[mesh.outer]                                               # (n, k, 3)
+    nodes = mesh.points[mesh.outer]  # (n, k, 3)
     shapes = [element.lbasis(ref_points, i) for i in range(nodes.shape[1])]
-    phi = np.array([value for value, _ in shapes])                                # (k, q)
-    dphi = np.array([gradient for _, gradient in shapes])                         # (k, 2, q)
+    phi = np.array([value for value, _ in shapes])  # (k, q)
+    dphi = np.array([gradient for _, gradient in shapes])  # (k, 2, q)
     points = np.einsum("kq,nkd->nqd", phi, nodes)
     tangents = np.einsum("kjq,nkd->nqjd", dphi, nodes)
     cross = np.cross(tangents[:, :, 0], tangents[:, :, 1])
     area = np.linalg.norm(cross, axis=2)
-    return (points.reshape(-1, 3), (cross / area[..., None]).reshape(-1, 3),
-            (ref_weights[None, :] * area).reshape(-1))
+    return (points.reshape(-1, 3), (cross / area[..., None]).reshape(-1, 3), (ref_weights[None, :] * area).reshape(-1))
 
 
-def surface_quadrature(mesh: ProjectileMesh, centre: np.ndarray, profile: Profile | None = None,
-                       normal_model: str = "exact", intorder: int = 2,
-                       skfem_mesh: MeshTet1 | MeshTet2 | None = None, surface=None,
-                       facet_rule: str = "basis") -> SurfaceQuadrature:
+def surface_quadrature(
+    mesh: ProjectileMesh,
+    centre: np.ndarray,
+    profile: Profile | None = None,
+    normal_model: str = "exact",
+    intorder: int = 2,
+    skfem_mesh: MeshTet1 | MeshTet2 | None = None,
+    surface=None,
+    facet_rule: str = "basis",
+) -> SurfaceQuadrature:
     """Quadrature points, outward normals and weights of the outer surface.
 
     Parameters

@@ -7,8 +7,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["ResistanceLaw", "NAMED_LAWS", "resistance_law", "register_law", "locking_cavity_expansion",
-           "UnknownLawError"]
+__all__ = [
+    "ResistanceLaw",
+    "NAMED_LAWS",
+    "resistance_law",
+    "register_law",
+    "locking_cavity_expansion",
+    "UnknownLawError",
+]
 
 
 class UnknownLawError(ValueError):
@@ -40,8 +46,7 @@ class ResistanceLaw:
                 raise ValueError(f"{field_name} = {value}: must be a finite number >= 0")
 
     @classmethod
-    def from_coefficients(cls, A: float, sigma_0: float, B: float, rho_0: float,
-                          name: str = "custom") -> ResistanceLaw:
+    def from_coefficients(cls, A: float, sigma_0: float, B: float, rho_0: float, name: str = "custom") -> ResistanceLaw:
         """The law from its dimensionless coefficients and the target's ``sigma_0`` (Pa), ``rho_0`` (kg/m^3)."""
         return cls(A * sigma_0, B * rho_0, name)
 
@@ -50,8 +55,9 @@ class ResistanceLaw:
         return self.static_stress + self.dynamic_density * np.square(normal_velocity)
 
 
-def locking_cavity_expansion(sigma_0: float, rho_0: float, locking_strain: float,
-                             name: str = "locking cavity expansion") -> ResistanceLaw:
+def locking_cavity_expansion(
+    sigma_0: float, rho_0: float, locking_strain: float, name: str = "locking cavity expansion"
+) -> ResistanceLaw:
     """Spherical cavity expansion in an elastic-plastic-locking soil (rigid-locking limit).
 
     A cavity expands at speed ``V`` into a Tresca soil of strength ``sigma_0``

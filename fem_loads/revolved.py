@@ -36,12 +36,27 @@ from numba import njit
 
 from mesh import Profile
 
-__all__ = ["RevolvedSurface", "revolved_surface", "law_data", "pitch_plane_load", "lowest_height",
-           "PitchPlaneLoad", "LAW_FIELDS"]
+__all__ = [
+    "RevolvedSurface",
+    "revolved_surface",
+    "law_data",
+    "pitch_plane_load",
+    "lowest_height",
+    "PitchPlaneLoad",
+    "LAW_FIELDS",
+]
 
 #: the layout of the law array the kernel takes (:func:`law_data`)
-LAW_FIELDS = ("static_stress", "dynamic_density", "contact_width", "contact_incidence", "entry_length",
-              "friction_coefficient", "friction_cap", "max_radius")
+LAW_FIELDS = (
+    "static_stress",
+    "dynamic_density",
+    "contact_width",
+    "contact_incidence",
+    "entry_length",
+    "friction_coefficient",
+    "friction_cap",
+    "max_radius",
+)
 _RAMP_X, _RAMP_W = np.polynomial.legendre.leggauss(4)  # arcs of a ramp: the integrand is a smooth polynomial
 _FRICTION_X, _FRICTION_W = np.polynomial.legendre.leggauss(6)  # arcs with friction: its slip direction too
 OUTLINE_POINTS = 257  # samples of the profile where the lowest point is sought: 4 mm apart on a 1 m body
@@ -82,8 +97,9 @@ class RevolvedSurface:
         return float(2.0 * math.pi * np.sum((x * n_axial + rho * n_radial) * w) / 3.0)
 
 
-def revolved_surface(profile: Profile, tip_from_centre: float, nose_rings: int = 12, shank_rings: int = 8,
-                     face_rings: int = 4) -> RevolvedSurface:
+def revolved_surface(
+    profile: Profile, tip_from_centre: float, nose_rings: int = 12, shank_rings: int = 8, face_rings: int = 4
+) -> RevolvedSurface:
     """Rings at Gauss-Legendre stations of each smooth piece of ``profile``, and of its flat faces.
 
     Parameters
@@ -108,31 +124,62 @@ def revolved_surface(profile: Profile, tip_from_centre: float, nose_rings: int =
         ds = (end - start) / 2.0 * weights
         radius, slope = profile.radius_at(s), profile.slope_at(s)
         n_axial, n_radial = profile.outward_normal(s)
-        rows.append(np.stack([tip_from_centre - s, radius, n_axial, n_radial, radius * np.sqrt(1.0 + slope**2) * ds],
-                             axis=1))
-    for x, n_axial, outer in ((tip_from_centre - length, -1.0, profile.tail_radius),
-                              (tip_from_centre, 1.0, profile.tip_radius)):
+        rows.append(
+            np.stack([tip_from_centre - s, radius, n_axial, n_radial, radius * np.sqrt(1.0 + slope**2) * ds], axis=1)
+        )
+    for x, n_axial, outer in (
+        (tip_from_centre - length, -1.0, profile.tail_radius),
+        (tip_from_centre, 1.0, profile.tip_radius),
+    ):
         if outer > 0.0:  # a flat face: rings of radius rho, area rho d rho d phi
             nodes, weights = np.polynomial.legendre.leggauss(face_rings)
             rho = outer * (nodes + 1.0) / 2.0
-            rows.append(np.stack([np.full(face_rings, x), rho, np.full(face_rings, n_axial), np.zeros(face_rings),
-                                  rho * outer / 2.0 * weights], axis=1))
+            rows.append(
+                np.stack(
+                    [
+                        np.full(face_rings, x),
+                        rho,
+                        np.full(face_rings, n_axial),
+                        np.zeros(face_rings),
+                        rho * outer / 2.0 * weights,
+                    ],
+                    axis=1,
+                )
+            )
     s = np.unique(np.concatenate([np.linspace(0.0, length, OUTLINE_POINTS), pieces]))
     outline = np.stack([tip_from_centre - s, profile.radius_at(s)], axis=1)
     outline = np.vstack([[tip_from_centre, 0.0], outline])  # the tip's centre (a blunt nose's face)
     return RevolvedSurface(np.ascontiguousarray(np.concatenate(rows)), np.ascontiguousarray(outline))
 
 
-def law_data(static_stress: float, dynamic_density: float, contact_width: float, contact_incidence: float,
-             entry_length: float, max_radius: float, friction_coefficient: float = 0.0,
-             friction_cap: float | None = None) -> np.ndarray:
+def law_data(
+    static_stress: float,
+    dynamic_density: float,
+    contact_width: float,
+    contact_incidence: float,
+    entry_length: float,
+    max_radius: float,
+    friction_coefficient: float = 0.0,
+    friction_cap: float | None = None,
+) -> np.ndarray:
     """The law, its switches and friction as the kernel takes them (:data:`LAW_FIELDS`; SI units).
 
     ``contact_width`` ``w`` (m/s) and ``contact_incidence`` ``delta`` give the contact ramp's width
     ``W = w + delta (|V| + |q| max_radius)``; ``entry_length`` ``l`` (m) the entry ramp's (0: sharp).
     """
-    return np.array([static_stress, dynamic_density, contact_width, contact_incidence, entry_length,
-                     friction_coefficient, friction_cap or 0.0, max_radius], dtype=float)
+    return np.array(
+        [
+            static_stress,
+            dynamic_density,
+            contact_width,
+            contact_incidence,
+            entry_length,
+            friction_coefficient,
+            friction_cap or 0.0,
+            max_radius,
+        ],
+        dtype=float,
+    )
 
 
 @njit(cache=True, inline="always")
@@ -188,8 +235,10 @@ def _closed_arc(low, high, a, b, static, dynamic):
     i1 = s_low - s_high
     i2 = 0.5 * (i0 + s_low * low - s_high * high)
     i3 = i1 - (s_low * s_low * s_low - s_high * s_high * s_high) / 3.0
-    return (static * i0 + dynamic * (a * a * i0 + 2.0 * a * b * i1 + b * b * i2),
-            static * i1 + dynamic * (a * a * i1 + 2.0 * a * b * i2 + b * b * i3))
+    return (
+        static * i0 + dynamic * (a * a * i0 + 2.0 * a * b * i1 + b * b * i2),
+        static * i1 + dynamic * (a * a * i1 + 2.0 * a * b * i2 + b * b * i3),
+    )
 
 
 @njit(cache=True, inline="always")
@@ -307,8 +356,9 @@ def pitch_plane_load(rings, law, height, sin_theta, cos_theta, vx, vz, q, out) -
                     j0 += d0
                     j1 += d1
                 else:
-                    d0, d1, dx, dz, dm = _gauss_arc(low, high, a, b, h0, h1, x, rho, n_axial, n_radial, vx, vz, q,
-                                                    law, width)
+                    d0, d1, dx, dz, dm = _gauss_arc(
+                        low, high, a, b, h0, h1, x, rho, n_axial, n_radial, vx, vz, q, law, width
+                    )
                     j0, j1, jx, jz, jm = j0 + d0, j1 + d1, jx + dx, jz + dz, jm + dm
         # both halves of the ring: dF = -(sigma n + tau t) w dphi, dM = r x dF
         fx -= 2.0 * w * (n_axial * j0 + jx)
@@ -344,11 +394,21 @@ class PitchPlaneLoad:
     def __init__(self, surface: RevolvedSurface, law: np.ndarray) -> None:
         self.surface, self.law = surface, np.asarray(law, dtype=float)
 
-    def __call__(self, height: float, theta: float, velocity_body: tuple[float, float],
-                 pitch_rate: float) -> np.ndarray:
+    def __call__(
+        self, height: float, theta: float, velocity_body: tuple[float, float], pitch_rate: float
+    ) -> np.ndarray:
         """``(F_x, F_z, M_y)`` in the body frame (N, N m) at ``height`` (m), ``theta`` (rad), ``(v_x, v_z)`` (m/s)
         and ``pitch_rate`` (rad/s)."""
         out = np.empty(3)
-        pitch_plane_load(self.surface.rings, self.law, float(height), math.sin(theta), math.cos(theta),
-                         float(velocity_body[0]), float(velocity_body[1]), float(pitch_rate), out)
+        pitch_plane_load(
+            self.surface.rings,
+            self.law,
+            float(height),
+            math.sin(theta),
+            math.cos(theta),
+            float(velocity_body[0]),
+            float(velocity_body[1]),
+            float(pitch_rate),
+            out,
+        )
         return out

@@ -14,8 +14,18 @@ from pathlib import Path
 import numpy as np
 
 from .geometry import TRI_EDGES, ProjectileMesh, _orient_tetra, elements, generate, gmsh_session
-from .imported import (CAD_SUFFIXES, UNITS, FileGeometry, GeometryError, check_size, components, model_frame,
-                       orient_by_volume, regions, rotation_to_x)
+from .imported import (
+    CAD_SUFFIXES,
+    UNITS,
+    FileGeometry,
+    GeometryError,
+    check_size,
+    components,
+    model_frame,
+    orient_by_volume,
+    regions,
+    rotation_to_x,
+)
 
 __all__ = ["cad_mesh", "CadSurface", "load_cad"]
 
@@ -54,19 +64,21 @@ def load_cad(geometry: FileGeometry) -> dict[int, str]:
         shapes = occ.importShapes(geometry.path, highestDimOnly=True, format=fmt)
     except Exception as exc:
         reason = " ".join(str(exc).split())
-        raise GeometryError(f"projectile.geometry.file = {geometry.path!r}: gmsh cannot read it as"
-                            f" {fmt.upper()} ({reason})") from None
+        raise GeometryError(
+            f"projectile.geometry.file = {geometry.path!r}: gmsh cannot read it as {fmt.upper()} ({reason})"
+        ) from None
     if shapes and not any(d == 3 for d, _ in shapes):
         _sew_solid(geometry, shapes)
     occ.synchronize()
     volumes = [t for _, t in gmsh.model.getEntities(3)]
     if not volumes:
-        raise GeometryError(f"projectile.geometry.file = {geometry.path!r}: no closed solid (surfaces that do"
-                            " not close, or that OpenCASCADE cannot sew into one: the body must be a watertight"
-                            " solid; export it as STEP or BREP)")
+        raise GeometryError(
+            f"projectile.geometry.file = {geometry.path!r}: no closed solid (surfaces that do"
+            " not close, or that OpenCASCADE cannot sew into one: the body must be a watertight"
+            " solid; export it as STEP or BREP)"
+        )
     names = {v: _solid_name(gmsh.model.getEntityName(3, v), k) for k, v in enumerate(volumes)}
-    check_size(_extent_of([(3, v) for v in volumes]) * UNITS[geometry.unit], geometry,
-                _declared_unit(geometry.path))
+    check_size(_extent_of([(3, v) for v in volumes]) * UNITS[geometry.unit], geometry, _declared_unit(geometry.path))
     # Split the solids by the two planes through the axis, and make touching solids share their interfaces
     # (one conforming mesh).  gmsh meshes a whole cone badly at its apex, a pole of its parameters on the
     # seam (the triangles there fold over and the volume mesh loses the tip); split into quarters, the apex
@@ -138,18 +150,21 @@ def cad_mesh(geometry: FileGeometry, size: float, order: int) -> ProjectileMesh:
                 _meridian_edge_nodes(points, surface, block)
     tetra = np.concatenate(blocks)
     if len(tetra) == 0:
-        raise GeometryError(f"projectile.geometry.file = {geometry.path!r}: gmsh made no tetrahedra of it (a solid"
-                            " whose surfaces do not meet edge to edge); export it as STEP or BREP")
+        raise GeometryError(
+            f"projectile.geometry.file = {geometry.path!r}: gmsh made no tetrahedra of it (a solid"
+            " whose surfaces do not meet edge to edge); export it as STEP or BREP"
+        )
     region = np.concatenate([np.full(len(b), region_of[v]) for b, v in zip(blocks, volumes)])
     outer_tris = np.concatenate(tris)
     entity = np.concatenate([np.full(len(t), s) for t, s in zip(tris, outer)])
     used, points_index = np.unique(np.concatenate([tetra.ravel(), outer_tris.ravel()]), return_inverse=True)
     tetra = points_index[: tetra.size].reshape(tetra.shape)
-    outer_tris = points_index[tetra.size:].reshape(outer_tris.shape)
+    outer_tris = points_index[tetra.size :].reshape(outer_tris.shape)
     points = model_frame(points[used], geometry)
     tetra = _orient_tetra(points, tetra)
-    return ProjectileMesh(points, tetra, region, orient_by_volume(points, outer_tris, tetra), order,
-                          outer_entity=entity)
+    return ProjectileMesh(
+        points, tetra, region, orient_by_volume(points, outer_tris, tetra), order, outer_entity=entity
+    )
 
 
 def _meridian_edge_nodes(points: np.ndarray, surface: int, triangles: np.ndarray) -> None:
@@ -201,24 +216,28 @@ def _one_body(geometry: FileGeometry, volumes: list[int]) -> None:
     pairs = [(i, j) for i, a in enumerate(volumes) for j, b in enumerate(volumes) if i < j and faces[a] & faces[b]]
     n = len(set(components(len(volumes), pairs).tolist()))
     if n > 1:
-        raise GeometryError(f"projectile.geometry.file = {geometry.path!r}: {n} disjoint bodies; a projectile is"
-                            " one body (join the solids in the CAD tool, or keep one)")
+        raise GeometryError(
+            f"projectile.geometry.file = {geometry.path!r}: {n} disjoint bodies; a projectile is"
+            " one body (join the solids in the CAD tool, or keep one)"
+        )
 
 
 def _outer_shell(volumes: list[int]) -> list[int]:
     """The boundary surfaces of the union of ``volumes`` on its outermost shell (closed voids left out)."""
     import gmsh
 
-    boundary = sorted({abs(t) for _, t in gmsh.model.getBoundary([(3, v) for v in volumes], combined=True,
-                                                                   oriented=False)})
+    boundary = sorted(
+        {abs(t) for _, t in gmsh.model.getBoundary([(3, v) for v in volumes], combined=True, oriented=False)}
+    )
     curves = {s: {abs(t) for _, t in gmsh.model.getBoundary([(2, s)], oriented=False)} for s in boundary}
-    pairs = [(i, j) for i, a in enumerate(boundary) for j, b in enumerate(boundary)
-             if i < j and curves[a] & curves[b]]
+    pairs = [(i, j) for i, a in enumerate(boundary) for j, b in enumerate(boundary) if i < j and curves[a] & curves[b]]
     shell = components(len(boundary), pairs)
     # the outer shell encloses every other: it has the largest bounding box
     boxes = np.array([gmsh.model.getBoundingBox(2, s) for s in boundary])
-    size = {c: np.prod(np.max(boxes[shell == c, 3:], axis=0) - np.min(boxes[shell == c, :3], axis=0))
-            for c in set(shell.tolist())}
+    size = {
+        c: np.prod(np.max(boxes[shell == c, 3:], axis=0) - np.min(boxes[shell == c, :3], axis=0))
+        for c in set(shell.tolist())
+    }
     outer = max(size, key=size.get)
     return [s for s, c in zip(boundary, shell) if c == outer]
 
@@ -238,8 +257,9 @@ class CadSurface:
         self.geometry = geometry
         self.tip = tip
 
-    def quadrature(self, corners: np.ndarray, entities: np.ndarray, ref_points: np.ndarray,
-                   ref_weights: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def quadrature(
+        self, corners: np.ndarray, entities: np.ndarray, ref_points: np.ndarray, ref_weights: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """A quadrature rule on the CAD surfaces, facet by facet, in their parametric coordinates.
 
         Each facet's corners are given their parameters ``(u, v)`` on its CAD surface; the
@@ -299,12 +319,11 @@ class CadSurface:
                 jacobian = np.linalg.norm(cross, axis=2)
                 points[rows] = scale * value @ rotation.T - shift
                 normals[rows] = (cross / np.maximum(jacobian, np.finfo(float).tiny)[..., None]) @ rotation.T
-                weights[rows] = weight * jacobian * scale ** 2
+                weights[rows] = weight * jacobian * scale**2
         return points.reshape(-1, 3), normals.reshape(-1, 3), weights.reshape(-1), planar
 
 
-def _parameter_rule(uv: np.ndarray, ref_points: np.ndarray,
-                    ref_weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _parameter_rule(uv: np.ndarray, ref_points: np.ndarray, ref_weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Each facet's rule points in its parameter triangle, and their weights in the parameter plane.
 
     ``uv``: (m, 3, 2) corner parameters, NaN in the degenerate parameter of a corner at a pole
@@ -342,9 +361,9 @@ def _square_rule(q: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     t = np.zeros(q)
     s = np.full(q, 0.5)
     w = np.zeros(q)
-    t[:across * along] = np.repeat(0.5 * (a + 1.0), along)
-    s[:across * along] = np.tile(0.5 * (b + 1.0), across)
-    w[:across * along] = 0.25 * np.outer(wa, wb).ravel()
+    t[: across * along] = np.repeat(0.5 * (a + 1.0), along)
+    s[: across * along] = np.tile(0.5 * (b + 1.0), across)
+    w[: across * along] = 0.25 * np.outer(wa, wb).ravel()
     return t, s, w
 
 

@@ -26,28 +26,32 @@ def build_file_mesh(geometry: FileGeometry, size: float, order: int = 2) -> Proj
     """
     if not Path(geometry.path).is_file():
         raise GeometryError(f"projectile.geometry.file = {geometry.path!r}: no such file")
-    if geometry.is_cad:
-        mesh = cad_mesh(geometry, size, order)
-    else:
-        mesh = read_volume_mesh(geometry)
+    mesh = cad_mesh(geometry, size, order) if geometry.is_cad else read_volume_mesh(geometry)
     extent = float(np.ptp(mesh.points, axis=0).max())
     folded = tangled(mesh)
     if folded.any():
         where = mesh.points[mesh.tetra[folded, 0]]
-        fix = ("a smaller numerics.mesh_size or numerics.geometry_order = 1" if geometry.is_cad else
-               "untangle it (gmsh: Mesh.HighOrderOptimize = 2) or give 4-node tetrahedra")
-        raise GeometryError(f"projectile.geometry.file = {geometry.path!r}: {int(folded.sum())} curved"
-                            f" tetrahedra fold over (their Jacobian changes sign; the first at x = "
-                            f"{where[0, 0]:.4g} m along the axis): {fix}")
+        fix = (
+            "a smaller numerics.mesh_size or numerics.geometry_order = 1"
+            if geometry.is_cad
+            else "untangle it (gmsh: Mesh.HighOrderOptimize = 2) or give 4-node tetrahedra"
+        )
+        raise GeometryError(
+            f"projectile.geometry.file = {geometry.path!r}: {int(folded.sum())} curved"
+            f" tetrahedra fold over (their Jacobian changes sign; the first at x = "
+            f"{where[0, 0]:.4g} m along the axis): {fix}"
+        )
     if not size < extent:
-        raise GeometryError(f"numerics.mesh_size = {size:g}: must be less than the body's largest extent,"
-                            f" {extent:.4g} m")
+        raise GeometryError(
+            f"numerics.mesh_size = {size:g}: must be less than the body's largest extent, {extent:.4g} m"
+        )
     return mesh
 
 
 # barycentric points where a quadratic tetrahedron's Jacobian is sampled: corners, edge midpoints, centroid
-_SAMPLES = np.vstack([np.eye(4), 0.5 * (np.eye(4)[[0, 1, 0, 0, 1, 2]] + np.eye(4)[[1, 2, 2, 3, 3, 3]]),
-                      np.full((1, 4), 0.25)])
+_SAMPLES = np.vstack(
+    [np.eye(4), 0.5 * (np.eye(4)[[0, 1, 0, 0, 1, 2]] + np.eye(4)[[1, 2, 2, 3, 3, 3]]), np.full((1, 4), 0.25)]
+)
 
 
 def tangled(mesh: ProjectileMesh) -> np.ndarray:
@@ -59,7 +63,8 @@ def tangled(mesh: ProjectileMesh) -> np.ndarray:
     x = mesh.points[mesh.tetra]  # (n, 10, 3)
     worst = np.full(len(mesh.tetra), np.inf)
     for b in _SAMPLES:
-        # quadratic Lagrange shape functions' gradients: corners (4 L_i - 1) grad L_i, edges 4 (L_j grad L_i + L_i grad L_j)
+        # quadratic Lagrange shape functions' gradients: corners (4 L_i - 1) grad L_i, edges 4 (L_j grad L_i
+        # + L_i grad L_j)
         d = [(4.0 * b[i] - 1.0) * gradient[i] for i in range(4)]
         d += [4.0 * (b[j] * gradient[i] + b[i] * gradient[j]) for i, j in TET_EDGES]
         jacobian = np.einsum("nkd,ke->nde", x, np.array(d))

@@ -100,8 +100,7 @@ def _profile_faces(occ, geometry: ProjectileGeometry) -> tuple[list[int], list[i
         if p.curve is not None:  # a measured nose: its cubic pieces, exactly, as one B-spline
             poles, knots, multiplicities = p.curve.bezier(-tip_x, drop)
             inner = [occ.addPoint(-s, r, 0.0) for s, r in poles[1:-1]]
-            curve = occ.addBSpline([tip, *inner, shoulder], degree=3, knots=knots,
-                                   multiplicities=multiplicities)
+            curve = occ.addBSpline([tip, *inner, shoulder], degree=3, knots=knots, multiplicities=multiplicities)
             occ.remove([(0, t) for t in inner])
         elif arc is not None:
             s_c, r_c, _ = arc
@@ -180,8 +179,7 @@ def _mesh_quarter(geometry: ProjectileGeometry, size: float, order: int) -> Proj
     profile = geometry.profile
     a = profile.radius
     inner = 0.0 if geometry.interior is None else geometry.interior.wall_thickness
-    boundary = gmsh.model.getBoundary([(3, v) for v in body_vols + weight_vols],
-                                      combined=True, oriented=False)
+    boundary = gmsh.model.getBoundary([(3, v) for v in body_vols + weight_vols], combined=True, oriented=False)
     outer_surfaces = []
     for _, tag in boundary:
         xmin, ymin, zmin, xmax, ymax, zmax = gmsh.model.getBoundingBox(2, abs(tag))
@@ -246,6 +244,7 @@ def elements(order: int):
                 _, nodes = gmsh.model.mesh.getElementsByType(etype, tag)
                 blocks.append(index[nodes.astype(np.int64)].reshape(-1, len(cols))[:, cols])
             return np.concatenate(blocks) if blocks else np.zeros((0, len(cols)), dtype=np.int64)
+
         return read
 
     return points, reader("Tetrahedron", TET_EDGES), reader("Triangle", TRI_EDGES)

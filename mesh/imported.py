@@ -31,8 +31,17 @@ import numpy as np
 
 from .geometry import BODY, TRI_EDGES, ProjectileMesh, _permute
 
-__all__ = ["FileGeometry", "GeometryError", "body_frame", "outline", "BodyOutline", "UNITS",
-           "CAD_SUFFIXES", "MATERIAL_BASE", "file_digest"]
+__all__ = [
+    "FileGeometry",
+    "GeometryError",
+    "body_frame",
+    "outline",
+    "BodyOutline",
+    "UNITS",
+    "CAD_SUFFIXES",
+    "MATERIAL_BASE",
+    "file_digest",
+]
 
 UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
 CAD_SUFFIXES = {".step": "step", ".stp": "step", ".brep": "brep", ".brp": "brep", ".iges": "iges", ".igs": "iges"}
@@ -115,13 +124,17 @@ def check_size(extent: float, geometry: FileGeometry, declared: str | None = Non
         return
     raw = extent / UNITS[geometry.unit]
     # the unit that makes the body most like a projectile (a few decimetres); the file's own if it fits
-    fits = sorted((u for u, f in UNITS.items() if SMALLEST_BODY <= raw * f <= LARGEST_BODY),
-                  key=lambda u: (u != DECLARED.get(declared), abs(math.log(raw * UNITS[u] / TYPICAL_BODY))))
-    hint = f"; if the file is in {fits[0]}, say unit = \"{fits[0]}\"" if fits else ""
+    fits = sorted(
+        (u for u, f in UNITS.items() if SMALLEST_BODY <= raw * f <= LARGEST_BODY),
+        key=lambda u: (u != DECLARED.get(declared), abs(math.log(raw * UNITS[u] / TYPICAL_BODY))),
+    )
+    hint = f'; if the file is in {fits[0]}, say unit = "{fits[0]}"' if fits else ""
     told = f" (the file declares {declared})" if declared else ""
-    raise GeometryError(f"projectile.geometry.unit = \"{geometry.unit}\": the body is {extent:.4g} m across,"
-                        f" {'over' if extent > LARGEST_BODY else 'under'} the {SMALLEST_BODY:g}-{LARGEST_BODY:g} m"
-                        f" a projectile can be{told}{hint}")
+    raise GeometryError(
+        f'projectile.geometry.unit = "{geometry.unit}": the body is {extent:.4g} m across,'
+        f" {'over' if extent > LARGEST_BODY else 'under'} the {SMALLEST_BODY:g}-{LARGEST_BODY:g} m"
+        f" a projectile can be{told}{hint}"
+    )
 
 
 def components(n: int, pairs: list[tuple[int, int]]) -> np.ndarray:
@@ -146,8 +159,10 @@ def regions(geometry: FileGeometry, names: dict) -> dict:
     found = set(names.values())
     for material in geometry.materials:
         if material not in found:
-            raise GeometryError(f"projectile.materials.{material}: no solid or group of that name in the file"
-                                f" (it has: {', '.join(sorted(found))})")
+            raise GeometryError(
+                f"projectile.materials.{material}: no solid or group of that name in the file"
+                f" (it has: {', '.join(sorted(found))})"
+            )
     index = {m: MATERIAL_BASE + k for k, m in enumerate(geometry.materials)}
     return {key: index.get(name, BODY) for key, name in names.items()}
 
@@ -159,8 +174,8 @@ TET_FACES = ((1, 2, 3, 0), (0, 3, 2, 1), (0, 1, 3, 2), (0, 2, 1, 3))
 def face_table(tetra: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Every face of every tetrahedron: sorted corner keys, the face's local corners and the opposite corner."""
     faces = np.array([f[:3] for f in TET_FACES])
-    corners = tetra[:, :4][:, faces]                        # (n, 4, 3)
-    opposite = tetra[:, [f[3] for f in TET_FACES]]          # (n, 4)
+    corners = tetra[:, :4][:, faces]  # (n, 4, 3)
+    opposite = tetra[:, [f[3] for f in TET_FACES]]  # (n, 4)
     return np.sort(corners, axis=2).reshape(-1, 3), corners.reshape(-1, 3), opposite.reshape(-1)
 
 
@@ -194,5 +209,8 @@ def outline(mesh: ProjectileMesh) -> BodyOutline:
     nodes = mesh.points[np.unique(mesh.outer[:, :3])]
     radius = np.hypot(nodes[:, 1], nodes[:, 2])
     widest = radius.max()
-    return BodyOutline(length=float(-nodes[:, 0].min()), diameter=float(2.0 * widest),
-                       nose_length=float(-nodes[radius >= 0.999 * widest, 0].max()))
+    return BodyOutline(
+        length=float(-nodes[:, 0].min()),
+        diameter=float(2.0 * widest),
+        nose_length=float(-nodes[radius >= 0.999 * widest, 0].max()),
+    )

@@ -49,7 +49,8 @@ def read_mesh(path: str | os.PathLike) -> ProjectileMesh:
                 tetra_region=regions[tet_type].astype(np.int64),
                 outer=m.cells_dict[tri_type].astype(np.int64),
                 order=order,
-                outer_entity=(m.cell_data_dict["entity"][tri_type].astype(np.int64)
-                              if "entity" in m.cell_data_dict else None),
+                outer_entity=(
+                    m.cell_data_dict["entity"][tri_type].astype(np.int64) if "entity" in m.cell_data_dict else None
+                ),
             )
     raise ValueError(f"{path}: no tetrahedra found")

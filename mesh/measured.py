@@ -7,7 +7,8 @@ table with a flat stretch or a sharp shoulder rings, and a radius that dips belo
 rises above it would give the nose a bulge or a waist that the table does not have), and each piece
 depends only on the neighbouring points, so one bad point spoils only its own neighbourhood.  It is
 ``C^1``: the radius and the slope (hence the exact normal) are continuous everywhere on the nose,
-the curvature jumps at the points.  At the tip and at the shoulder the slope is scipy's one-sided three-point estimate, set to zero
+the curvature jumps at the points.  At the tip and at the shoulder the slope is scipy's one-sided three-point
+estimate, set to zero
 where its sign would differ from the end chord's: a finite number at the tip (a pointed nose with a
 finite tip angle), and at the shoulder a table that flattens towards the shank meets it nearly
 tangentially, one that does not leaves a kink there (like a secant ogive).  The error for a smooth
@@ -64,16 +65,22 @@ class ProfileNose:
     def __post_init__(self) -> None:
         points = _finite_pairs(self, "nose", MIN_POINTS, "")
         if points[0] != (0.0, 0.0):
-            raise ValueError(f"nose.points[0] = [{points[0][0]:g}, {points[0][1]:g}]: must be the tip"
-                             " (allowed: [0, 0], x = 0 and r = 0)")
+            raise ValueError(
+                f"nose.points[0] = [{points[0][0]:g}, {points[0][1]:g}]: must be the tip"
+                " (allowed: [0, 0], x = 0 and r = 0)"
+            )
         for i in range(1, len(points)):
             (x0, r0), (x1, r1) = points[i - 1], points[i]
             if not x1 > x0:
-                raise ValueError(f"nose.points[{i}] = [{x1:g}, {r1:g}]: x must exceed the previous point's"
-                                 f" x = {x0:g} m (allowed: x strictly increasing)")
+                raise ValueError(
+                    f"nose.points[{i}] = [{x1:g}, {r1:g}]: x must exceed the previous point's"
+                    f" x = {x0:g} m (allowed: x strictly increasing)"
+                )
             if not r1 >= r0:
-                raise ValueError(f"nose.points[{i}] = [{x1:g}, {r1:g}]: r must be at least the previous"
-                                 f" point's r = {r0:g} m (allowed: r non-decreasing)")
+                raise ValueError(
+                    f"nose.points[{i}] = [{x1:g}, {r1:g}]: r must be at least the previous"
+                    f" point's r = {r0:g} m (allowed: r non-decreasing)"
+                )
 
     @property
     def length(self) -> float:
@@ -84,8 +91,10 @@ class ProfileNose:
         """Raise ValueError unless the last point's radius is the shank ``radius`` (m) within :data:`SHANK_RTOL`."""
         last = self.points[-1][1]
         if not abs(last - radius) <= SHANK_RTOL * radius:
-            raise ValueError(f"nose.points[{len(self.points) - 1}]: r = {last:g} m must be the shank radius"
-                             f" (allowed: diameter/2 = {radius:g} m, within {SHANK_RTOL:g} of it)")
+            raise ValueError(
+                f"nose.points[{len(self.points) - 1}]: r = {last:g} m must be the shank radius"
+                f" (allowed: diameter/2 = {radius:g} m, within {SHANK_RTOL:g} of it)"
+            )
 
     def curve(self, radius: float) -> NoseCurve:
         """The interpolating curve, its last radius set to the shank ``radius`` (m)."""
@@ -117,11 +126,15 @@ class ProfileBody:
         points = _finite_pairs(self, "body", 2, ", from the shank to the tail")
         for i, (x, r) in enumerate(points):
             if not r > 0.0:
-                raise ValueError(f"body.points[{i}] = [{x:g}, {r:g}]: r must be > 0 m (a body with a hole in its"
-                                 " profile is two bodies)")
+                raise ValueError(
+                    f"body.points[{i}] = [{x:g}, {r:g}]: r must be > 0 m (a body with a hole in its"
+                    " profile is two bodies)"
+                )
             if i and not x > points[i - 1][0]:
-                raise ValueError(f"body.points[{i}] = [{x:g}, {r:g}]: x must exceed the previous point's x ="
-                                 f" {points[i - 1][0]:g} m (allowed: x strictly increasing)")
+                raise ValueError(
+                    f"body.points[{i}] = [{x:g}, {r:g}]: x must exceed the previous point's x ="
+                    f" {points[i - 1][0]:g} m (allowed: x strictly increasing)"
+                )
 
     @property
     def start(self) -> float:
@@ -132,15 +145,20 @@ class ProfileBody:
         """Raise ValueError unless the points start on the shank behind the nose and end at the tail."""
         x0, r0 = self.points[0]
         if not abs(r0 - radius) <= SHANK_RTOL * radius:
-            raise ValueError(f"body.points[0]: r = {r0:g} m must be the shank radius (allowed: diameter/2 ="
-                             f" {radius:g} m, within {SHANK_RTOL:g} of it)")
+            raise ValueError(
+                f"body.points[0]: r = {r0:g} m must be the shank radius (allowed: diameter/2 ="
+                f" {radius:g} m, within {SHANK_RTOL:g} of it)"
+            )
         if not x0 >= nose_length * (1 - 1e-12):
-            raise ValueError(f"body.points[0]: x = {x0:g} m lies on the nose (allowed: x >= the nose length,"
-                             f" {nose_length:g} m)")
+            raise ValueError(
+                f"body.points[0]: x = {x0:g} m lies on the nose (allowed: x >= the nose length, {nose_length:g} m)"
+            )
         last = self.points[-1][0]
         if not abs(last - length) <= 1e-9 * length:
-            raise ValueError(f"body.points[{len(self.points) - 1}]: x = {last:g} m must be the tail (allowed:"
-                             f" the projectile's length, {length:g} m)")
+            raise ValueError(
+                f"body.points[{len(self.points) - 1}]: x = {last:g} m must be the tail (allowed:"
+                f" the projectile's length, {length:g} m)"
+            )
 
     def curve(self, radius: float, length: float) -> NoseCurve:
         """The interpolating curve, its first radius set to the shank ``radius`` and its end to ``length`` (m)."""
@@ -191,8 +209,9 @@ class NoseCurve:
             return lo
         return optimize.brentq(lambda s: float(self.radius(s)) - radius, lo, hi, xtol=1e-15, rtol=1e-15)
 
-    def bezier(self, start: float, drop: float = 0.0,
-               end: float | None = None) -> tuple[list[tuple[float, float]], list[float], list[int]]:
+    def bezier(
+        self, start: float, drop: float = 0.0, end: float | None = None
+    ) -> tuple[list[tuple[float, float]], list[float], list[int]]:
         """The curve from ``start`` to ``end`` (default: its end, the shoulder of a nose), lowered by ``drop`` (m),
         as one cubic B-spline.
 

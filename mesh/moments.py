@@ -73,8 +73,9 @@ def revolved_moments(radius, s0: float, s1: float, breakpoints=(), cubic: bool =
         w = (half * weights).ravel()
         s = s.ravel()
         r2 = np.asarray(radius(s), dtype=float) ** 2
-        return RevolvedMoments(*(math.pi * float(np.dot(w, f)) for f in (r2, r2 * s, 0.5 * r2**2,
-                                                                          0.25 * r2**2 + r2 * s * s)))
+        return RevolvedMoments(
+            *(math.pi * float(np.dot(w, f)) for f in (r2, r2 * s, 0.5 * r2**2, 0.25 * r2**2 + r2 * s * s))
+        )
     from scipy import integrate
 
     points = [p for p in breakpoints if s0 < p < s1] or None
@@ -85,8 +86,5 @@ def revolved_moments(radius, s0: float, s1: float, breakpoints=(), cubic: bool =
         lambda s: 0.5 * math.pi * float(radius(s)) ** 4,
         lambda s: 0.25 * math.pi * float(radius(s)) ** 4 + math.pi * float(radius(s)) ** 2 * s * s,
     )
-    values = [
-        integrate.quad(f, s0, s1, points=points, epsabs=0.0, epsrel=1e-13, limit=limit)[0]
-        for f in integrands
-    ]
+    values = [integrate.quad(f, s0, s1, points=points, epsabs=0.0, epsrel=1e-13, limit=limit)[0] for f in integrands]
     return RevolvedMoments(*values)

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-
 from .profile import Interior, Profile, ProjectileGeometry, RevolvedMoments, revolved_moments
 
 __all__ = ["AxisymmetricMassProperties", "analytic_mass_properties", "place_counterweight"]
@@ -50,8 +49,9 @@ def _outer_moments(profile: Profile, s0: float = 0.0, s1: float | None = None) -
 def _cavity_moments(geometry: ProjectileGeometry, s0: float, s1: float) -> RevolvedMoments:
     s0 = max(s0, geometry.cavity_start)
     s1 = min(s1, geometry.cavity_end)
-    return revolved_moments(geometry.cavity_radius_at, s0, s1, geometry.profile.breakpoints,
-                            geometry.profile.curve is not None)
+    return revolved_moments(
+        geometry.cavity_radius_at, s0, s1, geometry.profile.breakpoints, geometry.profile.curve is not None
+    )
 
 
 def region_moments(geometry: ProjectileGeometry) -> tuple[RevolvedMoments, RevolvedMoments]:
@@ -137,7 +137,10 @@ def place_counterweight(
     # the last start that still leaves room for the whole volume
     start_max = optimize.brentq(
         lambda start: _cavity_moments(shell_geometry, start, hi).volume - weight_volume,
-        lo, hi, xtol=1e-14, rtol=1e-14,
+        lo,
+        hi,
+        xtol=1e-14,
+        rtol=1e-14,
     )
 
     def centre_error(start: float) -> float:
@@ -156,4 +159,3 @@ def place_counterweight(
         )
     start = optimize.brentq(centre_error, lo, start_max, xtol=1e-13, rtol=1e-14)
     return start, end_for(start)
-

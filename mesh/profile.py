@@ -141,8 +141,10 @@ class Profile:
             if not (self.nose.length > 0 and math.isfinite(self.nose.length)):
                 raise ValueError(f"nose.length = {self.nose.length}: must be a finite number > 0 (calibres)")
             if not (self.nose.crh >= tangent * (1 - 1e-12) and math.isfinite(self.nose.crh)):
-                raise ValueError(f"nose.crh = {self.nose.crh}: a secant ogive of length {self.nose.length} calibres"
-                                 f" needs crh >= {tangent:.6g} (the tangent ogive's)")
+                raise ValueError(
+                    f"nose.crh = {self.nose.crh}: a secant ogive of length {self.nose.length} calibres"
+                    f" needs crh >= {tangent:.6g} (the tangent ogive's)"
+                )
         if isinstance(self.nose, BluntOgiveNose):
             if not (self.nose.crh >= 0.5 and math.isfinite(self.nose.crh)):
                 raise ValueError(f"nose.crh = {self.nose.crh}: must be a finite number >= 0.5")
@@ -151,9 +153,7 @@ class Profile:
         if isinstance(self.nose, ProfileNose):
             self.nose.check_shank(a)
         if not (self.length > self.nose_length and math.isfinite(self.length)):
-            raise ValueError(
-                f"length = {self.length}: must exceed the nose length {self.nose_length:.6g} m"
-            )
+            raise ValueError(f"length = {self.length}: must exceed the nose length {self.nose_length:.6g} m")
         if self.body is not None:
             self.body.check(a, self.nose_length, self.length)
 
@@ -304,8 +304,15 @@ class Profile:
         from scipy import integrate  # imported where used (slow to import)
 
         points = [p for p in self.breakpoints if p < self.nose_length] or None
-        lateral = integrate.quad(integrand, 0.0, self.nose_length, points=points, epsabs=0.0, epsrel=1e-12,
-                                 limit=max(200, 4 * len(self.breakpoints)))[0]
+        lateral = integrate.quad(
+            integrand,
+            0.0,
+            self.nose_length,
+            points=points,
+            epsabs=0.0,
+            epsrel=1e-12,
+            limit=max(200, 4 * len(self.breakpoints)),
+        )[0]
         return (math.pi * self.tip_radius**2 + lateral) / (math.pi * self.radius**2)
 
     def lateral_area(self, s0: float = 0.0, s1: float | None = None) -> float:
@@ -316,7 +323,12 @@ class Profile:
         points = [p for p in self.breakpoints if s0 < p < s1]
         value, _ = integrate.quad(
             lambda s: 2 * math.pi * float(self.radius_at(s)) * math.sqrt(1 + float(self.slope_at(s)) ** 2),
-            s0, s1, points=points or None, epsabs=0.0, epsrel=1e-12, limit=max(200, 4 * len(points)),
+            s0,
+            s1,
+            points=points or None,
+            epsabs=0.0,
+            epsrel=1e-12,
+            limit=max(200, 4 * len(points)),
         )
         return value
 
@@ -377,17 +389,17 @@ class ProjectileGeometry:
             raise ValueError(f"interior.wall_thickness = {t}: must lie in (0, {a:.6g}) m")
         lo, hi = self.cavity_start, self.profile.length
         if not (0.0 < tail < hi - lo):
-            raise ValueError(
-                f"interior.tail_thickness = {tail}: must lie in (0, {hi - lo:.6g}) m"
-            )
+            raise ValueError(f"interior.tail_thickness = {tail}: must lie in (0, {hi - lo:.6g}) m")
         body = self.profile.body
         if body is not None and body.start < self.cavity_end:
             # a boat tail narrows the body: the wall must leave a cavity all the way to its end
             s = np.linspace(body.start, self.cavity_end, 401)
             narrowest = float(self.profile.radius_at(s).min())
             if not t < narrowest:
-                raise ValueError(f"interior.wall_thickness = {t}: must be less than the body's narrowest radius"
-                                 f" before the tail plate, {narrowest:.6g} m (a thinner wall or a thicker tail plate)")
+                raise ValueError(
+                    f"interior.wall_thickness = {t}: must be less than the body's narrowest radius"
+                    f" before the tail plate, {narrowest:.6g} m (a thinner wall or a thicker tail plate)"
+                )
         if self.counterweight is not None:
             x1, x2 = self.counterweight
             if not (self.cavity_start <= x1 < x2 <= self.cavity_end):

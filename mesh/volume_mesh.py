@@ -10,8 +10,17 @@ from __future__ import annotations
 import numpy as np
 
 from .geometry import TET_EDGES, TRI_EDGES, ProjectileMesh, _orient_tetra, standard_output_discarded
-from .imported import (FileGeometry, GeometryError, TET_FACES, check_size, components, face_table, model_frame,
-                       orient_by_volume, regions)
+from .imported import (
+    TET_FACES,
+    FileGeometry,
+    GeometryError,
+    check_size,
+    components,
+    face_table,
+    model_frame,
+    orient_by_volume,
+    regions,
+)
 
 __all__ = ["read_volume_mesh"]
 
@@ -38,16 +47,20 @@ def read_volume_mesh(geometry: FileGeometry) -> ProjectileMesh:
         with standard_output_discarded():  # meshio prints an empty line reading a gmsh 4 file: stdout is the caller's
             m = meshio.read(geometry.path)
     except Exception as exc:  # meshio raises ReadError, KeyError, ValueError, ... on files it cannot parse
-        raise GeometryError(f"projectile.geometry.file = {geometry.path!r}: meshio cannot read it"
-                            f" ({type(exc).__name__}: {exc})") from None
+        raise GeometryError(
+            f"projectile.geometry.file = {geometry.path!r}: meshio cannot read it ({type(exc).__name__}: {exc})"
+        ) from None
     blocks = [(k, b) for k, b in enumerate(m.cells) if b.type in ("tetra", "tetra10")]
     kinds = {b.type for _, b in blocks}
     if not blocks:
-        raise GeometryError(f"projectile.geometry.file = {geometry.path!r}: no tetrahedra (a volume mesh of"
-                            f" 4- or 10-node tetrahedra is needed; the file has {sorted({b.type for b in m.cells})})")
+        raise GeometryError(
+            f"projectile.geometry.file = {geometry.path!r}: no tetrahedra (a volume mesh of"
+            f" 4- or 10-node tetrahedra is needed; the file has {sorted({b.type for b in m.cells})})"
+        )
     if len(kinds) > 1:
-        raise GeometryError(f"projectile.geometry.file = {geometry.path!r}: mixes 4- and 10-node tetrahedra;"
-                            " give one order")
+        raise GeometryError(
+            f"projectile.geometry.file = {geometry.path!r}: mixes 4- and 10-node tetrahedra; give one order"
+        )
     order = 2 if kinds == {"tetra10"} else 1
     tetra = np.concatenate([b.data for _, b in blocks]).astype(np.int64)
     names = _mesh_region_names(geometry, m, [k for k, _ in blocks])
@@ -69,8 +82,9 @@ def read_volume_mesh(geometry: FileGeometry) -> ProjectileMesh:
     pairs = list(zip(face_owner[order_faces][:-1][same].tolist(), face_owner[order_faces][1:][same].tolist()))
     n = len(set(components(len(tetra), pairs).tolist()))
     if n > 1:
-        raise GeometryError(f"projectile.geometry.file = {geometry.path!r}: {n} disjoint bodies; a projectile is"
-                            " one body")
+        raise GeometryError(
+            f"projectile.geometry.file = {geometry.path!r}: {n} disjoint bodies; a projectile is one body"
+        )
     tetra = _orient_tetra(points, tetra)
     faces = _boundary_faces(tetra)
     # keep the outermost shell: the boundary faces connected (through shared corners) to the foremost node
@@ -86,8 +100,10 @@ def _mesh_region_names(geometry: FileGeometry, m, block_indices: list[int]) -> n
     field = geometry.cell_field
     if field is not None:
         if field not in m.cell_data:
-            raise GeometryError(f"projectile.geometry.cell_field = {field!r}: the mesh has no such cell data"
-                                f" (it has: {', '.join(sorted(m.cell_data)) or 'none'})")
+            raise GeometryError(
+                f"projectile.geometry.cell_field = {field!r}: the mesh has no such cell data"
+                f" (it has: {', '.join(sorted(m.cell_data)) or 'none'})"
+            )
         values = np.concatenate([np.asarray(m.cell_data[field][k]).reshape(-1) for k in block_indices])
         return np.array([_label(v) for v in values.tolist()], dtype=object)
     if "gmsh:physical" in m.cell_data:

@@ -40,11 +40,18 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 VOLATILE = ("wall_time", "integration_time")
 FAMILY_SWEEP = [
-    "sweep", "cases/paper_p3.toml",
-    "--set", "numerics.mesh_size=0.02", "--set", "numerics.time_step=2e-5",
-    "--list", "docs/performance/disturbances.toml",
-    "--grid", "projectile.centre_of_mass_ratio=0.4448,0.5042,0.5636,0.6230",
-    "--grid", "impact.speed=700:1200:100",
+    "sweep",
+    "cases/paper_p3.toml",
+    "--set",
+    "numerics.mesh_size=0.02",
+    "--set",
+    "numerics.time_step=2e-5",
+    "--list",
+    "docs/performance/disturbances.toml",
+    "--grid",
+    "projectile.centre_of_mass_ratio=0.4448,0.5042,0.5636,0.6230",
+    "--grid",
+    "impact.speed=700:1200:100",
     "--no-progress",
 ]
 CLI = "import sys; from cases.cli import main; sys.exit(main(sys.argv[1:]))"
@@ -57,8 +64,7 @@ def _git(*args: str, cwd: Path = ROOT) -> str:
 def _penetrate(checkout: Path, cache: Path, args: list[str]) -> None:
     """``penetrate ARGS`` with the code of ``checkout``, run from inside it."""
     env = dict(os.environ, PYTHONPATH=str(checkout), PENETRATE_CACHE_DIR=str(cache))
-    done = subprocess.run([sys.executable, "-c", CLI, *args], cwd=checkout, env=env, capture_output=True,
-                          text=True)
+    done = subprocess.run([sys.executable, "-c", CLI, *args], cwd=checkout, env=env, capture_output=True, text=True)
     if done.returncode not in (0, 1):
         raise SystemExit(f"penetrate {' '.join(args)} in {checkout} failed ({done.returncode}):\n{done.stderr}")
 
@@ -78,8 +84,9 @@ def produce(checkout: Path, out: Path, scenes: list[str], sweep: bool) -> None:
         if sweep and not (out / "family_sweep.csv").exists():
             print(f"  {checkout.name}: family sweep (72 runs)", file=sys.stderr, flush=True)
             store = Path(cache) / "store"
-            _penetrate(checkout, Path(cache), [*FAMILY_SWEEP, "--store", str(store),
-                                              "--out", str(out / "family_sweep.csv")])
+            _penetrate(
+                checkout, Path(cache), [*FAMILY_SWEEP, "--store", str(store), "--out", str(out / "family_sweep.csv")]
+            )
 
 
 def _digest(path: Path) -> str:
@@ -135,12 +142,16 @@ def compare(before: Path, after: Path, scenes: list[str], sweep: bool) -> bool:
         a, b = before / name / "history.csv", after / name / "history.csv"
         identical = a.exists() and a.read_bytes() == b.read_bytes() if b.exists() else False
         same &= identical
-        print(f"{name + '/history.csv':44} {_digest(a):16} {_digest(b):16} "
-              f"{'byte-identical' if identical else 'DIFFERENT'}")
+        print(
+            f"{name + '/history.csv':44} {_digest(a):16} {_digest(b):16} "
+            f"{'byte-identical' if identical else 'DIFFERENT'}"
+        )
         sa, sb = _summary(before / name / "summary.json"), _summary(after / name / "summary.json")
         same &= sa == sb
-        print(f"{name + '/summary.json (no timings)':44} {'':16} {'':16} "
-              f"{'identical' if sa == sb else 'DIFFERENT: ' + _how_different(sa, sb)}")
+        print(
+            f"{name + '/summary.json (no timings)':44} {'':16} {'':16} "
+            f"{'identical' if sa == sb else 'DIFFERENT: ' + _how_different(sa, sb)}"
+        )
     if sweep:
         a, b = _table(before / "family_sweep.csv"), _table(after / "family_sweep.csv")
         identical = a is not None and a == b
@@ -168,14 +179,17 @@ def main(argv: list[str] | None = None) -> int:
     worktree = Path(tempfile.mkdtemp(prefix="identity-worktree-")) / commit[:12]
     try:
         if not all((before / s / "history.csv").exists() for s in scenes) or (
-                sweep and not (before / "family_sweep.csv").exists()):
+            sweep and not (before / "family_sweep.csv").exists()
+        ):
             _git("worktree", "add", "--detach", str(worktree), commit)
             produce(worktree, before, scenes, sweep)
         with tempfile.TemporaryDirectory(prefix="identity-after-") as after:
             produce(ROOT, Path(after), scenes, sweep)
-            print(f"this checkout ({_git('rev-parse', '--short', 'HEAD')}"
-                  f"{' + uncommitted changes' if _git('status', '--porcelain', '--untracked-files=no') else ''})"
-                  f" against {commit[:12]}:")
+            print(
+                f"this checkout ({_git('rev-parse', '--short', 'HEAD')}"
+                f"{' + uncommitted changes' if _git('status', '--porcelain', '--untracked-files=no') else ''})"
+                f" against {commit[:12]}:"
+            )
             same = compare(before, Path(after), scenes, sweep)
     finally:
         if worktree.exists():

@@ -30,13 +30,12 @@ def _gmsh():
         gmsh.finalize()
 
 
-def _revolved(occ, diameter: float, length: float, crh: float | None, half_angle: float | None,
-              scale: float) -> int:
+def _revolved(occ, diameter: float, length: float, crh: float | None, half_angle: float | None, scale: float) -> int:
     """An ogive (``crh``) or cone (``half_angle``, deg) nosed cylinder, revolved from its half-profile."""
     a, length = 0.5 * diameter / scale, length / scale
     if crh is not None:
         radius = crh * diameter / scale
-        nose = math.sqrt(radius ** 2 - (radius - a) ** 2)
+        nose = math.sqrt(radius**2 - (radius - a) ** 2)
         tip, shoulder = occ.addPoint(length, 0, 0), occ.addPoint(length - nose, a, 0)
         centre = occ.addPoint(length - nose, a - radius, 0)
         curve = occ.addCircleArc(tip, centre, shoulder)
@@ -45,17 +44,25 @@ def _revolved(occ, diameter: float, length: float, crh: float | None, half_angle
         tip, shoulder = occ.addPoint(length, 0, 0), occ.addPoint(length - nose, a, 0)
         curve = occ.addLine(tip, shoulder)
     tail_edge, tail_centre = occ.addPoint(0, a, 0), occ.addPoint(0, 0, 0)
-    loop = occ.addCurveLoop([curve, occ.addLine(shoulder, tail_edge), occ.addLine(tail_edge, tail_centre),
-                             occ.addLine(tail_centre, tip)])
+    loop = occ.addCurveLoop(
+        [curve, occ.addLine(shoulder, tail_edge), occ.addLine(tail_edge, tail_centre), occ.addLine(tail_centre, tip)]
+    )
     face = occ.addPlaneSurface([loop])
     solid = [t for d, t in occ.revolve([(2, face)], 0, 0, 0, 1, 0, 0, 2 * math.pi) if d == 3][0]
     occ.remove([(2, face)], recursive=True)  # the profile face is no part of the body (IGES would keep it)
     return solid
 
 
-def write_body(path: str | os.PathLike, diameter: float = VALIDATION["diameter"], length: float = VALIDATION["length"],
-               crh: float | None = VALIDATION["crh"], half_angle: float | None = None, scale: float = 1.0,
-               counterweight: tuple[float, float, float] | None = None, axis: str = "x") -> Path:
+def write_body(
+    path: str | os.PathLike,
+    diameter: float = VALIDATION["diameter"],
+    length: float = VALIDATION["length"],
+    crh: float | None = VALIDATION["crh"],
+    half_angle: float | None = None,
+    scale: float = 1.0,
+    counterweight: tuple[float, float, float] | None = None,
+    axis: str = "x",
+) -> Path:
     """Write a nosed cylinder as STEP, BREP or IGES (by the suffix); ``counterweight = (start, end, radius)``
     (m from the tail) adds a second solid inside; ``axis = "z"`` turns the body to run along +z."""
     path = Path(path)
@@ -73,8 +80,7 @@ def write_body(path: str | os.PathLike, diameter: float = VALIDATION["diameter"]
     return path
 
 
-def write_volume_mesh(path: str | os.PathLike, size: float, order: int = 2, counterweight=None,
-                      **body) -> Path:
+def write_volume_mesh(path: str | os.PathLike, size: float, order: int = 2, counterweight=None, **body) -> Path:
     """Mesh a body with gmsh and write it as ``.msh`` (physical groups "body", "counterweight") or, through
     meshio, any other format (cell data ``material``: 1 body, 2 counterweight)."""
     import meshio
@@ -84,15 +90,23 @@ def write_volume_mesh(path: str | os.PathLike, size: float, order: int = 2, coun
     with _gmsh() as gmsh:
         occ = gmsh.model.occ
         crh, half_angle = body.get("crh", VALIDATION["crh"]), body.get("half_angle")
-        solid = _revolved(occ, body.get("diameter", VALIDATION["diameter"]), body.get("length", VALIDATION["length"]),
-                          crh if half_angle is None else None, half_angle, 1.0)
+        solid = _revolved(
+            occ,
+            body.get("diameter", VALIDATION["diameter"]),
+            body.get("length", VALIDATION["length"]),
+            crh if half_angle is None else None,
+            half_angle,
+            1.0,
+        )
         volumes = {"body": [solid]}
         if counterweight is not None:
             start, end, radius = counterweight
             weight = occ.addCylinder(start, 0, 0, end - start, 0, 0, radius)
             _, mapping = occ.fragment([(3, solid)], [(3, weight)])
-            volumes = {"body": [t for _, t in mapping[0] if (3, t) not in mapping[1]],
-                       "counterweight": [t for _, t in mapping[1]]}
+            volumes = {
+                "body": [t for _, t in mapping[0] if (3, t) not in mapping[1]],
+                "counterweight": [t for _, t in mapping[1]],
+            }
         occ.synchronize()
         for tag, (name, tags) in enumerate(volumes.items(), 1):
             gmsh.model.addPhysicalGroup(3, tags, tag, name=name)
@@ -106,8 +120,9 @@ def write_volume_mesh(path: str | os.PathLike, size: float, order: int = 2, coun
     if path.suffix != ".msh":
         m = meshio.read(msh)
         tets = [(b.type, b.data) for b in m.cells if b.type.startswith("tetra")]
-        material = [np.asarray(m.cell_data["gmsh:physical"][k]) for k, b in enumerate(m.cells)
-                    if b.type.startswith("tetra")]
+        material = [
+            np.asarray(m.cell_data["gmsh:physical"][k]) for k, b in enumerate(m.cells) if b.type.startswith("tetra")
+        ]
         meshio.write(path, meshio.Mesh(m.points, tets, cell_data={"material": material}))
         msh.unlink()
     return path
@@ -122,12 +137,14 @@ def occ_mass_properties(path: str | os.PathLike, density: float = 1.0, scale: fl
         gmsh.model.occ.synchronize()
         volumes = [t for d, t in shapes if d == 3]
         mass = sum(gmsh.model.occ.getMass(3, v) for v in volumes)
-        centre = sum(np.array(gmsh.model.occ.getCenterOfMass(3, v)) * gmsh.model.occ.getMass(3, v)
-                     for v in volumes) / mass
+        centre = (
+            sum(np.array(gmsh.model.occ.getCenterOfMass(3, v)) * gmsh.model.occ.getMass(3, v) for v in volumes) / mass
+        )
         inertia = np.zeros((3, 3))
         for v in volumes:  # each solid's tensor is about its own centre (OpenCASCADE): move it to the common one
             m, c = gmsh.model.occ.getMass(3, v), np.array(gmsh.model.occ.getCenterOfMass(3, v))
             d = c - centre
-            inertia += np.array(gmsh.model.occ.getMatrixOfInertia(3, v)).reshape(3, 3) \
-                + m * (d @ d * np.eye(3) - np.outer(d, d))
-    return mass * density * scale ** 3, centre * scale, inertia * density * scale ** 5
+            inertia += np.array(gmsh.model.occ.getMatrixOfInertia(3, v)).reshape(3, 3) + m * (
+                d @ d * np.eye(3) - np.outer(d, d)
+            )
+    return mass * density * scale**3, centre * scale, inertia * density * scale**5

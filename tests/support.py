@@ -22,13 +22,14 @@ def slow_except(values, *keep):
     """``values`` as pytest parameters: those in ``keep`` run in the default suite, the others only in
     CI's slow step (``-m slow``), so that each parametrised family keeps a representative in the default
     run and its full range in CI without the default run passing five minutes."""
+
     def slow(value):
         return pytest.param(*value if isinstance(value, tuple) else (value,), marks=pytest.mark.slow)
 
     return [value if value in keep else slow(value) for value in values]
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def meshed(geometry: ProjectileGeometry, size: float, order: int = 2) -> ProjectileMesh:
     """``build_mesh``, once per test session for each geometry, size and order."""
     return build_mesh(geometry, size, order)
@@ -61,12 +62,19 @@ def dask_cluster(folder, workers: int = 2) -> Iterator[str]:
 
     address = f"tcp://127.0.0.1:{free_port()}"
     env = {**os.environ, "PYTHONPATH": ""}  # the workers find the project as installed, from another folder
-    options = {"cwd": folder, "env": env, "start_new_session": True, "stdout": subprocess.DEVNULL,
-               "stderr": subprocess.DEVNULL}
-    scheduler = subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", address.rsplit(":", 1)[1],
-                                  "--no-dashboard"], **options)
-    worker = subprocess.Popen([dask, "worker", address, "--nworkers", str(workers), "--nthreads", "1",
-                               "--no-dashboard"], **options)
+    options = {
+        "cwd": folder,
+        "env": env,
+        "start_new_session": True,
+        "stdout": subprocess.DEVNULL,
+        "stderr": subprocess.DEVNULL,
+    }
+    scheduler = subprocess.Popen(
+        [dask, "scheduler", "--host", "127.0.0.1", "--port", address.rsplit(":", 1)[1], "--no-dashboard"], **options
+    )
+    worker = subprocess.Popen(
+        [dask, "worker", address, "--nworkers", str(workers), "--nthreads", "1", "--no-dashboard"], **options
+    )
     try:
         with Client(address, timeout=60) as client:
             client.wait_for_workers(workers, timeout=60)
@@ -98,6 +106,12 @@ def mirrored_states(rng, count: int = 20):
         q = np.array([w, x, y, z]) / math.sqrt(w * w + x * x + y * y + z * z)
         position = np.array([0.0, 0.0, rng.uniform(-1.5, -0.2)])
         velocity, spin = rng.normal(size=3) * 300.0, rng.normal(size=3) * 20.0
-        yield ((position, velocity, rotation_matrix(q), spin),
-               (mirror @ position, mirror @ velocity, rotation_matrix(q * np.array([1.0, -1.0, 1.0, -1.0])),
-                -(mirror @ spin)))
+        yield (
+            (position, velocity, rotation_matrix(q), spin),
+            (
+                mirror @ position,
+                mirror @ velocity,
+                rotation_matrix(q * np.array([1.0, -1.0, 1.0, -1.0])),
+                -(mirror @ spin),
+            ),
+        )

@@ -37,12 +37,13 @@ def body(occ) -> int:
     """The validation projectile as one solid, revolved from its half-profile (mm)."""
     a = DIAMETER / 2
     radius = CRH * DIAMETER
-    nose = math.sqrt(radius ** 2 - (radius - a) ** 2)
+    nose = math.sqrt(radius**2 - (radius - a) ** 2)
     tip, shoulder = occ.addPoint(LENGTH, 0, 0), occ.addPoint(LENGTH - nose, a, 0)
     arc = occ.addCircleArc(tip, occ.addPoint(LENGTH - nose, a - radius, 0), shoulder)
     tail_edge, tail_centre = occ.addPoint(0, a, 0), occ.addPoint(0, 0, 0)
-    loop = occ.addCurveLoop([arc, occ.addLine(shoulder, tail_edge), occ.addLine(tail_edge, tail_centre),
-                             occ.addLine(tail_centre, tip)])
+    loop = occ.addCurveLoop(
+        [arc, occ.addLine(shoulder, tail_edge), occ.addLine(tail_edge, tail_centre), occ.addLine(tail_centre, tip)]
+    )
     face = occ.addPlaneSurface([loop])
     solid = [t for d, t in occ.revolve([(2, face)], 0, 0, 0, 1, 0, 0, 2 * math.pi) if d == 3][0]
     occ.remove([(2, face)], recursive=True)
@@ -66,8 +67,10 @@ def finned(occ) -> None:
     a = DIAMETER / 2
     reach = a + FIN_SPAN
     t = FIN_THICKNESS / 2
-    fins = [occ.addBox(0, -reach, -t, FIN_CHORD, 2 * reach, FIN_THICKNESS),  # in the x-y plane
-            occ.addBox(0, -t, -reach, FIN_CHORD, FIN_THICKNESS, 2 * reach)]  # in the x-z plane
+    fins = [
+        occ.addBox(0, -reach, -t, FIN_CHORD, 2 * reach, FIN_THICKNESS),  # in the x-y plane
+        occ.addBox(0, -t, -reach, FIN_CHORD, FIN_THICKNESS, 2 * reach),
+    ]  # in the x-z plane
     occ.fuse([(3, solid)], [(3, fin) for fin in fins])
 
 
@@ -143,15 +146,25 @@ def eroded_p3(occ, angle: float = P3_ERODED_ANGLE, depth: float = P3_ERODED_DEPT
     # the plane meets the cavity's apex ring (SOLID_NOSE behind the tip) at depth + r_i tan(angle) from the tip
     reach = depth + float(_p3_radius(SOLID_NOSE, True)) * math.tan(math.radians(angle))
     if depth > 0.0 and not (0.0 <= angle < 90.0 and reach < SOLID_NOSE):
-        raise ValueError(f"a cut {depth} m behind the tip at {angle} deg would open the cavity"
-                         f" ({SOLID_NOSE} m behind the tip): a shallower or less oblique cut")
+        raise ValueError(
+            f"a cut {depth} m behind the tip at {angle} deg would open the cavity"
+            f" ({SOLID_NOSE} m behind the tip): a shallower or less oblique cut"
+        )
     nose = math.sqrt(big_r**2 - (big_r - a) ** 2)
     centre = (length - nose, a - big_r)  # the ogive's centre, x and radius
     outer = _revolved_face(occ, [(length, 0.0), (length - nose, a), (0.0, a), (0.0, 0.0)], centre)
     apex = length - SOLID_NOSE
-    cavity = _revolved_face(occ, [(apex, float(_p3_radius(SOLID_NOSE, True))), (length - nose, a - WALL),
-                                  (TAIL_PLATE, a - WALL), (TAIL_PLATE, 0.0), (apex, 0.0)],
-                            (centre[0], centre[1] - WALL))
+    cavity = _revolved_face(
+        occ,
+        [
+            (apex, float(_p3_radius(SOLID_NOSE, True))),
+            (length - nose, a - WALL),
+            (TAIL_PLATE, a - WALL),
+            (TAIL_PLATE, 0.0),
+            (apex, 0.0),
+        ],
+        (centre[0], centre[1] - WALL),
+    )
     start, end = p3_counterweight()
     slab = occ.addBox(length - end, -a, -a, end - start, 2 * a, 2 * a)
     weight, _ = occ.intersect([(3, cavity)], [(3, slab)], removeObject=False)

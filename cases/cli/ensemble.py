@@ -12,22 +12,40 @@ __all__ = ["register"]
 
 
 def register(commands) -> None:
-    parser = commands.add_parser("ensemble", help="Monte Carlo: the probability of each outcome under sampled"
-                                                  " impact conditions (resumable)")
+    parser = commands.add_parser(
+        "ensemble", help="Monte Carlo: the probability of each outcome under sampled impact conditions (resumable)"
+    )
     add_scene_options(parser, "the base scene TOML file")
-    parser.add_argument("--sample", action="append", default=[], metavar="KEY=DIST",
-                        help="sample a numeric scene key: normal:MEAN:SD, truncnormal:MEAN:SD:LO:HI, uniform:LO:HI,"
-                             " lognormal:MEDIAN:SIGMA or choice:V1,V2,... (repeatable, one per key)")
+    parser.add_argument(
+        "--sample",
+        action="append",
+        default=[],
+        metavar="KEY=DIST",
+        help="sample a numeric scene key: normal:MEAN:SD, truncnormal:MEAN:SD:LO:HI, uniform:LO:HI,"
+        " lognormal:MEDIAN:SIGMA or choice:V1,V2,... (repeatable, one per key)",
+    )
     parser.add_argument("-n", dest="count", type=positive_int, required=True, metavar="N", help="how many runs")
     parser.add_argument("--seed", type=int, default=0, help="the seed of the samples (default 0)")
-    parser.add_argument("--design", choices=("random", "sobol", "lhs"), default="random",
-                        help="independent random samples, a scrambled Sobol' sequence or a Latin hypercube"
-                             " (default random; lhs cannot be extended by a larger -n)")
-    parser.add_argument("--by", metavar="KEY=START:STOP:STEP",
-                        help="the probabilities in bins of a sampled key (the last bin ends at STOP)")
+    parser.add_argument(
+        "--design",
+        choices=("random", "sobol", "lhs"),
+        default="random",
+        help="independent random samples, a scrambled Sobol' sequence or a Latin hypercube"
+        " (default random; lhs cannot be extended by a larger -n)",
+    )
+    parser.add_argument(
+        "--by",
+        metavar="KEY=START:STOP:STEP",
+        help="the probabilities in bins of a sampled key (the last bin ends at STOP)",
+    )
     add_pool_options(parser, "runs/store")
-    parser.add_argument("--out", default="runs/ensemble", type=out_folder, metavar="DIR",
-                        help="where to write ensemble.md, .csv, .json and the figures (default runs/ensemble)")
+    parser.add_argument(
+        "--out",
+        default="runs/ensemble",
+        type=out_folder,
+        metavar="DIR",
+        help="where to write ensemble.md, .csv, .json and the figures (default runs/ensemble)",
+    )
     parser.add_argument("--json", action="store_true", help="print the result as one JSON object")
     parser.set_defaults(handler=ensemble)
 
@@ -36,8 +54,18 @@ def ensemble(args: argparse.Namespace) -> int:
     from ..run import RunStore
     from ..studies.ensemble_study import run_ensemble
 
-    record = run_ensemble(args.scene, overrides(args), args.sample, args.count, RunStore(args.store), args.out,
-                          seed=args.seed, design=args.design, by=args.by, pool=pool(args))
+    record = run_ensemble(
+        args.scene,
+        overrides(args),
+        args.sample,
+        args.count,
+        RunStore(args.store),
+        args.out,
+        seed=args.seed,
+        design=args.design,
+        by=args.by,
+        pool=pool(args),
+    )
     if args.json:
         print(json.dumps(record))
     else:

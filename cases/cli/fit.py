@@ -15,21 +15,46 @@ def register(commands) -> None:
     parser = commands.add_parser("fit", help="fit numeric scene keys to observed quantities (least squares)")
     add_scene_options(parser)
     add_pool_options(parser, "runs/store")
-    parser.add_argument("--param", action="append", default=[], metavar="KEY=LO:HI",
-                        help="a numeric scene key to fit within its bounds, e.g. target.law.B=0.3:3 (repeatable)")
-    parser.add_argument("--observe", action="append", default=[], metavar="[SCENE:]QUANTITY=VALUE[+-SIGMA]",
-                        help="an observed quantity of a run (depth, path_length, max_attack_angle, ...) or a"
-                             " study (critical_velocity, characteristic_convergent_velocity), of this scene or"
-                             " of SCENE (repeatable)")
-    parser.add_argument("--resolution", type=positive_float, default=5.0, metavar="M/S",
-                        help="resolution of a critical-speed search (default 5 m/s)")
-    parser.add_argument("--step", type=positive_float, metavar="FRACTION",
-                        help="forward-difference step as a fraction of each range (default 1e-3; 0.05 when a"
-                             " characteristic speed is observed)")
-    parser.add_argument("--max-evaluations", type=positive_int, default=30, metavar="N",
-                        help="model evaluations at most (default 30)")
-    parser.add_argument("--out", type=out_folder, default="runs/fit", metavar="DIR",
-                        help="where to write fit.md, fit.json and fit.png (default runs/fit)")
+    parser.add_argument(
+        "--param",
+        action="append",
+        default=[],
+        metavar="KEY=LO:HI",
+        help="a numeric scene key to fit within its bounds, e.g. target.law.B=0.3:3 (repeatable)",
+    )
+    parser.add_argument(
+        "--observe",
+        action="append",
+        default=[],
+        metavar="[SCENE:]QUANTITY=VALUE[+-SIGMA]",
+        help="an observed quantity of a run (depth, path_length, max_attack_angle, ...) or a"
+        " study (critical_velocity, characteristic_convergent_velocity), of this scene or"
+        " of SCENE (repeatable)",
+    )
+    parser.add_argument(
+        "--resolution",
+        type=positive_float,
+        default=5.0,
+        metavar="M/S",
+        help="resolution of a critical-speed search (default 5 m/s)",
+    )
+    parser.add_argument(
+        "--step",
+        type=positive_float,
+        metavar="FRACTION",
+        help="forward-difference step as a fraction of each range (default 1e-3; 0.05 when a"
+        " characteristic speed is observed)",
+    )
+    parser.add_argument(
+        "--max-evaluations", type=positive_int, default=30, metavar="N", help="model evaluations at most (default 30)"
+    )
+    parser.add_argument(
+        "--out",
+        type=out_folder,
+        default="runs/fit",
+        metavar="DIR",
+        help="where to write fit.md, fit.json and fit.png (default runs/fit)",
+    )
     parser.add_argument("--json", action="store_true", help="print the result as one JSON object")
     parser.set_defaults(handler=run_fit)
 
@@ -46,8 +71,17 @@ def run_fit(args: argparse.Namespace) -> int:
 
         raise InputError(f"--step {args.step:g}: must be below 1 (a fraction of each parameter's range)")
     try:
-        result = fit(args.scene, overrides(args), args.param, args.observe, RunStore(args.store), pool(args),
-                     resolution=args.resolution, step=args.step, max_evaluations=args.max_evaluations)
+        result = fit(
+            args.scene,
+            overrides(args),
+            args.param,
+            args.observe,
+            RunStore(args.store),
+            pool(args),
+            resolution=args.resolution,
+            step=args.step,
+            max_evaluations=args.max_evaluations,
+        )
     except NotIdentifiable as exc:
         print(f"penetrate fit: {one_line(exc)}", file=sys.stderr)
         return 1

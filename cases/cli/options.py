@@ -11,8 +11,19 @@ from pathlib import Path
 
 from ..scene import one_line
 
-__all__ = ["Parser", "positive_int", "positive_float", "out_folder", "out_file", "add_scene_options",
-           "add_pool_options", "overrides", "pool", "quiet_start", "environment_defaults"]
+__all__ = [
+    "Parser",
+    "positive_int",
+    "positive_float",
+    "out_folder",
+    "out_file",
+    "add_scene_options",
+    "add_pool_options",
+    "overrides",
+    "pool",
+    "quiet_start",
+    "environment_defaults",
+]
 
 
 class Parser(argparse.ArgumentParser):
@@ -58,10 +69,15 @@ def out_file(text: str) -> str:
 
 def add_scene_options(parser: argparse.ArgumentParser, what: str = "a scene TOML file") -> None:
     parser.add_argument("scene", help=what)
-    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                        help="override a scene key by its dotted path, e.g. impact.speed=1120 (repeatable); the"
-                             " value replaces what the scene gives, and its alternatives (target.layers replaces"
-                             " target.law)")
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a scene key by its dotted path, e.g. impact.speed=1120 (repeatable); the"
+        " value replaces what the scene gives, and its alternatives (target.layers replaces"
+        " target.law)",
+    )
 
 
 def overrides(args: argparse.Namespace) -> list[tuple[str, object]]:
@@ -73,8 +89,9 @@ def overrides(args: argparse.Namespace) -> list[tuple[str, object]]:
 
 def add_pool_options(parser: argparse.ArgumentParser, store: str) -> None:
     """The run store and where the runs go: shared by every command that runs many scenes."""
-    parser.add_argument("--store", default=store, metavar="DIR",
-                        help=f"where finished runs are kept and found again (default {store})")
+    parser.add_argument(
+        "--store", default=store, metavar="DIR", help=f"where finished runs are kept and found again (default {store})"
+    )
     parser.add_argument("--workers", type=positive_int, metavar="N", help="local processes (default: every core)")
     parser.add_argument("--scheduler", metavar="ADDRESS", help="run on this Dask distributed scheduler")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -93,7 +110,8 @@ def quiet_start() -> Iterator[Callable[[], None]]:
 
     Starting a run makes about 60 000 objects that live as long as the process (modules, classes,
     pydantic's validators, the scene) and next to no garbage: the collector would traverse them in some
-    80 passes as they are made, for nothing (about 15 ms of test 2's process).  Here it rests until the command calls ``started()``, which
+    80 passes as they are made, for nothing (about 15 ms of test 2's process).  Here it rests until the
+    command calls ``started()``, which
     freezes what exists (:func:`gc.freeze`: out of the collector's reach) and wakes the collector for
     what the command makes afterwards.  When the block ends the frozen objects go back to the oldest
     generation, so a caller of :func:`cases.cli.main` in a longer process keeps its collector as it was.

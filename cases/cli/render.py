@@ -12,21 +12,39 @@ __all__ = ["register"]
 
 
 def register(commands) -> None:
-    parser = commands.add_parser("render", help="off-screen images, an animation and ParaView files of the"
-                                                " resistance field")
+    parser = commands.add_parser(
+        "render", help="off-screen images, an animation and ParaView files of the resistance field"
+    )
     add_scene_options(parser)
-    parser.add_argument("--times", metavar="T,...",
-                        help="instants: times in seconds or embedded, peak, converged, end (default: those four)")
+    parser.add_argument(
+        "--times",
+        metavar="T,...",
+        help="instants: times in seconds or embedded, peak, converged, end (default: those four)",
+    )
     parser.add_argument("--out", default="runs/render", metavar="DIR", help="where to write (default runs/render)")
     parser.add_argument("--animation", action="store_true", help="also write animation.gif")
-    parser.add_argument("--frames", type=positive_int, default=60, metavar="N",
-                        help="frames of the animation, evenly spaced in time (default 60)")
-    parser.add_argument("--paraview", action="store_true",
-                        help="also write paraview/run.pvd: the surface field over time and the path")
-    parser.add_argument("--steps", default="100", metavar="N|all",
-                        help="steps in the ParaView output, evenly spaced in time, or all (default 100)")
-    parser.add_argument("--station", type=positive_float, metavar="M",
-                        help="distance behind the tip of the polar plot's ring (default: one calibre behind the nose)")
+    parser.add_argument(
+        "--frames",
+        type=positive_int,
+        default=60,
+        metavar="N",
+        help="frames of the animation, evenly spaced in time (default 60)",
+    )
+    parser.add_argument(
+        "--paraview", action="store_true", help="also write paraview/run.pvd: the surface field over time and the path"
+    )
+    parser.add_argument(
+        "--steps",
+        default="100",
+        metavar="N|all",
+        help="steps in the ParaView output, evenly spaced in time, or all (default 100)",
+    )
+    parser.add_argument(
+        "--station",
+        type=positive_float,
+        metavar="M",
+        help="distance behind the tip of the polar plot's ring (default: one calibre behind the nose)",
+    )
     parser.add_argument("--size", default="1280x640", metavar="WxH", help="image size in pixels (default 1280x640)")
     parser.add_argument("--json", action="store_true", help="print the written files and timings as JSON")
     parser.set_defaults(handler=render)
@@ -52,8 +70,9 @@ def _checked(args: argparse.Namespace) -> tuple[tuple[int, int], int | None, lis
             float(text)
         except ValueError:
             if text not in INSTANT_NAMES:
-                raise InputError(f"--times {text!r}: expected a time in seconds or one of"
-                                 f" {', '.join(INSTANT_NAMES)}") from None
+                raise InputError(
+                    f"--times {text!r}: expected a time in seconds or one of {', '.join(INSTANT_NAMES)}"
+                ) from None
     return (width, height), steps, times
 
 
@@ -64,8 +83,17 @@ def render(args: argparse.Namespace) -> int:
 
     size, steps, times = _checked(args)
     result = run_scene(load_scene(args.scene, overrides(args)))
-    record = render_all(result, args.out, times, animation=args.animation, paraview=args.paraview,
-                        frames=args.frames, steps=steps, station=args.station, size=size)
+    record = render_all(
+        result,
+        args.out,
+        times,
+        animation=args.animation,
+        paraview=args.paraview,
+        frames=args.frames,
+        steps=steps,
+        station=args.station,
+        size=size,
+    )
     if args.json:
         print(json.dumps(record))
         return 0

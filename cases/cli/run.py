@@ -39,8 +39,10 @@ def run(args: argparse.Namespace) -> int:
         return 0
     print(human_summary(summary, scene))
     if args.out:
-        print(f"written        {os.path.join(args.out, 'summary.json')}"
-              + (f", {os.path.join(args.out, 'history.csv')}" if scene.outputs.history else ""))
+        print(
+            f"written        {os.path.join(args.out, 'summary.json')}"
+            + (f", {os.path.join(args.out, 'history.csv')}" if scene.outputs.history else "")
+        )
     return 0
 
 

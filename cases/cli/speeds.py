@@ -21,27 +21,58 @@ def _study_options(parser: argparse.ArgumentParser) -> None:
 def register(commands) -> None:
     critical = commands.add_parser("critical", help="find the critical impact velocity of a scene's disturbance")
     _study_options(critical)
-    critical.add_argument("--speeds", type=speed_range, default=(200.0, 1600.0), metavar="LOW:HIGH",
-                          help="the range of impact speeds searched, m/s (default 200:1600; of a list or"
-                               " START:STOP:STEP only the lowest and highest count)")
-    critical.add_argument("--guess", type=speed_range, metavar="LOW:HIGH",
-                          help="a first bracket inside the range, m/s (e.g. a neighbour's critical speed): runs"
-                               " confirm its ends, and the search widens to the range if they do not hold")
-    critical.add_argument("--resolution", type=positive_float, default=5.0, metavar="M/S",
-                          help="search until a stable and an unstable run are this close (default 5 m/s)")
+    critical.add_argument(
+        "--speeds",
+        type=speed_range,
+        default=(200.0, 1600.0),
+        metavar="LOW:HIGH",
+        help="the range of impact speeds searched, m/s (default 200:1600; of a list or"
+        " START:STOP:STEP only the lowest and highest count)",
+    )
+    critical.add_argument(
+        "--guess",
+        type=speed_range,
+        metavar="LOW:HIGH",
+        help="a first bracket inside the range, m/s (e.g. a neighbour's critical speed): runs"
+        " confirm its ends, and the search widens to the range if they do not hold",
+    )
+    critical.add_argument(
+        "--resolution",
+        type=positive_float,
+        default=5.0,
+        metavar="M/S",
+        help="search until a stable and an unstable run are this close (default 5 m/s)",
+    )
     critical.set_defaults(handler=critical_speed)
     convergent = commands.add_parser("convergent", help="measure the characteristic convergent velocity")
     _study_options(convergent)
-    convergent.add_argument("--threshold", type=positive_float, default=0.1, metavar="DEG",
-                            help="the attack angle counts as converged below this (default 0.1 deg)")
+    convergent.add_argument(
+        "--threshold",
+        type=positive_float,
+        default=0.1,
+        metavar="DEG",
+        help="the attack angle counts as converged below this (default 0.1 deg)",
+    )
     convergent.set_defaults(handler=convergent_speed)
-    predict = commands.add_parser("predict", help="predict both characteristic speeds without a full trajectory"
-                                                  " (reduced pitch-plane model, docs/theory.md)")
+    predict = commands.add_parser(
+        "predict",
+        help="predict both characteristic speeds without a full trajectory (reduced pitch-plane model, docs/theory.md)",
+    )
     add_scene_options(predict)
-    predict.add_argument("--speeds", type=speed_range, default=(200.0, 1600.0), metavar="LOW:HIGH",
-                         help="the range the critical impact velocity is sought in, m/s (default 200:1600)")
-    predict.add_argument("--resolution", type=positive_float, default=5.0, metavar="M/S",
-                         help="bisect until a stable and an unstable reduced run are this close (default 5 m/s)")
+    predict.add_argument(
+        "--speeds",
+        type=speed_range,
+        default=(200.0, 1600.0),
+        metavar="LOW:HIGH",
+        help="the range the critical impact velocity is sought in, m/s (default 200:1600)",
+    )
+    predict.add_argument(
+        "--resolution",
+        type=positive_float,
+        default=5.0,
+        metavar="M/S",
+        help="bisect until a stable and an unstable reduced run are this close (default 5 m/s)",
+    )
     predict.add_argument("--json", action="store_true", help="print the result as one JSON object")
     predict.set_defaults(handler=predict_speeds)
 
@@ -63,7 +94,6 @@ def speed_range(text: str) -> tuple[float, float]:
 def _inputs(args: argparse.Namespace):
     from ..run import RunStore
     from ..studies import Sweep
-
     from .options import overrides
 
     return Sweep.from_file(args.scene, overrides(args)), RunStore(args.store)
@@ -74,22 +104,28 @@ def critical_speed(args: argparse.Namespace) -> int:
     from ..studies import find_critical_velocity
 
     if args.guess and not args.speeds[0] <= args.guess[0] < args.guess[1] <= args.speeds[1]:
-        raise InputError(f"--guess {args.guess[0]:g}:{args.guess[1]:g}: must lie inside --speeds"
-                         f" {args.speeds[0]:g}:{args.speeds[1]:g} (m/s)")
+        raise InputError(
+            f"--guess {args.guess[0]:g}:{args.guess[1]:g}: must lie inside --speeds"
+            f" {args.speeds[0]:g}:{args.speeds[1]:g} (m/s)"
+        )
     sweep, store = _inputs(args)
     search = find_critical_velocity(sweep, store, args.speeds, args.resolution, pool(args), args.guess)
     if args.json:
         print(json.dumps(search.as_dict()))
         return 0 if search.critical_velocity is not None else 1
     for run in search.indicator:
-        print(f"{run.speed:8.1f} m/s   max attack angle {run.max_attack_angle:8.3f} deg"
-              f"   axis angle change {run.axis_angle_change:9.3f} deg   {run.end_reason}")
+        print(
+            f"{run.speed:8.1f} m/s   max attack angle {run.max_attack_angle:8.3f} deg"
+            f"   axis angle change {run.axis_angle_change:9.3f} deg   {run.end_reason}"
+        )
     if search.critical_velocity is None:
         print(f"{search.message} ({len(search.indicator)} runs in {search.rounds} rounds)")
         return 1
     low, high = search.bracket
-    print(f"critical impact velocity {search.critical_velocity:.1f} m/s (between {low:g} and {high:g} m/s;"
-          f" {len(search.indicator)} runs in {search.rounds} rounds)")
+    print(
+        f"critical impact velocity {search.critical_velocity:.1f} m/s (between {low:g} and {high:g} m/s;"
+        f" {len(search.indicator)} runs in {search.rounds} rounds)"
+    )
     return 0
 
 
@@ -103,9 +139,11 @@ def convergent_speed(args: argparse.Namespace) -> int:
         return 0 if result.characteristic_convergent_velocity is not None else 1
     for run in result.runs:
         converged = f"{run.convergence_speed:.1f} m/s" if run.convergence_speed is not None else "never"
-        print(f"{run.speed:8.1f} m/s   {'unstable' if run.unstable else 'stable  '}"
-              f"   max attack angle {run.max_attack_angle:7.3f} deg   attack angle below"
-              f" {args.threshold} deg at {converged}")
+        print(
+            f"{run.speed:8.1f} m/s   {'unstable' if run.unstable else 'stable  '}"
+            f"   max attack angle {run.max_attack_angle:7.3f} deg   attack angle below"
+            f" {args.threshold} deg at {converged}"
+        )
     if result.message:
         print(result.message)
     if result.characteristic_convergent_velocity is None:
@@ -117,7 +155,6 @@ def convergent_speed(args: argparse.Namespace) -> int:
 def predict_speeds(args: argparse.Namespace) -> int:
     from ..scene import load_scene
     from ..studies.predict import predict
-
     from .options import overrides
 
     result = predict(load_scene(args.scene, overrides(args)), args.speeds, args.resolution)
@@ -129,13 +166,18 @@ def predict_speeds(args: argparse.Namespace) -> int:
     def speed(value: float | None) -> str:
         return f"{value:.1f} m/s" if value is not None else "none"
 
-    bracket = f" (between {result.critical_bracket[0]:.1f} and {result.critical_bracket[1]:.1f} m/s)" \
-        if result.critical_bracket else ""
+    bracket = (
+        f" (between {result.critical_bracket[0]:.1f} and {result.critical_bracket[1]:.1f} m/s)"
+        if result.critical_bracket
+        else ""
+    )
     print(f"characteristic convergent velocity {speed(result.characteristic_convergent_velocity)}")
     print(f"critical impact velocity {speed(result.critical_velocity)}{bracket}")
     for message in result.messages:
         print(message)
-    print(f"{result.model}; {len(result.runs)} reduced runs in {1e3 * result.prediction_time:.1f} ms"
-          f" ({result.wall_time:.2f} s with the projectile's preparation)")
+    print(
+        f"{result.model}; {len(result.runs)} reduced runs in {1e3 * result.prediction_time:.1f} ms"
+        f" ({result.wall_time:.2f} s with the projectile's preparation)"
+    )
     print("assumptions: " + "; ".join(result.assumptions))
     return 0 if found else 1

@@ -13,60 +13,112 @@ from .options import add_pool_options, add_scene_options, out_folder, overrides,
 __all__ = ["register"]
 
 
-def _study_parser(commands, name: str, help: str, writes: str,
-                  json_help: str = "print the table as JSON records") -> argparse.ArgumentParser:
+def _study_parser(
+    commands, name: str, help: str, writes: str, json_help: str = "print the table as JSON records"
+) -> argparse.ArgumentParser:
     """A study's command with what every study takes: the scene and its overrides, where the runs go,
     ``--json`` and ``--out`` (default ``runs/NAME``; ``writes`` names what is written there)."""
     parser = commands.add_parser(name, help=help)
     add_scene_options(parser)
     add_pool_options(parser, "runs/store")
     parser.add_argument("--json", action="store_true", help=json_help)
-    parser.add_argument("--out", default=f"runs/{name}", type=out_folder, metavar="DIR",
-                        help=f"where to write {writes} (default runs/{name})")
+    parser.add_argument(
+        "--out",
+        default=f"runs/{name}",
+        type=out_folder,
+        metavar="DIR",
+        help=f"where to write {writes} (default runs/{name})",
+    )
     return parser
 
 
 def register(commands) -> None:
-    compare = _study_parser(commands, "compare", "run a scene under several resistance laws, side by side",
-                            "compare.md, compare.csv and compare.png")
-    compare.add_argument("--laws", required=True, metavar="A,B,...",
-                         help="comma-separated law names (see docs/effects.md)")
+    compare = _study_parser(
+        commands,
+        "compare",
+        "run a scene under several resistance laws, side by side",
+        "compare.md, compare.csv and compare.png",
+    )
+    compare.add_argument(
+        "--laws", required=True, metavar="A,B,...", help="comma-separated law names (see docs/effects.md)"
+    )
     compare.set_defaults(handler=compare_laws)
 
-    accuracy = _study_parser(commands, "accuracy", "what accuracy costs in time, for a scene",
-                             "accuracy.md, .csv and .png", json_help="print the result as one JSON object")
-    accuracy.add_argument("--sizes", default="0.04,0.02,0.01,0.005", metavar="M,M,...",
-                          help="mesh sizes of the mesh axis (default 0.04,0.02,0.01,0.005 m)")
-    accuracy.add_argument("--steps", default="2e-4,1e-4,5e-5,2.5e-5,1.25e-5,6.25e-6", metavar="S,S,...",
-                          help="RK4 steps of the time axis (default 2e-4,1e-4,...,6.25e-6 s)")
-    accuracy.add_argument("--rtols", default="1e-3,1e-4,1e-5,1e-6", metavar="R,R,...",
-                          help="Dormand-Prince tolerances of the time axis (default 1e-3,1e-4,1e-5,1e-6)")
-    accuracy.add_argument("--quadrature-orders", default="4,6", metavar="Q,Q,...",
-                          help="facet quadrature degrees beside the default 2, on the mesh-size axis (default 4,6)")
+    accuracy = _study_parser(
+        commands,
+        "accuracy",
+        "what accuracy costs in time, for a scene",
+        "accuracy.md, .csv and .png",
+        json_help="print the result as one JSON object",
+    )
+    accuracy.add_argument(
+        "--sizes",
+        default="0.04,0.02,0.01,0.005",
+        metavar="M,M,...",
+        help="mesh sizes of the mesh axis (default 0.04,0.02,0.01,0.005 m)",
+    )
+    accuracy.add_argument(
+        "--steps",
+        default="2e-4,1e-4,5e-5,2.5e-5,1.25e-5,6.25e-6",
+        metavar="S,S,...",
+        help="RK4 steps of the time axis (default 2e-4,1e-4,...,6.25e-6 s)",
+    )
+    accuracy.add_argument(
+        "--rtols",
+        default="1e-3,1e-4,1e-5,1e-6",
+        metavar="R,R,...",
+        help="Dormand-Prince tolerances of the time axis (default 1e-3,1e-4,1e-5,1e-6)",
+    )
+    accuracy.add_argument(
+        "--quadrature-orders",
+        default="4,6",
+        metavar="Q,Q,...",
+        help="facet quadrature degrees beside the default 2, on the mesh-size axis (default 4,6)",
+    )
     accuracy.set_defaults(handler=accuracy_study)
 
-    contact = _study_parser(commands, "contact", "what the contact incidence changes: a scene down to the sharp law",
-                            "contact.md and contact.csv")
-    contact.add_argument("--incidences", default="0.02,0.01,0.005,0.0025,0.00125", metavar="D,D,...",
-                         help="contact incidences beside the sharp law's 0 (default 0.02,0.01,0.005,0.0025,0.00125)")
-    contact.add_argument("--step", type=positive_float, default=2.5e-6, metavar="S",
-                         help="the RK4 step of every run (default 2.5e-6 s)")
+    contact = _study_parser(
+        commands,
+        "contact",
+        "what the contact incidence changes: a scene down to the sharp law",
+        "contact.md and contact.csv",
+    )
+    contact.add_argument(
+        "--incidences",
+        default="0.02,0.01,0.005,0.0025,0.00125",
+        metavar="D,D,...",
+        help="contact incidences beside the sharp law's 0 (default 0.02,0.01,0.005,0.0025,0.00125)",
+    )
+    contact.add_argument(
+        "--step", type=positive_float, default=2.5e-6, metavar="S", help="the RK4 step of every run (default 2.5e-6 s)"
+    )
     contact.set_defaults(handler=contact_incidence_study)
 
-    entry = _study_parser(commands, "entry", "what the entry smoothing changes, and RK4's time error with it",
-                          "entry.md and entry.csv")
-    entry.add_argument("--smoothings", default="1,2,4,8", metavar="E,E,...",
-                       help="entry smoothings (units of a point's own size; default 1,2,4,8)")
-    entry.add_argument("--steps", default="1e-4,5e-5,2.5e-5,1.25e-5,6.25e-6,3.125e-6", metavar="S,S,...",
-                       help="RK4 steps; the finest is each smoothing's reference (default 1e-4 ... 3.125e-6 s)")
+    entry = _study_parser(
+        commands, "entry", "what the entry smoothing changes, and RK4's time error with it", "entry.md and entry.csv"
+    )
+    entry.add_argument(
+        "--smoothings",
+        default="1,2,4,8",
+        metavar="E,E,...",
+        help="entry smoothings (units of a point's own size; default 1,2,4,8)",
+    )
+    entry.add_argument(
+        "--steps",
+        default="1e-4,5e-5,2.5e-5,1.25e-5,6.25e-6,3.125e-6",
+        metavar="S,S,...",
+        help="RK4 steps; the finest is each smoothing's reference (default 1e-4 ... 3.125e-6 s)",
+    )
     entry.set_defaults(handler=entry_smoothing_study)
 
     paper = commands.add_parser("paper", help="regenerate the paper's study: tables and figures")
-    paper.add_argument("--out", default="docs/paper", type=out_folder, metavar="DIR",
-                       help="where to write (default docs/paper)")
+    paper.add_argument(
+        "--out", default="docs/paper", type=out_folder, metavar="DIR", help="where to write (default docs/paper)"
+    )
     add_pool_options(paper, "runs/paper-store")
-    paper.add_argument("--variants", action="store_true",
-                       help="the paper's variants instead: friction, conical nose, other soil laws")
+    paper.add_argument(
+        "--variants", action="store_true", help="the paper's variants instead: friction, conical nose, other soil laws"
+    )
     paper.set_defaults(handler=paper_study)
 
 
@@ -109,13 +161,26 @@ def accuracy_study(args: argparse.Namespace) -> int:
     orders = _numbers("--quadrature-orders", args.quadrature_orders)
     if not all(q == int(q) and 1 <= q <= 10 for q in orders):
         raise InputError(f"--quadrature-orders {args.quadrature_orders!r}: expected integers from 1 to 10")
-    table, reference = study(args.scene, overrides(args), RunStore(args.store), args.out,
-                             _numbers("--sizes", args.sizes), _numbers("--steps", args.steps),
-                             _numbers("--rtols", args.rtols), pool(args), [int(q) for q in orders])
+    table, reference = study(
+        args.scene,
+        overrides(args),
+        RunStore(args.store),
+        args.out,
+        _numbers("--sizes", args.sizes),
+        _numbers("--steps", args.steps),
+        _numbers("--rtols", args.rtols),
+        pool(args),
+        [int(q) for q in orders],
+    )
     if args.json:
-        print(json.dumps({"reference": {k: (None if isinstance(v, float) and v != v else v)
-                                        for k, v in reference.items()},
-                          "settings": json.loads(table.to_json(orient="records"))}))
+        print(
+            json.dumps(
+                {
+                    "reference": {k: (None if isinstance(v, float) and v != v else v) for k, v in reference.items()},
+                    "settings": json.loads(table.to_json(orient="records")),
+                }
+            )
+        )
     else:
         print((Path(args.out) / "accuracy.md").read_text())
     return 0
@@ -125,8 +190,15 @@ def contact_incidence_study(args: argparse.Namespace) -> int:
     from ..run import RunStore
     from ..studies.contact import contact_study
 
-    table = contact_study(args.scene, overrides(args), RunStore(args.store), args.out,
-                          _numbers("--incidences", args.incidences), args.step, pool(args))
+    table = contact_study(
+        args.scene,
+        overrides(args),
+        RunStore(args.store),
+        args.out,
+        _numbers("--incidences", args.incidences),
+        args.step,
+        pool(args),
+    )
     return _show(args, table, "contact.md")
 
 
@@ -137,8 +209,15 @@ def entry_smoothing_study(args: argparse.Namespace) -> int:
     steps = _numbers("--steps", args.steps)
     if len(set(steps)) < 2:
         raise InputError(f"--steps {args.steps!r}: expected two or more different steps")
-    table = entry_study(args.scene, overrides(args), RunStore(args.store), args.out,
-                        _numbers("--smoothings", args.smoothings), steps, pool(args))
+    table = entry_study(
+        args.scene,
+        overrides(args),
+        RunStore(args.store),
+        args.out,
+        _numbers("--smoothings", args.smoothings),
+        steps,
+        pool(args),
+    )
     return _show(args, table, "entry.md")
 
 

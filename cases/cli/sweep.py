@@ -14,11 +14,19 @@ SHOWN = ("end_reason", "depth", "path_length", "max_attack_angle", "axis_angle_c
 def register(commands) -> None:
     parser = commands.add_parser("sweep", help="run variations of a scene in parallel (resumable)")
     add_scene_options(parser, "the base scene TOML file")
-    parser.add_argument("--grid", action="append", default=[], metavar="KEY=VALUES",
-                        help="vary a key over V1,V2,... or START:STOP:STEP (inclusive); several --grid"
-                             " options make a cartesian product")
-    parser.add_argument("--list", metavar="FILE",
-                        help="a TOML file of [[run]] tables of dotted keys, one run each (with --grid: their product)")
+    parser.add_argument(
+        "--grid",
+        action="append",
+        default=[],
+        metavar="KEY=VALUES",
+        help="vary a key over V1,V2,... or START:STOP:STEP (inclusive); several --grid"
+        " options make a cartesian product",
+    )
+    parser.add_argument(
+        "--list",
+        metavar="FILE",
+        help="a TOML file of [[run]] tables of dotted keys, one run each (with --grid: their product)",
+    )
     add_pool_options(parser, "runs/store")
     parser.add_argument("--out", type=out_file, metavar="FILE", help="write the results table as CSV")
     parser.add_argument("--json", action="store_true", help="print the table as JSON records")

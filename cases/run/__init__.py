@@ -4,18 +4,41 @@ A run knows no studies or pictures: this room imports ``cases.scene`` and the ph
 (``mesh``, ``fem_loads``, ``dynamics``), nothing else of ``cases``.
 """
 
-from .history import (CONVERGENCE_THRESHOLD, HISTORY_UNITS, attack_angle_peak, convergence_speed, history_columns,
-                      history_table)
+from .history import (
+    CONVERGENCE_THRESHOLD,
+    HISTORY_UNITS,
+    attack_angle_peak,
+    convergence_speed,
+    history_columns,
+    history_table,
+)
 from .persistence import ContentCache, RunStore, atomic_write, atomic_write_text, cache_dir, code_version
 from .prepare import PreparedProjectile, body_mesh, cached_mesh, prepare_projectile
 from .runner import RunResult, initial_state, run_scene
 from .summary import RunSummary, StoredRun, summarise, write_outputs
 
 __all__ = [
-    "prepare_projectile", "PreparedProjectile", "cached_mesh", "body_mesh",
-    "run_scene", "RunResult", "initial_state",
-    "history_table", "history_columns", "attack_angle_peak", "convergence_speed",
-    "HISTORY_UNITS", "CONVERGENCE_THRESHOLD",
-    "RunSummary", "summarise", "write_outputs", "StoredRun",
-    "RunStore", "ContentCache", "atomic_write", "atomic_write_text", "cache_dir", "code_version",
+    "prepare_projectile",
+    "PreparedProjectile",
+    "cached_mesh",
+    "body_mesh",
+    "run_scene",
+    "RunResult",
+    "initial_state",
+    "history_table",
+    "history_columns",
+    "attack_angle_peak",
+    "convergence_speed",
+    "HISTORY_UNITS",
+    "CONVERGENCE_THRESHOLD",
+    "RunSummary",
+    "summarise",
+    "write_outputs",
+    "StoredRun",
+    "RunStore",
+    "ContentCache",
+    "atomic_write",
+    "atomic_write_text",
+    "cache_dir",
+    "code_version",
 ]

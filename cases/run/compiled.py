@@ -8,7 +8,8 @@ pitch-plane trajectory of ``penetrate predict`` (:mod:`.pitch_plane_step`) inlin
 machine code in the cache of the joining file and notices changes of that file alone, not of the
 modules it inlines and calls.  So numba's cache lives in a folder named for the digest of all
 these sources (:data:`COMPILED_SOURCES`) and numba's version, ``$PENETRATE_CACHE_DIR/numba/<digest>``
-(``$NUMBA_CACHE_DIR/<digest>`` when that is set), set before any of them is imported: changed code gets a folder of its own and
+(``$NUMBA_CACHE_DIR/<digest>`` when that is set), set before any of them is imported: changed code gets a
+folder of its own and
 compiles afresh.
 """
 
@@ -26,8 +27,16 @@ from .persistence import cache_dir
 
 __all__ = ["compiled_step", "precompile", "numba_cache_folder", "use_numba_cache", "COMPILED_SOURCES"]
 
-COMPILED_SOURCES = ("dynamics.compiled", "dynamics.quaternion", "dynamics.integrators", "fem_loads.compiled",
-                    "cases.run.dafl_step", "dynamics.pitch_plane", "fem_loads.revolved", "cases.run.pitch_plane_step")
+COMPILED_SOURCES = (
+    "dynamics.compiled",
+    "dynamics.quaternion",
+    "dynamics.integrators",
+    "fem_loads.compiled",
+    "cases.run.dafl_step",
+    "dynamics.pitch_plane",
+    "fem_loads.revolved",
+    "cases.run.pitch_plane_step",
+)
 
 
 def numba_cache_folder() -> Path:
@@ -76,8 +85,11 @@ def compiled_step(loads, method, body, weight: np.ndarray | None):
     compiled_load = step.CompiledLoad(load.dafl_kernel, data, _dafl_step(), weight)
     compiled_method = step.CompiledRungeKutta(method)
     _warm(compiled_load, compiled_method, body, data, load.lowest_height_kernel)
-    return (compiled_load, compiled_method,
-            lambda position, attitude: load.lowest_height_kernel(data, position, _up(attitude)))
+    return (
+        compiled_load,
+        compiled_method,
+        lambda position, attitude: load.lowest_height_kernel(data, position, _up(attitude)),
+    )
 
 
 def _up(attitude: np.ndarray) -> np.ndarray:
@@ -92,8 +104,7 @@ def _warm(load, method, body, data, lowest_height) -> None:
     compiling) is done before a run starts its clock: a run's ``integration_time`` is the integration alone."""
     from dynamics import State
 
-    far = State(0.0, np.array([0.0, 0.0, 1e6]), np.array([0.0, 0.0, -1.0]), np.array([1.0, 0.0, 0.0, 0.0]),
-                np.zeros(3))
+    far = State(0.0, np.array([0.0, 0.0, 1e6]), np.array([0.0, 0.0, -1.0]), np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3))
     method.step(body, load, far, 1e-9)
     lowest_height(data, far.position, far.rotation[2])
 
@@ -110,6 +121,10 @@ def precompile() -> None:
 
     points = np.array([[0.1, 0.05, 0.05], [0.1, -0.05, 0.05], [0.1, 0.05, -0.05], [0.1, -0.05, -0.05]])
     normals = points / np.linalg.norm(points, axis=1)[:, None]
-    loads = DAFLLoads(SurfaceQuadrature(points, normals, np.full(4, 1e-4)), ResistanceLaw(1e6, 1e3),
-                      contact_incidence=0.005, entry_smoothing=4.0)
+    loads = DAFLLoads(
+        SurfaceQuadrature(points, normals, np.full(4, 1e-4)),
+        ResistanceLaw(1e6, 1e3),
+        contact_incidence=0.005,
+        entry_smoothing=4.0,
+    )
     compiled_step(loads, RK4(), RigidBody(1.0, np.eye(3)), None)

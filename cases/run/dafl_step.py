@@ -10,7 +10,27 @@ __all__ = ["dafl_step"]
 
 
 @njit(cache=True, error_model="numpy")
-def dafl_step(data, constant_force, mass, inertia, inverse, A, b, b_error, fsal, x0, v0, q0, w0, h, given, has_given, out):
+def dafl_step(
+    data, constant_force, mass, inertia, inverse, A, b, b_error, fsal, x0, v0, q0, w0, h, given, has_given, out
+):
     """:func:`dynamics.compiled.rk_step` with the load :func:`fem_loads.compiled.dafl_kernel`."""
-    rk_step(dafl_kernel, data, constant_force, mass, inertia, inverse, A, b, b_error, fsal, x0, v0, q0, w0, h, given, has_given,
-            out)
+    rk_step(
+        dafl_kernel,
+        data,
+        constant_force,
+        mass,
+        inertia,
+        inverse,
+        A,
+        b,
+        b_error,
+        fsal,
+        x0,
+        v0,
+        q0,
+        w0,
+        h,
+        given,
+        has_given,
+        out,
+    )

@@ -20,8 +20,17 @@ from .runner import RunResult
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["history_columns", "history_table", "history_csv", "attack_angle_peak", "convergence_speed", "HISTORY_UNITS",
-           "ATTACK_ANGLE_SPEED_FRACTION", "CONVERGENCE_THRESHOLD", "RESISTANCE_CENTRE_FORCE_FRACTION"]
+__all__ = [
+    "history_columns",
+    "history_table",
+    "history_csv",
+    "attack_angle_peak",
+    "convergence_speed",
+    "HISTORY_UNITS",
+    "ATTACK_ANGLE_SPEED_FRACTION",
+    "CONVERGENCE_THRESHOLD",
+    "RESISTANCE_CENTRE_FORCE_FRACTION",
+]
 
 ATTACK_ANGLE_SPEED_FRACTION = 0.1
 CONVERGENCE_THRESHOLD = 0.1  # deg
@@ -32,14 +41,32 @@ RESISTANCE_CENTRE_FORCE_FRACTION = 1e-2
 
 HISTORY_UNITS = {
     "time": "s",
-    "position_x": "m", "position_y": "m", "position_z": "m",
-    "velocity_x": "m/s", "velocity_y": "m/s", "velocity_z": "m/s",
-    "speed": "m/s", "path_length": "m", "tip_depth": "m",
-    "attitude_w": "1", "attitude_x": "1", "attitude_y": "1", "attitude_z": "1",
-    "angular_velocity_x": "rad/s", "angular_velocity_y": "rad/s", "angular_velocity_z": "rad/s",
-    "axis_angle": "deg", "velocity_angle": "deg", "attack_angle": "deg", "total_attack_angle": "deg",
-    "force_x": "N", "force_y": "N", "force_z": "N",
-    "moment_x": "N m", "moment_y": "N m", "moment_z": "N m",
+    "position_x": "m",
+    "position_y": "m",
+    "position_z": "m",
+    "velocity_x": "m/s",
+    "velocity_y": "m/s",
+    "velocity_z": "m/s",
+    "speed": "m/s",
+    "path_length": "m",
+    "tip_depth": "m",
+    "attitude_w": "1",
+    "attitude_x": "1",
+    "attitude_y": "1",
+    "attitude_z": "1",
+    "angular_velocity_x": "rad/s",
+    "angular_velocity_y": "rad/s",
+    "angular_velocity_z": "rad/s",
+    "axis_angle": "deg",
+    "velocity_angle": "deg",
+    "attack_angle": "deg",
+    "total_attack_angle": "deg",
+    "force_x": "N",
+    "force_y": "N",
+    "force_z": "N",
+    "moment_x": "N m",
+    "moment_y": "N m",
+    "moment_z": "N m",
     "resistance_centre_from_tip": "m",
 }
 
@@ -81,26 +108,40 @@ def history_columns(result: RunResult) -> dict[str, np.ndarray]:
     attack = (axis_angle - velocity_angle + 180.0) % 360.0 - 180.0
     force_body = np.einsum("nji,nj->ni", rotation, tr.force)
     transverse2 = force_body[:, 1] ** 2 + force_body[:, 2] ** 2
-    ahead = (tr.moment[:, 2] * force_body[:, 1] - tr.moment[:, 1] * force_body[:, 2])
+    ahead = tr.moment[:, 2] * force_body[:, 1] - tr.moment[:, 1] * force_body[:, 2]
     defined = transverse2 >= (RESISTANCE_CENTRE_FORCE_FRACTION * np.linalg.norm(force_body, axis=1)) ** 2
     with np.errstate(divide="ignore", invalid="ignore"):
         centre = np.where(defined, result.prepared.mass.centre_from_tip - ahead / transverse2, np.nan)
-    columns = {
+    return {
         "time": tr.time,
-        "position_x": tr.position[:, 0], "position_y": tr.position[:, 1], "position_z": tr.position[:, 2],
-        "velocity_x": tr.velocity[:, 0], "velocity_y": tr.velocity[:, 1], "velocity_z": tr.velocity[:, 2],
-        "speed": speed, "path_length": tr.path_length, "tip_depth": -tip[:, 2],
-        "attitude_w": tr.attitude[:, 0], "attitude_x": tr.attitude[:, 1],
-        "attitude_y": tr.attitude[:, 2], "attitude_z": tr.attitude[:, 3],
-        "angular_velocity_x": tr.angular_velocity[:, 0], "angular_velocity_y": tr.angular_velocity[:, 1],
+        "position_x": tr.position[:, 0],
+        "position_y": tr.position[:, 1],
+        "position_z": tr.position[:, 2],
+        "velocity_x": tr.velocity[:, 0],
+        "velocity_y": tr.velocity[:, 1],
+        "velocity_z": tr.velocity[:, 2],
+        "speed": speed,
+        "path_length": tr.path_length,
+        "tip_depth": -tip[:, 2],
+        "attitude_w": tr.attitude[:, 0],
+        "attitude_x": tr.attitude[:, 1],
+        "attitude_y": tr.attitude[:, 2],
+        "attitude_z": tr.attitude[:, 3],
+        "angular_velocity_x": tr.angular_velocity[:, 0],
+        "angular_velocity_y": tr.angular_velocity[:, 1],
         "angular_velocity_z": tr.angular_velocity[:, 2],
-        "axis_angle": axis_angle, "velocity_angle": velocity_angle,
-        "attack_angle": attack, "total_attack_angle": total_attack,
-        "force_x": tr.force[:, 0], "force_y": tr.force[:, 1], "force_z": tr.force[:, 2],
-        "moment_x": tr.moment[:, 0], "moment_y": tr.moment[:, 1], "moment_z": tr.moment[:, 2],
+        "axis_angle": axis_angle,
+        "velocity_angle": velocity_angle,
+        "attack_angle": attack,
+        "total_attack_angle": total_attack,
+        "force_x": tr.force[:, 0],
+        "force_y": tr.force[:, 1],
+        "force_z": tr.force[:, 2],
+        "moment_x": tr.moment[:, 0],
+        "moment_y": tr.moment[:, 1],
+        "moment_z": tr.moment[:, 2],
         "resistance_centre_from_tip": centre,
     }
-    return columns
 
 
 _NON_FINITE_CELL = re.compile(r"(?m)(?<![^,\n])-?(?:nan|inf)(?=,|$)")
@@ -131,8 +172,9 @@ def attack_angle_peak(history: pd.DataFrame | Mapping[str, np.ndarray]) -> int:
     return int(moving[np.argmax(angle[moving])])
 
 
-def convergence_speed(history: pd.DataFrame | Mapping[str, np.ndarray],
-                      threshold: float = CONVERGENCE_THRESHOLD) -> float | None:
+def convergence_speed(
+    history: pd.DataFrame | Mapping[str, np.ndarray], threshold: float = CONVERGENCE_THRESHOLD
+) -> float | None:
     """Speed (m/s) at which the attack angle, after its peak, first falls below ``threshold`` (deg).
 
     The peak is :func:`attack_angle_peak` (sought while the speed is at least 10 % of

@@ -39,16 +39,28 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-__all__ = ["atomic_path", "atomic_write", "atomic_write_text", "remove_stale_temporaries", "json_safe",
-           "code_version", "installed_version", "ContentCache", "cache_dir", "save_figure_bytes", "RunStore"]
+__all__ = [
+    "atomic_path",
+    "atomic_write",
+    "atomic_write_text",
+    "remove_stale_temporaries",
+    "json_safe",
+    "code_version",
+    "installed_version",
+    "ContentCache",
+    "cache_dir",
+    "save_figure_bytes",
+    "RunStore",
+]
 
 # the code each kind of cache entry is computed by: packages (or modules) and the libraries they call
 CODE = {
     "mesh": (("mesh",), ("gmsh", "meshio", "numpy")),
-    "prepared": (("mesh", "fem_loads", "cases.scene", "cases.run.prepare"), ("gmsh", "meshio", "numpy",
-                                                                             "scikit-fem")),
-    "run": (("mesh", "fem_loads", "dynamics", "cases.scene", "cases.run"), ("gmsh", "meshio", "numpy",
-                                                                          "scikit-fem", "scipy")),
+    "prepared": (("mesh", "fem_loads", "cases.scene", "cases.run.prepare"), ("gmsh", "meshio", "numpy", "scikit-fem")),
+    "run": (
+        ("mesh", "fem_loads", "dynamics", "cases.scene", "cases.run"),
+        ("gmsh", "meshio", "numpy", "scikit-fem", "scipy"),
+    ),
 }
 
 
@@ -185,8 +197,7 @@ def _source_files(module: str) -> tuple[Path, list[Path]]:
     origin = Path(spec.origin)
     depth = module.count(".")
     if spec.submodule_search_locations:  # origin is the package's __init__.py
-        return origin.parents[depth + 1], sorted(p for p in origin.parent.rglob("*.py")
-                                                 if "__pycache__" not in p.parts)
+        return origin.parents[depth + 1], sorted(p for p in origin.parent.rglob("*.py") if "__pycache__" not in p.parts)
     return origin.parents[depth], [origin]
 
 
@@ -208,7 +219,7 @@ def installed_version(library: str) -> str:
     return distribution.version
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def code_version(kind: str) -> str:
     """Digest of the code that computes a cache entry of ``kind`` (``mesh``, ``prepared``, ``run``).
 

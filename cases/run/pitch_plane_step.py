@@ -21,10 +21,47 @@ def _lowest(data, height, sin_theta, cos_theta):
 
 
 @njit(cache=True, error_model="numpy")
-def pitch_plane_trajectory(rings, law, outline, y0, mass, inertia, gravity, rtol, scales, first_step, max_step, stop_speed,
-                           time_limit, turn_limit, threshold, peak_floor, stop_when_converged, a_matrix, b_error):
+def pitch_plane_trajectory(
+    rings,
+    law,
+    outline,
+    y0,
+    mass,
+    inertia,
+    gravity,
+    rtol,
+    scales,
+    first_step,
+    max_step,
+    stop_speed,
+    time_limit,
+    turn_limit,
+    threshold,
+    peak_floor,
+    stop_when_converged,
+    a_matrix,
+    b_error,
+):
     """:func:`dynamics.pitch_plane.trajectory` with the load :func:`fem_loads.revolved.pitch_plane_load` on ``rings``
     under ``law`` (and the lowest point on ``outline``); returns its :data:`~dynamics.pitch_plane.OUTCOME_FIELDS`."""
-    return trajectory(_load, _lowest, (rings, law, outline), y0, mass, inertia, gravity, rtol, scales, first_step,
-                      max_step, stop_speed, time_limit, turn_limit, threshold, peak_floor, stop_when_converged,
-                      a_matrix, b_error)
+    return trajectory(
+        _load,
+        _lowest,
+        (rings, law, outline),
+        y0,
+        mass,
+        inertia,
+        gravity,
+        rtol,
+        scales,
+        first_step,
+        max_step,
+        stop_speed,
+        time_limit,
+        turn_limit,
+        threshold,
+        peak_floor,
+        stop_when_converged,
+        a_matrix,
+        b_error,
+    )

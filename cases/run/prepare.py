@@ -27,8 +27,7 @@ from mesh.imported import BodyOutline, FileGeometry, GeometryError, body_frame, 
 from ..scene import InputError, Numerics, Projectile, Scene
 from .persistence import ContentCache, atomic_path, atomic_write, cache_dir
 
-__all__ = ["PreparedProjectile", "prepare_projectile", "preparation_key", "cached_mesh", "body_mesh",
-           "prepared_path"]
+__all__ = ["PreparedProjectile", "prepare_projectile", "preparation_key", "cached_mesh", "body_mesh", "prepared_path"]
 
 
 @dataclass(frozen=True)
@@ -49,8 +48,10 @@ class PreparedProjectile:
     def profile(self) -> Profile:
         """The exact profile of an analytic projectile (a file's body has none)."""
         if isinstance(self.geometry, FileGeometry):
-            raise InputError("this needs an axisymmetric profile, and the projectile comes from"
-                             f" {self.geometry.path}: it works for the analytic projectiles only")
+            raise InputError(
+                "this needs an axisymmetric profile, and the projectile comes from"
+                f" {self.geometry.path}: it works for the analytic projectiles only"
+            )
         return self.geometry.profile
 
     @property
@@ -84,8 +85,12 @@ def cached_mesh(geometry: ProjectileGeometry | FileGeometry, size: float, order:
     if isinstance(geometry, FileGeometry):  # the file's digest is in the key: a changed file is meshed again
         inputs = {"file": dataclasses.asdict(geometry), "size": size, "order": order}
     else:
-        inputs = {"geometry": dataclasses.asdict(geometry), "nose": type(geometry.profile.nose).__name__,
-                  "size": size, "order": order}
+        inputs = {
+            "geometry": dataclasses.asdict(geometry),
+            "nose": type(geometry.profile.nose).__name__,
+            "size": size,
+            "order": order,
+        }
     path = ContentCache(cache_dir()).path("mesh", inputs, ".vtu")
     if path.exists():
         try:
@@ -110,8 +115,10 @@ def body_mesh(geometry: ProjectileGeometry | FileGeometry, size: float, order: i
 
 def preparation_key(scene: Scene) -> tuple[str, str]:
     """What a prepared projectile depends on: the projectile and the mesh and quadrature numerics (JSON)."""
-    return (scene.projectile.model_dump_json(),
-            scene.numerics.model_dump_json(include={"mesh_size", "geometry_order", "normals", "quadrature_order"}))
+    return (
+        scene.projectile.model_dump_json(),
+        scene.numerics.model_dump_json(include={"mesh_size", "geometry_order", "normals", "quadrature_order"}),
+    )
 
 
 def prepare_projectile(scene: Scene) -> PreparedProjectile:
@@ -145,8 +152,9 @@ def _load(path, spec: Projectile) -> PreparedProjectile | None:
             geometry = spec.shape(placed=(float(span[0]), float(span[1])) if span.size else None)
             mass = MassProperties(float(data["mass"]), data["centre"], data["inertia"], float(data["volume"]))
             quarters = data["mirror_quarters"]
-            quadrature = SurfaceQuadrature(data["points"], data["normals"], data["weights"],
-                                           quarters if quarters.size else None)
+            quadrature = SurfaceQuadrature(
+                data["points"], data["normals"], data["weights"], quarters if quarters.size else None
+            )
             sizes = data["outline"]
             body = BodyOutline(*(float(v) for v in sizes)) if sizes.size else None
             return PreparedProjectile(geometry, mass, quadrature, int(data["n_tetra"]), body)
@@ -159,11 +167,20 @@ def _save(path, prepared: PreparedProjectile) -> None:
     m, q = prepared.mass, prepared.quadrature
     buffer = io.BytesIO()
     span = getattr(prepared.geometry, "counterweight", None)
-    np.savez(buffer, mass=m.mass, centre=m.centre, inertia=m.inertia, volume=m.volume, points=q.points,
-             normals=q.normals, weights=q.weights, n_tetra=prepared.n_tetra,
-             counterweight=np.array(span if span is not None else [], dtype=float),
-             outline=np.array(dataclasses.astuple(prepared.outline) if prepared.outline else [], dtype=float),
-             mirror_quarters=q.mirror_quarters if q.mirror_quarters is not None else np.empty(0, dtype=np.int64))
+    np.savez(
+        buffer,
+        mass=m.mass,
+        centre=m.centre,
+        inertia=m.inertia,
+        volume=m.volume,
+        points=q.points,
+        normals=q.normals,
+        weights=q.weights,
+        n_tetra=prepared.n_tetra,
+        counterweight=np.array(span if span is not None else [], dtype=float),
+        outline=np.array(dataclasses.astuple(prepared.outline) if prepared.outline else [], dtype=float),
+        mirror_quarters=q.mirror_quarters if q.mirror_quarters is not None else np.empty(0, dtype=np.int64),
+    )
     atomic_write(path, buffer.getvalue())
 
 
@@ -186,33 +203,47 @@ def _compute(spec: Projectile, numerics: Numerics, geometry: ProjectileGeometry)
     except GeometryError as exc:  # the file, not the numerics: bad input
         raise InputError(str(exc)) from None
     except Exception as exc:  # gmsh raises bare Exceptions ("HXT 3D mesh failed", ...)
-        raise RuntimeError(f"{size}: gmsh could not mesh this projectile at this size ({exc});"
-                           " a finer numerics.mesh_size usually works") from exc
+        raise RuntimeError(
+            f"{size}: gmsh could not mesh this projectile at this size ({exc});"
+            " a finer numerics.mesh_size usually works"
+        ) from exc
     if from_file and mesh.order != numerics.geometry_order:  # a mesh file's order is its own
-        raise InputError(f"numerics.geometry_order = {numerics.geometry_order}: the mesh file has"
-                         f" {'10' if mesh.order == 2 else '4'}-node tetrahedra; set numerics.geometry_order ="
-                         f" {mesh.order}")
+        raise InputError(
+            f"numerics.geometry_order = {numerics.geometry_order}: the mesh file has"
+            f" {'10' if mesh.order == 2 else '4'}-node tetrahedra; set numerics.geometry_order ="
+            f" {mesh.order}"
+        )
     exact_cad = from_file and numerics.normals == "exact"
     try:
         fem_mesh = to_skfem(mesh)
         mass = _mass_properties(spec, mesh, fem_mesh)
-        quadrature = surface_quadrature(mesh, mass.centre, None if from_file else geometry.profile,
-                                        numerics.normals, numerics.quadrature_order, fem_mesh,
-                                        surface=CadSurface(geometry, tip) if exact_cad else None,
-                                        facet_rule="shape" if from_file else "basis")
+        quadrature = surface_quadrature(
+            mesh,
+            mass.centre,
+            None if from_file else geometry.profile,
+            numerics.normals,
+            numerics.quadrature_order,
+            fem_mesh,
+            surface=CadSurface(geometry, tip) if exact_cad else None,
+            facet_rule="shape" if from_file else "basis",
+        )
     except Exception as exc:  # scikit-fem: "Newton iteration didn't converge" on distorted curved elements
-        raise RuntimeError(f"{size}: the elements of this mesh are too distorted to integrate ({exc});"
-                           " a finer numerics.mesh_size, or numerics.geometry_order = 1, usually works") from exc
-    return PreparedProjectile(geometry, _scaled_inertia(spec, mass), quadrature, len(mesh.tetra),
-                              outline(mesh) if from_file else None)
+        raise RuntimeError(
+            f"{size}: the elements of this mesh are too distorted to integrate ({exc});"
+            " a finer numerics.mesh_size, or numerics.geometry_order = 1, usually works"
+        ) from exc
+    return PreparedProjectile(
+        geometry, _scaled_inertia(spec, mass), quadrature, len(mesh.tetra), outline(mesh) if from_file else None
+    )
 
 
 def _mass_properties(spec: Projectile, mesh: ProjectileMesh, fem_mesh) -> MassProperties:
     """Given, or integrated over the mesh (a homogeneous body of a given mass has its density scaled)."""
     if spec.mass_properties is not None:
         given = spec.mass_properties
-        return MassProperties.axisymmetric(given.mass, given.centre_of_mass, given.axial_inertia,
-                                           given.transverse_inertia)
+        return MassProperties.axisymmetric(
+            given.mass, given.centre_of_mass, given.axial_inertia, given.transverse_inertia
+        )
     mass = mass_properties(mesh, spec.densities(), fem_mesh)
     if spec.mass is not None and spec.counterweight is None:
         scale = spec.mass / mass.mass
@@ -227,8 +258,10 @@ def _scaled_inertia(spec: Projectile, mass: MassProperties) -> MassProperties:
     axial, transverse = mass.axial_inertia, mass.transverse_inertia
     lowest = 0.5 * axial / transverse  # I_axial <= 2 I_transverse for every rigid body
     if spec.transverse_inertia_scale < lowest:
-        raise ValueError(f"projectile.transverse_inertia_scale = {spec.transverse_inertia_scale:g}: the transverse"
-                         f" moments ({spec.transverse_inertia_scale * transverse:.3g} kg m^2) would be less than"
-                         f" half the axial moment ({axial:.3g} kg m^2), which no rigid body has (allowed for this"
-                         f" projectile: transverse_inertia_scale >= {lowest:.3g})")
+        raise ValueError(
+            f"projectile.transverse_inertia_scale = {spec.transverse_inertia_scale:g}: the transverse"
+            f" moments ({spec.transverse_inertia_scale * transverse:.3g} kg m^2) would be less than"
+            f" half the axial moment ({axial:.3g} kg m^2), which no rigid body has (allowed for this"
+            f" projectile: transverse_inertia_scale >= {lowest:.3g})"
+        )
     return mass.with_transverse_scale(spec.transverse_inertia_scale)

@@ -19,22 +19,43 @@ from dataclasses import dataclass
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from dynamics import (METHODS, EnergyGuard, ErrorControl, Event, FixedStep, RigidBody, SpeedBelow, State,
-                      StepControl, Trajectory, simulate)
+from dynamics import (
+    METHODS,
+    EnergyGuard,
+    ErrorControl,
+    Event,
+    FixedStep,
+    RigidBody,
+    SpeedBelow,
+    State,
+    StepControl,
+    Trajectory,
+    simulate,
+)
 from dynamics.quaternion import multiply, rotation_matrix
 
 from ..scene import Scene
 from .prepare import PreparedProjectile, prepare_projectile
 
-__all__ = ["RunResult", "run_scene", "initial_state", "initial_attitude", "step_control", "WithGravity",
-           "STOPPED", "EXITED", "ANGLE_SCALE", "FLOOR_FRACTION"]
+__all__ = [
+    "RunResult",
+    "run_scene",
+    "initial_state",
+    "initial_attitude",
+    "step_control",
+    "WithGravity",
+    "STOPPED",
+    "EXITED",
+    "ANGLE_SCALE",
+    "FLOOR_FRACTION",
+]
 
 STOPPED, EXITED = "stopped", "exited"
 # attitude errors are measured against this angle (rad), not against a radian: the disturbances
 # of interest are of the order of a degree (docs/numerics.md, Hard cases)
 ANGLE_SCALE = 1e-2
 # the step floor below the time step: 10 halvings of the energy guard (docs/numerics.md, Hard cases)
-FLOOR_FRACTION = 2.0 ** -10
+FLOOR_FRACTION = 2.0**-10
 
 
 @dataclass
@@ -62,8 +83,10 @@ def initial_attitude(oblique_angle: float, attack_angle: float, yaw_angle: float
     yaw = math.radians(yaw_angle) / 2  # about body z
     half = math.sqrt(0.5)
     nose_down = np.array([half, 0.0, half, 0.0])
-    return multiply(multiply(nose_down, np.array([math.cos(pitch), 0.0, -math.sin(pitch), 0.0])),
-                    np.array([math.cos(yaw), 0.0, 0.0, math.sin(yaw)]))
+    return multiply(
+        multiply(nose_down, np.array([math.cos(pitch), 0.0, -math.sin(pitch), 0.0])),
+        np.array([math.cos(yaw), 0.0, 0.0, math.sin(yaw)]),
+    )
 
 
 def initial_state(scene: Scene, prepared: PreparedProjectile) -> State:
@@ -123,8 +146,13 @@ def step_control(scene: Scene, length: float) -> StepControl:
     rate = ANGLE_SCALE * speed / length
     scales = np.array([length] * 3 + [speed] * 3 + [ANGLE_SCALE] * 3 + [rate] * 3 + [length])
     sharp = scene.effects.sharp_contact or numerics.entry_smoothing == 0.0
-    return ErrorControl(numerics.rtol, numerics.rtol * scales, first_step=1e-3 * length / speed,
-                        forced_step=numerics.time_step if sharp else 0.0, min_step=floor)
+    return ErrorControl(
+        numerics.rtol,
+        numerics.rtol * scales,
+        first_step=1e-3 * length / speed,
+        forced_step=numerics.time_step if sharp else 0.0,
+        min_step=floor,
+    )
 
 
 def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
@@ -144,6 +172,7 @@ def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
     loads = scene.loads(prepared.quadrature)
     body = RigidBody(prepared.mass.mass, prepared.mass.inertia)
     method = METHODS[numerics.integrator]()
+
     def lowest_height(position, attitude):
         return loads.lowest_height(position, rotation_matrix(attitude))
 
@@ -156,8 +185,9 @@ def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
         driving = WithGravity(loads, body.mass, effects.gravity_acceleration) if effects.gravity else loads
     control = step_control(scene, prepared.length)
     # the energy guard needs loads that only dissipate: gravity and no-separation can do work
-    guard = EnergyGuard(control.min_step) if numerics.energy_guard and effects.separation and not effects.gravity \
-        else None
+    guard = (
+        EnergyGuard(control.min_step) if numerics.energy_guard and effects.separation and not effects.gravity else None
+    )
     state = initial_state(scene, prepared) if initial is None else initial
     events = [
         SpeedBelow(STOPPED, numerics.stop_speed),
@@ -169,8 +199,8 @@ def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
     # wait for a busy core (a sweep runs one process per core) cost up to 50x; one thread also
     # fixes the summation order, so results do not depend on the machine's core count
     with threadpool_limits(limits=1, user_api="blas"):
-        trajectory = simulate(body, driving, state, method, control,
-                              time_limit=numerics.time_limit, events=events, guard=guard)
+        trajectory = simulate(
+            body, driving, state, method, control, time_limit=numerics.time_limit, events=events, guard=guard
+        )
     end = time.perf_counter()
     return RunResult(scene, prepared, trajectory, end - start, end - integrate_start)
-

@@ -6,9 +6,9 @@ import io
 import json
 import math
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from collections.abc import Mapping
 from typing import TYPE_CHECKING, Annotated, Any
 
 import numpy as np
@@ -22,8 +22,16 @@ from .runner import RunResult, run_scene
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["RunSummary", "summarise", "run_warnings", "write_outputs", "StoredRun", "simulate_record",
-           "MAX_STORED_HISTORY_ROWS", "WARN_SHARE"]
+__all__ = [
+    "RunSummary",
+    "summarise",
+    "run_warnings",
+    "write_outputs",
+    "StoredRun",
+    "simulate_record",
+    "MAX_STORED_HISTORY_ROWS",
+    "WARN_SHARE",
+]
 
 # a share of steps above which retaken or forced steps mean the numerics do not suit the scene
 WARN_SHARE = 0.1
@@ -59,8 +67,10 @@ class RunSummary(BaseModel):
     final_time: Real = _quantity("s", "time at the end of the run")
     final_speed: Real = _quantity("m/s", "speed at the end of the run")
     final_position: list[Real] = _quantity("m", "centre of mass at the end, world frame")
-    max_attack_angle: Real = _quantity("deg", "largest total attack angle while the speed is at least"
-                                              f" {ATTACK_ANGLE_SPEED_FRACTION:g} of the impact speed")
+    max_attack_angle: Real = _quantity(
+        "deg",
+        f"largest total attack angle while the speed is at least {ATTACK_ANGLE_SPEED_FRACTION:g} of the impact speed",
+    )
     final_attack_angle: Real = _quantity("deg", "signed attack angle in the vertical plane at the end")
     axis_angle_change: Real = _quantity("deg", "turn of the axis in the vertical plane over the run")
     wall_time: Real = _quantity("s", "the whole run, preparation included")
@@ -118,8 +128,17 @@ def summarise(result: RunResult, history: pd.DataFrame | Mapping[str, np.ndarray
         transverse_inertia=mass.transverse_inertia,
         surface_points=len(result.prepared.quadrature),
         tetrahedra=result.prepared.n_tetra,
-        **{name: stats.get(name) for name in ("steps", "rejected_steps", "forced_steps", "energy_rejections",
-                                               "energy_projections", "load_evaluations")},
+        **{
+            name: stats.get(name)
+            for name in (
+                "steps",
+                "rejected_steps",
+                "forced_steps",
+                "energy_rejections",
+                "energy_projections",
+                "load_evaluations",
+            )
+        },
         warnings=run_warnings(result.trajectory.end_reason, stats) + surface_warnings(result.scene.numerics),
     )
 
@@ -129,10 +148,12 @@ def surface_warnings(numerics) -> list[str]:
     geometry, mesh normals) tilt every normal by up to half the angle between neighbouring facets,
     and the depth comes out short by several per cent (docs/geometry.md, faceted surfaces)."""
     if numerics.geometry_order == 1 and numerics.normals == "mesh":
-        return ["flat facets with their own normals (numerics.geometry_order = 1, normals = \"mesh\"): test 2's"
-                " depth comes out 7 % short at 20 mm facets, 2.4 % at 10 mm, 0.8 % at 5 mm; second-order"
-                " tetrahedra give 0.3 %, 0.1 %, 0.03 % (against the exact 1-D integration; docs/geometry.md, faceted"
-                " surfaces)"]
+        return [
+            'flat facets with their own normals (numerics.geometry_order = 1, normals = "mesh"): test 2\'s'
+            " depth comes out 7 % short at 20 mm facets, 2.4 % at 10 mm, 0.8 % at 5 mm; second-order"
+            " tetrahedra give 0.3 %, 0.1 %, 0.03 % (against the exact 1-D integration; docs/geometry.md, faceted"
+            " surfaces)"
+        ]
     return []
 
 
@@ -149,17 +170,25 @@ def run_warnings(end_reason: str, statistics: dict) -> list[str]:
         warnings.append(f"the run ended by {end_reason}, not by stopping or leaving the target")
     retaken = int(statistics.get("energy_rejections") or 0)
     if retaken > WARN_SHARE * steps:
-        warnings.append(f"{retaken} retakes by the energy guard for {steps} steps: numerics.time_step is too coarse"
-                        " for this scene (docs/numerics.md, the energy guard)")
+        warnings.append(
+            f"{retaken} retakes by the energy guard for {steps} steps: numerics.time_step is too coarse"
+            " for this scene (docs/numerics.md, the energy guard)"
+        )
     forced = int(statistics.get("forced_steps") or 0)
     if forced > WARN_SHARE * steps:
-        warnings.append(f"{forced} of {steps} steps accepted above the tolerance at the step floor: the error control"
-                        " cannot meet numerics.rtol here (docs/numerics.md, hard cases)")
+        warnings.append(
+            f"{forced} of {steps} steps accepted above the tolerance at the step floor: the error control"
+            " cannot meet numerics.rtol here (docs/numerics.md, hard cases)"
+        )
     return warnings
 
 
-def write_outputs(result: RunResult, out_dir: str | os.PathLike, every: int = 1,
-                  history: pd.DataFrame | Mapping[str, np.ndarray] | None = None) -> dict[str, Path]:
+def write_outputs(
+    result: RunResult,
+    out_dir: str | os.PathLike,
+    every: int = 1,
+    history: pd.DataFrame | Mapping[str, np.ndarray] | None = None,
+) -> dict[str, Path]:
     """Write ``summary.json`` (with the resolved scene) and ``history.csv`` into ``out_dir``.
 
     Each file is written atomically, and ``summary.json`` last: a run killed at

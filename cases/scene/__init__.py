@@ -14,20 +14,46 @@ from __future__ import annotations
 from .errors import InputError, SceneError, one_line
 
 _EXPORTS = {
-    "Scene": "schema", "Impact": "schema", "Numerics": "schema", "Outputs": "schema",
+    "Scene": "schema",
+    "Impact": "schema",
+    "Numerics": "schema",
+    "Outputs": "schema",
     "Projectile": "projectile",
-    "Target": "target", "Effects": "target", "build_law": "target",
-    "load_scene": "load", "scene_from_dict": "load", "apply_overrides": "load", "dotted_key": "load",
-    "parse_override": "load", "read_toml": "load", "read_scene_data": "load", "scene_key": "load",
+    "Target": "target",
+    "Effects": "target",
+    "build_law": "target",
+    "load_scene": "load",
+    "scene_from_dict": "load",
+    "apply_overrides": "load",
+    "dotted_key": "load",
+    "parse_override": "load",
+    "read_toml": "load",
+    "read_scene_data": "load",
+    "scene_key": "load",
     "Overrides": "load",
 }
 
 __all__ = [
-    "Scene", "Projectile", "Target", "Effects", "Impact", "Numerics", "Outputs", "build_law",
-    "load_scene", "scene_from_dict", "apply_overrides", "dotted_key", "parse_override", "read_toml", "read_scene_data",
+    "Scene",
+    "Projectile",
+    "Target",
+    "Effects",
+    "Impact",
+    "Numerics",
+    "Outputs",
+    "build_law",
+    "load_scene",
+    "scene_from_dict",
+    "apply_overrides",
+    "dotted_key",
+    "parse_override",
+    "read_toml",
+    "read_scene_data",
     "scene_key",
     "Overrides",
-    "InputError", "SceneError", "one_line",
+    "InputError",
+    "SceneError",
+    "one_line",
 ]
 
 

@@ -26,8 +26,9 @@ def not_boolean(value):
 def _one_line(value):
     """Labels print as one line: no newlines, tabs, escapes or other control characters."""
     if isinstance(value, str) and not value.isprintable():
-        raise PydanticCustomError("text_type", "input should be one line of printable text"
-                                  " (no newlines, tabs or control characters)")
+        raise PydanticCustomError(
+            "text_type", "input should be one line of printable text (no newlines, tabs or control characters)"
+        )
     return value
 
 

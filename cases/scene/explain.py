@@ -61,8 +61,7 @@ def _field_at(loc: tuple) -> tuple[Any, list[type[BaseModel]], str]:
             path.append(part)
             continue
         # a union tag narrows to the member it names; anything else is an unknown key
-        tagged = [m for m in models if any(
-            typing.get_args(f.annotation) == (part,) for f in m.model_fields.values())]
+        tagged = [m for m in models if any(typing.get_args(f.annotation) == (part,) for f in m.model_fields.values())]
         if tagged:
             models = tagged
         elif part in LAW_TAGS and LAW_TAGS[part] in models:
@@ -120,13 +119,19 @@ def _explain_one(error: dict) -> str:
         return f"{name}.shape = {_show(ctx.get('tag'))}: unknown shape (allowed: {tags})"
     if kind in ("model_type", "model_attributes_type", "dict_type"):
         if loc and loc[-1] in LAW_TAGS:
-            return (f"{name} = {_show(given)}: must be a law (allowed: a name, {', '.join(sorted(NAMED_LAWS))};"
-                    " a table of A, sigma_0, B, rho_0; or a table of model, sigma_0, rho_0, locking_strain)")
+            return (
+                f"{name} = {_show(given)}: must be a law (allowed: a name, {', '.join(sorted(NAMED_LAWS))};"
+                " a table of A, sigma_0, B, rho_0; or a table of model, sigma_0, rho_0, locking_strain)"
+            )
         models = _field_at(loc)[1]
         keys = ", ".join(sorted({k for m in models for k in m.model_fields}))
         return f"{name} = {_show(given)}: must be a table (allowed: a table of {keys})"
-    bounds = {"greater_than": "> {gt}", "greater_than_equal": ">= {ge}",
-              "less_than": "< {lt}", "less_than_equal": "<= {le}"}
+    bounds = {
+        "greater_than": "> {gt}",
+        "greater_than_equal": ">= {ge}",
+        "less_than": "< {lt}",
+        "less_than_equal": "<= {le}",
+    }
     if kind in bounds:
         rule = "must be " + bounds[kind].format(**{k: f"{v:g}" for k, v in ctx.items()})
     elif kind == "finite_number":
@@ -146,8 +151,12 @@ def _explain_one(error: dict) -> str:
 
 def _tags(models: list[type[BaseModel]]) -> list[str]:
     """The ``shape`` values the models of a tagged union accept, quoted."""
-    return [repr(arg) for m in models if "shape" in m.model_fields
-            for arg in typing.get_args(m.model_fields["shape"].annotation)]
+    return [
+        repr(arg)
+        for m in models
+        if "shape" in m.model_fields
+        for arg in typing.get_args(m.model_fields["shape"].annotation)
+    ]
 
 
 def explain(exc: ValidationError) -> str:

@@ -29,8 +29,22 @@ from .errors import SceneError
 from .projectile import NOSE_SPECS
 from .schema import Scene
 
-__all__ = ["Overrides", "load_scene", "read_scene_data", "anchor_files", "scene_from_dict", "apply_overrides", "parse_override", "scene_key",
-           "read_toml", "read_toml_text", "dotted_key", "MAX_SCENE_BYTES", "ALTERNATIVES", "TAGGED_TABLES"]
+__all__ = [
+    "Overrides",
+    "load_scene",
+    "read_scene_data",
+    "anchor_files",
+    "scene_from_dict",
+    "apply_overrides",
+    "parse_override",
+    "scene_key",
+    "read_toml",
+    "read_toml_text",
+    "dotted_key",
+    "MAX_SCENE_BYTES",
+    "ALTERNATIVES",
+    "TAGGED_TABLES",
+]
 
 MAX_SCENE_BYTES = 1 << 20  # a scene is a few hundred bytes; anything past 1 MiB is not one
 
@@ -43,22 +57,44 @@ Overrides = Mapping[str, Any] | Iterable[tuple[str, Any]]
 ALTERNATIVES: list[tuple[str, tuple[frozenset[str], ...], str]] = [
     ("target", (frozenset({"law"}), frozenset({"layers"})), ""),
     ("projectile", (frozenset({"centre_of_mass"}), frozenset({"centre_of_mass_ratio"})), ""),
-    ("projectile", (frozenset({"mass_properties"}),
-                    frozenset({"mass", "centre_of_mass", "centre_of_mass_ratio"})), ""),
-    ("projectile", (frozenset({"counterweight.start", "counterweight.end"}),
-                    frozenset({"mass", "centre_of_mass", "centre_of_mass_ratio"})), ""),
+    ("projectile", (frozenset({"mass_properties"}), frozenset({"mass", "centre_of_mass", "centre_of_mass_ratio"})), ""),
+    (
+        "projectile",
+        (
+            frozenset({"counterweight.start", "counterweight.end"}),
+            frozenset({"mass", "centre_of_mass", "centre_of_mass_ratio"}),
+        ),
+        "",
+    ),
     ("projectile", (frozenset({"mass"}), frozenset({"body_density"})), "no counterweight"),
-    ("projectile", (frozenset({"geometry"}),
-                    frozenset({"diameter", "length", "nose", "interior", "counterweight", "centre_of_mass",
-                               "centre_of_mass_ratio"})), ""),
+    (
+        "projectile",
+        (
+            frozenset({"geometry"}),
+            frozenset(
+                {"diameter", "length", "nose", "interior", "counterweight", "centre_of_mass", "centre_of_mass_ratio"}
+            ),
+        ),
+        "",
+    ),
 ]
 # Tables whose tag decides their other keys: a new tag drops the keys the new kind does not have.
 TAGGED_TABLES: dict[str, tuple[str, dict[str, frozenset[str]]]] = {
-    "projectile.nose": ("shape", {typing.get_args(spec.model_fields["shape"].annotation)[0]:
-                                  frozenset(spec.model_fields) for spec in NOSE_SPECS}),
-    "effects.friction": ("model", {"none": frozenset({"model", "coefficient"}),
-                                   "coulomb": frozenset({"model", "coefficient"}),
-                                   "capped": frozenset({"model", "coefficient", "cap"})}),
+    "projectile.nose": (
+        "shape",
+        {
+            typing.get_args(spec.model_fields["shape"].annotation)[0]: frozenset(spec.model_fields)
+            for spec in NOSE_SPECS
+        },
+    ),
+    "effects.friction": (
+        "model",
+        {
+            "none": frozenset({"model", "coefficient"}),
+            "coulomb": frozenset({"model", "coefficient"}),
+            "capped": frozenset({"model", "coefficient", "cap"}),
+        },
+    ),
 }
 
 
@@ -117,8 +153,10 @@ def parse_override(text: str) -> tuple[str, Any]:
     except tomllib.TOMLDecodeError:
         value = raw  # a bare word such as softer_soil
     except (RecursionError, ValueError):
-        raise SceneError(f"--set {_quoted(text)}: the value is not readable (arrays nested too deeply,"
-                         " or an integer of more than 4300 digits)") from None
+        raise SceneError(
+            f"--set {_quoted(text)}: the value is not readable (arrays nested too deeply,"
+            " or an integer of more than 4300 digits)"
+        ) from None
     return ".".join(path), value
 
 
@@ -128,8 +166,10 @@ def _pairs(overrides: Overrides | None) -> list[tuple[str, Any]]:
     pairs = list(overrides.items() if isinstance(overrides, Mapping) else overrides)
     for pair in pairs:
         if not (isinstance(pair, tuple) and len(pair) == 2 and isinstance(pair[0], str)):
-            raise SceneError(f"overrides: expected (dotted key, value) pairs or a mapping, got {pair!r:.60}"
-                             " (text such as 'impact.speed=1120' is read by parse_override)")
+            raise SceneError(
+                f"overrides: expected (dotted key, value) pairs or a mapping, got {pair!r:.60}"
+                " (text such as 'impact.speed=1120' is read by parse_override)"
+            )
     return pairs
 
 
@@ -150,8 +190,9 @@ def apply_overrides(data: dict[str, Any], overrides: Overrides | None, source: s
             child = node.setdefault(part, {})
             if not isinstance(child, dict):
                 where = ".".join(path[: depth + 1])
-                raise SceneError(f"{source}: {'.'.join(path)}: {where} is a value, not a table"
-                                 f" (the key must stop at {where})")
+                raise SceneError(
+                    f"{source}: {'.'.join(path)}: {where} is a value, not a table (the key must stop at {where})"
+                )
             node = child
         try:
             node[path[-1]] = copy.deepcopy(value)
@@ -173,16 +214,17 @@ def _holder(data: dict, path: list[str]) -> dict | None:
 
 def _drop_replaced(data: dict[str, Any], paths: list[list[str]]) -> None:
     """Remove what the overrides replaced: the other alternatives, the keys an old tag had."""
+
     def present(full: list[str]) -> bool:
         holder = _holder(data, full)
         return holder is not None and full[-1] in holder
 
     def touched(full: list[str]) -> bool:  # an override set this key, a key inside it, or a table holding it
-        return any(p[:len(full)] == full for p in paths) or (present(full) and any(full[:len(p)] == p for p in paths))
+        return any(p[: len(full)] == full for p in paths) or (present(full) and any(full[: len(p)] == p for p in paths))
 
     def table_at(dotted: str) -> tuple[list[str], dict | None]:
         base = dotted.split(".")
-        if any(base[:len(p)] == p for p in paths):
+        if any(base[: len(p)] == p for p in paths):
             return base, None  # replaced as a whole: nothing of the scene file is left in it
         holder = _holder(data, base)
         table = holder.get(base[-1]) if holder is not None else None
@@ -202,8 +244,12 @@ def _drop_replaced(data: dict[str, Any], paths: list[list[str]]) -> None:
     for dotted, (tag, keys_of) in TAGGED_TABLES.items():
         base, table = table_at(dotted)
         # a tag that is not a known name (a list, say) is left for validation to name
-        if table is None or base + [tag] not in paths or not isinstance(table.get(tag), str) \
-                or table.get(tag) not in keys_of:
+        if (
+            table is None
+            or base + [tag] not in paths
+            or not isinstance(table.get(tag), str)
+            or table.get(tag) not in keys_of
+        ):
             continue
         for key in [k for k in table if k not in keys_of[table[tag]] and not touched(base + [k])]:
             del table[key]

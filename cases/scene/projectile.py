@@ -7,15 +7,41 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from mesh import (BODY, COUNTERWEIGHT, BluntOgiveNose, ConeNose, Interior, OgiveNose, Profile, ProfileBody,
-                  ProfileNose, ProjectileGeometry, SecantOgiveNose, place_counterweight)
+from mesh import (
+    BODY,
+    COUNTERWEIGHT,
+    BluntOgiveNose,
+    ConeNose,
+    Interior,
+    OgiveNose,
+    Profile,
+    ProfileBody,
+    ProfileNose,
+    ProjectileGeometry,
+    SecantOgiveNose,
+    place_counterweight,
+)
 from mesh.imported import CAD_SUFFIXES, MATERIAL_BASE, FileGeometry, file_digest
 
 from .base import Label, Number, Strict, field
 
-__all__ = ["Projectile", "GeometryFileSpec", "NoseSpec", "OgiveNoseSpec", "ConeNoseSpec", "SecantOgiveNoseSpec", "HemisphereNoseSpec",
-           "BluntNoseSpec", "ProfileNoseSpec", "BodySpec", "InteriorSpec", "CounterweightSpec", "MassPropertiesSpec", "DEFAULT_BODY_DENSITY",
-           "MIN_MEAN_DENSITY"]
+__all__ = [
+    "Projectile",
+    "GeometryFileSpec",
+    "NoseSpec",
+    "OgiveNoseSpec",
+    "ConeNoseSpec",
+    "SecantOgiveNoseSpec",
+    "HemisphereNoseSpec",
+    "BluntNoseSpec",
+    "ProfileNoseSpec",
+    "BodySpec",
+    "InteriorSpec",
+    "CounterweightSpec",
+    "MassPropertiesSpec",
+    "DEFAULT_BODY_DENSITY",
+    "MIN_MEAN_DENSITY",
+]
 
 DEFAULT_BODY_DENSITY = 7850.0  # steel (kg/m^3)
 # lightest mean density (kg/m^3) over the bounding cylinder: far below any hard projectile (balsa is 150);
@@ -84,8 +110,11 @@ class ProfileNoseSpec(Strict):
 
     shape: Literal["profile"]
     points: list[tuple[Coordinate, Coordinate]] = field(
-        unit="m", min_length=3, max_length=MAX_PROFILE_POINTS,
-        description="[x, r] from the tip: x strictly increasing from 0, r non-decreasing from 0 to the shank radius")
+        unit="m",
+        min_length=3,
+        max_length=MAX_PROFILE_POINTS,
+        description="[x, r] from the tip: x strictly increasing from 0, r non-decreasing from 0 to the shank radius",
+    )
 
     def build(self) -> ProfileNose:
         return ProfileNose(tuple(self.points))
@@ -97,21 +126,48 @@ class BodySpec(Strict):
     shape-preserving cubic as a measured nose (mesh.measured)."""
 
     points: list[tuple[Coordinate, Coordinate]] = field(
-        unit="m", min_length=2, max_length=MAX_PROFILE_POINTS,
+        unit="m",
+        min_length=2,
+        max_length=MAX_PROFILE_POINTS,
         description="[x, r] from the tip: x strictly increasing from the shank (r = diameter / 2) to the tail"
-                    " (x = length), r > 0")
+        " (x = length), r > 0",
+    )
 
     def build(self) -> ProfileBody:
         return ProfileBody(tuple(self.points))
 
 
 NOSE_SPECS = (OgiveNoseSpec, ConeNoseSpec, SecantOgiveNoseSpec, HemisphereNoseSpec, BluntNoseSpec, ProfileNoseSpec)
-NoseSpec = Annotated[OgiveNoseSpec | ConeNoseSpec | SecantOgiveNoseSpec | HemisphereNoseSpec | BluntNoseSpec
-                     | ProfileNoseSpec, Field(discriminator="shape")]
+NoseSpec = Annotated[
+    OgiveNoseSpec | ConeNoseSpec | SecantOgiveNoseSpec | HemisphereNoseSpec | BluntNoseSpec | ProfileNoseSpec,
+    Field(discriminator="shape"),
+]
 
 
-MESH_SUFFIXES = (".msh", ".vtu", ".vtk", ".inp", ".med", ".xdmf", ".xmf", ".mesh", ".meshb", ".bdf", ".nas",
-                 ".h5m", ".e", ".exo", ".vol", ".ugrid", ".su2", ".avs", ".f3grid", ".mdpa", ".dat", ".tec")
+MESH_SUFFIXES = (
+    ".msh",
+    ".vtu",
+    ".vtk",
+    ".inp",
+    ".med",
+    ".xdmf",
+    ".xmf",
+    ".mesh",
+    ".meshb",
+    ".bdf",
+    ".nas",
+    ".h5m",
+    ".e",
+    ".exo",
+    ".vol",
+    ".ugrid",
+    ".su2",
+    ".avs",
+    ".f3grid",
+    ".mdpa",
+    ".dat",
+    ".tec",
+)
 
 
 class GeometryFileSpec(Strict):
@@ -121,10 +177,14 @@ class GeometryFileSpec(Strict):
     file: Label = field(description="the CAD or mesh file")
     unit: Literal["m", "cm", "mm", "in"] = field("m", description="what a length of 1 in the file means")
     axis: tuple[Number, Number, Number] = field((1.0, 0.0, 0.0), description="the file's direction from tail to tip")
-    cell_field: Label | None = field(None, description="a mesh's cell-data field that names the materials"
-                                                       " (default: the physical groups)")
-    sha256: Label | None = field(None, description="the file's digest: filled in when the scene is read; a changed"
-                                                   " file is refused by a resolved scene that holds the old one")
+    cell_field: Label | None = field(
+        None, description="a mesh's cell-data field that names the materials (default: the physical groups)"
+    )
+    sha256: Label | None = field(
+        None,
+        description="the file's digest: filled in when the scene is read; a changed"
+        " file is refused by a resolved scene that holds the old one",
+    )
 
     @model_validator(mode="after")
     def _readable(self):
@@ -133,18 +193,26 @@ class GeometryFileSpec(Strict):
         path = Path(self.file)
         suffix = path.suffix.lower()
         if suffix not in CAD_SUFFIXES and suffix not in MESH_SUFFIXES:
-            raise ValueError(f"file = {self.file!r}: not a CAD or mesh file (allowed suffixes: CAD"
-                             f" {', '.join(sorted(CAD_SUFFIXES))}; volume meshes {', '.join(MESH_SUFFIXES)})")
+            raise ValueError(
+                f"file = {self.file!r}: not a CAD or mesh file (allowed suffixes: CAD"
+                f" {', '.join(sorted(CAD_SUFFIXES))}; volume meshes {', '.join(MESH_SUFFIXES)})"
+            )
         if suffix in CAD_SUFFIXES and self.cell_field is not None:
-            raise ValueError("cell_field names the materials of a mesh file: drop it for a CAD file (its solids have names)")
+            raise ValueError(
+                "cell_field names the materials of a mesh file: drop it for a CAD file (its solids have names)"
+            )
         try:
             digest = file_digest(path)
         except OSError as exc:
-            raise ValueError(f"file = {self.file!r}: cannot read it ({exc.strerror or exc}); give"
-                             " a readable file, absolute or relative to the scene file's folder") from None
+            raise ValueError(
+                f"file = {self.file!r}: cannot read it ({exc.strerror or exc}); give"
+                " a readable file, absolute or relative to the scene file's folder"
+            ) from None
         if self.sha256 is not None and self.sha256 != digest:
-            raise ValueError(f"file = {self.file!r}: changed since this scene was resolved (sha256 {digest[:12]}...,"
-                             f" the scene holds {self.sha256[:12]}...); drop sha256 to use the file as it is now")
+            raise ValueError(
+                f"file = {self.file!r}: changed since this scene was resolved (sha256 {digest[:12]}...,"
+                f" the scene holds {self.sha256[:12]}...); drop sha256 to use the file as it is now"
+            )
         if not any(self.axis) or math.hypot(*self.axis) < 1e-12:
             raise ValueError(f"axis = {list(self.axis)}: must be a non-zero direction")
         self.sha256 = digest
@@ -199,9 +267,11 @@ class MassPropertiesSpec(Strict):
     def _rigid_body(self):
         # I_axial = int (y^2 + z^2) dm <= I_y + I_z = 2 I_transverse for every rigid body
         if self.axial_inertia > 2.0 * self.transverse_inertia:
-            raise ValueError(f"axial_inertia = {self.axial_inertia:g}: more than twice transverse_inertia ="
-                             f" {self.transverse_inertia:g}, which no rigid body has (allowed: axial_inertia"
-                             " <= 2 transverse_inertia)")
+            raise ValueError(
+                f"axial_inertia = {self.axial_inertia:g}: more than twice transverse_inertia ="
+                f" {self.transverse_inertia:g}, which no rigid body has (allowed: axial_inertia"
+                " <= 2 transverse_inertia)"
+            )
         return self
 
 
@@ -215,22 +285,27 @@ class Projectile(Strict):
     diameter: Number | None = field(None, unit="m", gt=0.0, le=10.0)
     length: Number | None = field(None, unit="m", gt=0.0, le=100.0, description="nose tip to tail")
     nose: NoseSpec | None = None
-    body: BodySpec | None = field(None, description="a measured body behind the nose (a boat tail, a flare);"
-                                                    " default: the cylinder to the tail")
+    body: BodySpec | None = field(
+        None, description="a measured body behind the nose (a boat tail, a flare); default: the cylinder to the tail"
+    )
     geometry: GeometryFileSpec | None = None
-    materials: dict[Label, Density] | None = field(None, unit="kg/m^3",
-                                                   description="density of a file's named solids or groups")
+    materials: dict[Label, Density] | None = field(
+        None, unit="kg/m^3", description="density of a file's named solids or groups"
+    )
     body_density: Number | None = field(None, unit="kg/m^3", gt=0.0, le=1e5)
     mass: Number | None = field(None, unit="kg", gt=0.0, le=1e6)
-    centre_of_mass: Number | None = field(None, unit="m", gt=0.0, le=100.0,
-                                          description="target centre of mass, from the nose tip")
-    centre_of_mass_ratio: Number | None = field(None, unit="Lc/L", gt=0.0, lt=1.0,
-                                                description="target centre of mass over length")
+    centre_of_mass: Number | None = field(
+        None, unit="m", gt=0.0, le=100.0, description="target centre of mass, from the nose tip"
+    )
+    centre_of_mass_ratio: Number | None = field(
+        None, unit="Lc/L", gt=0.0, lt=1.0, description="target centre of mass over length"
+    )
     interior: InteriorSpec | None = None
     counterweight: CounterweightSpec | None = None
     mass_properties: MassPropertiesSpec | None = None
-    transverse_inertia_scale: Number = field(1.0, unit="", gt=0.0, le=100.0,
-                                             description="factor on both transverse moments of inertia")
+    transverse_inertia_scale: Number = field(
+        1.0, unit="", gt=0.0, le=100.0, description="factor on both transverse moments of inertia"
+    )
 
     @model_validator(mode="after")
     def _shape(self):
@@ -239,15 +314,31 @@ class Projectile(Strict):
             if missing:
                 raise ValueError(f"give {', '.join(missing)} (an analytic projectile), or geometry = {{ file = ... }}")
             if self.materials is not None:
-                raise ValueError("materials name the solids of a geometry file: drop materials, or give"
-                                 " geometry = { file = ... } (an analytic projectile has body_density and a"
-                                 " counterweight)")
+                raise ValueError(
+                    "materials name the solids of a geometry file: drop materials, or give"
+                    " geometry = { file = ... } (an analytic projectile has body_density and a"
+                    " counterweight)"
+                )
             return self
-        given = [k for k in ("diameter", "length", "nose", "body", "interior", "counterweight", "centre_of_mass",
-                             "centre_of_mass_ratio") if getattr(self, k) is not None]
+        given = [
+            k
+            for k in (
+                "diameter",
+                "length",
+                "nose",
+                "body",
+                "interior",
+                "counterweight",
+                "centre_of_mass",
+                "centre_of_mass_ratio",
+            )
+            if getattr(self, k) is not None
+        ]
         if given:
-            raise ValueError(f"{', '.join(given)}: the geometry file sets the shape and its materials the mass;"
-                             " drop them (or drop geometry)")
+            raise ValueError(
+                f"{', '.join(given)}: the geometry file sets the shape and its materials the mass;"
+                " drop them (or drop geometry)"
+            )
         if self.materials is not None and len(self.materials) > 50:
             raise ValueError(f"materials: {len(self.materials)} named; at most 50")
         if self.materials and self.mass is not None:
@@ -263,17 +354,23 @@ class Projectile(Strict):
             raise ValueError("counterweight needs an interior (a cavity to fill)")
         if self.mass_properties is not None:
             if self.mass is not None or wants_centre:
-                raise ValueError("mass_properties sets mass and centre of mass itself:"
-                                 " drop mass, centre_of_mass and centre_of_mass_ratio")
+                raise ValueError(
+                    "mass_properties sets mass and centre of mass itself:"
+                    " drop mass, centre_of_mass and centre_of_mass_ratio"
+                )
             return self
         if self._placed_by_mass:
             if self.mass is None or not wants_centre:
-                raise ValueError("a counterweight without start and end needs mass and"
-                                 " centre_of_mass (or centre_of_mass_ratio) to place it")
+                raise ValueError(
+                    "a counterweight without start and end needs mass and"
+                    " centre_of_mass (or centre_of_mass_ratio) to place it"
+                )
             return self
         if wants_centre:
-            raise ValueError("centre_of_mass places a counterweight that has no start and end;"
-                             " to set it directly give mass_properties")
+            raise ValueError(
+                "centre_of_mass places a counterweight that has no start and end;"
+                " to set it directly give mass_properties"
+            )
         if self.mass is not None and self.counterweight is not None:
             raise ValueError("with a placed counterweight the mass follows from the densities: drop mass")
         if self.mass is not None and self.body_density is not None:
@@ -291,11 +388,13 @@ class Projectile(Strict):
             span = (self.counterweight.start, self.counterweight.end)
         ProjectileGeometry(self.profile(), self.interior.build() if self.interior else None, span)
         mass = self.mass_properties.mass if self.mass_properties is not None else self.mass
-        lightest = MIN_MEAN_DENSITY * 0.25 * math.pi * self.diameter ** 2 * self.length
+        lightest = MIN_MEAN_DENSITY * 0.25 * math.pi * self.diameter**2 * self.length
         if mass is not None and mass < lightest:
             field_name = "mass_properties.mass" if self.mass_properties is not None else "mass"
-            raise ValueError(f"{field_name} = {mass:g}: lighter than {MIN_MEAN_DENSITY:g} kg/m^3 over the bounding"
-                             f" cylinder (allowed: {field_name} >= {lightest:.3g} kg for this diameter and length)")
+            raise ValueError(
+                f"{field_name} = {mass:g}: lighter than {MIN_MEAN_DENSITY:g} kg/m^3 over the bounding"
+                f" cylinder (allowed: {field_name} >= {lightest:.3g} kg for this diameter and length)"
+            )
         return self
 
     @property
@@ -334,8 +433,7 @@ class Projectile(Strict):
         A geometry file gives its :class:`~mesh.imported.FileGeometry`."""
         if self.geometry is not None:
             g = self.geometry
-            return FileGeometry(str(g.file), g.sha256, g.unit, tuple(g.axis), tuple(self.materials or {}),
-                                g.cell_field)
+            return FileGeometry(str(g.file), g.sha256, g.unit, tuple(g.axis), tuple(self.materials or {}), g.cell_field)
         profile = self.profile()
         if self.interior is None:
             return ProjectileGeometry(profile)
@@ -348,6 +446,12 @@ class Projectile(Strict):
         elif placed is not None:
             span = placed
         else:
-            span = place_counterweight(profile, interior, self.body_density or DEFAULT_BODY_DENSITY, weight.density,
-                                       self.mass, self.centre_target)
+            span = place_counterweight(
+                profile,
+                interior,
+                self.body_density or DEFAULT_BODY_DENSITY,
+                weight.density,
+                self.mass,
+                self.centre_target,
+            )
         return ProjectileGeometry(profile, interior, span)

@@ -30,12 +30,13 @@ class Impact(Strict):
 
     speed: Number = field(unit="m/s", gt=0.0, le=1e4)
     oblique_angle: Number = field(0.0, unit="deg", gt=-90.0, lt=90.0, description="velocity from the target normal")
-    attack_angle: Number = field(0.0, unit="deg", ge=-90.0, le=90.0,
-                                 description="axis from the velocity, in the vertical plane")
+    attack_angle: Number = field(
+        0.0, unit="deg", ge=-90.0, le=90.0, description="axis from the velocity, in the vertical plane"
+    )
     yaw_angle: Number = field(0.0, unit="deg", gt=-90.0, lt=90.0, description="axis out of the vertical plane")
     angular_velocity: tuple[Number, Number, Number] = field(
-        (0.0, 0.0, 0.0), unit="rad/s",
-        description="body frame: x along the axis, y normal to the vertical plane")
+        (0.0, 0.0, 0.0), unit="rad/s", description="body frame: x along the axis, y normal to the vertical plane"
+    )
 
     @model_validator(mode="after")
     def _bounded_spin(self):
@@ -52,32 +53,47 @@ class Numerics(Strict):
     normals: Literal["exact", "mesh"] = "exact"
     quadrature_order: Whole = field(2, ge=1, le=10, description="degree exact on each facet")
     integrator: Literal["rk4", "dopri54"] = "rk4"
-    time_step: Number = field(2e-5, unit="s", gt=0.0, le=1e-2,
-                              description="fixed step (rk4); the error control shortens no step below it (dopri54)")
+    time_step: Number = field(
+        2e-5,
+        unit="s",
+        gt=0.0,
+        le=1e-2,
+        description="fixed step (rk4); the error control shortens no step below it (dopri54)",
+    )
     rtol: Number = field(1e-6, gt=0.0, lt=1.0, description="relative tolerance (dopri54)")
     time_limit: Number = field(1.0, unit="s", gt=0.0, le=100.0)
-    stop_speed: Number = field(0.5, unit="m/s", gt=0.0, le=1e3,
-                               description="the run ends when the speed falls below this")
-    normal_velocity_guard: Number = field(1e-9, ge=0.0, le=1e-3,
-                                          description="relative guard on Vn = 0 (sharp contact only)")
-    entry_smoothing: Number = field(4.0, ge=0.0, le=10.0,
-                                    description="length over which a surface point enters the target (and crosses a"
-                                                " layer interface), in units of its own size (the square root of its"
-                                                " weight); 4 keeps RK4's time error under the mesh error at the longest"
-                                                " stable step (docs/accuracy.md); 0: sharp")
+    stop_speed: Number = field(
+        0.5, unit="m/s", gt=0.0, le=1e3, description="the run ends when the speed falls below this"
+    )
+    normal_velocity_guard: Number = field(
+        1e-9, ge=0.0, le=1e-3, description="relative guard on Vn = 0 (sharp contact only)"
+    )
+    entry_smoothing: Number = field(
+        4.0,
+        ge=0.0,
+        le=10.0,
+        description="length over which a surface point enters the target (and crosses a"
+        " layer interface), in units of its own size (the square root of its"
+        " weight); 4 keeps RK4's time error under the mesh error at the longest"
+        " stable step (docs/accuracy.md); 0: sharp",
+    )
     energy_guard: bool = field(True, description="retake shorter any step that gains kinetic energy")
     kernel: Literal["auto", "numpy", "compiled"] = field(
-        "auto", description="how the steps are computed: numpy (the reference), compiled (numba: the whole Runge-Kutta"
-                            " step in machine code, after about 0.4 s of loading per process) or auto (compiled in"
-                            " studies, whose workers load it once, numpy for a single run)")
+        "auto",
+        description="how the steps are computed: numpy (the reference), compiled (numba: the whole Runge-Kutta"
+        " step in machine code, after about 0.4 s of loading per process) or auto (compiled in"
+        " studies, whose workers load it once, numpy for a single run)",
+    )
 
     @model_validator(mode="after")
     def _reachable_time_limit(self):
         # rk4 steps by time_step, and dopri54 shortens no step below it
         if self.time_limit / self.time_step > MAX_STEPS:
-            raise ValueError(f"time_step = {self.time_step:g}: {self.time_limit / self.time_step:.3g} steps to reach"
-                             f" time_limit = {self.time_limit:g} s (allowed: time_limit / time_step <= {MAX_STEPS:g};"
-                             " shorten time_limit or lengthen time_step)")
+            raise ValueError(
+                f"time_step = {self.time_step:g}: {self.time_limit / self.time_step:.3g} steps to reach"
+                f" time_limit = {self.time_limit:g} s (allowed: time_limit / time_step <= {MAX_STEPS:g};"
+                " shorten time_limit or lengthen time_step)"
+            )
         return self
 
 
@@ -106,18 +122,24 @@ class Scene(Strict):
         p, size = self.projectile, self.numerics.mesh_size
         if p.geometry is not None:
             if self.numerics.normals == "exact" and not p.geometry.is_cad:
-                raise ValueError("numerics.normals = 'exact' needs an exact surface to take the normals from, and a mesh file"
-                                 " has none: set numerics.normals = 'mesh' (the mesh's own; docs/geometry.md says"
-                                 " what they cost in accuracy)")
+                raise ValueError(
+                    "numerics.normals = 'exact' needs an exact surface to take the normals from, and a mesh file"
+                    " has none: set numerics.normals = 'mesh' (the mesh's own; docs/geometry.md says"
+                    " what they cost in accuracy)"
+                )
             return self  # the file's size is known once it is read (mesh.imported checks the mesh size)
-        finest = (0.25 * math.pi * p.diameter ** 2 * p.length / MAX_MESH_CELLS) ** (1 / 3)
+        finest = (0.25 * math.pi * p.diameter**2 * p.length / MAX_MESH_CELLS) ** (1 / 3)
         if size < finest:
-            raise ValueError(f"numerics.mesh_size = {size:g}: too fine for this projectile (allowed: numerics.mesh_size"
-                             f" >= {finest:.3g} m, at most {MAX_MESH_CELLS:g} cells of mesh_size^3 in"
-                             " pi/4 diameter^2 length)")
+            raise ValueError(
+                f"numerics.mesh_size = {size:g}: too fine for this projectile (allowed: numerics.mesh_size"
+                f" >= {finest:.3g} m, at most {MAX_MESH_CELLS:g} cells of mesh_size^3 in"
+                " pi/4 diameter^2 length)"
+            )
         if size > p.diameter:  # describes nothing of the cross-section; gmsh fails on such meshes (HXT, Newton)
-            raise ValueError(f"numerics.mesh_size = {size:g}: coarser than the projectile (allowed: numerics.mesh_size"
-                             f" <= projectile.diameter = {p.diameter:g} m)")
+            raise ValueError(
+                f"numerics.mesh_size = {size:g}: coarser than the projectile (allowed: numerics.mesh_size"
+                f" <= projectile.diameter = {p.diameter:g} m)"
+            )
         return self
 
     @property
@@ -125,8 +147,12 @@ class Scene(Strict):
         """Whether the compiled kernel computes this scene's load: one law with separation, no free surface,
         no friction (layers and those effects run on the numpy path)."""
         effects = self.effects
-        return (self.target.layers is None and effects.separation and effects.free_surface is None
-                and effects.friction.model == "none")
+        return (
+            self.target.layers is None
+            and effects.separation
+            and effects.free_surface is None
+            and effects.friction.model == "none"
+        )
 
     def with_kernel(self, many_runs: bool) -> Scene:
         """This scene with ``numerics.kernel`` resolved: ``auto`` is ``compiled`` in a process that runs
@@ -140,14 +166,23 @@ class Scene(Strict):
     @model_validator(mode="after")
     def _kernel_covers_scene(self):
         if self.numerics.kernel == "compiled" and not self.compilable:
-            raise ValueError("numerics.kernel = \"compiled\": the compiled load covers one law with separation and"
-                             " no free surface or friction (allowed for this scene: \"numpy\" or \"auto\")")
+            raise ValueError(
+                'numerics.kernel = "compiled": the compiled load covers one law with separation and'
+                ' no free surface or friction (allowed for this scene: "numpy" or "auto")'
+            )
         return self
 
     def loads(self, quadrature: SurfaceQuadrature) -> DAFLLoads:
         """The DAFL load function over ``quadrature`` with exactly the effects the scene asks for."""
         effects = self.effects
         free_surface = effects.free_surface.build() if effects.free_surface is not None else None
-        return DAFLLoads(quadrature, self.target.build(), self.numerics.normal_velocity_guard,
-                         friction=effects.friction.build(), separation=effects.separation, free_surface=free_surface,
-                         **effects.contact, entry_smoothing=self.numerics.entry_smoothing)
+        return DAFLLoads(
+            quadrature,
+            self.target.build(),
+            self.numerics.normal_velocity_guard,
+            friction=effects.friction.build(),
+            separation=effects.separation,
+            free_surface=free_surface,
+            **effects.contact,
+            entry_smoothing=self.numerics.entry_smoothing,
+        )

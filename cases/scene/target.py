@@ -11,8 +11,17 @@ from fem_loads.target import FreeSurface, Friction, LayeredTarget
 
 from .base import Number, Strict, field
 
-__all__ = ["LawSpec", "MaterialLawSpec", "LawChoice", "LayerSpec", "Target", "FrictionSpec", "FreeSurfaceSpec",
-           "Effects", "build_law"]
+__all__ = [
+    "LawSpec",
+    "MaterialLawSpec",
+    "LawChoice",
+    "LayerSpec",
+    "Target",
+    "FrictionSpec",
+    "FreeSurfaceSpec",
+    "Effects",
+    "build_law",
+]
 
 
 class LawSpec(Strict):
@@ -42,13 +51,16 @@ class MaterialLawSpec(Strict):
 def _law_kind(value) -> str:
     if isinstance(value, str):
         return "name"
-    return "material" if isinstance(value, (dict, MaterialLawSpec)) and "model" in (
-        value if isinstance(value, dict) else value.model_fields_set) else "coefficients"
+    return (
+        "material"
+        if isinstance(value, (dict, MaterialLawSpec))
+        and "model" in (value if isinstance(value, dict) else value.model_fields_set)
+        else "coefficients"
+    )
 
 
 LawChoice = Annotated[
-    Annotated[str, Tag("name")] | Annotated[LawSpec, Tag("coefficients")]
-    | Annotated[MaterialLawSpec, Tag("material")],
+    Annotated[str, Tag("name")] | Annotated[LawSpec, Tag("coefficients")] | Annotated[MaterialLawSpec, Tag("material")],
     Discriminator(_law_kind),
 ]
 LAW_TAGS = {"coefficients": LawSpec, "material": MaterialLawSpec}  # the table tags of LawChoice
@@ -61,8 +73,10 @@ def build_law(law: str | LawSpec | MaterialLawSpec) -> ResistanceLaw:
 
 def _check_law_name(value):
     if isinstance(value, str) and value not in NAMED_LAWS:
-        raise ValueError(f"unknown law {value!r}: must be one of {', '.join(sorted(NAMED_LAWS))}"
-                         " or a table with A, sigma_0, B and rho_0")
+        raise ValueError(
+            f"unknown law {value!r}: must be one of {', '.join(sorted(NAMED_LAWS))}"
+            " or a table with A, sigma_0, B and rho_0"
+        )
     return value
 
 
@@ -101,8 +115,9 @@ class Target(Strict):
         """The law of a homogeneous target, or the layers."""
         if self.layers is None:
             return build_law(self.law)
-        return LayeredTarget(tuple(layer.thickness for layer in self.layers[:-1]),
-                             tuple(build_law(layer.law) for layer in self.layers))
+        return LayeredTarget(
+            tuple(layer.thickness for layer in self.layers[:-1]), tuple(build_law(layer.law) for layer in self.layers)
+        )
 
 
 class FrictionSpec(Strict):
@@ -117,7 +132,7 @@ class FrictionSpec(Strict):
         if self.model == "capped" and self.cap is None:
             raise ValueError("the capped model needs cap (tau_s, Pa)")
         if self.model != "capped" and self.cap is not None:
-            raise ValueError("cap applies to the capped model only: drop cap or give model = \"capped\"")
+            raise ValueError('cap applies to the capped model only: drop cap or give model = "capped"')
         return self
 
     def build(self) -> Friction | None:
@@ -139,14 +154,23 @@ class Effects(Strict):
 
     friction: FrictionSpec = FrictionSpec()
     separation: bool = field(True, description="no stress where Vn <= 0")
-    contact_width: Number = field(0.0, unit="m/s", ge=0.0, le=100.0,
-                                  description="fixed part of the normal velocity over which the stress rises from 0"
-                                              " at Vn = 0 to the full law (docs/model.md); with contact_incidence 0"
-                                              " too: the sharp switch")
-    contact_incidence: Number = field(0.005, ge=0.0, le=0.5,
-                                      description="part of that width proportional to the body's speed"
-                                                  " |V| + |omega| r_max: the sine of the incidence angle over which"
-                                                  " the stress rises")
+    contact_width: Number = field(
+        0.0,
+        unit="m/s",
+        ge=0.0,
+        le=100.0,
+        description="fixed part of the normal velocity over which the stress rises from 0"
+        " at Vn = 0 to the full law (docs/model.md); with contact_incidence 0"
+        " too: the sharp switch",
+    )
+    contact_incidence: Number = field(
+        0.005,
+        ge=0.0,
+        le=0.5,
+        description="part of that width proportional to the body's speed"
+        " |V| + |omega| r_max: the sine of the incidence angle over which"
+        " the stress rises",
+    )
     free_surface: FreeSurfaceSpec | None = None
     gravity: bool = False
     gravity_acceleration: Number = field(9.80665, unit="m/s^2", ge=0.0, le=1e3)

@@ -7,12 +7,31 @@ physics; nothing imports it but the command line.
 
 from .pool import Pool
 from .predict import Prediction, predict
-from .speeds import (CriticalSearch, ConvergentResult, find_critical_velocities, find_critical_velocity, is_unstable,
-                     measure_convergent_velocity)
+from .speeds import (
+    ConvergentResult,
+    CriticalSearch,
+    find_critical_velocities,
+    find_critical_velocity,
+    is_unstable,
+    measure_convergent_velocity,
+)
 from .sweep import Sweep, SweepResult, Variation, grid, parse_grid, read_variations, run_sweep
 
 __all__ = [
-    "Pool", "Sweep", "SweepResult", "Variation", "grid", "parse_grid", "read_variations", "run_sweep",
-    "find_critical_velocity", "find_critical_velocities", "CriticalSearch", "measure_convergent_velocity",
-    "ConvergentResult", "is_unstable", "predict", "Prediction",
+    "Pool",
+    "Sweep",
+    "SweepResult",
+    "Variation",
+    "grid",
+    "parse_grid",
+    "read_variations",
+    "run_sweep",
+    "find_critical_velocity",
+    "find_critical_velocities",
+    "CriticalSearch",
+    "measure_convergent_velocity",
+    "ConvergentResult",
+    "is_unstable",
+    "predict",
+    "Prediction",
 ]

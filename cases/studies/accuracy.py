@@ -45,7 +45,14 @@ from .reference import axial_depth_1d, check_nose_alone_presses
 from .speeds import is_unstable
 from .sweep import Sweep, Variation, run_sweep
 
-__all__ = ["accuracy_study", "time_convergence", "DEFAULT_SIZES", "DEFAULT_STEPS", "DEFAULT_RTOLS", "DEFAULT_QUADRATURE_ORDERS"]
+__all__ = [
+    "accuracy_study",
+    "time_convergence",
+    "DEFAULT_SIZES",
+    "DEFAULT_STEPS",
+    "DEFAULT_RTOLS",
+    "DEFAULT_QUADRATURE_ORDERS",
+]
 
 DEFAULT_SIZES = (0.04, 0.02, 0.01, 0.005)
 DEFAULT_STEPS = (2e-4, 1e-4, 5e-5, 2.5e-5, 1.25e-5, 6.25e-6)
@@ -57,10 +64,18 @@ def is_plain_normal_impact(scene) -> bool:
     """A normal impact with no disturbance, one law and no effect, of a body of revolution whose nose alone
     presses (no flare): the 1-D integration is its exact reference."""
     impact, effects = scene.impact, scene.effects
-    plain = (impact.oblique_angle == 0 and impact.attack_angle == 0 and impact.yaw_angle == 0
-             and not any(impact.angular_velocity) and scene.target.layers is None
-             and effects.friction.model == "none" and effects.separation and effects.free_surface is None
-             and not effects.gravity and scene.projectile.geometry is None)
+    plain = (
+        impact.oblique_angle == 0
+        and impact.attack_angle == 0
+        and impact.yaw_angle == 0
+        and not any(impact.angular_velocity)
+        and scene.target.layers is None
+        and effects.friction.model == "none"
+        and effects.separation
+        and effects.free_surface is None
+        and not effects.gravity
+        and scene.projectile.geometry is None
+    )
     if plain and scene.projectile.body is not None:
         try:
             check_nose_alone_presses(scene.projectile.profile())
@@ -69,8 +84,12 @@ def is_plain_normal_impact(scene) -> bool:
     return plain
 
 
-def _settings(sizes: Sequence[float], steps: Sequence[float], rtols: Sequence[float],
-              quadrature_orders: Sequence[int] = DEFAULT_QUADRATURE_ORDERS) -> list[dict]:
+def _settings(
+    sizes: Sequence[float],
+    steps: Sequence[float],
+    rtols: Sequence[float],
+    quadrature_orders: Sequence[int] = DEFAULT_QUADRATURE_ORDERS,
+) -> list[dict]:
     """The grid: four axes through the finest setting, each refining one thing, plus the product.
 
     ``mesh``: size x geometry order x normal model at the finest step; ``quadrature``:
@@ -86,19 +105,42 @@ def _settings(sizes: Sequence[float], steps: Sequence[float], rtols: Sequence[fl
     for size in sizes:
         for order in (1, 2):
             for normals in ("mesh", "exact"):
-                candidates.append(("mesh", {"numerics.mesh_size": size, "numerics.geometry_order": order,
-                                            "numerics.normals": normals, "numerics.quadrature_order": 2,
-                                            **rk4, "numerics.time_step": finest_step}))
+                candidates.append(
+                    (
+                        "mesh",
+                        {
+                            "numerics.mesh_size": size,
+                            "numerics.geometry_order": order,
+                            "numerics.normals": normals,
+                            "numerics.quadrature_order": 2,
+                            **rk4,
+                            "numerics.time_step": finest_step,
+                        },
+                    )
+                )
     for size in sizes:
         for quadrature in quadrature_orders:
-            candidates.append(("quadrature", {"numerics.mesh_size": size, **default,
-                                              "numerics.quadrature_order": quadrature,
-                                              **rk4, "numerics.time_step": finest_step}))
+            candidates.append(
+                (
+                    "quadrature",
+                    {
+                        "numerics.mesh_size": size,
+                        **default,
+                        "numerics.quadrature_order": quadrature,
+                        **rk4,
+                        "numerics.time_step": finest_step,
+                    },
+                )
+            )
     for step in steps:
         candidates.append(("time", {"numerics.mesh_size": finest_size, **default, **rk4, "numerics.time_step": step}))
     for rtol in rtols:
-        candidates.append(("time", {"numerics.mesh_size": finest_size, **default, "numerics.integrator": "dopri54",
-                                    "numerics.rtol": rtol}))
+        candidates.append(
+            (
+                "time",
+                {"numerics.mesh_size": finest_size, **default, "numerics.integrator": "dopri54", "numerics.rtol": rtol},
+            )
+        )
     for size in sizes:
         for step in steps:
             candidates.append(("combined", {"numerics.mesh_size": size, **default, **rk4, "numerics.time_step": step}))
@@ -111,10 +153,17 @@ def _settings(sizes: Sequence[float], steps: Sequence[float], rtols: Sequence[fl
     return settings
 
 
-def accuracy_study(scene: str | os.PathLike, overrides: Overrides | None, store: RunStore, out: str | os.PathLike,
-                   sizes: Sequence[float] = DEFAULT_SIZES, steps: Sequence[float] = DEFAULT_STEPS,
-                   rtols: Sequence[float] = DEFAULT_RTOLS, pool: Pool | None = None,
-                   quadrature_orders: Sequence[int] = DEFAULT_QUADRATURE_ORDERS) -> tuple[pd.DataFrame, dict]:
+def accuracy_study(
+    scene: str | os.PathLike,
+    overrides: Overrides | None,
+    store: RunStore,
+    out: str | os.PathLike,
+    sizes: Sequence[float] = DEFAULT_SIZES,
+    steps: Sequence[float] = DEFAULT_STEPS,
+    rtols: Sequence[float] = DEFAULT_RTOLS,
+    pool: Pool | None = None,
+    quadrature_orders: Sequence[int] = DEFAULT_QUADRATURE_ORDERS,
+) -> tuple[pd.DataFrame, dict]:
     """Run the grid, compare with the reference, write ``accuracy.md``, ``.csv`` and ``.png`` into ``out``."""
     settings = _settings(sizes, steps, rtols, quadrature_orders)
     # the scene's own numerics as they are, to show where they sit against the front
@@ -135,9 +184,14 @@ def accuracy_study(scene: str | os.PathLike, overrides: Overrides | None, store:
         table[column] = table[column].astype(object)
         table.loc[own, column] = getattr(sweep.scenes[-1].numerics, name)
     # the time axis: RK4 on the finest mesh with the default geometry, on whichever axis each run is
-    on_time_axis = ((table["axis"] != "scene") & (table["numerics.integrator"] == "rk4")
-                    & (table["numerics.mesh_size"] == min(sizes)) & (table["numerics.geometry_order"] == 2)
-                    & (table["numerics.normals"] == "exact") & (table["numerics.quadrature_order"] == 2))
+    on_time_axis = (
+        (table["axis"] != "scene")
+        & (table["numerics.integrator"] == "rk4")
+        & (table["numerics.mesh_size"] == min(sizes))
+        & (table["numerics.geometry_order"] == 2)
+        & (table["numerics.normals"] == "exact")
+        & (table["numerics.quadrature_order"] == 2)
+    )
     finest = table[on_time_axis].drop_duplicates("key").sort_values("numerics.time_step")
     # the scene counts as unstable when its most accurate run is
     unstable = is_unstable(float(finest["axis_angle_change"].iloc[0]))
@@ -165,18 +219,25 @@ def time_convergence(table: pd.DataFrame) -> pd.DataFrame:
     error of that mesh's finest step against the study's reference, the floor below which a
     shorter step buys nothing.
     """
-    default = ((table["axis"] != "scene") & (table["numerics.integrator"] == "rk4")
-               & (table["numerics.geometry_order"] == 2) & (table["numerics.normals"] == "exact")
-               & (table["numerics.quadrature_order"] == 2))
+    default = (
+        (table["axis"] != "scene")
+        & (table["numerics.integrator"] == "rk4")
+        & (table["numerics.geometry_order"] == 2)
+        & (table["numerics.normals"] == "exact")
+        & (table["numerics.quadrature_order"] == 2)
+    )
     runs = table[default].drop_duplicates("key")
     rows = []
-    for size, group in runs.groupby("numerics.mesh_size", sort=False):
+    for _size, group in runs.groupby("numerics.mesh_size", sort=False):
         group = group.sort_values("numerics.time_step", ascending=False)
         if len(group) < 2:
             continue
         finest = group.iloc[-1]
-        for name, column in (("depth", "depth"), ("axis_angle", "axis_angle_change"),
-                             ("convergence_speed", "convergence_speed")):
+        for name, column in (
+            ("depth", "depth"),
+            ("axis_angle", "axis_angle_change"),
+            ("convergence_speed", "convergence_speed"),
+        ):
             error = (group[column] - finest[column]).abs().to_numpy(dtype=float, copy=True)
             if name == "depth":
                 error = error / finest["depth"]
@@ -187,13 +248,26 @@ def time_convergence(table: pd.DataFrame) -> pd.DataFrame:
             group = group.assign(**{f"{name}_order": np.concatenate([[np.nan], order])})
         group = group.assign(mesh_error=finest["depth_error"])
         rows.append(group.iloc[:-1])
-    columns = ["numerics.mesh_size", "numerics.time_step", "steps", "depth_time_error", "depth_order",
-               "axis_angle_time_error", "axis_angle_order", "convergence_speed_time_error",
-               "convergence_speed_order", "mesh_error", "integration_time"]
+    columns = [
+        "numerics.mesh_size",
+        "numerics.time_step",
+        "steps",
+        "depth_time_error",
+        "depth_order",
+        "axis_angle_time_error",
+        "axis_angle_order",
+        "convergence_speed_time_error",
+        "convergence_speed_order",
+        "mesh_error",
+        "integration_time",
+    ]
     if not rows:
         return pd.DataFrame(columns=columns)
-    return pd.concat(rows)[columns].sort_values(["numerics.mesh_size", "numerics.time_step"],
-                                                 ascending=[False, False]).reset_index(drop=True)
+    return (
+        pd.concat(rows)[columns]
+        .sort_values(["numerics.mesh_size", "numerics.time_step"], ascending=[False, False])
+        .reset_index(drop=True)
+    )
 
 
 def _reference(sweep: Sweep, finest: pd.DataFrame) -> dict:
@@ -201,14 +275,28 @@ def _reference(sweep: Sweep, finest: pd.DataFrame) -> dict:
     base = sweep.scenes[0]
     if is_plain_normal_impact(base):
         prepared = prepare_projectile(base)
-        depth, _ = axial_depth_1d(prepared.profile, base.target.build(), prepared.mass.mass, base.impact.speed,
-                                  base.numerics.stop_speed, **base.effects.contact)
-        return {"kind": "1-D integration with exact nose entry and the same contact width (exact)", "depth": depth,
-                "axis_angle_change": 0.0, "convergence_speed": np.nan, "depth_uncertainty": 0.0}
+        depth, _ = axial_depth_1d(
+            prepared.profile,
+            base.target.build(),
+            prepared.mass.mass,
+            base.impact.speed,
+            base.numerics.stop_speed,
+            **base.effects.contact,
+        )
+        return {
+            "kind": "1-D integration with exact nose entry and the same contact width (exact)",
+            "depth": depth,
+            "axis_angle_change": 0.0,
+            "convergence_speed": np.nan,
+            "depth_uncertainty": 0.0,
+        }
     q = finest["depth"].to_numpy()
-    reference = {"kind": "finest setting", "depth": float(q[0]),
-                 "axis_angle_change": float(finest["axis_angle_change"].iloc[0]),
-                 "convergence_speed": float(finest["convergence_speed"].iloc[0])}
+    reference = {
+        "kind": "finest setting",
+        "depth": float(q[0]),
+        "axis_angle_change": float(finest["axis_angle_change"].iloc[0]),
+        "convergence_speed": float(finest["convergence_speed"].iloc[0]),
+    }
     if len(q) >= 3 and q[1] != q[2]:
         ratio = (q[2] - q[1]) / (q[1] - q[0]) if q[1] != q[0] else math.inf
         order = math.log2(abs(ratio)) if ratio not in (0, math.inf) and abs(ratio) > 1 else 1.0
@@ -225,15 +313,17 @@ def _pareto(error: np.ndarray, cost: np.ndarray) -> np.ndarray:
     for i in range(len(error)):
         if not np.isfinite(error[i]):
             continue
-        dominated = ((error <= error[i]) & (cost <= cost[i]) & ((error < error[i]) | (cost < cost[i])))
+        dominated = (error <= error[i]) & (cost <= cost[i]) & ((error < error[i]) | (cost < cost[i]))
         front[i] = not dominated.any()
     return front
 
 
 def _label(row: pd.Series) -> str:
     quadrature = int(row["numerics.quadrature_order"])
-    geometry = (f"{row['numerics.mesh_size'] * 1e3:g} mm P{int(row['numerics.geometry_order'])} {row['numerics.normals']}"
-                + (f" q{quadrature}" if quadrature != 2 else ""))
+    geometry = (
+        f"{row['numerics.mesh_size'] * 1e3:g} mm P{int(row['numerics.geometry_order'])} {row['numerics.normals']}"
+        + (f" q{quadrature}" if quadrature != 2 else "")
+    )
     if row["numerics.integrator"] == "dopri54":
         return f"{geometry}, dopri rtol {row['numerics.rtol']:g}"
     return f"{geometry}, rk4 {row['numerics.time_step']:g} s"
@@ -256,17 +346,27 @@ def _write(table: pd.DataFrame, reference: dict, scene, out: Path) -> None:
 
 
 def _markdown(table: pd.DataFrame, reference: dict, scene) -> str:
-    lines = [f"# Accuracy against time: {scene.name or 'scene'}", "",
-             f"Reference: {reference['kind']}, depth {reference['depth']:.6f} m"
-             + (f" (Richardson estimate of its own error {reference['depth_uncertainty']:.2g} m)"
-                if reference.get("depth_uncertainty") else "") + ".", "",
-             "| axis | setting | surface points | steps | depth (m) | depth error | axis angle error (deg) |"
-             " convergence speed error (m/s) | integration (s) | wall (s) | Pareto |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines = [
+        f"# Accuracy against time: {scene.name or 'scene'}",
+        "",
+        f"Reference: {reference['kind']}, depth {reference['depth']:.6f} m"
+        + (
+            f" (Richardson estimate of its own error {reference['depth_uncertainty']:.2g} m)"
+            if reference.get("depth_uncertainty")
+            else ""
+        )
+        + ".",
+        "",
+        "| axis | setting | surface points | steps | depth (m) | depth error | axis angle error (deg) |"
+        " convergence speed error (m/s) | integration (s) | wall (s) | Pareto |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
     for _, row in table.iterrows():
-        lines.append(f"| {row['axis']} | {_label(row)} | {row['surface_points']} | {row['steps']} | {row['depth']:.6f} |"
-                     f" {row['depth_error']:.2e} | {row['axis_angle_error']:.2e} | {row['convergence_speed_error']:.2g} |"
-                     f" {row['integration_time']:.2f} | {row['wall_time']:.2f} | {'yes' if row['pareto'] else ''} |")
+        lines.append(
+            f"| {row['axis']} | {_label(row)} | {row['surface_points']} | {row['steps']} | {row['depth']:.6f} |"
+            f" {row['depth_error']:.2e} | {row['axis_angle_error']:.2e} | {row['convergence_speed_error']:.2g} |"
+            f" {row['integration_time']:.2f} | {row['wall_time']:.2f} | {'yes' if row['pareto'] else ''} |"
+        )
     lines += ["", "![depth error against integration time](accuracy.png)", ""]
     lines += _time_convergence_markdown(time_convergence(table))
     return "\n".join(lines)
@@ -275,23 +375,29 @@ def _markdown(table: pd.DataFrame, reference: dict, scene) -> str:
 def _time_convergence_markdown(convergence: pd.DataFrame) -> list[str]:
     if convergence.empty:
         return []
-    lines = ["## Time convergence on each mesh", "",
-             "RK4 with the default geometry: each step against the finest step on the same mesh (the time"
-             " error alone), the observed order of each halving, and the mesh's own depth error (its finest"
-             " step against the reference), below which a shorter step buys nothing.", "",
-             "| mesh | step (s) | steps | depth time error | order | axis angle time error (deg) | order |"
-             " convergence speed time error (m/s) | order | mesh error (depth) | integration (s) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines = [
+        "## Time convergence on each mesh",
+        "",
+        "RK4 with the default geometry: each step against the finest step on the same mesh (the time"
+        " error alone), the observed order of each halving, and the mesh's own depth error (its finest"
+        " step against the reference), below which a shorter step buys nothing.",
+        "",
+        "| mesh | step (s) | steps | depth time error | order | axis angle time error (deg) | order |"
+        " convergence speed time error (m/s) | order | mesh error (depth) | integration (s) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
 
     def order(value: float) -> str:
         return "" if not np.isfinite(value) else f"{value:.1f}"
 
     for _, row in convergence.iterrows():
         mesh_error = "reference" if not np.isfinite(row["mesh_error"]) else f"{row['mesh_error']:.2e}"
-        lines.append(f"| {row['numerics.mesh_size'] * 1e3:g} mm | {row['numerics.time_step']:g} | {int(row['steps'])} |"
-                     f" {row['depth_time_error']:.2e} | {order(row['depth_order'])} |"
-                     f" {row['axis_angle_time_error']:.2e} | {order(row['axis_angle_order'])} |"
-                     f" {row['convergence_speed_time_error']:.2g} | {order(row['convergence_speed_order'])} |"
-                     f" {mesh_error} | {row['integration_time']:.2f} |")
+        lines.append(
+            f"| {row['numerics.mesh_size'] * 1e3:g} mm | {row['numerics.time_step']:g} | {int(row['steps'])} |"
+            f" {row['depth_time_error']:.2e} | {order(row['depth_order'])} |"
+            f" {row['axis_angle_time_error']:.2e} | {order(row['axis_angle_order'])} |"
+            f" {row['convergence_speed_time_error']:.2g} | {order(row['convergence_speed_order'])} |"
+            f" {mesh_error} | {row['integration_time']:.2f} |"
+        )
     lines.append("")
     return lines

@@ -21,8 +21,14 @@ COLUMNS = ("end_reason", "depth", "path_length", "final_time", "max_attack_angle
 UNITS = "Units: Pa, kg/m^3, m, m, s, deg, deg."
 
 
-def compare_laws(scene: str | os.PathLike, overrides: Overrides | None, laws: list[str], store: RunStore,
-                 out: str | os.PathLike, pool: Pool | None = None) -> pd.DataFrame:
+def compare_laws(
+    scene: str | os.PathLike,
+    overrides: Overrides | None,
+    laws: list[str],
+    store: RunStore,
+    out: str | os.PathLike,
+    pool: Pool | None = None,
+) -> pd.DataFrame:
     """Run ``scene`` once per named law; write ``compare.csv``, ``compare.md`` and ``compare.png`` in ``out``.
 
     Raises
@@ -45,8 +51,7 @@ def compare_laws(scene: str | os.PathLike, overrides: Overrides | None, laws: li
 
 def _markdown(table: pd.DataFrame, name: str, count: int) -> str:
     shown = ["target.law", "A_sigma_0", "B_rho_0", *[c for c in COLUMNS if c in table]]
-    lines = [f"# {name} under {count} resistance laws", "",
-             "| " + " | ".join(shown) + " |", "|" + "---|" * len(shown)]
+    lines = [f"# {name} under {count} resistance laws", "", "| " + " | ".join(shown) + " |", "|" + "---|" * len(shown)]
     for _, row in table.iterrows():
         cells = [f"{row[c]:.4g}" if isinstance(row[c], float) else str(row[c]) for c in shown]
         lines.append("| " + " | ".join(cells) + " |")

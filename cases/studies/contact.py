@@ -37,8 +37,14 @@ from .reference import axial_depth_1d
 from .speeds import is_unstable
 from .sweep import Sweep, Variation, run_sweep
 
-__all__ = ["contact_study", "entry_study", "DEFAULT_INCIDENCES", "DEFAULT_STEP", "DEFAULT_SMOOTHINGS",
-           "DEFAULT_ENTRY_STEPS"]
+__all__ = [
+    "contact_study",
+    "entry_study",
+    "DEFAULT_INCIDENCES",
+    "DEFAULT_STEP",
+    "DEFAULT_SMOOTHINGS",
+    "DEFAULT_ENTRY_STEPS",
+]
 
 DEFAULT_INCIDENCES = (0.02, 0.01, 0.005, 0.0025, 0.00125)
 DEFAULT_STEP = 2.5e-6
@@ -46,14 +52,29 @@ DEFAULT_SMOOTHINGS = (1.0, 2.0, 4.0, 8.0)
 DEFAULT_ENTRY_STEPS = (1e-4, 5e-5, 2.5e-5, 1.25e-5, 6.25e-6, 3.125e-6)
 
 
-def contact_study(scene: str | os.PathLike, overrides: Overrides | None, store: RunStore, out: str | os.PathLike,
-                  incidences: Sequence[float] = DEFAULT_INCIDENCES, step: float = DEFAULT_STEP,
-                  pool: Pool | None = None) -> pd.DataFrame:
+def contact_study(
+    scene: str | os.PathLike,
+    overrides: Overrides | None,
+    store: RunStore,
+    out: str | os.PathLike,
+    incidences: Sequence[float] = DEFAULT_INCIDENCES,
+    step: float = DEFAULT_STEP,
+    pool: Pool | None = None,
+) -> pd.DataFrame:
     """Run ``scene`` at each contact incidence (no fixed width) and the sharp law; write ``contact.md``
     and ``contact.csv``."""
     values = [*sorted(set(incidences), reverse=True), 0.0]
-    variations = [Variation({"effects.contact_width": 0.0, "effects.contact_incidence": d,
-                             "numerics.integrator": "rk4", "numerics.time_step": step}) for d in values]
+    variations = [
+        Variation(
+            {
+                "effects.contact_width": 0.0,
+                "effects.contact_incidence": d,
+                "numerics.integrator": "rk4",
+                "numerics.time_step": step,
+            }
+        )
+        for d in values
+    ]
     sweep = Sweep.from_file(scene, overrides, variations)
     result = run_sweep(sweep, store, pool)
     rows = []
@@ -61,11 +82,20 @@ def contact_study(scene: str | os.PathLike, overrides: Overrides | None, store: 
         if run.failed:
             raise RuntimeError(f"the run at contact incidence {w:g} failed: {run.error}")
         s = run.summary
-        rows.append({"contact_incidence": w, "depth": s.depth, "path_length": s.path_length,
-                     "axis_angle_change": s.axis_angle_change, "end_reason": s.end_reason, "steps": s.steps,
-                     "integration_time": s.integration_time,
-                     "convergence_speed": convergence_speed(result.history(i)) if is_unstable(s.axis_angle_change)
-                     else math.nan})
+        rows.append(
+            {
+                "contact_incidence": w,
+                "depth": s.depth,
+                "path_length": s.path_length,
+                "axis_angle_change": s.axis_angle_change,
+                "end_reason": s.end_reason,
+                "steps": s.steps,
+                "integration_time": s.integration_time,
+                "convergence_speed": convergence_speed(result.history(i))
+                if is_unstable(s.axis_angle_change)
+                else math.nan,
+            }
+        )
     table = pd.DataFrame(rows)
     sharp = table.iloc[-1]
     for name in ("depth", "path_length", "axis_angle_change", "convergence_speed"):
@@ -73,9 +103,17 @@ def contact_study(scene: str | os.PathLike, overrides: Overrides | None, store: 
     base = sweep.scenes[0]
     if is_plain_normal_impact(base):
         prepared = prepare_projectile(base)
-        table["depth_1d"] = [axial_depth_1d(prepared.profile, base.target.build(), prepared.mass.mass,
-                                            base.impact.speed, base.numerics.stop_speed, contact_incidence=w)[0]
-                             for w in values]
+        table["depth_1d"] = [
+            axial_depth_1d(
+                prepared.profile,
+                base.target.build(),
+                prepared.mass.mass,
+                base.impact.speed,
+                base.numerics.stop_speed,
+                contact_incidence=w,
+            )[0]
+            for w in values
+        ]
     out = Path(out)
     atomic_write_text(out / "contact.csv", table.to_csv(index=False))
     atomic_write_text(out / "contact.md", _markdown(table, base.name or Path(scene).stem, step))
@@ -84,27 +122,44 @@ def contact_study(scene: str | os.PathLike, overrides: Overrides | None, store: 
 
 def _markdown(table: pd.DataFrame, name: str, step: float) -> str:
     reference = "depth_1d" in table
-    lines = [f"# Contact incidence: {name}", "",
-             f"RK4 at {step:g} s on the scene's mesh, no fixed contact width; the last row is the sharp law"
-             " (`contact_incidence = 0`). Changes are from the sharp run (m, deg, m/s);"
-             " changes below round-off (1e-12 of the value) are 0.", "",
-             "| contact incidence | depth (m) | change | path (m) | change | axis turn (deg) | change |"
-             " convergence speed (m/s) | change |" + (" 1-D depth, same width (m) |" if reference else ""),
-             "|---|---|---|---|---|---|---|---|---|" + ("---|" if reference else "")]
+    lines = [
+        f"# Contact incidence: {name}",
+        "",
+        f"RK4 at {step:g} s on the scene's mesh, no fixed contact width; the last row is the sharp law"
+        " (`contact_incidence = 0`). Changes are from the sharp run (m, deg, m/s);"
+        " changes below round-off (1e-12 of the value) are 0.",
+        "",
+        "| contact incidence | depth (m) | change | path (m) | change | axis turn (deg) | change |"
+        " convergence speed (m/s) | change |" + (" 1-D depth, same width (m) |" if reference else ""),
+        "|---|---|---|---|---|---|---|---|---|" + ("---|" if reference else ""),
+    ]
     for _, row in table.iterrows():
-        cells = [f"{row['contact_incidence']:g}", f"{row['depth']:.6f}", _change(row, "depth"),
-                 f"{row['path_length']:.6f}", _change(row, "path_length"), f"{row['axis_angle_change']:.4f}",
-                 _change(row, "axis_angle_change"), _number(row["convergence_speed"], ".2f"),
-                 _change(row, "convergence_speed")]
+        cells = [
+            f"{row['contact_incidence']:g}",
+            f"{row['depth']:.6f}",
+            _change(row, "depth"),
+            f"{row['path_length']:.6f}",
+            _change(row, "path_length"),
+            f"{row['axis_angle_change']:.4f}",
+            _change(row, "axis_angle_change"),
+            _number(row["convergence_speed"], ".2f"),
+            _change(row, "convergence_speed"),
+        ]
         if reference:
             cells.append(f"{row['depth_1d']:.6f}")
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
 
-def entry_study(scene: str | os.PathLike, overrides: Overrides | None, store: RunStore, out: str | os.PathLike,
-                smoothings: Sequence[float] = DEFAULT_SMOOTHINGS, steps: Sequence[float] = DEFAULT_ENTRY_STEPS,
-                pool: Pool | None = None) -> pd.DataFrame:
+def entry_study(
+    scene: str | os.PathLike,
+    overrides: Overrides | None,
+    store: RunStore,
+    out: str | os.PathLike,
+    smoothings: Sequence[float] = DEFAULT_SMOOTHINGS,
+    steps: Sequence[float] = DEFAULT_ENTRY_STEPS,
+    pool: Pool | None = None,
+) -> pd.DataFrame:
     """Run ``scene`` at each entry smoothing and RK4 step; write ``entry.md`` and ``entry.csv``.
 
     One row per (smoothing, step): the depth, path length, axis turn and (unstable runs) convergence
@@ -113,8 +168,10 @@ def entry_study(scene: str | os.PathLike, overrides: Overrides | None, store: Ru
     """
     smoothings, steps = sorted(set(smoothings)), sorted(set(steps), reverse=True)
     values = [(e, h) for e in smoothings for h in steps]
-    variations = [Variation({"numerics.entry_smoothing": e, "numerics.integrator": "rk4", "numerics.time_step": h})
-                  for e, h in values]
+    variations = [
+        Variation({"numerics.entry_smoothing": e, "numerics.integrator": "rk4", "numerics.time_step": h})
+        for e, h in values
+    ]
     sweep = Sweep.from_file(scene, overrides, variations)
     result = run_sweep(sweep, store, pool)
     rows = []
@@ -122,15 +179,29 @@ def entry_study(scene: str | os.PathLike, overrides: Overrides | None, store: Ru
         if run.failed:
             raise RuntimeError(f"the run at entry smoothing {e:g}, step {h:g} s failed: {run.error}")
         s = run.summary
-        rows.append({"entry_smoothing": e, "time_step": h, "depth": s.depth, "path_length": s.path_length,
-                     "axis_angle_change": s.axis_angle_change, "steps": s.steps,
-                     "energy_rejections": s.energy_rejections, "integration_time": s.integration_time,
-                     "convergence_speed": convergence_speed(result.history(i)) if is_unstable(s.axis_angle_change)
-                     else math.nan})
+        rows.append(
+            {
+                "entry_smoothing": e,
+                "time_step": h,
+                "depth": s.depth,
+                "path_length": s.path_length,
+                "axis_angle_change": s.axis_angle_change,
+                "steps": s.steps,
+                "energy_rejections": s.energy_rejections,
+                "integration_time": s.integration_time,
+                "convergence_speed": convergence_speed(result.history(i))
+                if is_unstable(s.axis_angle_change)
+                else math.nan,
+            }
+        )
     table = pd.DataFrame(rows)
     finest = table[table["time_step"] == steps[-1]].set_index("entry_smoothing")
-    for name, relative in (("depth", True), ("path_length", True), ("axis_angle_change", False),
-                           ("convergence_speed", False)):
+    for name, relative in (
+        ("depth", True),
+        ("path_length", True),
+        ("axis_angle_change", False),
+        ("convergence_speed", False),
+    ):
         at_finest = table["entry_smoothing"].map(finest[name])
         error = (table[name] - at_finest).abs()
         table[f"{name}_time_error"] = error / at_finest if relative else error
@@ -145,24 +216,38 @@ def _entry_markdown(table: pd.DataFrame, name: str) -> str:
     steps = sorted(table["time_step"].unique(), reverse=True)
     finest = table[table["time_step"] == steps[-1]]
     smallest = finest["entry_smoothing"].iloc[0]
-    lines = [f"# Entry smoothing: {name}", "",
-             f"RK4 on the scene's mesh. At the finest step ({steps[-1]:g} s), each smoothing's result and its"
-             f" change from smoothing {smallest:g} (m, deg, m/s):", "",
-             "| entry smoothing | depth (m) | change | path (m) | change | axis turn (deg) | change |"
-             " convergence speed (m/s) | change |", "|---|---|---|---|---|---|---|---|---|"]
+    lines = [
+        f"# Entry smoothing: {name}",
+        "",
+        f"RK4 on the scene's mesh. At the finest step ({steps[-1]:g} s), each smoothing's result and its"
+        f" change from smoothing {smallest:g} (m, deg, m/s):",
+        "",
+        "| entry smoothing | depth (m) | change | path (m) | change | axis turn (deg) | change |"
+        " convergence speed (m/s) | change |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
     for _, row in finest.iterrows():
-        lines.append(f"| {row['entry_smoothing']:g} | {row['depth']:.6f} | {_change(row, 'depth')} |"
-                     f" {row['path_length']:.6f} | {_change(row, 'path_length')} |"
-                     f" {row['axis_angle_change']:.4f} | {_change(row, 'axis_angle_change')} |"
-                     f" {_number(row['convergence_speed'], '.2f')} | {_change(row, 'convergence_speed')} |")
-    lines += ["", "Time error of each step against the finest step at the same smoothing: relative depth error /"
-              " axis-turn error (deg); `*`: the energy guard retook steps.", "",
-              "| entry smoothing | " + " | ".join(f"{h:g} s" for h in steps[:-1]) + " |",
-              "|---|" + "---|" * (len(steps) - 1)]
+        lines.append(
+            f"| {row['entry_smoothing']:g} | {row['depth']:.6f} | {_change(row, 'depth')} |"
+            f" {row['path_length']:.6f} | {_change(row, 'path_length')} |"
+            f" {row['axis_angle_change']:.4f} | {_change(row, 'axis_angle_change')} |"
+            f" {_number(row['convergence_speed'], '.2f')} | {_change(row, 'convergence_speed')} |"
+        )
+    lines += [
+        "",
+        "Time error of each step against the finest step at the same smoothing: relative depth error /"
+        " axis-turn error (deg); `*`: the energy guard retook steps.",
+        "",
+        "| entry smoothing | " + " | ".join(f"{h:g} s" for h in steps[:-1]) + " |",
+        "|---|" + "---|" * (len(steps) - 1),
+    ]
     for e, group in table.groupby("entry_smoothing"):
         group = group.set_index("time_step")
-        cells = [f"{group.loc[h, 'depth_time_error']:.1e} / {group.loc[h, 'axis_angle_change_time_error']:.1e}"
-                 + ("*" if group.loc[h, "energy_rejections"] else "") for h in steps[:-1]]
+        cells = [
+            f"{group.loc[h, 'depth_time_error']:.1e} / {group.loc[h, 'axis_angle_change_time_error']:.1e}"
+            + ("*" if group.loc[h, "energy_rejections"] else "")
+            for h in steps[:-1]
+        ]
         lines.append(f"| {e:g} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 

@@ -31,8 +31,24 @@ from ..scene import InputError, Scene, dotted_key
 from .speeds import is_unstable
 from .sweep import MAX_GRID_VALUES, SweepResult, Variation
 
-__all__ = ["Distribution", "parse_sample", "parse_bins", "unit_points", "draw", "variations", "wilson_interval",
-           "Estimate", "outcomes", "estimate", "curve", "summary_record", "FORMS", "DESIGNS", "OUTCOMES", "CONFIDENCE"]
+__all__ = [
+    "Distribution",
+    "parse_sample",
+    "parse_bins",
+    "unit_points",
+    "draw",
+    "variations",
+    "wilson_interval",
+    "Estimate",
+    "outcomes",
+    "estimate",
+    "curve",
+    "summary_record",
+    "FORMS",
+    "DESIGNS",
+    "OUTCOMES",
+    "CONFIDENCE",
+]
 
 FORMS = {
     "normal": "normal:MEAN:SD",
@@ -46,7 +62,7 @@ DESIGNS = ("random", "sobol", "lhs")
 OUTCOMES = ("unstable", "exited", "stopped", "failed")
 CONFIDENCE = 0.95
 _ALLOWED = "allowed: " + ", ".join(FORMS.values())
-_TINY = 2.0 ** -53  # unit points are kept inside (0, 1), where every ppf is finite
+_TINY = 2.0**-53  # unit points are kept inside (0, 1), where every ppf is finite
 
 
 @dataclass(frozen=True)
@@ -131,8 +147,10 @@ def _base_value(option: str, key: str, base: Scene | None) -> Any:
     for part in key.split("."):
         node = node.get(part) if isinstance(node, dict) else None
     if isinstance(node, bool) or not isinstance(node, (int, float)):
-        raise InputError(f"{option}: {key} is not a numeric key of the scene (allowed: a key whose value is a number,"
-                         " e.g. impact.speed, impact.attack_angle, projectile.mass)")
+        raise InputError(
+            f"{option}: {key} is not a numeric key of the scene (allowed: a key whose value is a number,"
+            " e.g. impact.speed, impact.attack_angle, projectile.mass)"
+        )
     return node
 
 
@@ -184,8 +202,9 @@ def parse_bins(text: str, sampled: Sequence[str]) -> tuple[str, np.ndarray]:
     key, raw = text.split("=", 1) if "=" in text else (text, "")
     key = ".".join(dotted_key(key, option)) if key.strip() else ""
     if key not in sampled:
-        raise InputError(f"{option}: expected KEY=START:STOP:STEP with KEY one of the sampled keys"
-                         f" ({', '.join(sampled) or 'none'})")
+        raise InputError(
+            f"{option}: expected KEY=START:STOP:STEP with KEY one of the sampled keys ({', '.join(sampled) or 'none'})"
+        )
     parts = raw.split(":")
     try:
         start, stop, step = (float(p) for p in parts) if len(parts) == 3 else (math.nan,) * 3
@@ -196,8 +215,9 @@ def parse_bins(text: str, sampled: Sequence[str]) -> tuple[str, np.ndarray]:
     if not (step > 0 and stop > start):
         raise InputError(f"{option}: need STEP > 0 and STOP > START")
     if (stop - start) / step >= MAX_GRID_VALUES:
-        raise InputError(f"{option}: more than {MAX_GRID_VALUES} bins (allowed: (STOP - START) / STEP"
-                         f" < {MAX_GRID_VALUES})")
+        raise InputError(
+            f"{option}: more than {MAX_GRID_VALUES} bins (allowed: (STOP - START) / STEP < {MAX_GRID_VALUES})"
+        )
     count = max(1, int(math.ceil((stop - start) / step - 1e-9)))
     edges = start + step * np.arange(count + 1)
     edges[-1] = stop
@@ -237,6 +257,7 @@ def draw(distributions: Sequence[Distribution], count: int, seed: int = 0, desig
 
 def variations(distributions: Sequence[Distribution], samples: np.ndarray) -> list[Variation]:
     """One typed :class:`~cases.studies.sweep.Variation` per sample (Python floats, or ints for whole-number keys)."""
+
     def typed(d: Distribution, value) -> Any:
         return int(value) if d.name == "choice" and all(isinstance(v, int) for v in d.parameters) else float(value)
 
@@ -293,10 +314,14 @@ def outcomes(result: SweepResult) -> pd.DataFrame:
     rows = []
     for run in result.runs:
         s = run.summary
-        rows.append({"unstable": s is not None and is_unstable(s.axis_angle_change),
-                     "exited": s is not None and s.end_reason == "exited",
-                     "stopped": s is not None and s.end_reason == "stopped",
-                     "failed": s is None})
+        rows.append(
+            {
+                "unstable": s is not None and is_unstable(s.axis_angle_change),
+                "exited": s is not None and s.end_reason == "exited",
+                "stopped": s is not None and s.end_reason == "stopped",
+                "failed": s is None,
+            }
+        )
     return pd.DataFrame(rows, columns=list(OUTCOMES), dtype=bool)
 
 
@@ -307,8 +332,9 @@ def estimate(table: pd.DataFrame) -> dict[str, Estimate]:
     that finished, so that a failed run counts neither for nor against them.
     """
     finished = int((~table["failed"]).sum())
-    return {name: Estimate.of(int(table[name].sum()), len(table) if name == "failed" else finished)
-            for name in OUTCOMES}
+    return {
+        name: Estimate.of(int(table[name].sum()), len(table) if name == "failed" else finished) for name in OUTCOMES
+    }
 
 
 def curve(values: np.ndarray, table: pd.DataFrame, edges: np.ndarray) -> list[dict]:
@@ -324,8 +350,11 @@ def curve(values: np.ndarray, table: pd.DataFrame, edges: np.ndarray) -> list[di
     bins = []
     for b in range(len(edges) - 1):
         estimates = estimate(table[index == b])
-        entry: dict[str, Any] = {"bin": [float(edges[b]), float(edges[b + 1])], "runs": int((index == b).sum()),
-                                 "finished": estimates["unstable"].runs}
+        entry: dict[str, Any] = {
+            "bin": [float(edges[b]), float(edges[b + 1])],
+            "runs": int((index == b).sum()),
+            "finished": estimates["unstable"].runs,
+        }
         entry.update({name: e.probability for name, e in estimates.items()})
         entry["interval"] = {name: list(e.interval) for name, e in estimates.items()}
         bins.append(entry)
@@ -334,5 +363,8 @@ def curve(values: np.ndarray, table: pd.DataFrame, edges: np.ndarray) -> list[di
 
 def summary_record(estimates: Mapping[str, Estimate], runs: int) -> dict:
     """The JSON of :func:`estimate`: ``{"runs": N, "probability": {...}, "interval": {...}}``."""
-    return {"runs": runs, "probability": {name: e.probability for name, e in estimates.items()},
-            "interval": {name: list(e.interval) for name, e in estimates.items()}}
+    return {
+        "runs": runs,
+        "probability": {name: e.probability for name, e in estimates.items()},
+        "interval": {name: list(e.interval) for name, e in estimates.items()},
+    }

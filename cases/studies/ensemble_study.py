@@ -23,8 +23,18 @@ from ..run import CONVERGENCE_THRESHOLD, RunStore, atomic_write_text, convergenc
 from ..run.persistence import json_safe
 from ..scene import InputError, Overrides, one_line
 from ..viz.figures import save_figure, subplots
-from .ensemble import (OUTCOMES, Distribution, curve, draw, estimate, outcomes, parse_bins, parse_sample,
-                       summary_record, variations)
+from .ensemble import (
+    OUTCOMES,
+    Distribution,
+    curve,
+    draw,
+    estimate,
+    outcomes,
+    parse_bins,
+    parse_sample,
+    summary_record,
+    variations,
+)
 from .pool import Pool
 from .sweep import Sweep, SweepResult, run_sweep
 
@@ -53,8 +63,10 @@ def _sweep(base: Sweep, distributions: list[Distribution], values: np.ndarray, s
         return Sweep(base.base, parts, base.source)
     except InputError as exc:
         bad = next(i for i, v in enumerate(parts) if _invalid(base, v))
-        raise InputError(f"sample {bad} of seed {seed} ({', '.join(f'{k} = {v:g}' for k, v in parts[bad].values.items())}"
-                         f"): {one_line(exc)}; keep the samples in range (truncnormal, uniform, choice)") from None
+        raise InputError(
+            f"sample {bad} of seed {seed} ({', '.join(f'{k} = {v:g}' for k, v in parts[bad].values.items())}"
+            f"): {one_line(exc)}; keep the samples in range (truncnormal, uniform, choice)"
+        ) from None
 
 
 def _invalid(base: Sweep, variation) -> bool:
@@ -65,9 +77,19 @@ def _invalid(base: Sweep, variation) -> bool:
     return False
 
 
-def run_ensemble(scene: str | os.PathLike, overrides: Overrides | None, samples: Sequence[str], count: int,
-                 store: RunStore, out: str | os.PathLike, *, seed: int = 0, design: str = "random",
-                 by: str | None = None, pool: Pool | None = None) -> dict:
+def run_ensemble(
+    scene: str | os.PathLike,
+    overrides: Overrides | None,
+    samples: Sequence[str],
+    count: int,
+    store: RunStore,
+    out: str | os.PathLike,
+    *,
+    seed: int = 0,
+    design: str = "random",
+    by: str | None = None,
+    pool: Pool | None = None,
+) -> dict:
     """Run ``count`` samples of ``scene``; write the report in ``out`` and return its JSON record.
 
     Parameters
@@ -103,9 +125,14 @@ def run_ensemble(scene: str | os.PathLike, overrides: Overrides | None, samples:
     result = run_sweep(_sweep(base, distributions, values, seed), store, pool)
     table = _table(result)
     record = summary_record(estimate(table), count)
-    record.update(interval_method=INTERVAL, design=design, seed=seed,
-                  samples={d.key: d.text for d in distributions}, finished=int((~table["failed"]).sum()),
-                  distributions=_quantiles(table))
+    record.update(
+        interval_method=INTERVAL,
+        design=design,
+        seed=seed,
+        samples={d.key: d.text for d in distributions},
+        finished=int((~table["failed"]).sum()),
+        distributions=_quantiles(table),
+    )
     if bins is not None:
         key, edges = bins
         record["by"] = key
@@ -132,9 +159,12 @@ def _table(result: SweepResult) -> pd.DataFrame:
     for i, (name, column) in enumerate(outcomes(result).items()):
         table.insert(columns + i, name, column.to_numpy())
     # a run whose attack angle never reached the threshold had nothing to converge from
-    speeds = [convergence_speed(result.history(i))
-              if run.summary is not None and run.summary.max_attack_angle >= CONVERGENCE_THRESHOLD else None
-              for i, run in enumerate(result.runs)]
+    speeds = [
+        convergence_speed(result.history(i))
+        if run.summary is not None and run.summary.max_attack_angle >= CONVERGENCE_THRESHOLD
+        else None
+        for i, run in enumerate(result.runs)
+    ]
     table["convergence_speed"] = [math.nan if v is None else float(v) for v in speeds]
     return table
 
@@ -149,9 +179,11 @@ def _quantiles(table: pd.DataFrame) -> dict:
     record = {}
     for name in DISTRIBUTED:
         values = table[name].dropna().astype(float).to_numpy() if name in table else np.array([])
-        record[name] = {"runs": int(len(values)), "mean": float(values.mean()) if len(values) else None,
-                        "quantiles": {f"{q:g}": (float(np.quantile(values, q)) if len(values) else None)
-                                      for q in QUANTILES}}
+        record[name] = {
+            "runs": int(len(values)),
+            "mean": float(values.mean()) if len(values) else None,
+            "quantiles": {f"{q:g}": (float(np.quantile(values, q)) if len(values) else None) for q in QUANTILES},
+        }
     return record
 
 
@@ -160,29 +192,48 @@ def _cell(value) -> str:
 
 
 def _markdown(record: dict, table: pd.DataFrame, name: str) -> str:
-    lines = [f"# {name}: an ensemble of {record['runs']} runs", "",
-             f"Design {record['design']}, seed {record['seed']}; {record['finished']} runs finished. Unstable: the axis"
-             " turned by at least 30 degrees (as `penetrate critical` decides). `failed` is counted over every run,"
-             f" the other outcomes over the finished runs; intervals: {INTERVAL}.", "",
-             "| sampled key | distribution | min | mean | max |", "|---|---|---|---|---|"]
+    lines = [
+        f"# {name}: an ensemble of {record['runs']} runs",
+        "",
+        f"Design {record['design']}, seed {record['seed']}; {record['finished']} runs finished. Unstable: the axis"
+        " turned by at least 30 degrees (as `penetrate critical` decides). `failed` is counted over every run,"
+        f" the other outcomes over the finished runs; intervals: {INTERVAL}.",
+        "",
+        "| sampled key | distribution | min | mean | max |",
+        "|---|---|---|---|---|",
+    ]
     for key, text in record["samples"].items():
         column = table[key].astype(float)
         lines.append(f"| {key} | {text} | {column.min():.4g} | {column.mean():.4g} | {column.max():.4g} |")
-    lines += ["", "| quantity | runs | mean | " + " | ".join(f"{q:.0%}" for q in QUANTILES) + " |",
-              "|---|---|---|" + "---|" * len(QUANTILES)]
+    lines += [
+        "",
+        "| quantity | runs | mean | " + " | ".join(f"{q:.0%}" for q in QUANTILES) + " |",
+        "|---|---|---|" + "---|" * len(QUANTILES),
+    ]
     for name, unit in DISTRIBUTED.items():
         d = record["distributions"][name]
-        lines.append(f"| {name} ({unit}) | {d['runs']} | {_cell(d['mean'])} | "
-                     + " | ".join(_cell(v) for v in d["quantiles"].values()) + " |")
-    lines += ["", "(quantiles over the finished runs; the convergence speed over the runs whose attack angle"
-              " peaked and fell below 0.1 degree)"]
+        lines.append(
+            f"| {name} ({unit}) | {d['runs']} | {_cell(d['mean'])} | "
+            + " | ".join(_cell(v) for v in d["quantiles"].values())
+            + " |"
+        )
+    lines += [
+        "",
+        "(quantiles over the finished runs; the convergence speed over the runs whose attack angle"
+        " peaked and fell below 0.1 degree)",
+    ]
     lines += ["", "| outcome | probability | 95 % interval |", "|---|---|---|"]
     for outcome in OUTCOMES:
         low, high = record["interval"][outcome]
         lines.append(f"| {outcome} | {_cell(record['probability'][outcome])} | {_cell(low)} - {_cell(high)} |")
     if "curve" in record:
-        lines += ["", f"By {record['by']}:", "", "| bin | runs | " + " | ".join(OUTCOMES) + " |",
-                  "|---|---|" + "---|" * len(OUTCOMES)]
+        lines += [
+            "",
+            f"By {record['by']}:",
+            "",
+            "| bin | runs | " + " | ".join(OUTCOMES) + " |",
+            "|---|---|" + "---|" * len(OUTCOMES),
+        ]
         for b in record["curve"]:
             cells = [f"{_cell(b[o])} ({_cell(b['interval'][o][0])} - {_cell(b['interval'][o][1])})" for o in OUTCOMES]
             lines.append(f"| {b['bin'][0]:g} - {b['bin'][1]:g} | {b['runs']} | " + " | ".join(cells) + " |")
@@ -196,7 +247,7 @@ def _histograms(table: pd.DataFrame, distributions: list[Distribution], path: Pa
     columns = min(4, len(panels))
     rows = -(-len(panels) // columns)
     fig, axes = subplots(rows, columns, figsize=(4.2 * columns, 3.4 * rows), squeeze=False)
-    for ax in axes.flat[len(panels):]:
+    for ax in axes.flat[len(panels) :]:
         ax.set_visible(False)
     for ax, column in zip(axes.flat, panels):
         values = table[column].dropna().astype(float)
@@ -215,12 +266,15 @@ def _curve_figure(record: dict, path: Path) -> None:
     for outcome in shown:
         p = [b[outcome] for b in record["curve"]]
         low, high = ([b["interval"][outcome][i] for b in record["curve"]] for i in (0, 1))
-        line, = ax.plot(middles, p, marker="o", label=outcome)
+        (line,) = ax.plot(middles, p, marker="o", label=outcome)
         ax.fill_between(middles, low, high, color=line.get_color(), alpha=0.2)
     absent = [o for o in OUTCOMES if o not in shown]
-    ax.set(xlabel=record["by"], ylabel="probability", ylim=(-0.02, 1.02),
-           title=f"outcomes by {record['by']} ({INTERVAL} bands)"
-                 + (f"\nnever: {', '.join(absent)}" if absent else ""))
+    ax.set(
+        xlabel=record["by"],
+        ylabel="probability",
+        ylim=(-0.02, 1.02),
+        title=f"outcomes by {record['by']} ({INTERVAL} bands)" + (f"\nnever: {', '.join(absent)}" if absent else ""),
+    )
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()

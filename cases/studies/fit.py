@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -33,17 +33,41 @@ import numpy as np
 
 from ..run import RunStore, convergence_speed
 from ..scene import InputError, Overrides, apply_overrides, dotted_key, read_scene_data, scene_from_dict
+
+# the report is written by its own module; fit.write_report stays its public name
+from .fit_report import FitResult, write_report
 from .pool import Pool
 from .speeds import find_critical_velocity, measure_convergent_velocity
 from .sweep import Sweep, Variation, run_sweep
 
-__all__ = ["Parameter", "Observation", "FitResult", "NotIdentifiable", "parse_parameter", "parse_observation",
-           "fit", "write_report", "RUN_QUANTITIES", "STUDY_QUANTITIES"]
+__all__ = [
+    "Parameter",
+    "Observation",
+    "FitResult",
+    "NotIdentifiable",
+    "parse_parameter",
+    "parse_observation",
+    "fit",
+    "write_report",
+    "RUN_QUANTITIES",
+    "STUDY_QUANTITIES",
+]
 
 #: quantities of one run (its summary, and the convergence speed of its history)
-RUN_QUANTITIES = ("depth", "path_length", "final_time", "final_speed", "max_attack_angle", "final_attack_angle",
-                  "axis_angle_change", "convergence_speed", "mass", "centre_of_mass_from_tip", "axial_inertia",
-                  "transverse_inertia")
+RUN_QUANTITIES = (
+    "depth",
+    "path_length",
+    "final_time",
+    "final_speed",
+    "max_attack_angle",
+    "final_attack_angle",
+    "axis_angle_change",
+    "convergence_speed",
+    "mass",
+    "centre_of_mass_from_tip",
+    "axial_inertia",
+    "transverse_inertia",
+)
 #: quantities of a study of the scene (penetrate critical, penetrate convergent)
 STUDY_QUANTITIES = ("critical_velocity", "characteristic_convergent_velocity")
 #: forward-difference step, as a fraction of each parameter's range
@@ -89,29 +113,6 @@ class Observation:
     sigma: float | None
 
 
-@dataclass
-class FitResult:
-    """The fitted parameters, their standard errors and correlation, each observation's fit, the runs used."""
-
-    parameters: dict[str, float]
-    standard_errors: dict[str, float | None]
-    correlation: list[list[float]] | None
-    observations: list[dict[str, Any]]
-    runs: int
-    new_runs: int
-    evaluations: int
-    cost: float
-    message: str = ""
-    notes: list[str] = field(default_factory=list)
-
-    def record(self) -> dict:
-        """The JSON record: parameters, standard_errors, observations, runs (and the rest)."""
-        return {"parameters": self.parameters, "standard_errors": self.standard_errors,
-                "correlation": self.correlation, "observations": self.observations, "runs": self.runs,
-                "new_runs": self.new_runs, "evaluations": self.evaluations, "cost": self.cost,
-                "message": self.message, "notes": self.notes}
-
-
 def _number(text: str, what: str) -> float:
     try:
         value = float(text)
@@ -144,9 +145,12 @@ def parse_parameter(text: str, scenes: dict[str, dict]) -> Parameter:
     for name, data in scenes.items():
         value = _scene_value(scene_from_dict(data, name).model_dump(), key)  # the scene's defaults count
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise InputError(f"{what}: {name} holds no number at {key}, and the key must hold one (set one first with --set {key}=VALUE;"
-                             " a law given by name needs its coefficients, e.g. --set 'target.law={A = 1.1,"
-                             " sigma_0 = 15.6e6, B = 1.2, rho_0 = 1900}')")
+            raise InputError(
+                f"{what}: {name} holds no number at {key}, and the key must hold one"
+                f" (set one first with --set {key}=VALUE;"
+                " a law given by name needs its coefficients, e.g. --set 'target.law={A = 1.1,"
+                " sigma_0 = 15.6e6, B = 1.2, rho_0 = 1900}')"
+            )
         if not low <= value <= high:
             raise InputError(f"{what}: {name} has {key} = {value:g}: the start must lie inside {low:g}:{high:g}")
         starts.append(float(value))
@@ -177,8 +181,15 @@ def parse_observation(text: str, default_scene: str) -> Observation:
 class _Model:
     """The observations as a function of the parameters' unit values, through the run store (cached)."""
 
-    def __init__(self, bases: dict[str, dict], parameters: Sequence[Parameter], observations: Sequence[Observation],
-                 store: RunStore, pool: Pool | None, resolution: float) -> None:
+    def __init__(
+        self,
+        bases: dict[str, dict],
+        parameters: Sequence[Parameter],
+        observations: Sequence[Observation],
+        store: RunStore,
+        pool: Pool | None,
+        resolution: float,
+    ) -> None:
         self.bases, self.parameters, self.observations = bases, list(parameters), list(observations)
         self.store, self.pool, self.resolution = store, pool, resolution
         self.cache: dict[tuple[float, ...], np.ndarray] = {}
@@ -205,8 +216,11 @@ class _Model:
     def _evaluate(self, points: list[np.ndarray]) -> None:
         run_observations = [(i, o) for i, o in enumerate(self.observations) if o.quantity in RUN_QUANTITIES]
         scenes = list(dict.fromkeys(o.scene for _, o in run_observations))
-        parts = [(Sweep(self.bases[scene], [Variation({})], scene), Variation(self._values(point)))
-                 for point in points for scene in scenes]
+        parts = [
+            (Sweep(self.bases[scene], [Variation({})], scene), Variation(self._values(point)))
+            for point in points
+            for scene in scenes
+        ]
         results = np.full((len(points), len(self.observations)), np.nan)
         if parts:
             sweep = Sweep.combined(parts)
@@ -219,8 +233,11 @@ class _Model:
                 for i, o in run_observations:
                     if o.scene != scenes[scene]:
                         continue
-                    value = (convergence_speed(result.history(index)) if o.quantity == "convergence_speed"
-                             else getattr(run.summary, o.quantity))
+                    value = (
+                        convergence_speed(result.history(index))
+                        if o.quantity == "convergence_speed"
+                        else getattr(run.summary, o.quantity)
+                    )
                     results[point, i] = np.nan if value is None else value
         for i, o in enumerate(self.observations):
             if o.quantity not in STUDY_QUANTITIES:
@@ -235,16 +252,19 @@ class _Model:
     def _study(self, quantity: str, base: Sweep) -> float:
         if quantity == "critical_velocity":
             speed = base.scenes[0].impact.speed
-            search = find_critical_velocity(base, self.store, (200.0, max(2000.0, 2 * speed)), self.resolution,
-                                            self.pool)
+            search = find_critical_velocity(
+                base, self.store, (200.0, max(2000.0, 2 * speed)), self.resolution, self.pool
+            )
             value = search.critical_velocity
             used = {run.key for run in search.indicator}
         else:
             measured = measure_convergent_velocity(base, self.store, pool=self.pool)
             value = measured.characteristic_convergent_velocity
             start = base.variations[0].values
-            used = {Sweep(base.base, [Variation({**start, "impact.speed": run.speed})], base.source).keys()[0]
-                    for run in measured.runs}
+            used = {
+                Sweep(base.base, [Variation({**start, "impact.speed": run.speed})], base.source).keys()[0]
+                for run in measured.runs
+            }
         self.keys.update(used)
         if value is None:
             raise RuntimeError(f"{quantity} of {base.source} not found at {base.variations[0].values or 'the start'}")
@@ -255,19 +275,24 @@ def _sigmas(observations: Sequence[Observation]) -> np.ndarray:
     return np.array([1.0 if o.sigma is None else o.sigma for o in observations])
 
 
-def _check_identifiable(jacobian: np.ndarray, parameters: Sequence[Parameter], observations: Sequence[Observation],
-                        where: str) -> None:
+def _check_identifiable(
+    jacobian: np.ndarray, parameters: Sequence[Parameter], observations: Sequence[Observation], where: str
+) -> None:
     """Refuse a flat or collinear weighted Jacobian (in unit values) with one line naming the parameters."""
     names = [p.key for p in parameters]
     if len(observations) < len(parameters):
-        raise NotIdentifiable(f"not identifiable: {len(parameters)} parameters ({', '.join(names)}) from "
-                              f"{len(observations)} observation{'s' if len(observations) != 1 else ''}; give at"
-                              " least as many observations as parameters, or fix a parameter with --set")
+        raise NotIdentifiable(
+            f"not identifiable: {len(parameters)} parameters ({', '.join(names)}) from "
+            f"{len(observations)} observation{'s' if len(observations) != 1 else ''}; give at"
+            " least as many observations as parameters, or fix a parameter with --set"
+        )
     norms = np.linalg.norm(jacobian, axis=0)
     for name, norm in zip(names, norms):
         if not norm > FLAT:
-            raise NotIdentifiable(f"not identifiable: no observation changes with {name} {where} (flat Jacobian);"
-                                  " observe a quantity it moves, or fix it with --set")
+            raise NotIdentifiable(
+                f"not identifiable: no observation changes with {name} {where} (flat Jacobian);"
+                " observe a quantity it moves, or fix it with --set"
+            )
     if len(parameters) > 1:
         singular = np.linalg.svd(jacobian / norms, compute_uv=False)
         if singular[-1] < COLLINEAR * singular[0]:
@@ -277,15 +302,27 @@ def _check_identifiable(jacobian: np.ndarray, parameters: Sequence[Parameter], o
                 off = np.abs(correlation - np.eye(len(names)))
                 i, j = np.unravel_index(np.nanargmax(off), off.shape)
                 pair = f" ({names[i]} and {names[j]} move the observations together)"
-            raise NotIdentifiable(f"not identifiable: the observations fix only a combination of "
-                                  f"{', '.join(names)}{pair}, collinear Jacobian {where} (singular values "
-                                  f"{singular[0]:.3g} and {singular[-1]:.3g}); add an observation that tells them"
-                                  " apart, or fix one with --set")
+            raise NotIdentifiable(
+                f"not identifiable: the observations fix only a combination of "
+                f"{', '.join(names)}{pair}, collinear Jacobian {where} (singular values "
+                f"{singular[0]:.3g} and {singular[-1]:.3g}); add an observation that tells them"
+                " apart, or fix one with --set"
+            )
 
 
-def fit(scene: str | os.PathLike, overrides: Overrides | None, parameters: Sequence[str], observations: Sequence[str],
-        store: RunStore, pool: Pool | None = None, *, resolution: float = 5.0, step: float | None = None,
-        max_evaluations: int = 30, progress: Callable[[str], None] | None = None) -> FitResult:
+def fit(
+    scene: str | os.PathLike,
+    overrides: Overrides | None,
+    parameters: Sequence[str],
+    observations: Sequence[str],
+    store: RunStore,
+    pool: Pool | None = None,
+    *,
+    resolution: float = 5.0,
+    step: float | None = None,
+    max_evaluations: int = 30,
+    progress: Callable[[str], None] | None = None,
+) -> FitResult:
     """Fit ``parameters`` (``KEY=LO:HI`` texts) to ``observations`` (``[SCENE:]QUANTITY=VALUE[+-SIGMA]`` texts).
 
     Parameters
@@ -350,9 +387,18 @@ def fit(scene: str | os.PathLike, overrides: Overrides | None, parameters: Seque
 
     start = np.array([(p.start - p.low) / (p.high - p.low) for p in fitted])
     _check_identifiable(jacobian(start), fitted, observed, "at the start")
-    solution = least_squares(residuals, start, jac=jacobian, bounds=(0.0, 1.0), method="trf",
-                             x_scale=1.0, xtol=XTOL, ftol=FTOL, gtol=GTOL,
-                             max_nfev=max_evaluations)
+    solution = least_squares(
+        residuals,
+        start,
+        jac=jacobian,
+        bounds=(0.0, 1.0),
+        method="trf",
+        x_scale=1.0,
+        xtol=XTOL,
+        ftol=FTOL,
+        gtol=GTOL,
+        max_nfev=max_evaluations,
+    )
     final_jacobian = jacobian(solution.x)
     _check_identifiable(final_jacobian, fitted, observed, "at the solution")
     fitted_values = model([solution.x])[0]
@@ -369,8 +415,10 @@ def fit(scene: str | os.PathLike, overrides: Overrides | None, parameters: Seque
         dof = len(observed) - len(fitted)
         if dof > 0:
             covariance = covariance * float(solution.fun @ solution.fun) / dof
-            notes.append("no sigmas given: standard errors scaled by the residual variance"
-                         f" ({dof} degree{'s' if dof != 1 else ''} of freedom)")
+            notes.append(
+                "no sigmas given: standard errors scaled by the residual variance"
+                f" ({dof} degree{'s' if dof != 1 else ''} of freedom)"
+            )
         else:
             covariance = None
             notes.append("no sigmas given and no more observations than parameters: no standard errors")
@@ -383,55 +431,26 @@ def fit(scene: str | os.PathLike, overrides: Overrides | None, parameters: Seque
         se = np.sqrt(np.clip(np.diag(covariance), 0, None))
         errors = {p.key: float(s) for p, s in zip(fitted, se)}
         correlation = (covariance / np.outer(se, se)).round(6).tolist() if np.all(se > 0) else None
-    rows = [{"scene": o.scene, "quantity": o.quantity, "observed": o.value, "sigma": o.sigma,
-             "fitted": float(f), "residual": float(f - o.value)} for o, f in zip(observed, fitted_values)]
-    return FitResult(values, errors, correlation, rows, runs=len(model.keys), new_runs=model.new_runs,
-                     evaluations=len(model.cache), cost=float(solution.cost), message=solution.message, notes=notes)
-
-
-def write_report(result: FitResult, out: Path, scene: str) -> None:
-    """``fit.json``, ``fit.md`` and ``fit.png`` (observed against fitted) in ``out``, each written atomically."""
-    import json
-
-    from ..run import atomic_write_text
-    from ..run.persistence import json_safe
-    from ..viz.figures import save_figure, subplots
-
-    out = Path(out)
-    atomic_write_text(out / "fit.json", json.dumps(json_safe(result.record()), indent=1, allow_nan=False) + "\n")
-    lines = [f"# Fit of {scene}", "", "| parameter | value | standard error |", "|---|---|---|"]
-    for key, value in result.parameters.items():
-        error = result.standard_errors[key]
-        lines.append(f"| `{key}` | {value:.6g} | {'-' if error is None else f'{error:.3g}'} |")
-    if result.correlation is not None and len(result.parameters) > 1:
-        keys = list(result.parameters)
-        lines += ["", "Correlation of the parameters:", "", "| | " + " | ".join(f"`{k}`" for k in keys) + " |",
-                  "|---|" + "---|" * len(keys)]
-        lines += [f"| `{k}` | " + " | ".join(f"{c:+.3f}" for c in row) + " |" for k, row in zip(keys, result.correlation)]
-    lines += ["", "| scene | quantity | observed | sigma | fitted | residual |", "|---|---|---|---|---|---|"]
-    for row in result.observations:
-        sigma = "-" if row["sigma"] is None else f"{row['sigma']:.4g}"
-        lines.append(f"| {row['scene']} | {row['quantity']} | {row['observed']:.6g} | {sigma} | {row['fitted']:.6g} |"
-                     f" {row['residual']:+.4g} |")
-    lines += ["", f"Runs: {result.runs} ({result.new_runs} made by this fit, the rest found in the run store); "
-              f"{result.evaluations} points of the model evaluated; least squares: {result.message}"]
-    if result.notes:
-        lines += ["", *[f"* {note}" for note in result.notes]]
-    lines += ["", "![observed against fitted](fit.png)", ""]
-    atomic_write_text(out / "fit.md", "\n".join(lines))
-    figure, axes = subplots(figsize=(5.5, 4.5))
-    observed = np.array([row["observed"] for row in result.observations])
-    fitted = np.array([row["fitted"] for row in result.observations])
-    sigma = np.array([np.nan if row["sigma"] is None else row["sigma"] for row in result.observations])
-    axes.errorbar(observed, fitted, xerr=np.nan_to_num(sigma), fmt="o", color="tab:blue", capsize=3)
-    low, high = float(min(observed.min(), fitted.min())), float(max(observed.max(), fitted.max()))
-    pad = 0.05 * (high - low or abs(high) or 1.0)
-    axes.plot([low - pad, high + pad], [low - pad, high + pad], color="grey", lw=1, ls="--")
-    for row, x, y in zip(result.observations, observed, fitted):
-        axes.annotate(f"{Path(row['scene']).stem}: {row['quantity']}", (x, y), fontsize=7,
-                      xytext=(4, 4), textcoords="offset points")
-    axes.set_xlabel("observed")
-    axes.set_ylabel("fitted")
-    axes.set_title("observed against fitted (bars: sigma)", fontsize=10)
-    figure.tight_layout()
-    save_figure(figure, out / "fit.png")
+    rows = [
+        {
+            "scene": o.scene,
+            "quantity": o.quantity,
+            "observed": o.value,
+            "sigma": o.sigma,
+            "fitted": float(f),
+            "residual": float(f - o.value),
+        }
+        for o, f in zip(observed, fitted_values)
+    ]
+    return FitResult(
+        values,
+        errors,
+        correlation,
+        rows,
+        runs=len(model.keys),
+        new_runs=model.new_runs,
+        evaluations=len(model.cache),
+        cost=float(solution.cost),
+        message=solution.message,
+        notes=notes,
+    )

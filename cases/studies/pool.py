@@ -12,6 +12,7 @@ than the driver's is refused rather than stored under the driver's version.
 from __future__ import annotations
 
 import atexit
+import contextlib
 import os
 from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -63,10 +64,9 @@ def run_job(scene_json: str) -> tuple[dict, bytes | None, str]:
 
 def prepare_job(scene_json: str) -> None:
     """Prepare a scene's projectile into the disk cache (a worker's job); errors surface in its runs."""
-    try:
+    # the runs of this projectile will fail and record why
+    with contextlib.suppress(Exception):
         prepare_projectile(Scene.model_validate_json(scene_json))
-    except Exception:  # noqa: BLE001 - the runs of this projectile will fail and record why
-        pass
 
 
 def _distinct_projectiles(scenes: Sequence[Scene]) -> list[str]:
@@ -82,16 +82,19 @@ def run_missing(todo: dict[str, Scene], store: RunStore, pool: Pool, total: int)
     from tqdm import tqdm
 
     jobs = {key: scene.model_dump_json() for key, scene in todo.items()}
-    bar = tqdm(total=total, initial=total - len(jobs), disable=not pool.progress, unit="run",
-               desc="sweep", dynamic_ncols=True)
+    bar = tqdm(
+        total=total, initial=total - len(jobs), disable=not pool.progress, unit="run", desc="sweep", dynamic_ncols=True
+    )
     failed = 0
     own = code_version("run")
 
     def finish(key: str, record: dict, history: bytes | None, code: str) -> None:
         nonlocal failed
         if code != own:
-            raise CodeMismatch(f"a worker ran code version {code}, this process has {own}: install the same"
-                               " version of penetrate on every worker of the cluster")
+            raise CodeMismatch(
+                f"a worker ran code version {code}, this process has {own}: install the same"
+                " version of penetrate on every worker of the cluster"
+            )
         store.save(key, record, history)
         failed += "error" in record
         bar.set_postfix(failed=failed, refresh=False)

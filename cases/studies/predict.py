@@ -73,8 +73,9 @@ class ReducedModel:
         The rings' counts (:func:`fem_loads.revolved.revolved_surface`).
     """
 
-    def __init__(self, scene: Scene, prepared: PreparedProjectile, rtol: float = RTOL,
-                 rings: dict[str, int] | None = None) -> None:
+    def __init__(
+        self, scene: Scene, prepared: PreparedProjectile, rtol: float = RTOL, rings: dict[str, int] | None = None
+    ) -> None:
         _check_supported(scene)
         use_numba_cache()
         from dynamics.pitch_plane import TABLEAU
@@ -90,9 +91,16 @@ class ReducedModel:
         friction = effects.friction.build()
         # the mesh's entry ramp: each point enters over entry_smoothing times the square root of its weight
         entry = numerics.entry_smoothing * math.sqrt(float(np.median(prepared.quadrature.weights)))
-        self.law = law_data(law.static_stress, law.dynamic_density, effects.contact_width, effects.contact_incidence,
-                            entry, self.surface.max_radius, friction.coefficient if friction else 0.0,
-                            friction.cap if friction else None)
+        self.law = law_data(
+            law.static_stress,
+            law.dynamic_density,
+            effects.contact_width,
+            effects.contact_incidence,
+            entry,
+            self.surface.max_radius,
+            friction.coefficient if friction else 0.0,
+            friction.cap if friction else None,
+        )
         self.mass = float(prepared.mass.mass)
         self.inertia = float(prepared.mass.inertia[1, 1])
         self.gravity = effects.gravity_acceleration if effects.gravity else 0.0
@@ -101,8 +109,16 @@ class ReducedModel:
         # only the velocity depends on the impact speed
         state = initial_state(scene, prepared)
         axis_angle = math.radians(scene.impact.oblique_angle + scene.impact.attack_angle)
-        self._start = np.array([state.position[0], state.position[2], axis_angle, state.velocity[0],
-                                state.velocity[2], state.angular_velocity[1]])
+        self._start = np.array(
+            [
+                state.position[0],
+                state.position[2],
+                axis_angle,
+                state.velocity[0],
+                state.velocity[2],
+                state.angular_velocity[1],
+            ]
+        )
 
     def start(self, speed: float) -> np.ndarray:
         """The planar state ``(X, Z, phi, v_X, v_Z, q)`` at impact with ``speed`` (m/s)."""
@@ -110,24 +126,51 @@ class ReducedModel:
         state[3:5] *= speed / self.scene.impact.speed
         return state
 
-    def run(self, speed: float, stop_when_converged: bool = True, turn_limit: float = math.inf,
-            time_limit: float | None = None) -> ReducedRun:
+    def run(
+        self,
+        speed: float,
+        stop_when_converged: bool = True,
+        turn_limit: float = math.inf,
+        time_limit: float | None = None,
+    ) -> ReducedRun:
         """A reduced run from impact at ``speed`` (m/s) to its end (``turn_limit``: an axis turn that ends it, deg;
         ``time_limit``: s, the scene's by default)."""
         length, numerics = self.prepared.length, self.scene.numerics
         # absolute tolerances as the full model's error control sets them (cases.run.step_control)
         scales = np.array([length, length, 0.01, speed, speed, 0.01 * speed / length])
-        outcome = self._trajectory(self.surface.rings, self.law, self.surface.outline, self.start(speed), self.mass, self.inertia,
-                                   self.gravity, self.rtol, scales, 1e-3 * length / speed, math.inf, numerics.stop_speed,
-                                   numerics.time_limit if time_limit is None else time_limit, math.radians(turn_limit),
-                                   math.radians(CONVERGENCE_THRESHOLD),
-                                   0.1 * speed, stop_when_converged, *self._tableau)
+        outcome = self._trajectory(
+            self.surface.rings,
+            self.law,
+            self.surface.outline,
+            self.start(speed),
+            self.mass,
+            self.inertia,
+            self.gravity,
+            self.rtol,
+            scales,
+            1e-3 * length / speed,
+            math.inf,
+            numerics.stop_speed,
+            numerics.time_limit if time_limit is None else time_limit,
+            math.radians(turn_limit),
+            math.radians(CONVERGENCE_THRESHOLD),
+            0.1 * speed,
+            stop_when_converged,
+            *self._tableau,
+        )
         from dynamics.pitch_plane import END_REASONS
 
         end, _, _, turn, peak, _, converged, _, _, evaluations = outcome
         turn = math.degrees(turn)  # the run's axis_angle_change
-        return ReducedRun(speed, END_REASONS[end], abs(turn) >= UNSTABLE_TURN, turn, math.degrees(peak),
-                          converged if converged >= 0.0 else None, int(evaluations))
+        return ReducedRun(
+            speed,
+            END_REASONS[end],
+            abs(turn) >= UNSTABLE_TURN,
+            turn,
+            math.degrees(peak),
+            converged if converged >= 0.0 else None,
+            int(evaluations),
+        )
 
 
 @dataclass
@@ -150,12 +193,18 @@ class Prediction:
         return record
 
 
-def predict(scene: Scene, speeds: tuple[float, float] = (200.0, 1600.0), resolution: float = 5.0,
-            rtol: float = RTOL, rings: dict[str, int] | None = None) -> Prediction:
+def predict(
+    scene: Scene,
+    speeds: tuple[float, float] = (200.0, 1600.0),
+    resolution: float = 5.0,
+    rtol: float = RTOL,
+    rings: dict[str, int] | None = None,
+) -> Prediction:
     """The characteristic convergent velocity and the critical impact velocity of ``scene`` (its disturbance).
 
     ``speeds``: the range the critical velocity is sought in, and ``resolution`` its bracket (m/s), as
-    ``penetrate critical`` takes them; ``rtol`` and ``rings``: the model's numerics (:class:`ReducedModel`).  ``prediction_time`` is the model's own cost (from the prepared
+    ``penetrate critical`` takes them; ``rtol`` and ``rings``: the model's numerics (:class:`ReducedModel`).
+    ``prediction_time`` is the model's own cost (from the prepared
     projectile on: comparable with a run's ``integration_time``); ``wall_time`` includes preparing the
     projectile (the mesh and mass properties a run prepares too; read from the cache when there).
     """
@@ -168,10 +217,13 @@ def predict(scene: Scene, speeds: tuple[float, float] = (200.0, 1600.0), resolut
     convergent = _convergent(model, scene.impact.speed, runs, messages)
     critical, bracket = _critical(model, speeds, resolution, runs, messages, convergent)
     end = time.perf_counter()
-    description = (f"reduced pitch-plane model: the scene's DAFL integrated over {len(model.surface.rings)} rings of"
-                   f" the exact profile, a planar rigid body, Dormand-Prince rtol {rtol:g} (docs/theory.md)")
-    return Prediction(convergent, critical, bracket, description, list(ASSUMPTIONS), runs, messages,
-                      end - clock, end - start)
+    description = (
+        f"reduced pitch-plane model: the scene's DAFL integrated over {len(model.surface.rings)} rings of"
+        f" the exact profile, a planar rigid body, Dormand-Prince rtol {rtol:g} (docs/theory.md)"
+    )
+    return Prediction(
+        convergent, critical, bracket, description, list(ASSUMPTIONS), runs, messages, end - clock, end - start
+    )
 
 
 def _convergent(model: ReducedModel, speed: float, runs: list[ReducedRun], messages: list[str]) -> float | None:
@@ -186,16 +238,25 @@ def _convergent(model: ReducedModel, speed: float, runs: list[ReducedRun], messa
             return None
         speed *= RAISE_FACTOR
     if speed != model.scene.impact.speed:
-        messages.append(f"the reduced run at {model.scene.impact.speed:g} m/s is stable; the convergent velocity is"
-                        f" that of the run at {speed:.6g} m/s")
+        messages.append(
+            f"the reduced run at {model.scene.impact.speed:g} m/s is stable; the convergent velocity is"
+            f" that of the run at {speed:.6g} m/s"
+        )
     if run.convergence_speed is None:
-        messages.append(f"the attack angle of the reduced run at {speed:.6g} m/s never fell below"
-                        f" {CONVERGENCE_THRESHOLD} deg")
+        messages.append(
+            f"the attack angle of the reduced run at {speed:.6g} m/s never fell below {CONVERGENCE_THRESHOLD} deg"
+        )
     return run.convergence_speed
 
 
-def _critical(model: ReducedModel, speeds: tuple[float, float], resolution: float, runs: list[ReducedRun],
-              messages: list[str], convergent: float | None) -> tuple[float | None, list[float] | None]:
+def _critical(
+    model: ReducedModel,
+    speeds: tuple[float, float],
+    resolution: float,
+    runs: list[ReducedRun],
+    messages: list[str],
+    convergent: float | None,
+) -> tuple[float | None, list[float] | None]:
     """Bisection of reduced runs between a stable and an unstable impact speed in ``speeds`` (each run stops
     at the 30-degree turn that makes it unstable, or once its attack angle has converged).
 
@@ -233,8 +294,9 @@ def _critical(model: ReducedModel, speeds: tuple[float, float], resolution: floa
     if not low_checked and unstable(low):
         if low > min(speeds):  # the guess from the convergent velocity did not hold: search the whole range
             return _critical(model, (min(speeds), low), resolution, runs, messages, None)
-        messages.append(f"the reduced run at {low:g} m/s is already unstable: the critical impact velocity lies below"
-                        " the range")
+        messages.append(
+            f"the reduced run at {low:g} m/s is already unstable: the critical impact velocity lies below the range"
+        )
         return None, None
     return 0.5 * (low + high), [low, high]
 
@@ -243,8 +305,10 @@ def _check_supported(scene: Scene) -> None:
     """One line naming what the reduced model cannot take, with what it needs."""
     projectile, effects, impact = scene.projectile, scene.effects, scene.impact
     if projectile.geometry is not None:
-        raise InputError("projectile.geometry: penetrate predict needs a body of revolution given by its profile"
-                         " (diameter, length, nose); a projectile read from a file is run by penetrate critical")
+        raise InputError(
+            "projectile.geometry: penetrate predict needs a body of revolution given by its profile"
+            " (diameter, length, nose); a projectile read from a file is run by penetrate critical"
+        )
     from fem_loads.target import LayeredTarget
 
     if isinstance(scene.target.build(), LayeredTarget):
@@ -254,5 +318,7 @@ def _check_supported(scene: Scene) -> None:
     if not effects.separation:
         raise InputError("effects.separation = false: penetrate predict needs separation (the DAFL's default)")
     if impact.yaw_angle != 0.0 or impact.angular_velocity[0] != 0.0 or impact.angular_velocity[2] != 0.0:
-        raise InputError("impact.yaw_angle and impact.angular_velocity[0], [2] must be 0: penetrate predict models"
-                         " motion in the vertical plane (attack angle, oblique angle, pitch rate)")
+        raise InputError(
+            "impact.yaw_angle and impact.angular_velocity[0], [2] must be 0: penetrate predict models"
+            " motion in the vertical plane (attack angle, oblique angle, pitch rate)"
+        )

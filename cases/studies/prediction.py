@@ -61,8 +61,7 @@ def pitch_moment(loads: DAFLLoads, mass: float, speed: float, attack: float, ste
     return float(moment[1])
 
 
-def _crossing(loads: DAFLLoads, mass: float, attack: float, steady_turn: bool,
-              speeds: np.ndarray) -> float | None:
+def _crossing(loads: DAFLLoads, mass: float, attack: float, steady_turn: bool, speeds: np.ndarray) -> float | None:
     """The highest speed where ``M_y`` changes sign, refined by Brent's method."""
     values = np.array([pitch_moment(loads, mass, v, attack, steady_turn) for v in speeds])
     finite = np.isfinite(values[:-1]) & np.isfinite(values[1:])
@@ -70,8 +69,9 @@ def _crossing(loads: DAFLLoads, mass: float, attack: float, steady_turn: bool,
     if len(changes) == 0:
         return None
     i = int(changes[-1])
-    return optimize.brentq(lambda v: pitch_moment(loads, mass, v, attack, steady_turn),
-                           speeds[i], speeds[i + 1], xtol=0.01)
+    return optimize.brentq(
+        lambda v: pitch_moment(loads, mass, v, attack, steady_turn), speeds[i], speeds[i + 1], xtol=0.01
+    )
 
 
 @dataclass
@@ -85,8 +85,7 @@ class TurnBoundary:
     fold_attack_angle: float | None
 
 
-def turn_boundary(loads: DAFLLoads, mass: float, attack_angles=tuple(range(1, 21)),
-                  speeds=None) -> TurnBoundary:
+def turn_boundary(loads: DAFLLoads, mass: float, attack_angles=tuple(range(1, 21)), speeds=None) -> TurnBoundary:
     """``V0(alpha)``, ``V_turn(alpha)`` and the minimum of ``V_turn`` over ``alpha``."""
     speeds = SPEEDS if speeds is None else np.asarray(speeds, dtype=float)
     non_rotating = [_crossing(loads, mass, math.radians(a), False, speeds) for a in attack_angles]
@@ -100,12 +99,12 @@ def turn_boundary(loads: DAFLLoads, mass: float, attack_angles=tuple(range(1, 21
     lo = attack_angles[max(k - 1, 0)]
     hi = attack_angles[min(k + 1, len(attack_angles) - 1)]
     if hi > lo:
+
         def boundary(a: float) -> float:
             v = _crossing(loads, mass, math.radians(a), True, speeds)
             return v if v is not None else math.inf
 
-        best = optimize.minimize_scalar(boundary, bounds=(lo, hi), method="bounded",
-                                        options={"xatol": 0.05})
+        best = optimize.minimize_scalar(boundary, bounds=(lo, hi), method="bounded", options={"xatol": 0.05})
         if best.fun < v_min:
             v_min, a_min = float(best.fun), float(best.x)
     return TurnBoundary(list(attack_angles), non_rotating, turning, v_min, a_min)

@@ -35,8 +35,14 @@ from fem_loads.ramps import smooth_step
 from fem_loads.resistance import ResistanceLaw
 from mesh.profile import ConeNose, OgiveNose, Profile
 
-__all__ = ["embedded_axial_force", "closed_form_depth", "axial_depth_1d", "axial_force", "nose_factors",
-           "check_nose_alone_presses"]
+__all__ = [
+    "embedded_axial_force",
+    "closed_form_depth",
+    "axial_depth_1d",
+    "axial_force",
+    "nose_factors",
+    "check_nose_alone_presses",
+]
 
 
 def check_nose_alone_presses(profile: Profile) -> None:
@@ -47,8 +53,10 @@ def check_nose_alone_presses(profile: Profile) -> None:
     curve = profile.body_curve
     s = np.linspace(profile.body.start, profile.length, 2001)
     if float(curve.slope(s).max()) > 0.0 or float(curve.r.max()) > profile.radius:
-        raise ValueError("projectile.body: a flare presses in axial motion, and the 1-D references load the nose"
-                         " alone (a boat tail, which only narrows, is covered)")
+        raise ValueError(
+            "projectile.body: a flare presses in axial motion, and the 1-D references load the nose"
+            " alone (a boat tail, which only narrows, is covered)"
+        )
 
 
 def nose_factors(profile: Profile, friction: float = 0.0) -> tuple[float, float]:
@@ -71,24 +79,29 @@ def nose_factors(profile: Profile, friction: float = 0.0) -> tuple[float, float]
     if isinstance(profile.nose, OgiveNose):
         psi, big_r = profile.nose.crh, profile.ogive_radius
         n1 = 1 + friction * (4 * psi**2 * math.asin(ln / big_r) - (2 * psi - 1) * math.sqrt(4 * psi - 1))
-        bracket = (ln * (2 * ln**2 - big_r**2) * (big_r - a) / 8 + big_r**4 * math.asin(ln / big_r) / 8
-                   - (big_r - a) * ln**3 / 3)
+        bracket = (
+            ln * (2 * ln**2 - big_r**2) * (big_r - a) / 8
+            + big_r**4 * math.asin(ln / big_r) / 8
+            - (big_r - a) * ln**3 / 3
+        )
         n2 = profile.nose_factor() + friction * 2 / (a**2 * big_r**2) * bracket
         return n1, n2
     if isinstance(profile.nose, ConeNose):
         theta = math.radians(profile.nose.half_angle)
         return 1 + friction / math.tan(theta), math.sin(theta) ** 2 + friction * math.sin(theta) * math.cos(theta)
+
     # other noses: the same integrals, by quadrature (a flat front face does not slip axially)
     def sin2(s: float) -> float:
         slope = float(profile.slope_at(s))
         return slope**2 / (1 + slope**2)
 
     area = math.pi * a**2
-    kinks = dict(points=[p for p in profile.breakpoints if p < ln] or None,
-                 limit=max(200, 4 * len(profile.breakpoints)))
+    kinks = {
+        "points": [p for p in profile.breakpoints if p < ln] or None,
+        "limit": max(200, 4 * len(profile.breakpoints)),
+    }
     side = integrate.quad(lambda s: 2 * math.pi * float(profile.radius_at(s)), 0, ln, epsrel=1e-12, **kinks)[0]
-    dyn = integrate.quad(lambda s: 2 * math.pi * float(profile.radius_at(s)) * sin2(s), 0, ln, epsrel=1e-12,
-                         **kinks)[0]
+    dyn = integrate.quad(lambda s: 2 * math.pi * float(profile.radius_at(s)) * sin2(s), 0, ln, epsrel=1e-12, **kinks)[0]
     return 1 + friction * side / area, profile.nose_factor() + friction * dyn / area
 
 
@@ -100,8 +113,12 @@ def _g(profile: Profile, depth: float) -> float:
     # a flat front face (blunt nose) meets the target head on: sin(slope) = 1 there
     end = min(depth, profile.nose_length)
     kinks = [p for p in profile.breakpoints if 0.0 < p < end] or None  # a measured nose's points
-    return math.pi * profile.tip_radius**2 + integrate.quad(
-        integrand, 0.0, end, points=kinks, epsabs=0, epsrel=1e-13, limit=max(200, 4 * len(kinks or ())))[0]
+    return (
+        math.pi * profile.tip_radius**2
+        + integrate.quad(
+            integrand, 0.0, end, points=kinks, epsabs=0, epsrel=1e-13, limit=max(200, 4 * len(kinks or ()))
+        )[0]
+    )
 
 
 def embedded_axial_force(profile: Profile, law: ResistanceLaw, speed: float, friction: float = 0.0) -> float:
@@ -124,9 +141,16 @@ def closed_form_depth(profile: Profile, law: ResistanceLaw, mass: float, speed: 
     return mass / (2 * area * n_b) * math.log1p(n_b * speed**2 / law.static_stress)
 
 
-def axial_depth_1d(profile: Profile, law: ResistanceLaw, mass: float, speed: float,
-                   stop_speed: float = 0.0, rtol: float = 1e-12, contact_width: float = 0.0,
-                   contact_incidence: float = 0.0) -> tuple[float, float]:
+def axial_depth_1d(
+    profile: Profile,
+    law: ResistanceLaw,
+    mass: float,
+    speed: float,
+    stop_speed: float = 0.0,
+    rtol: float = 1e-12,
+    contact_width: float = 0.0,
+    contact_incidence: float = 0.0,
+) -> tuple[float, float]:
     """Tip depth (m) at which the speed falls to ``stop_speed``, with exact nose entry.
 
     Integrates ``dP/dt = V, m dV/dt = -F(P, V)`` through the nose-entry phase
@@ -170,12 +194,14 @@ def _integrate(rate, start: list[float], stop_speed: float, rtol: float, embedde
     """``solve_ivp`` of ``(P, V)`` from ``start`` until the speed falls to ``stop_speed`` or, with
     ``embedded_at`` (the nose length), the nose is embedded (events ``[embedded, stopped]``, else
     ``[stopped]``)."""
+
     def stopped(t: float, y: np.ndarray) -> float:
         return y[1] - stop_speed
 
     stopped.terminal = True
     events, horizon = [stopped], 1e3
     if embedded_at is not None:
+
         def embedded(t: float, y: np.ndarray) -> float:
             return y[0] - embedded_at
 
@@ -187,8 +213,14 @@ def _integrate(rate, start: list[float], stop_speed: float, rtol: float, embedde
 _GAUSS = np.polynomial.legendre.leggauss(2000)
 
 
-def axial_force(profile: Profile, law: ResistanceLaw, depth: float, speed: float, contact_width: float,
-                contact_incidence: float = 0.0) -> float:
+def axial_force(
+    profile: Profile,
+    law: ResistanceLaw,
+    depth: float,
+    speed: float,
+    contact_width: float,
+    contact_incidence: float = 0.0,
+) -> float:
     """Axial force (N) with the nose embedded to ``depth`` (m) at ``speed`` (m/s), with the contact width
     ``W = w + delta V`` (m/s; ``w = contact_width``, ``delta = contact_incidence``, ``W > 0``).
 
@@ -207,8 +239,16 @@ def axial_force(profile: Profile, law: ResistanceLaw, depth: float, speed: float
     return force + math.pi * profile.tip_radius**2 * face * float(smooth_step(np.array(speed / width)))
 
 
-def _axial_depth_contact(profile: Profile, law: ResistanceLaw, mass: float, speed: float, stop_speed: float,
-                         rtol: float, contact_width: float, contact_incidence: float) -> tuple[float, float]:
+def _axial_depth_contact(
+    profile: Profile,
+    law: ResistanceLaw,
+    mass: float,
+    speed: float,
+    stop_speed: float,
+    rtol: float,
+    contact_width: float,
+    contact_incidence: float,
+) -> tuple[float, float]:
     def rate(t: float, y: np.ndarray) -> list[float]:
         return [y[1], -axial_force(profile, law, y[0], y[1], contact_width, contact_incidence) / mass]
 

@@ -39,8 +39,17 @@ from ..scene import InputError
 from .pool import Pool
 from .sweep import Sweep, Variation, run_sweep
 
-__all__ = ["CriticalSearch", "find_critical_velocity", "find_critical_velocities", "is_unstable", "indicator",
-           "ConvergentResult", "measure_convergent_velocity", "UNSTABLE_TURN", "ScanRun"]
+__all__ = [
+    "CriticalSearch",
+    "find_critical_velocity",
+    "find_critical_velocities",
+    "is_unstable",
+    "indicator",
+    "ConvergentResult",
+    "measure_convergent_velocity",
+    "UNSTABLE_TURN",
+    "ScanRun",
+]
 
 UNSTABLE_TURN = 30.0  # deg of axis turn that marks an unstable run
 
@@ -77,13 +86,24 @@ class CriticalSearch:
     rounds: int = 0
 
     def as_dict(self) -> dict:
-        return {"critical_velocity": self.critical_velocity, "bracket": self.bracket,
-                "indicator": [asdict(run) for run in self.indicator], "message": self.message,
-                "runs": len(self.indicator), "rounds": self.rounds}
+        return {
+            "critical_velocity": self.critical_velocity,
+            "bracket": self.bracket,
+            "indicator": [asdict(run) for run in self.indicator],
+            "message": self.message,
+            "runs": len(self.indicator),
+            "rounds": self.rounds,
+        }
 
 
-def find_critical_velocity(sweep_base: Sweep, store: RunStore, speeds: Sequence[float], resolution: float = 5.0,
-                           pool: Pool | None = None, guess: Sequence[float] | None = None) -> CriticalSearch:
+def find_critical_velocity(
+    sweep_base: Sweep,
+    store: RunStore,
+    speeds: Sequence[float],
+    resolution: float = 5.0,
+    pool: Pool | None = None,
+    guess: Sequence[float] | None = None,
+) -> CriticalSearch:
     """The critical impact velocity between the lowest and highest of ``speeds``, to ``resolution``.
 
     Parameters
@@ -102,12 +122,18 @@ def find_critical_velocity(sweep_base: Sweep, store: RunStore, speeds: Sequence[
         A first bracket inside the range (a neighbour's result, a prediction); its ends count only once
         runs confirm them, and the search widens to the range when they do not.
     """
-    return find_critical_velocities([sweep_base], store, speeds, resolution, pool,
-                                    None if guess is None else [guess])[0]
+    return find_critical_velocities([sweep_base], store, speeds, resolution, pool, None if guess is None else [guess])[
+        0
+    ]
 
 
-def _scan(bases: Sequence[Sweep], store: RunStore, pool: Pool | None, seen: list[dict[float, ScanRun]],
-          wanted: list[list[float]]) -> None:
+def _scan(
+    bases: Sequence[Sweep],
+    store: RunStore,
+    pool: Pool | None,
+    seen: list[dict[float, ScanRun]],
+    wanted: list[list[float]],
+) -> None:
     """Run the wanted speeds of every base not seen yet, as one parallel sweep; record them in ``seen``."""
     jobs = [(i, v) for i, values in enumerate(wanted) for v in values if v not in seen[i]]
     if not jobs:
@@ -193,8 +219,9 @@ def _shares(brackets: Sequence[_Bracket], width: int) -> list[int]:
     return counts
 
 
-def _first_brackets(bases: Sequence[Sweep], speeds: Sequence[float],
-                    guesses: Sequence[Sequence[float] | None] | None) -> list[_Bracket]:
+def _first_brackets(
+    bases: Sequence[Sweep], speeds: Sequence[float], guesses: Sequence[Sequence[float] | None] | None
+) -> list[_Bracket]:
     """A bracket per scene: its guess, else the range; bad input is refused before anything runs."""
     low, high = float(min(speeds)), float(max(speeds))
     if not 0 < low < high:
@@ -206,18 +233,25 @@ def _first_brackets(bases: Sequence[Sweep], speeds: Sequence[float],
     for guess in guesses:
         g_low, g_high = (low, high) if guess is None else (float(min(guess)), float(max(guess)))
         if not low <= g_low < g_high <= high:
-            raise InputError(f"the guess {g_low:g} to {g_high:g} m/s must lie inside the range of speeds, {low:g} to"
-                             f" {high:g} m/s")
+            raise InputError(
+                f"the guess {g_low:g} to {g_high:g} m/s must lie inside the range of speeds, {low:g} to {high:g} m/s"
+            )
         brackets.append(_Bracket(g_low, g_high, (low, high)))
     # every speed a search may run lies in the range: a speed the scene refuses fails here, not mid-search
-    Sweep.combined([(base, Variation({**base.variations[0].values, "impact.speed": v}))
-                    for base in bases for v in (low, high)])
+    Sweep.combined(
+        [(base, Variation({**base.variations[0].values, "impact.speed": v})) for base in bases for v in (low, high)]
+    )
     return brackets
 
 
-def find_critical_velocities(bases: Sequence[Sweep], store: RunStore, speeds: Sequence[float],
-                             resolution: float = 5.0, pool: Pool | None = None,
-                             guesses: Sequence[Sequence[float] | None] | None = None) -> list[CriticalSearch]:
+def find_critical_velocities(
+    bases: Sequence[Sweep],
+    store: RunStore,
+    speeds: Sequence[float],
+    resolution: float = 5.0,
+    pool: Pool | None = None,
+    guesses: Sequence[Sequence[float] | None] | None = None,
+) -> list[CriticalSearch]:
     """:func:`find_critical_velocity` for several scenes at once.
 
     The searches advance in lockstep, every round one parallel sweep: each
@@ -252,8 +286,9 @@ def find_critical_velocities(bases: Sequence[Sweep], store: RunStore, speeds: Se
         if bracket.failure:
             results.append(CriticalSearch(None, None, rows, bracket.failure, rounds[i]))
         else:
-            results.append(CriticalSearch(0.5 * (bracket.low + bracket.high), [bracket.low, bracket.high], rows, "",
-                                          rounds[i]))
+            results.append(
+                CriticalSearch(0.5 * (bracket.low + bracket.high), [bracket.low, bracket.high], rows, "", rounds[i])
+            )
     return results
 
 
@@ -278,13 +313,21 @@ class ConvergentResult:
     message: str
 
     def as_dict(self) -> dict:
-        return {"characteristic_convergent_velocity": self.characteristic_convergent_velocity,
-                "runs": [asdict(run) for run in self.runs], "message": self.message}
+        return {
+            "characteristic_convergent_velocity": self.characteristic_convergent_velocity,
+            "runs": [asdict(run) for run in self.runs],
+            "message": self.message,
+        }
 
 
-def measure_convergent_velocity(sweep_base: Sweep, store: RunStore, threshold: float = CONVERGENCE_THRESHOLD,
-                                raise_factor: float = 1.15, max_speed: float = 4000.0,
-                                pool: Pool | None = None) -> ConvergentResult:
+def measure_convergent_velocity(
+    sweep_base: Sweep,
+    store: RunStore,
+    threshold: float = CONVERGENCE_THRESHOLD,
+    raise_factor: float = 1.15,
+    max_speed: float = 4000.0,
+    pool: Pool | None = None,
+) -> ConvergentResult:
     """The characteristic convergent velocity from an unstable run of the scene.
 
     The scene runs at its own impact speed; if that run is stable (see
@@ -302,9 +345,16 @@ def measure_convergent_velocity(sweep_base: Sweep, store: RunStore, threshold: f
         if run.failed:
             raise RuntimeError(f"the run at {speed:g} m/s failed: {run.error}")
         s = run.summary
-        runs.append(ConvergentRun(round(speed, 6), s.max_attack_angle, s.axis_angle_change,
-                                  convergence_speed(result.history(0), threshold), is_unstable(s.axis_angle_change),
-                                  s.end_reason))
+        runs.append(
+            ConvergentRun(
+                round(speed, 6),
+                s.max_attack_angle,
+                s.axis_angle_change,
+                convergence_speed(result.history(0), threshold),
+                is_unstable(s.axis_angle_change),
+                s.end_reason,
+            )
+        )
         if runs[-1].unstable:
             break
         if speed * raise_factor > max_speed:
@@ -313,8 +363,10 @@ def measure_convergent_velocity(sweep_base: Sweep, store: RunStore, threshold: f
     value = runs[-1].convergence_speed
     message = ""
     if len(runs) > 1:
-        message = (f"the run at {scene.impact.speed:g} m/s is stable; raised the impact speed to"
-                   f" {speed:.6g} m/s to get an unstable run")
+        message = (
+            f"the run at {scene.impact.speed:g} m/s is stable; raised the impact speed to"
+            f" {speed:.6g} m/s to get an unstable run"
+        )
     if value is None:
         message += ("; " if message else "") + f"the attack angle never fell below {threshold} deg"
     return ConvergentResult(value, runs, message)

@@ -25,12 +25,21 @@ from typing import Any
 import pandas as pd
 
 from ..run import RunStore, StoredRun
-from ..scene import (InputError, Overrides, Scene, apply_overrides, dotted_key, parse_override, read_scene_data,
-                     read_toml, scene_from_dict, scene_key)
+from ..scene import (
+    InputError,
+    Overrides,
+    Scene,
+    apply_overrides,
+    dotted_key,
+    parse_override,
+    read_scene_data,
+    read_toml,
+    scene_from_dict,
+    scene_key,
+)
 from .pool import Pool, run_missing
 
-__all__ = ["Variation", "grid", "parse_grid", "read_variations", "Sweep", "SweepResult", "run_sweep",
-           "MAX_GRID_VALUES"]
+__all__ = ["Variation", "grid", "parse_grid", "read_variations", "Sweep", "SweepResult", "run_sweep", "MAX_GRID_VALUES"]
 
 MAX_GRID_VALUES = 100_000  # values of one START:STOP:STEP range
 
@@ -65,8 +74,10 @@ def parse_grid(text: str) -> tuple[str, list[Any]]:
         if not step > 0 or stop < start:
             raise InputError(f"--grid {text!r}: need STEP > 0 and STOP >= START")
         if (stop - start) / step >= MAX_GRID_VALUES:
-            raise InputError(f"--grid {text!r}: more than {MAX_GRID_VALUES} values (allowed: (STOP - START) / STEP"
-                             f" < {MAX_GRID_VALUES})")
+            raise InputError(
+                f"--grid {text!r}: more than {MAX_GRID_VALUES} values (allowed: (STOP - START) / STEP"
+                f" < {MAX_GRID_VALUES})"
+            )
         count = int(round((stop - start) / step)) + 1
         values = [start + i * step for i in range(count)]
         if all(float(v).is_integer() for v in (start, step)):
@@ -88,8 +99,7 @@ def read_variations(path: str | os.PathLike) -> list[Variation]:
     runs = data.get("run")
     unknown = set(data) - {"run"}
     if unknown or not isinstance(runs, list) or not all(isinstance(r, dict) and r for r in runs):
-        raise InputError(f"{path}: expected only [[run]] tables of dotted keys, e.g."
-                         ' [[run]] "impact.speed" = 1100')
+        raise InputError(f'{path}: expected only [[run]] tables of dotted keys, e.g. [[run]] "impact.speed" = 1100')
     return [Variation(dict(run)) for run in runs]
 
 
@@ -115,12 +125,15 @@ class Sweep:
     def __post_init__(self) -> None:
         # validate everything before anything runs: a typo fails the sweep at once; the runs of a study
         # share warm workers, so numerics.kernel = "auto" is the compiled step (Scene.with_kernel)
-        self.scenes = [scene_from_dict(apply_overrides(self.base, v.values, self.source), self.source)
-                       .with_kernel(many_runs=True) for v in self.variations]
+        self.scenes = [
+            scene_from_dict(apply_overrides(self.base, v.values, self.source), self.source).with_kernel(many_runs=True)
+            for v in self.variations
+        ]
 
     @classmethod
-    def from_file(cls, path: str | os.PathLike, overrides: Overrides | None = None,
-                  variations: Sequence[Variation] = ()) -> Sweep:
+    def from_file(
+        cls, path: str | os.PathLike, overrides: Overrides | None = None, variations: Sequence[Variation] = ()
+    ) -> Sweep:
         base = apply_overrides(read_scene_data(path), overrides, str(path))
         return cls(base, list(variations) or [Variation({})], str(path))
 
@@ -130,8 +143,12 @@ class Sweep:
         sweep = cls.__new__(cls)
         sweep.base, sweep.source = {}, "scenes"
         sweep.variations = [variation for _, variation in parts]
-        sweep.scenes = [scene_from_dict(apply_overrides(base.base, variation.values, base.source), base.source)
-                        .with_kernel(many_runs=True) for base, variation in parts]
+        sweep.scenes = [
+            scene_from_dict(apply_overrides(base.base, variation.values, base.source), base.source).with_kernel(
+                many_runs=True
+            )
+            for base, variation in parts
+        ]
         return sweep
 
     def keys(self) -> list[str]:

@@ -5,12 +5,28 @@ This room imports ``cases.run``, ``cases.scene`` and the physics; it takes every
 run's own load function (``DAFLLoads.surface_stress``) and evaluates no physics of its own.
 """
 
-from .field import (INSTANT_NAMES, FieldEvaluator, SurfaceField, SurfaceMesh, key_instants, resolve_instants,
-                    surface_mesh)
+from .field import (
+    INSTANT_NAMES,
+    FieldEvaluator,
+    SurfaceField,
+    SurfaceMesh,
+    key_instants,
+    resolve_instants,
+    surface_mesh,
+)
 from .figures import new_figure, save_figure, subplots
 from .render import render_all
 
 __all__ = [
-    "FieldEvaluator", "SurfaceField", "SurfaceMesh", "surface_mesh", "key_instants", "resolve_instants",
-    "INSTANT_NAMES", "render_all", "new_figure", "subplots", "save_figure",
+    "FieldEvaluator",
+    "SurfaceField",
+    "SurfaceMesh",
+    "surface_mesh",
+    "key_instants",
+    "resolve_instants",
+    "INSTANT_NAMES",
+    "render_all",
+    "new_figure",
+    "subplots",
+    "save_figure",
 ]

@@ -48,12 +48,20 @@ from fem_loads import DAFLLoads
 from ..run import CONVERGENCE_THRESHOLD, PreparedProjectile, RunResult, attack_angle_peak, body_mesh, history_table
 from ..scene import InputError, Numerics
 
-__all__ = ["SurfaceMesh", "surface_mesh", "SurfaceField", "FieldEvaluator", "key_instants", "resolve_instants",
-           "frame_rows", "INSTANT_NAMES", "INSTANT_LABELS"]
+__all__ = [
+    "SurfaceMesh",
+    "surface_mesh",
+    "SurfaceField",
+    "FieldEvaluator",
+    "key_instants",
+    "resolve_instants",
+    "frame_rows",
+    "INSTANT_NAMES",
+    "INSTANT_LABELS",
+]
 
 INSTANT_NAMES = ("embedded", "peak", "converged", "end")
-INSTANT_LABELS = {"embedded": "nose embedded", "peak": "peak attack angle", "converged": "converged",
-                  "end": "end"}
+INSTANT_LABELS = {"embedded": "nose embedded", "peak": "peak attack angle", "converged": "converged", "end": "end"}
 
 # second-order triangle (corners 0-2, edge nodes 3 = 01, 4 = 12, 5 = 02) as four flat ones
 _SPLIT6 = np.array([[0, 3, 5], [3, 1, 4], [5, 4, 2], [3, 4, 5]])
@@ -167,8 +175,10 @@ class SurfaceField:
     def title(self, label: str = "") -> str:
         """One line: instant, time, speed, attack angle and tip depth."""
         head = f"{label}   " if label else ""
-        return (f"{head}t = {self.time * 1e3:.2f} ms   V = {self.speed:.0f} m/s   "
-                f"attack {self.attack_angle:+.2f} deg   tip depth {self.tip_depth:.2f} m")
+        return (
+            f"{head}t = {self.time * 1e3:.2f} ms   V = {self.speed:.0f} m/s   "
+            f"attack {self.attack_angle:+.2f} deg   tip depth {self.tip_depth:.2f} m"
+        )
 
 
 class FieldEvaluator:
@@ -213,10 +223,21 @@ class FieldEvaluator:
         stress = self.loads.surface_stress(position, velocity, self.rotations[index], tr.angular_velocity[index])
         tau = None if stress.tau is None else self._facet_mean(stress.tau)
         row = self.history.iloc[index]
-        return SurfaceField(index, float(tr.time[index]), float(row["speed"]), float(row["attack_angle"]),
-                            float(row["total_attack_angle"]), float(row["tip_depth"]), position.copy(),
-                            velocity.copy(), self.rotations[index].copy(), self._facet_mean(stress.sigma_n), tau,
-                            self._facet_mean(stress.normal_velocity), stress.sigma_n)
+        return SurfaceField(
+            index,
+            float(tr.time[index]),
+            float(row["speed"]),
+            float(row["attack_angle"]),
+            float(row["total_attack_angle"]),
+            float(row["tip_depth"]),
+            position.copy(),
+            velocity.copy(),
+            self.rotations[index].copy(),
+            self._facet_mean(stress.sigma_n),
+            tau,
+            self._facet_mean(stress.normal_velocity),
+            stress.sigma_n,
+        )
 
     def world_points(self, index: int) -> np.ndarray:
         """Vertices of the drawn surface in the world frame at row ``index`` (m)."""
@@ -241,7 +262,7 @@ def _nose_embedded_index(evaluator: FieldEvaluator) -> int | None:
     tr = evaluator.result.trajectory
     up = evaluator.rotations[:, 2, :]  # world Z of the body axes, one row per step
     for start in range(0, len(up), 512):
-        highest = tr.position[start:start + 512, 2] + (up[start:start + 512] @ nose.T).max(axis=1)
+        highest = tr.position[start : start + 512, 2] + (up[start : start + 512] @ nose.T).max(axis=1)
         inside = np.flatnonzero(highest < 0.0)
         if len(inside):
             return start + int(inside[0])
@@ -322,8 +343,9 @@ def resolve_instants(evaluator: FieldEvaluator, spec: Sequence[str] | None) -> l
         try:
             t = float(text)
         except ValueError:
-            raise InputError(f"--times {text!r}: expected a time in seconds or one of {', '.join(INSTANT_NAMES)}")\
-                from None
+            raise InputError(
+                f"--times {text!r}: expected a time in seconds or one of {', '.join(INSTANT_NAMES)}"
+            ) from None
         if not (times[0] <= t <= times[-1]):
             raise InputError(f"--times {text}: outside the run ({times[0]:g} .. {times[-1]:.6g} s)")
         out.append(("", int(np.argmin(np.abs(times - t)))))

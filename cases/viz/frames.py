@@ -23,8 +23,18 @@ from ..run import atomic_write  # noqa: E402
 from .field import FieldEvaluator, SurfaceField, frame_rows  # noqa: E402
 from .panels import SidePanel  # noqa: E402
 
-__all__ = ["FrameRenderer", "render_snapshots", "render_animation", "png_bytes", "pyvista_off_screen",
-           "colour_range", "space_titles", "STRESS_CMAP", "N_COLOURS", "BACKGROUND"]
+__all__ = [
+    "FrameRenderer",
+    "render_snapshots",
+    "render_animation",
+    "png_bytes",
+    "pyvista_off_screen",
+    "colour_range",
+    "space_titles",
+    "STRESS_CMAP",
+    "N_COLOURS",
+    "BACKGROUND",
+]
 
 STRESS_CMAP = "turbo"
 N_COLOURS = 256
@@ -94,9 +104,16 @@ class FrameRenderer:
         The same for ``tau`` (MPa).
     """
 
-    def __init__(self, evaluator: FieldEvaluator, size: tuple[int, int] = (1280, 640), *, side_panel: bool = True,
-                 lighting: bool = True, clim: tuple[float, float] | None = None,
-                 tau_clim: tuple[float, float] | None = None) -> None:
+    def __init__(
+        self,
+        evaluator: FieldEvaluator,
+        size: tuple[int, int] = (1280, 640),
+        *,
+        side_panel: bool = True,
+        lighting: bool = True,
+        clim: tuple[float, float] | None = None,
+        tau_clim: tuple[float, float] | None = None,
+    ) -> None:
         pv = pyvista_off_screen()
         self.evaluator = evaluator
         width, height = size
@@ -119,8 +136,13 @@ class FrameRenderer:
     def _build(self, pv, lighting: bool) -> None:
         ev = self.evaluator
         rows = len(self.fields)
-        self.plotter = plotter = pv.Plotter(off_screen=True, window_size=self.view_size, shape=(rows, 1),
-                                            border=False, lighting="light kit" if lighting else "none")
+        self.plotter = plotter = pv.Plotter(
+            off_screen=True,
+            window_size=self.view_size,
+            shape=(rows, 1),
+            border=False,
+            lighting="light kit" if lighting else "none",
+        )
         plotter.set_background(BACKGROUND)
         surface = ev.surface
         faces = np.hstack([np.full((len(surface.triangles), 1), 3), surface.triangles]).ravel()
@@ -130,12 +152,19 @@ class FrameRenderer:
         x_lo, x_hi = positions[:, 0].min() - 5 * length, positions[:, 0].max() + 5 * length
         z_lo = min(positions[:, 2].min(), 0.0) - 5 * length
         y_back = positions[:, 1].max() + 3 * length
-        soil = pv.Plane(center=(0.5 * (x_lo + x_hi), y_back, 0.5 * z_lo), direction=(0, -1, 0), i_size=-z_lo,
-                        j_size=x_hi - x_lo)
+        soil = pv.Plane(
+            center=(0.5 * (x_lo + x_hi), y_back, 0.5 * z_lo), direction=(0, -1, 0), i_size=-z_lo, j_size=x_hi - x_lo
+        )
         surface_line = pv.Line((x_lo, y_back - 0.01 * length, 0.0), (x_hi, y_back - 0.01 * length, 0.0))
         path = pv.lines_from_points(positions) if len(positions) > 1 else None
-        arrow = {"start": (0, 0, 0), "direction": (1, 0, 0), "scale": 1.0, "tip_length": 0.22, "tip_radius": 0.05,
-                 "shaft_radius": 0.015}
+        arrow = {
+            "start": (0, 0, 0),
+            "direction": (1, 0, 0),
+            "scale": 1.0,
+            "tip_length": 0.22,
+            "tip_radius": 0.05,
+            "shaft_radius": 0.015,
+        }
         self._arrow_template = np.asarray(pv.Arrow(**arrow).points)
         self.arrow = pv.Arrow(**arrow)
         self.meshes = {}
@@ -147,11 +176,28 @@ class FrameRenderer:
             mesh.cell_data[name] = np.zeros(len(surface.triangles))
             unit = "sigma_n (MPa)" if name == "sigma_n" else "tau (MPa)"
             self.actors[name] = plotter.add_mesh(
-                mesh, scalars=name, cmap=STRESS_CMAP, n_colors=N_COLOURS, clim=(0.0, 1.0), lighting=lighting,
-                smooth_shading=False, show_scalar_bar=True,
-                scalar_bar_args={"title": unit, "vertical": True, "position_x": 0.86, "position_y": 0.1,
-                                 "width": 0.06, "height": 0.62, "fmt": "%.4g", "title_font_size": 14,
-                                 "label_font_size": 12, "color": "black", "n_labels": 6})
+                mesh,
+                scalars=name,
+                cmap=STRESS_CMAP,
+                n_colors=N_COLOURS,
+                clim=(0.0, 1.0),
+                lighting=lighting,
+                smooth_shading=False,
+                show_scalar_bar=True,
+                scalar_bar_args={
+                    "title": unit,
+                    "vertical": True,
+                    "position_x": 0.86,
+                    "position_y": 0.1,
+                    "width": 0.06,
+                    "height": 0.62,
+                    "fmt": "%.4g",
+                    "title_font_size": 14,
+                    "label_font_size": 12,
+                    "color": "black",
+                    "n_labels": 6,
+                },
+            )
             self.meshes[name] = mesh
             plotter.add_mesh(soil, color=SOIL_LIGHT, lighting=False)
             plotter.add_mesh(surface_line, color="saddlebrown", line_width=3, lighting=False)
@@ -160,8 +206,12 @@ class FrameRenderer:
             plotter.add_mesh(self.arrow, color="black", lighting=lighting)
             self.texts[name] = plotter.add_text("", position="upper_edge", font_size=10, color="black")
             if row == len(self.fields) - 1:
-                plotter.add_text("black arrow: velocity direction; tan: the target (Z < 0); grey line: path of"
-                                 " the centre of mass", position="lower_left", font_size=8, color="black")
+                plotter.add_text(
+                    "black arrow: velocity direction; tan: the target (Z < 0); grey line: path of the centre of mass",
+                    position="lower_left",
+                    font_size=8,
+                    color="black",
+                )
             camera = plotter.camera
             camera.parallel_projection = True
         space_titles(plotter)
@@ -270,8 +320,12 @@ def _file_label(label: str, time_s: float) -> str:
     return label.replace(" ", "_") if label else f"t{time_s * 1e3:.3f}ms"
 
 
-def render_snapshots(evaluator: FieldEvaluator, out_dir: str | os.PathLike,
-                     instants: Sequence[tuple[str, int]], size: tuple[int, int] = (1280, 640)) -> list[Path]:
+def render_snapshots(
+    evaluator: FieldEvaluator,
+    out_dir: str | os.PathLike,
+    instants: Sequence[tuple[str, int]],
+    size: tuple[int, int] = (1280, 640),
+) -> list[Path]:
     """PNG images of the field at the given instants: ``field_<label>.png`` (``field_t<ms>ms.png`` unlabelled).
 
     Each image: the projectile in close-up coloured by ``sigma_n`` (and ``tau`` below it with
@@ -307,8 +361,14 @@ def render_snapshots(evaluator: FieldEvaluator, out_dir: str | os.PathLike,
     return paths
 
 
-def render_animation(evaluator: FieldEvaluator, path: str | os.PathLike, frames: int = 60, fps: float = 12.0,
-                     size: tuple[int, int] = (960, 480), clim: str = "frame") -> dict:
+def render_animation(
+    evaluator: FieldEvaluator,
+    path: str | os.PathLike,
+    frames: int = 60,
+    fps: float = 12.0,
+    size: tuple[int, int] = (960, 480),
+    clim: str = "frame",
+) -> dict:
     """An animated GIF (Pillow) of the run: the projectile along its path with its field and the histories.
 
     Parameters
@@ -345,11 +405,23 @@ def render_animation(evaluator: FieldEvaluator, path: str | os.PathLike, frames:
             # an adaptive palette per frame keeps each in memory as one byte per pixel
             images.append(Image.fromarray(frame).quantize(colors=255, method=Image.Quantize.MEDIANCUT))
     buffer = io.BytesIO()
-    images[0].save(buffer, format="GIF", save_all=True, append_images=images[1:],
-                   duration=int(round(1000 / fps)), loop=0, optimize=False)
+    images[0].save(
+        buffer,
+        format="GIF",
+        save_all=True,
+        append_images=images[1:],
+        duration=int(round(1000 / fps)),
+        loop=0,
+        optimize=False,
+    )
     data = buffer.getvalue()
     path = Path(path)
     atomic_write(path, data)
     seconds = time.perf_counter() - start
-    return {"path": str(path), "frames": len(rows), "seconds": seconds, "seconds_per_frame": seconds / len(rows),
-            "bytes": len(data)}
+    return {
+        "path": str(path),
+        "frames": len(rows),
+        "seconds": seconds,
+        "seconds_per_frame": seconds / len(rows),
+        "bytes": len(data),
+    }

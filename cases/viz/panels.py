@@ -157,14 +157,20 @@ def ring_stress(evaluator: FieldEvaluator, index: int, station: float, n: int = 
     points = np.column_stack([np.full(n, x), radius * e_rho])
     normals = np.column_stack([np.full(n, n_forward), n_radial * e_rho])
     loads = evaluator.loads
-    ring = DAFLLoads(SurfaceQuadrature(points, normals, np.full(n, 1.0 / n)), loads.law,
-                     loads.normal_velocity_guard, friction=loads.friction, separation=loads.separation,
-                     free_surface=loads.free_surface)
+    ring = DAFLLoads(
+        SurfaceQuadrature(points, normals, np.full(n, 1.0 / n)),
+        loads.law,
+        loads.normal_velocity_guard,
+        friction=loads.friction,
+        separation=loads.separation,
+        free_surface=loads.free_surface,
+    )
     return theta, ring.surface_stress(tr.position[index], tr.velocity[index], rotation, omega).sigma_n
 
 
-def _ring_of_points(evaluator: FieldEvaluator, index: int, x: float, reference: np.ndarray,
-                    side: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _ring_of_points(
+    evaluator: FieldEvaluator, index: int, x: float, reference: np.ndarray, side: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """``sigma_n`` at the body's own quadrature points within half an element of the body-frame ``x``, by
     their angle from the windward side: a body of any shape, read from a file, has no exact ring."""
     prepared = evaluator.prepared
@@ -172,16 +178,21 @@ def _ring_of_points(evaluator: FieldEvaluator, index: int, x: float, reference: 
     half = 0.5 * evaluator.result.scene.numerics.mesh_size
     band = np.flatnonzero(np.abs(q.points[:, 0] - x) <= half)  # x and the points: from the centre of mass
     tr = evaluator.result.trajectory
-    stress = evaluator.loads.surface_stress(tr.position[index], tr.velocity[index], evaluator.rotations[index],
-                                            tr.angular_velocity[index])
+    stress = evaluator.loads.surface_stress(
+        tr.position[index], tr.velocity[index], evaluator.rotations[index], tr.angular_velocity[index]
+    )
     lateral = q.points[band, 1:] - prepared.tip[1:]  # from the axis through the tip
     theta = np.mod(np.arctan2(lateral @ side, lateral @ reference), 2 * np.pi)
     order = np.argsort(theta)
     return theta[order], stress.sigma_n[band][order]
 
 
-def plot_histories(history: pd.DataFrame, prepared: PreparedProjectile, path: str | os.PathLike,
-                   instants: Sequence[tuple[str, int]] = ()) -> Path:
+def plot_histories(
+    history: pd.DataFrame,
+    prepared: PreparedProjectile,
+    path: str | os.PathLike,
+    instants: Sequence[tuple[str, int]] = (),
+) -> Path:
     """Resistance centre, pitch moment and attack angle against time, one PNG.
 
     The resistance centre is drawn only where it is defined (a transverse force); the centre of
@@ -212,16 +223,21 @@ def plot_histories(history: pd.DataFrame, prepared: PreparedProjectile, path: st
     for label, row in instants:
         for ax in (centre_ax, moment_ax, angle_ax):
             ax.axvline(t[row], color="0.3", lw=0.7, ls="--")
-        angle_ax.annotate(label or f"{t[row]:.1f} ms", (t[row], angle_ax.get_ylim()[1]), fontsize=7,
-                          rotation=90, va="top", ha="right")
+        angle_ax.annotate(
+            label or f"{t[row]:.1f} ms", (t[row], angle_ax.get_ylim()[1]), fontsize=7, rotation=90, va="top", ha="right"
+        )
     for ax in (centre_ax, moment_ax, angle_ax):
         ax.grid(alpha=0.3)
     figure.tight_layout()
     return save_figure(figure, path, dpi=100)
 
 
-def plot_polar(evaluator: FieldEvaluator, instants: Sequence[tuple[str, int]], path: str | os.PathLike,
-               station: float | None = None) -> Path:
+def plot_polar(
+    evaluator: FieldEvaluator,
+    instants: Sequence[tuple[str, int]],
+    path: str | os.PathLike,
+    station: float | None = None,
+) -> Path:
     """Polar plot of ``sigma_n`` (MPa) around the shank at ``station`` (m behind the tip), one curve per instant.
 
     ``theta = 0`` is the windward side (see the module docstring).
@@ -233,13 +249,18 @@ def plot_polar(evaluator: FieldEvaluator, instants: Sequence[tuple[str, int]], p
     for label, row in instants:
         theta, sigma = ring_stress(evaluator, row, station)
         closed = np.append(theta, theta[0])
-        ax.plot(closed, np.append(sigma, sigma[0]) * 1e-6, lw=1.4,
-                label=f"{label + ', ' if label else ''}t = {times[row] * 1e3:.2f} ms, "
-                      f"attack {evaluator.history['attack_angle'].iloc[row]:+.2f} deg"
-                      + ("" if sigma.max() > 0 else " (no stress at this station)"))
+        ax.plot(
+            closed,
+            np.append(sigma, sigma[0]) * 1e-6,
+            lw=1.4,
+            label=f"{label + ', ' if label else ''}t = {times[row] * 1e3:.2f} ms, "
+            f"attack {evaluator.history['attack_angle'].iloc[row]:+.2f} deg"
+            + ("" if sigma.max() > 0 else " (no stress at this station)"),
+        )
     ax.set_theta_zero_location("N")
-    ax.set_title(f"sigma_n (MPa) around the surface {station:.3f} m behind the tip\n"
-                 "(0 deg: windward side)", fontsize=10)
+    ax.set_title(
+        f"sigma_n (MPa) around the surface {station:.3f} m behind the tip\n(0 deg: windward side)", fontsize=10
+    )
     ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.06), ncol=1)
     figure.tight_layout()
     return save_figure(figure, path, dpi=100)

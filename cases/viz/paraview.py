@@ -25,8 +25,15 @@ def _write_vtu(path: Path, mesh) -> None:
         meshio.write(tmp, mesh, file_format="vtu", binary=True)
 
 
-TRAJECTORY_FIELDS = {"time": "s", "speed": "m/s", "attack_angle": "deg", "total_attack_angle": "deg",
-                     "tip_depth": "m", "path_length": "m", "resistance_centre_from_tip": "m"}
+TRAJECTORY_FIELDS = {
+    "time": "s",
+    "speed": "m/s",
+    "attack_angle": "deg",
+    "total_attack_angle": "deg",
+    "tip_depth": "m",
+    "path_length": "m",
+    "resistance_centre_from_tip": "m",
+}
 
 
 def write_paraview(evaluator: FieldEvaluator, out_dir: str | os.PathLike, steps: int | None = 100) -> dict:
@@ -71,19 +78,28 @@ def write_paraview(evaluator: FieldEvaluator, out_dir: str | os.PathLike, steps:
         times.append(fld.time)
     positions = ev.result.trajectory.position
     n_points = len(positions)
-    segments = np.column_stack([np.arange(n_points - 1), np.arange(1, n_points)]) if n_points > 1 \
+    segments = (
+        np.column_stack([np.arange(n_points - 1), np.arange(1, n_points)])
+        if n_points > 1
         else np.zeros((0, 2), dtype=np.int64)
+    )
     point_data = {name: ev.history[name].to_numpy(dtype=float) for name in TRAJECTORY_FIELDS}
     trajectory = out / "trajectory.vtu"
     _write_vtu(trajectory, meshio.Mesh(positions, [("line", segments)], point_data=point_data))
     root = ET.Element("VTKFile", type="Collection", version="0.1", byte_order="LittleEndian")
     collection = ET.SubElement(root, "Collection")
     for path, t in zip(surfaces, times):
-        ET.SubElement(collection, "DataSet", timestep=repr(float(t)), group="", part="0",
-                      file=path.relative_to(out).as_posix())
+        ET.SubElement(
+            collection, "DataSet", timestep=repr(float(t)), group="", part="0", file=path.relative_to(out).as_posix()
+        )
         ET.SubElement(collection, "DataSet", timestep=repr(float(t)), group="", part="1", file=trajectory.name)
     ET.indent(root)
     index = out / PARAVIEW_INDEX
     atomic_write_text(index, '<?xml version="1.0"?>\n' + ET.tostring(root, encoding="unicode") + "\n")
-    return {"index": index, "surfaces": surfaces, "trajectory": trajectory, "times": times,
-            "rows": [int(r) for r in rows]}
+    return {
+        "index": index,
+        "surfaces": surfaces,
+        "trajectory": trajectory,
+        "times": times,
+        "rows": [int(r) for r in rows],
+    }

@@ -17,9 +17,18 @@ from .trajectory import render_trajectory
 __all__ = ["render_all"]
 
 
-def render_all(result: RunResult, out_dir: str | os.PathLike, times: Iterable[str] | None = None, *,
-               animation: bool = False, paraview: bool = False, frames: int = 60, steps: int | None = 100,
-               station: float | None = None, size: tuple[int, int] = (1280, 640)) -> dict:
+def render_all(
+    result: RunResult,
+    out_dir: str | os.PathLike,
+    times: Iterable[str] | None = None,
+    *,
+    animation: bool = False,
+    paraview: bool = False,
+    frames: int = 60,
+    steps: int | None = 100,
+    station: float | None = None,
+    size: tuple[int, int] = (1280, 640),
+) -> dict:
     """Everything ``penetrate render`` writes.
 
     Parameters
@@ -52,8 +61,9 @@ def render_all(result: RunResult, out_dir: str | os.PathLike, times: Iterable[st
     start = time.perf_counter()
     evaluator = FieldEvaluator(result)
     instants = resolve_instants(evaluator, list(times) if times else None)
-    record["instants"] = [{"label": label, "row": row, "time": float(evaluator.result.trajectory.time[row])}
-                          for label, row in instants]
+    record["instants"] = [
+        {"label": label, "row": row, "time": float(evaluator.result.trajectory.time[row])} for label, row in instants
+    ]
     t0 = time.perf_counter()
     record["files"] += [str(p) for p in render_snapshots(evaluator, out, instants, size)]
     record["seconds"]["snapshots"] = time.perf_counter() - t0
@@ -61,8 +71,9 @@ def render_all(result: RunResult, out_dir: str | os.PathLike, times: Iterable[st
     record["files"].append(str(render_trajectory(evaluator, out / "trajectory.png")))
     record["seconds"]["trajectory"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    record["files"].append(str(plot_histories(evaluator.history, evaluator.prepared, out / "resistance_centre.png",
-                                              instants)))
+    record["files"].append(
+        str(plot_histories(evaluator.history, evaluator.prepared, out / "resistance_centre.png", instants))
+    )
     record["files"].append(str(plot_polar(evaluator, instants, out / "polar.png", station)))
     record["seconds"]["field_plots"] = time.perf_counter() - t0
     if animation:

@@ -32,8 +32,9 @@ def _label_anchor(fld: SurfaceField, positions: np.ndarray, length: float) -> tu
     return anchor, ("right" if across[0] < -0.2 else "left" if across[0] > 0.2 else "center")
 
 
-def render_trajectory(evaluator: FieldEvaluator, path: str | os.PathLike, count: int = 8,
-                      size: tuple[int, int] = (1400, 700)) -> Path:
+def render_trajectory(
+    evaluator: FieldEvaluator, path: str | os.PathLike, count: int = 8, size: tuple[int, int] = (1400, 700)
+) -> Path:
     """The whole path in the target, seen from the side, with the projectile at ``count`` instants.
 
     The instants are evenly spaced in path length.  The bodies are drawn to scale at their true
@@ -82,37 +83,69 @@ def render_trajectory(evaluator: FieldEvaluator, path: str | os.PathLike, count:
     try:
         plotter.set_background(BACKGROUND)
         behind = positions[:, 1].max() + 2 * length
-        soil = pv.Plane(center=(0.5 * (left + right), behind, 0.5 * bottom), direction=(0, -1, 0),
-                        i_size=-bottom, j_size=right - left)
+        soil = pv.Plane(
+            center=(0.5 * (left + right), behind, 0.5 * bottom),
+            direction=(0, -1, 0),
+            i_size=-bottom,
+            j_size=right - left,
+        )
         plotter.add_mesh(soil, color=SOIL, lighting=False)
-        plotter.add_mesh(pv.Line((left, behind - 0.01 * length, 0.0), (right, behind - 0.01 * length, 0.0)),
-                         color="saddlebrown", line_width=3)
+        plotter.add_mesh(
+            pv.Line((left, behind - 0.01 * length, 0.0), (right, behind - 0.01 * length, 0.0)),
+            color="saddlebrown",
+            line_width=3,
+        )
         if len(positions) > 1:
             plotter.add_mesh(pv.lines_from_points(positions), color="black", line_width=2)
         faces = np.hstack([np.full((len(ev.surface.triangles), 1), 3), ev.surface.triangles]).ravel()
         for f in fields:
             body = pv.PolyData(ev.world_points(f.index), faces)
             body.cell_data["sigma_n"] = ev.cell_values(f.sigma_n) * 1e-6
-            plotter.add_mesh(body, scalars="sigma_n", cmap=STRESS_CMAP, n_colors=N_COLOURS, clim=clim,
-                             scalar_bar_args={"title": "sigma_n (MPa)", "color": "black", "fmt": "%.4g",
-                                              "vertical": True, "position_x": 0.9, "position_y": 0.15,
-                                              "width": 0.04, "height": 0.6, "title_font_size": 14,
-                                              "label_font_size": 12})
+            plotter.add_mesh(
+                body,
+                scalars="sigma_n",
+                cmap=STRESS_CMAP,
+                n_colors=N_COLOURS,
+                clim=clim,
+                scalar_bar_args={
+                    "title": "sigma_n (MPa)",
+                    "color": "black",
+                    "fmt": "%.4g",
+                    "vertical": True,
+                    "position_x": 0.9,
+                    "position_y": 0.15,
+                    "width": 0.04,
+                    "height": 0.6,
+                    "title_font_size": 14,
+                    "label_font_size": 12,
+                },
+            )
         placed = [_label_anchor(f, positions, length) for f in fields]
         for side in ("left", "center", "right"):
             chosen = [k for k, (_, j) in enumerate(placed) if j == side]
             if chosen:
-                plotter.add_point_labels(np.array([placed[k][0] for k in chosen]),
-                                         [f"{fields[k].time * 1e3:.1f} ms, {fields[k].speed:.0f} m/s" for k in chosen],
-                                         font_size=11, point_size=1, shape=None, text_color="black",
-                                         show_points=False, always_visible=True, justification_horizontal=side,
-                                         justification_vertical="center")
+                plotter.add_point_labels(
+                    np.array([placed[k][0] for k in chosen]),
+                    [f"{fields[k].time * 1e3:.1f} ms, {fields[k].speed:.0f} m/s" for k in chosen],
+                    font_size=11,
+                    point_size=1,
+                    shape=None,
+                    text_color="black",
+                    show_points=False,
+                    always_visible=True,
+                    justification_horizontal=side,
+                    justification_vertical="center",
+                )
         space_titles(plotter)
         scene = ev.result.scene
-        plotter.add_text(f"{scene.name or 'run'}: impact {scene.impact.speed:g} m/s, attack "
-                         f"{scene.impact.attack_angle:g} deg, oblique {scene.impact.oblique_angle:g} deg; "
-                         f"end: {ev.result.trajectory.end_reason}", position="upper_edge", font_size=10,
-                         color="black")
+        plotter.add_text(
+            f"{scene.name or 'run'}: impact {scene.impact.speed:g} m/s, attack "
+            f"{scene.impact.attack_angle:g} deg, oblique {scene.impact.oblique_angle:g} deg; "
+            f"end: {ev.result.trajectory.end_reason}",
+            position="upper_edge",
+            font_size=10,
+            color="black",
+        )
         plotter.camera.parallel_projection = True
         plotter.camera.focal_point = centre
         plotter.camera.position = centre - np.array([0.0, 100 * (x_hi - x_lo), 0.0])

@@ -25,9 +25,9 @@ ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "docs"))
 
-from cases.studies.accuracy import time_convergence  # noqa: E402
 from measure import stamp  # noqa: E402
 
+from cases.studies.accuracy import time_convergence  # noqa: E402
 
 
 def _points_per_facet(degree: float) -> int:
@@ -50,7 +50,9 @@ def _error(value: float) -> str:
 
 def _orders(errors: list[float]) -> str:
     """log2 of successive ratios: the observed order of each halving of the mesh size."""
-    orders = [math.log2(a / b) for a, b in zip(errors, errors[1:]) if np.isfinite(a) and np.isfinite(b) and a > 0 and b > 0]
+    orders = [
+        math.log2(a / b) for a, b in zip(errors, errors[1:]) if np.isfinite(a) and np.isfinite(b) and a > 0 and b > 0
+    ]
     return ", ".join(f"{o:.1f}" for o in orders)
 
 
@@ -65,8 +67,10 @@ def mesh(study: Path) -> None:
     sizes = sorted(rows["numerics.mesh_size"].unique(), reverse=True)
     step = rows["numerics.time_step"].iloc[0]
     turns = _turns(table)
-    print(f"{reference} Each cell: the setting's relative depth error at RK4 {step:g} s"
-          + ("; in brackets, its axis-turn error (deg)." if turns else "."))
+    print(
+        f"{reference} Each cell: the setting's relative depth error at RK4 {step:g} s"
+        + ("; in brackets, its axis-turn error (deg)." if turns else ".")
+    )
     print()
     print("| normals, order, points per facet | " + " | ".join(f"{s * 1e3:g} mm" for s in sizes) + " | order |")
     print("|---|" + "---|" * (len(sizes) + 1))
@@ -83,10 +87,12 @@ def mesh(study: Path) -> None:
             elif not np.isfinite(d):  # the finest setting is the reference of a non-plain scene
                 cells.append("reference")
             else:
-                cells.append(_error(d) + (f" ({_error(float(by_size.loc[s, 'axis_angle_error']))})"
-                                          if turns else ""))
-        label = (f"{normals}, P{int(geometry)}" + (" (flat facets)" if geometry == 1 and normals == "mesh" else "")
-                 + f", {_points_per_facet(quadrature)}")
+                cells.append(_error(d) + (f" ({_error(float(by_size.loc[s, 'axis_angle_error']))})" if turns else ""))
+        label = (
+            f"{normals}, P{int(geometry)}"
+            + (" (flat facets)" if geometry == 1 and normals == "mesh" else "")
+            + f", {_points_per_facet(quadrature)}"
+        )
         # flat facets with their own normals do not converge to the exact surface: no order
         orders = "" if (geometry == 1 and normals == "mesh") else _orders(depth)
         print(f"| {label} | " + " | ".join(cells) + f" | {orders} |")
@@ -103,12 +109,19 @@ def time(study: Path) -> None:
     unstable = table["convergence_speed"].notna().any()
     print(f"{reference} On the {finest * 1e3:g} mm mesh (P2, exact normals, 3 points per facet):")
     print()
-    print("| integrator | steps | energy retakes | depth error | " + ("axis-turn error (deg) | " if turns else "")
-          + ("convergence-speed error (m/s) | " if unstable else "") + "integration |")
+    print(
+        "| integrator | steps | energy retakes | depth error | "
+        + ("axis-turn error (deg) | " if turns else "")
+        + ("convergence-speed error (m/s) | " if unstable else "")
+        + "integration |"
+    )
     print("|---|---|---|---|" + ("---|" if turns else "") + ("---|" if unstable else "") + "---|")
     for _, row in axis.iterrows():
-        setting = (f"RK4 {row['numerics.time_step']:g} s" if row["numerics.integrator"] == "rk4"
-                   else f"Dormand-Prince rtol {row['numerics.rtol']:g}")
+        setting = (
+            f"RK4 {row['numerics.time_step']:g} s"
+            if row["numerics.integrator"] == "rk4"
+            else f"Dormand-Prince rtol {row['numerics.rtol']:g}"
+        )
         cells = [setting, str(int(row["steps"])), str(int(row["energy_rejections"])), _error(row["depth_error"])]
         if turns:
             cells.append(_error(row["axis_angle_error"]))
@@ -119,8 +132,11 @@ def time(study: Path) -> None:
     convergence = time_convergence(table)
     steps = sorted(convergence["numerics.time_step"].unique(), reverse=True)
     print()
-    print("RK4's time error alone, each step against the finest step on the same mesh: relative depth"
-          + (" / axis turn (deg)" if turns else "") + "; the last column is the mesh's own depth error.")
+    print(
+        "RK4's time error alone, each step against the finest step on the same mesh: relative depth"
+        + (" / axis turn (deg)" if turns else "")
+        + "; the last column is the mesh's own depth error."
+    )
     print()
     print("| mesh | " + " | ".join(f"{h:g} s" for h in steps) + " | mesh error |")
     print("|---|" + "---|" * (len(steps) + 1))
@@ -136,28 +152,40 @@ def time(study: Path) -> None:
                 cell += f" / {_error(group.loc[h, 'axis_angle_time_error'])}"
             cells.append(cell)
         mesh_error = group["mesh_error"].iloc[0]
-        print(f"| {size * 1e3:g} mm | " + " | ".join(cells)
-              + f" | {'reference' if not np.isfinite(mesh_error) else _error(mesh_error)} |")
+        print(
+            f"| {size * 1e3:g} mm | "
+            + " | ".join(cells)
+            + f" | {'reference' if not np.isfinite(mesh_error) else _error(mesh_error)} |"
+        )
     print()
     print(stamp())
 
 
 def shipped(studies: list[Path]) -> None:
     """Each study's scene at its own shipped numerics: what the shipped settings cost and miss."""
-    print("| scene | shipped numerics | steps | depth error | axis-turn error (deg) | convergence-speed error (m/s) "
-          "| integration |")
+    print(
+        "| scene | shipped numerics | steps | depth error | axis-turn error (deg) | convergence-speed error (m/s) "
+        "| integration |"
+    )
     print("|---|---|---|---|---|---|---|")
     for study in studies:
         table, _ = _read(study)
         row = table[table["axis"] == "scene"].iloc[0]
-        numerics = (f"{float(row['numerics.mesh_size']) * 1e3:g} mm, P{int(float(row['numerics.geometry_order']))}, "
-                    f"{row['numerics.normals']} normals, {_points_per_facet(float(row['numerics.quadrature_order']))}"
-                    " points per facet, ")
-        numerics += (f"Dormand-Prince rtol {float(row['numerics.rtol']):g}" if row["numerics.integrator"] == "dopri54"
-                     else f"RK4 {float(row['numerics.time_step']):g} s")
-        print(f"| {study.name} | {numerics} | {int(row['steps'])} | {_error(row['depth_error'])} | "
-              f"{_error(row['axis_angle_error']) if _turns(table) else '-'} | {_error(row['convergence_speed_error'])} | "
-              f"{row['integration_time']:.2f} s |")
+        numerics = (
+            f"{float(row['numerics.mesh_size']) * 1e3:g} mm, P{int(float(row['numerics.geometry_order']))}, "
+            f"{row['numerics.normals']} normals, {_points_per_facet(float(row['numerics.quadrature_order']))}"
+            " points per facet, "
+        )
+        numerics += (
+            f"Dormand-Prince rtol {float(row['numerics.rtol']):g}"
+            if row["numerics.integrator"] == "dopri54"
+            else f"RK4 {float(row['numerics.time_step']):g} s"
+        )
+        print(
+            f"| {study.name} | {numerics} | {int(row['steps'])} | {_error(row['depth_error'])} | "
+            f"{_error(row['axis_angle_error']) if _turns(table) else '-'} | {_error(row['convergence_speed_error'])} | "
+            f"{row['integration_time']:.2f} s |"
+        )
     print()
     print(stamp())
 

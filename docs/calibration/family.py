@@ -2,7 +2,8 @@
 
 Run from the repository root: ``python docs/calibration/family.py`` (several minutes from an empty
 store; runs are kept in ``runs/calibration-family-store``); it writes ``family.json`` beside itself, and
-``python docs/calibration/family.py --from-json`` prints the same tables from it (docs/paper.md).  The one parameter is a common factor on the
+``python docs/calibration/family.py --from-json`` prints the same tables from it (docs/paper.md).  The one
+parameter is a common factor on the
 transverse moment of inertia, ``projectile.transverse_inertia_scale``, fitted by ``penetrate fit``'s
 own code to #3's two published numbers: its critical impact velocity (stable at 1100, unstable at
 1120 m/s: 1110 +- 10 m/s) and its characteristic convergent velocity (about 322 m/s; +- 10 m/s).
@@ -49,35 +50,57 @@ def calibrate() -> dict:
     members = []
     for i, ratio in enumerate(uncalibrated["ratios"]):
         critical, convergent = speeds(ratio, scaled)
-        members.append({"ratio": ratio, "critical_uncalibrated": uncalibrated["critical_velocity"][i],
-                        "critical_predicted": critical,
-                        "convergent_uncalibrated": uncalibrated["characteristic_convergent_velocity"]["attack 1"][i],
-                        "convergent_predicted": convergent})
-    return {"key": KEY, "value": scale, "standard_error": result.standard_errors[KEY], "shipped": scaled,
-            "runs": result.runs, "observations": result.observations, "members": members}
+        members.append(
+            {
+                "ratio": ratio,
+                "critical_uncalibrated": uncalibrated["critical_velocity"][i],
+                "critical_predicted": critical,
+                "convergent_uncalibrated": uncalibrated["characteristic_convergent_velocity"]["attack 1"][i],
+                "convergent_predicted": convergent,
+            }
+        )
+    return {
+        "key": KEY,
+        "value": scale,
+        "standard_error": result.standard_errors[KEY],
+        "shipped": scaled,
+        "runs": result.runs,
+        "observations": result.observations,
+        "members": members,
+    }
 
 
 def table(record: dict) -> None:
     """The calibration and the predictions, as markdown."""
-    print(f"Fitted on #3 alone: `{record['key']}` = {record['value']:.3f} +- {record['standard_error']:.3f} "
-          f"({record['runs']} runs).")
+    print(
+        f"Fitted on #3 alone: `{record['key']}` = {record['value']:.3f} +- {record['standard_error']:.3f} "
+        f"({record['runs']} runs)."
+    )
     print()
     print("| #3 | published | calibrated model | residual |")
     print("|---|---|---|---|")
     for row in record["observations"]:
-        print(f"| {row['quantity'].replace('_', ' ')} | {row['observed']:g} +- {row['sigma']:g} m/s | "
-              f"{row['fitted']:.1f} m/s | {row['residual']:+.1f} m/s |")
+        print(
+            f"| {row['quantity'].replace('_', ' ')} | {row['observed']:g} +- {row['sigma']:g} m/s | "
+            f"{row['fitted']:.1f} m/s | {row['residual']:+.1f} m/s |"
+        )
     print()
-    print(f"Each member with the factor {record['shipped']:g} (predictions: only #3 entered the fit), beside the "
-          "uncalibrated model (factor 1, docs/paper/results.json):")
+    print(
+        f"Each member with the factor {record['shipped']:g} (predictions: only #3 entered the fit), beside the "
+        "uncalibrated model (factor 1, docs/paper/results.json):"
+    )
     print()
-    print("| projectile | Lc/L (%) | critical, uncalibrated (m/s) | critical, predicted (m/s) | "
-          "convergent, uncalibrated (m/s) | convergent, predicted (m/s) |")
+    print(
+        "| projectile | Lc/L (%) | critical, uncalibrated (m/s) | critical, predicted (m/s) | "
+        "convergent, uncalibrated (m/s) | convergent, predicted (m/s) |"
+    )
     print("|---|---|---|---|---|---|")
     for m in record["members"]:
         shown = [("-" if v is None else f"{v:.1f}") for v in (m["critical_predicted"], m["convergent_predicted"])]
-        print(f"| {NAMES.get(m['ratio'], '')} | {m['ratio'] * 100:.2f} | {m['critical_uncalibrated']:.1f} | {shown[0]} | "
-              f"{m['convergent_uncalibrated']:.1f} | {shown[1]} |")
+        print(
+            f"| {NAMES.get(m['ratio'], '')} | {m['ratio'] * 100:.2f} | {m['critical_uncalibrated']:.1f} | {shown[0]} | "
+            f"{m['convergent_uncalibrated']:.1f} | {shown[1]} |"
+        )
 
 
 def main() -> None:

@@ -49,26 +49,35 @@ def residual_cells(result, mark: str = "") -> str:
 
 def main() -> None:
     tests = list(MEASURED)
-    print("| fit | parameter(s) | value +- standard error | fitted path lengths (m), tests 2-6 | residuals (m) "
-          "| RMS (m) | runs |")
+    print(
+        "| fit | parameter(s) | value +- standard error | fitted path lengths (m), tests 2-6 | residuals (m) "
+        "| RMS (m) | runs |"
+    )
     print("|---|---|---|---|---|---|---|")
     try:
         # the two are nearly collinear on these shots: where along the valley the fit stops moves with changes
         # far below the runs' accuracy (another machine's round-off), so its figures are marked ~ (not compared
         # by docs/regenerate.py --check); docs/calibration.md says so
         both = run_fit(["target.law.A=0.5:4", "target.law.B=0.3:3"], tests)
-        values = "; ".join(f"{k.rsplit('.', 1)[1]} = ~{v:.3f} +- ~{both.standard_errors[k]:.3f}"
-                           for k, v in both.parameters.items())
-        print(f"| A and B | `A`, `B` | {values} (correlation ~{both.correlation[0][1]:+.3f}) | "
-              f"{fitted_cells(both, '~')} | {residual_cells(both, '~')} | "
-              f"~{_rms(both):.3f} | ~{both.runs} |")
+        values = "; ".join(
+            f"{k.rsplit('.', 1)[1]} = ~{v:.3f} +- ~{both.standard_errors[k]:.3f}" for k, v in both.parameters.items()
+        )
+        print(
+            f"| A and B | `A`, `B` | {values} (correlation ~{both.correlation[0][1]:+.3f}) | "
+            f"{fitted_cells(both, '~')} | {residual_cells(both, '~')} | "
+            f"~{_rms(both):.3f} | ~{both.runs} |"
+        )
     except NotIdentifiable as error:
         print(f"| A and B | `A`, `B` | not identifiable: {error} | - | - | - | - |")
     for name, parameters, overrides in (
-            ("B alone (A = 1.718)", ["target.law.B=0.3:3"], ()),
-            ("A alone (B = 1.227)", ["target.law.A=0.5:4"], ()),
-            ("friction alone (A, B the paper's)", ["effects.friction.coefficient=0:0.5"],
-             [("effects.friction", {"model": "coulomb", "coefficient": 0.05})])):
+        ("B alone (A = 1.718)", ["target.law.B=0.3:3"], ()),
+        ("A alone (B = 1.227)", ["target.law.A=0.5:4"], ()),
+        (
+            "friction alone (A, B the paper's)",
+            ["effects.friction.coefficient=0:0.5"],
+            [("effects.friction", {"model": "coulomb", "coefficient": 0.05})],
+        ),
+    ):
         result = run_fit(parameters, tests, overrides)
         key = next(iter(result.parameters))
         error = result.standard_errors[key]
@@ -77,8 +86,10 @@ def main() -> None:
         shown = f"{value:.4g} +- {error:.2g}" if error is not None else f"{value:.4g}"
         if result.notes and any("bound" in n for n in result.notes):
             shown += " (at its bound)"
-        print(f"| {name} | `{key}` | {shown} | {fitted_cells(result)} | "
-              f"{residual_cells(result)} | {_rms(result):.3f} | {result.runs} |")
+        print(
+            f"| {name} | `{key}` | {shown} | {fitted_cells(result)} | "
+            f"{residual_cells(result)} | {_rms(result):.3f} | {result.runs} |"
+        )
     print()
     print("Leave one out (B alone, A = 1.718): fitted on the other four, the left-out shot predicted:")
     print()
@@ -96,9 +107,11 @@ def main() -> None:
     print()
     oblique = run_fit(["target.law.B=0.05:3"], [3, 4])
     normal = run_fit(["target.law.B=0.3:3"], [2, 5, 6])
-    print(f"The oblique shots alone (tests 3 and 4) need B = {oblique.parameters['target.law.B']:.3f} "
-          f"(residuals {residual_cells(oblique)} m); the three normal-incidence shots alone give "
-          f"B = {normal.parameters['target.law.B']:.3f} (residuals {residual_cells(normal)} m).")
+    print(
+        f"The oblique shots alone (tests 3 and 4) need B = {oblique.parameters['target.law.B']:.3f} "
+        f"(residuals {residual_cells(oblique)} m); the three normal-incidence shots alone give "
+        f"B = {normal.parameters['target.law.B']:.3f} (residuals {residual_cells(normal)} m)."
+    )
 
 
 def _rms(result) -> float:

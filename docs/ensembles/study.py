@@ -23,8 +23,8 @@ import pandas as pd
 from cases.run import RunStore
 from cases.studies import Pool, Sweep, find_critical_velocity
 from cases.studies.ensemble import wilson_interval
-from cases.studies.paper.plan import STUDY_NUMERICS
 from cases.studies.ensemble_study import run_ensemble
+from cases.studies.paper.plan import STUDY_NUMERICS
 from cases.viz.figures import save_figure, subplots
 
 HERE = Path(__file__).resolve().parent
@@ -44,8 +44,11 @@ MEDIAN_FACTOR = math.sqrt(2.0) * 0.4769362762044699  # the half-normal's median 
 
 def samples(scale: float) -> list[str]:
     b = SOIL["B"]
-    return ["impact.speed=uniform:700:1400", f"impact.attack_angle=halfnormal:{scale:g}",
-            f"target.law.B=uniform:{0.9 * b:.6g}:{1.1 * b:.6g}"]
+    return [
+        "impact.speed=uniform:700:1400",
+        f"impact.attack_angle=halfnormal:{scale:g}",
+        f"target.law.B=uniform:{0.9 * b:.6g}:{1.1 * b:.6g}",
+    ]
 
 
 def fifty_percent_point(speeds: np.ndarray, unstable: np.ndarray) -> float | None:
@@ -58,8 +61,12 @@ def fifty_percent_point(speeds: np.ndarray, unstable: np.ndarray) -> float | Non
         z = theta[0] + theta[1] * x
         return float(np.sum(np.logaddexp(0.0, z) - unstable * z))
 
-    fit = minimize(negative_log_likelihood, np.array([0.0, 1.0]), method="Nelder-Mead",
-                   options={"xatol": 1e-8, "fatol": 1e-10, "maxiter": 4000})
+    fit = minimize(
+        negative_log_likelihood,
+        np.array([0.0, 1.0]),
+        method="Nelder-Mead",
+        options={"xatol": 1e-8, "fatol": 1e-10, "maxiter": 4000},
+    )
     a, b = fit.x
     return None if b <= 0 else 1000.0 - 100.0 * a / b
 
@@ -74,12 +81,24 @@ def main() -> None:
     tables, walls = {}, {}
     for scale in SCALES:
         start = time.perf_counter()
-        run_ensemble(SCENE, STUDY, samples(scale), RUNS, STORE, HERE / f"scale_{scale:g}", seed=1, design="sobol",
-                     by="impact.speed=700:1400:50", pool=POOL)
+        run_ensemble(
+            SCENE,
+            STUDY,
+            samples(scale),
+            RUNS,
+            STORE,
+            HERE / f"scale_{scale:g}",
+            seed=1,
+            design="sobol",
+            by="impact.speed=700:1400:50",
+            pool=POOL,
+        )
         walls[scale] = time.perf_counter() - start
         tables[scale] = pd.read_csv(HERE / f"scale_{scale:g}" / "ensemble.csv")
-    print("| attack-angle scale (deg) | median angle (deg) | 50 % point (m/s) | critical at the median angle (m/s) "
-          "| critical at 1 deg (m/s) | P(unstable), 95 % interval, all runs | wall time |")
+    print(
+        "| attack-angle scale (deg) | median angle (deg) | 50 % point (m/s) | critical at the median angle (m/s) "
+        "| critical at 1 deg (m/s) | P(unstable), 95 % interval, all runs | wall time |"
+    )
     print("|---|---|---|---|---|---|---|")
     at_one = critical(1.0)
     for scale, table in tables.items():
@@ -87,16 +106,20 @@ def main() -> None:
         point = fifty_percent_point(speeds, unstable)
         median = MEDIAN_FACTOR * scale
         low, high = wilson_interval(int(unstable.sum()), len(unstable))
-        print(f"| {scale:g} | {median:.3f} | {'-' if point is None else f'{point:.0f}'} | {critical(median):.1f} | "
-              f"{at_one:.1f} | {unstable.mean():.3f} ({float(low):.3f}-{float(high):.3f}) | {walls[scale]:.0f} s |")
+        print(
+            f"| {scale:g} | {median:.3f} | {'-' if point is None else f'{point:.0f}'} | {critical(median):.1f} | "
+            f"{at_one:.1f} | {unstable.mean():.3f} ({float(low):.3f}-{float(high):.3f}) | {walls[scale]:.0f} s |"
+        )
     print()
     print(stamp())
     print()
     curve_figure(tables)
     print("![P(unstable) against the impact speed](ensembles/curves.png)")
     print()
-    print("How the band narrows: the 95 % half-width of P(unstable) in the 50 m/s bin nearest to 50 % (scale "
-          "1 degree), from the first N runs of the Sobol' design (a prefix of one sequence):")
+    print(
+        "How the band narrows: the 95 % half-width of P(unstable) in the 50 m/s bin nearest to 50 % (scale "
+        "1 degree), from the first N runs of the Sobol' design (a prefix of one sequence):"
+    )
     print()
     print("| runs in the ensemble | runs in the bin | P(unstable) in the bin | 95 % half-width |")
     print("|---|---|---|---|")
@@ -108,12 +131,16 @@ def main() -> None:
     for n in (32, 64, 128, 256, 512):
         inside = unstable[:n][(speeds[:n] >= lo) & (speeds[:n] < hi)]
         a, b = wilson_interval(int(inside.sum()), len(inside))
-        print(f"| {n} | {len(inside)} ({lo:.0f}-{hi:.0f} m/s) | {inside.mean():.3f} | {(float(b) - float(a)) / 2:.3f} |")
+        print(
+            f"| {n} | {len(inside)} ({lo:.0f}-{hi:.0f} m/s) | {inside.mean():.3f} | {(float(b) - float(a)) / 2:.3f} |"
+        )
     print()
-    needed = math.ceil(1.959964 ** 2 * 0.25 / 0.05 ** 2)
-    print(f"A +-5 % band at P = 1/2 needs {needed} runs in the bin (the normal approximation "
-          f"1.96^2 p (1 - p) / 0.05^2); over 700-1400 m/s in 50 m/s bins that is {needed * (len(EDGES) - 1)} runs, "
-          "or fewer where only the bins near the transition need it.")
+    needed = math.ceil(1.959964**2 * 0.25 / 0.05**2)
+    print(
+        f"A +-5 % band at P = 1/2 needs {needed} runs in the bin (the normal approximation "
+        f"1.96^2 p (1 - p) / 0.05^2); over 700-1400 m/s in 50 m/s bins that is {needed * (len(EDGES) - 1)} runs, "
+        "or fewer where only the bins near the transition need it."
+    )
 
 
 def curve_figure(tables: dict) -> None:
@@ -121,15 +148,21 @@ def curve_figure(tables: dict) -> None:
     middles = 0.5 * (EDGES[:-1] + EDGES[1:])
     for scale, table in tables.items():
         speeds, unstable = table["impact.speed"].to_numpy(float), table["unstable"].to_numpy(bool)
-        counts = [(int(unstable[(speeds >= lo) & (speeds < hi)].sum()), int(((speeds >= lo) & (speeds < hi)).sum()))
-                  for lo, hi in zip(EDGES[:-1], EDGES[1:])]
+        counts = [
+            (int(unstable[(speeds >= lo) & (speeds < hi)].sum()), int(((speeds >= lo) & (speeds < hi)).sum()))
+            for lo, hi in zip(EDGES[:-1], EDGES[1:])
+        ]
         p = np.array([k / n if n else np.nan for k, n in counts])
         low, high = zip(*[wilson_interval(k, n) if n else (np.nan, np.nan) for k, n in counts])
-        line, = axes.plot(middles, p, marker="o", label=f"attack angle half-normal, scale {scale:g} deg")
+        (line,) = axes.plot(middles, p, marker="o", label=f"attack angle half-normal, scale {scale:g} deg")
         axes.fill_between(middles, np.array(low, float), np.array(high, float), color=line.get_color(), alpha=0.18)
     axes.axhline(0.5, color="grey", lw=0.8, ls=":")
-    axes.set(xlabel="impact speed (m/s)", ylabel="P(unstable)", ylim=(-0.02, 1.02),
-             title=f"#3: probability of instability ({RUNS} runs each; B +-10 %; 95 % Wilson bands)")
+    axes.set(
+        xlabel="impact speed (m/s)",
+        ylabel="P(unstable)",
+        ylim=(-0.02, 1.02),
+        title=f"#3: probability of instability ({RUNS} runs each; B +-10 %; 95 % Wilson bands)",
+    )
     axes.grid(alpha=0.3)
     axes.legend(fontsize=8, loc="lower right")
     figure.tight_layout()

@@ -17,8 +17,11 @@ import numpy as np
 from cases import load_scene, run_scene, summarise
 
 ROOT = Path(__file__).resolve().parents[2]
-SCENES = {"forrestal_luk_test2": None, "eroded_test2": "cases/bodies/eroded_test2.step",
-          "finned_test2": "cases/bodies/finned_test2.step"}
+SCENES = {
+    "forrestal_luk_test2": None,
+    "eroded_test2": "cases/bodies/eroded_test2.step",
+    "finned_test2": "cases/bodies/finned_test2.step",
+}
 
 
 def occ_mass_properties(path: str):
@@ -30,8 +33,10 @@ def occ_mass_properties(path: str):
 
 
 def main() -> None:
-    print("| scene | volume: mesh / CAD - 1 | transverse inertia I_yy: mesh / CAD - 1 | tip depth (m) | "
-          "path length (m) | largest attack angle (deg) | axis turn (deg) | drift sideways (mm) |")
+    print(
+        "| scene | volume: mesh / CAD - 1 | transverse inertia I_yy: mesh / CAD - 1 | tip depth (m) | "
+        "path length (m) | largest attack angle (deg) | axis turn (deg) | drift sideways (mm) |"
+    )
     print("|---|---|---|---|---|---|---|---|")
     for name, step in SCENES.items():
         result = run_scene(load_scene(ROOT / "cases" / f"{name}.toml"))
@@ -44,8 +49,10 @@ def main() -> None:
             volume_error = f"{mass.volume / volume - 1:+.1e}"
             inertia_error = f"{(mass.inertia[1, 1] / mass.mass) / (inertia[1, 1] / volume) - 1:+.1e}"
         drift = float(np.hypot(*result.trajectory.position[-1, :2])) * 1e3
-        print(f"| `{name}` | {volume_error} | {inertia_error} | {summary.depth:.3f} | {summary.path_length:.3f} | "
-              f"{summary.max_attack_angle:.3f} | {summary.axis_angle_change:+.3f} | {drift:.1f} |")
+        print(
+            f"| `{name}` | {volume_error} | {inertia_error} | {summary.depth:.3f} | {summary.path_length:.3f} | "
+            f"{summary.max_attack_angle:.3f} | {summary.axis_angle_change:+.3f} | {drift:.1f} |"
+        )
 
 
 if __name__ == "__main__":

@@ -71,43 +71,69 @@ def study() -> dict:
     """Each body's mass properties, its runs over :data:`SPEEDS` and its critical impact velocity."""
     written = bodies()
     overrides = list(STUDY_NUMERICS.items())
-    variations = [Variation({"projectile.geometry.file": str(path), "impact.speed": speed})
-                  for _, path in written for speed in SPEEDS]
+    variations = [
+        Variation({"projectile.geometry.file": str(path), "impact.speed": speed})
+        for _, path in written
+        for speed in SPEEDS
+    ]
     swept = run_sweep(Sweep.from_file(SCENE, overrides, variations), STORE, POOL)
     per_body = [Sweep.from_file(SCENE, [*overrides, ("projectile.geometry.file", str(path))]) for _, path in written]
     searches = find_critical_velocities(per_body, STORE, CRITICAL_RANGE, 5.0, POOL)
     record = []
     for k, (label, _) in enumerate(written):
         mass = prepare_projectile(per_body[k].scenes[0]).mass
-        runs = swept.runs[k * len(SPEEDS):(k + 1) * len(SPEEDS)]
-        record.append({
-            "body": label, "mass": mass.mass, "centre_from_tip": mass.centre_from_tip,
-            "transverse_inertia": mass.transverse_inertia,
-            "largest_product_of_inertia": float(max(abs(mass.inertia[0, 1]), abs(mass.inertia[0, 2]),
-                                                    abs(mass.inertia[1, 2]))),
-            "runs": [{"speed": speed, "axis_turn": run.summary.axis_angle_change,
-                      "max_attack_angle": run.summary.max_attack_angle, "path_length": run.summary.path_length,
-                      "depth": run.summary.depth, "end": run.summary.end_reason}
-                     for speed, run in zip(SPEEDS, runs)],
-            "critical_velocity": searches[k].critical_velocity, "critical_bracket": searches[k].bracket,
-            "critical_message": searches[k].message})
+        runs = swept.runs[k * len(SPEEDS) : (k + 1) * len(SPEEDS)]
+        record.append(
+            {
+                "body": label,
+                "mass": mass.mass,
+                "centre_from_tip": mass.centre_from_tip,
+                "transverse_inertia": mass.transverse_inertia,
+                "largest_product_of_inertia": float(
+                    max(abs(mass.inertia[0, 1]), abs(mass.inertia[0, 2]), abs(mass.inertia[1, 2]))
+                ),
+                "runs": [
+                    {
+                        "speed": speed,
+                        "axis_turn": run.summary.axis_angle_change,
+                        "max_attack_angle": run.summary.max_attack_angle,
+                        "path_length": run.summary.path_length,
+                        "depth": run.summary.depth,
+                        "end": run.summary.end_reason,
+                    }
+                    for speed, run in zip(SPEEDS, runs)
+                ],
+                "critical_velocity": searches[k].critical_velocity,
+                "critical_bracket": searches[k].bracket,
+                "critical_message": searches[k].message,
+            }
+        )
     return {"depth": DEPTH, "speeds": SPEEDS, "bodies": record}
 
 
 def report(record: dict) -> None:
     """The tables, as markdown."""
-    print(f"#3 with a solid nose, at normal incidence and no attack; the nose cut {1e3 * record['depth']:g} mm behind"
-          " the tip by a plane whose normal leaves the axis by the angle given (0: a flat, symmetric cut):")
+    print(
+        f"#3 with a solid nose, at normal incidence and no attack; the nose cut {1e3 * record['depth']:g} mm behind"
+        " the tip by a plane whose normal leaves the axis by the angle given (0: a flat, symmetric cut):"
+    )
     print()
-    print("| nose | mass (kg) | centre of mass from the tip (m) | transverse inertia (kg m^2) | critical impact "
-          "velocity (m/s) | axis turn at 1200 m/s (deg) | largest attack angle at 1200 m/s (deg) |")
+    print(
+        "| nose | mass (kg) | centre of mass from the tip (m) | transverse inertia (kg m^2) | critical impact "
+        "velocity (m/s) | axis turn at 1200 m/s (deg) | largest attack angle at 1200 m/s (deg) |"
+    )
     print("|---|---|---|---|---|---|---|")
     for body in record["bodies"]:
         at = next(run for run in body["runs"] if run["speed"] == 1200)
-        critical = (f"{body['critical_velocity']:.1f}" if body["critical_velocity"] is not None else
-                    f"none up to {CRITICAL_RANGE[1]:g}")
-        print(f"| {body['body']} | {body['mass']:.2f} | {body['centre_from_tip']:.4f} | "
-              f"{body['transverse_inertia']:.3f} | {critical} | {at['axis_turn']:+.1f} | {at['max_attack_angle']:.2f} |")
+        critical = (
+            f"{body['critical_velocity']:.1f}"
+            if body["critical_velocity"] is not None
+            else f"none up to {CRITICAL_RANGE[1]:g}"
+        )
+        print(
+            f"| {body['body']} | {body['mass']:.2f} | {body['centre_from_tip']:.4f} | "
+            f"{body['transverse_inertia']:.3f} | {critical} | {at['axis_turn']:+.1f} | {at['max_attack_angle']:.2f} |"
+        )
     print()
     print("Axis turn (deg) against the impact speed (m/s):")
     print()
@@ -121,12 +147,22 @@ def figures(record: dict) -> None:
     """The axis turn against the speed for every body; the critical speed and the turn at 1200 m/s against the cut."""
     fig, axes = plt.subplots(figsize=(6.5, 4.2))
     for k, body in enumerate(record["bodies"]):
-        axes.plot(record["speeds"], [abs(run["axis_turn"]) for run in body["runs"]], "o-", ms=3,
-                  color=plt.cm.viridis(k / max(1, len(record["bodies"]) - 1)), label=body["body"])
+        axes.plot(
+            record["speeds"],
+            [abs(run["axis_turn"]) for run in body["runs"]],
+            "o-",
+            ms=3,
+            color=plt.cm.viridis(k / max(1, len(record["bodies"]) - 1)),
+            label=body["body"],
+        )
     axes.axhline(30.0, color="0.5", lw=0.8, ls="--")
     axes.set_yscale("symlog", linthresh=1.0)
-    axes.set(xlabel="impact speed (m/s)", ylabel="|axis turn| (deg)", ylim=(0.0, 400.0),
-             title="#3, normal impact, nose cut 40 mm behind the tip")
+    axes.set(
+        xlabel="impact speed (m/s)",
+        ylabel="|axis turn| (deg)",
+        ylim=(0.0, 400.0),
+        title="#3, normal impact, nose cut 40 mm behind the tip",
+    )
     axes.legend(fontsize=7, title="cut's angle")
     _save(fig, "erosion_turn.png")
     cut = [b for b in record["bodies"] if b["body"] != "whole"]
@@ -134,11 +170,19 @@ def figures(record: dict) -> None:
     fig, left = plt.subplots(figsize=(6.5, 4.2))
     critical = [b["critical_velocity"] if b["critical_velocity"] is not None else math.nan for b in cut]
     left.plot(angles, critical, "o-", color="C3", label="critical impact velocity")
-    left.set(xlabel="angle of the cut's normal from the axis (deg)", ylabel="critical impact velocity (m/s)",
-             ylim=(0, CRITICAL_RANGE[1]))
+    left.set(
+        xlabel="angle of the cut's normal from the axis (deg)",
+        ylabel="critical impact velocity (m/s)",
+        ylim=(0, CRITICAL_RANGE[1]),
+    )
     right = left.twinx()
-    right.plot(angles, [abs(next(r for r in b["runs"] if r["speed"] == 1200)["axis_turn"]) for b in cut], "s--",
-               color="C0", label="axis turn at 1200 m/s")
+    right.plot(
+        angles,
+        [abs(next(r for r in b["runs"] if r["speed"] == 1200)["axis_turn"]) for b in cut],
+        "s--",
+        color="C0",
+        label="axis turn at 1200 m/s",
+    )
     right.set(ylabel="|axis turn| at 1200 m/s (deg)")
     fig.legend(loc="center right", fontsize=8, bbox_to_anchor=(0.85, 0.45))
     _save(fig, "erosion_critical.png")

@@ -25,6 +25,7 @@ ROOT = Path(__file__).resolve().parents[2]
 sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 
 from bodies import write_body, write_volume_mesh  # noqa: E402
+
 from cases import load_scene, run_scene, scene_path, summarise  # noqa: E402
 from cases.studies.reference import axial_depth_1d  # noqa: E402
 
@@ -54,52 +55,75 @@ def _quiet():
 
 def facets(folder: Path) -> None:
     scene = load_scene(TEST2)
-    reference, _ = axial_depth_1d(scene.projectile.profile(), scene.target.build(), scene.projectile.mass,
-                                  scene.impact.speed, scene.numerics.stop_speed, **scene.effects.contact)
+    reference, _ = axial_depth_1d(
+        scene.projectile.profile(),
+        scene.target.build(),
+        scene.projectile.mass,
+        scene.impact.speed,
+        scene.numerics.stop_speed,
+        **scene.effects.contact,
+    )
     print("| mesh | 20 mm | 10 mm | 5 mm |")
     print("|---|---|---|---|")
-    for order, label in ((1, "4-node tetrahedra (flat facets), own normals"),
-                         (2, "10-node tetrahedra (curved facets), own normals")):
+    for order, label in (
+        (1, "4-node tetrahedra (flat facets), own normals"),
+        (2, "10-node tetrahedra (curved facets), own normals"),
+    ):
         cells = []
         for size in (0.02, 0.01, 0.005):
             with _quiet():
                 path = write_volume_mesh(folder / f"o{order}_{size:g}.msh", size, order=order)
-            _, depth = _run({"projectile.geometry": {"file": str(path)}, "numerics.normals": "mesh",
-                             "numerics.geometry_order": order, "numerics.mesh_size": size})
+            _, depth = _run(
+                {
+                    "projectile.geometry": {"file": str(path)},
+                    "numerics.normals": "mesh",
+                    "numerics.geometry_order": order,
+                    "numerics.mesh_size": size,
+                }
+            )
             cells.append(f"{100 * (depth / reference - 1):+.2g} %")
         print(f"| {label} | " + " | ".join(cells) + " |", flush=True)
 
 
 def _worst(got, want) -> float:
-    return max(abs(getattr(got, key) / getattr(want, key) - 1)
-               for key in ("mass", "centre_from_tip", "axial_inertia", "transverse_inertia"))
+    return max(
+        abs(getattr(got, key) / getattr(want, key) - 1)
+        for key in ("mass", "centre_from_tip", "axial_inertia", "transverse_inertia")
+    )
 
 
 def files(folder: Path) -> None:
     with _quiet():
         rows = _bodies(folder)
-    print("| file | largest mass-property error (mass, centre, both inertias) | depth (m) | analytic scene (m) |"
-          " difference |")
+    print(
+        "| file | largest mass-property error (mass, centre, both inertias) | depth (m) | analytic scene (m) |"
+        " difference |"
+    )
     print("|---|---|---|---|---|")
     for label, path, geometry, nose, numerics in rows:
         props, depth = _run({"projectile.geometry": {"file": str(path), **geometry}, **numerics})
         want, analytic = _run(nose)
-        print(f"| {label} | {_worst(props, want):.1e} | {depth:.4f} | {analytic:.4f} | {depth / analytic - 1:+.1e} |",
-              flush=True)
+        print(
+            f"| {label} | {_worst(props, want):.1e} | {depth:.4f} | {analytic:.4f} | {depth / analytic - 1:+.1e} |",
+            flush=True,
+        )
 
 
 def _bodies(folder: Path) -> list:
     return [
         ("STEP in mm, exact normals", write_body(folder / "body.step", scale=1e-3), {"unit": "mm"}, {}, {}),
         ("BREP in cm, exact normals", write_body(folder / "body.brep", scale=1e-2), {"unit": "cm"}, {}, {}),
-        ("IGES in mm (loose faces, sewn), exact normals", write_body(folder / "body.iges", scale=1e-3),
-         {"unit": "mm"}, {}, {}),
+        (
+            "IGES in mm (loose faces, sewn), exact normals",
+            write_body(folder / "body.iges", scale=1e-3),
+            {"unit": "mm"},
+            {},
+            {},
+        ),
         ("STEP, cone nose (12 deg half angle)", write_body(folder / "cone.step", half_angle=12.0), {}, CONE, {}),
         ("STEP in mm, mesh normals", folder / "body.step", {"unit": "mm"}, {}, {"numerics.normals": "mesh"}),
-        ("`.msh`, 10-node, 10 mm", write_volume_mesh(folder / "body.msh", 0.01), {}, {},
-         {"numerics.normals": "mesh"}),
-        ("`.vtu`, 10-node, 10 mm", write_volume_mesh(folder / "body.vtu", 0.01), {}, {},
-         {"numerics.normals": "mesh"}),
+        ("`.msh`, 10-node, 10 mm", write_volume_mesh(folder / "body.msh", 0.01), {}, {}, {"numerics.normals": "mesh"}),
+        ("`.vtu`, 10-node, 10 mm", write_volume_mesh(folder / "body.vtu", 0.01), {}, {}, {"numerics.normals": "mesh"}),
     ]
 
 

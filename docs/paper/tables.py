@@ -35,26 +35,41 @@ def p3() -> None:
     critical = results["critical_velocity"][i]
     low, high = results["critical_bracket"][i]
     convergent = results["characteristic_convergent_velocity"]
-    one, others = convergent["attack 1"][i], [convergent["attack 5"][i],
-                                              *convergent["attack 1, oblique 10"][i:i + 1],
-                                              *convergent["attack 1, oblique 20"], *convergent["attack 1, oblique 30"]]
+    one, others = (
+        convergent["attack 1"][i],
+        [
+            convergent["attack 5"][i],
+            *convergent["attack 1, oblique 10"][i : i + 1],
+            *convergent["attack 1, oblique 20"],
+            *convergent["attack 1, oblique 30"],
+        ],
+    )
     paper_runs = {run["impact.speed"]: run for run in results["runs"]["paper speeds @ 0.5636"]}
     later = [paper_runs[v]["convergence_speed"] for v in (1120, 1140, 1160, 1180, 1200)]
     print("| quantity | paper | ours | gap |")
     print("|---|---|---|---|")
     middle = sum(PAPER_CRITICAL) / 2
-    print(f"| critical impact velocity, 1 degree | {PAPER_CRITICAL[0]}-{PAPER_CRITICAL[1]} m/s | {critical:.0f} m/s "
-          f"({low:g}-{high:g}) | {critical / middle - 1:+.0%} |")
-    print(f"| characteristic convergent velocity | about {PAPER_CONVERGENT} m/s | {one:.0f} m/s (1 degree), "
-          f"{min(others):.0f}-{max(others):.0f} m/s (5 degrees; 1 degree with 10, 20 or 30 degrees oblique) | "
-          f"{min([one, *others]) / PAPER_CONVERGENT - 1:+.0%} to {max([one, *others]) / PAPER_CONVERGENT - 1:+.0%} |")
+    print(
+        f"| critical impact velocity, 1 degree | {PAPER_CRITICAL[0]}-{PAPER_CRITICAL[1]} m/s | {critical:.0f} m/s "
+        f"({low:g}-{high:g}) | {critical / middle - 1:+.0%} |"
+    )
+    print(
+        f"| characteristic convergent velocity | about {PAPER_CONVERGENT} m/s | {one:.0f} m/s (1 degree), "
+        f"{min(others):.0f}-{max(others):.0f} m/s (5 degrees; 1 degree with 10, 20 or 30 degrees oblique) | "
+        f"{min([one, *others]) / PAPER_CONVERGENT - 1:+.0%} to {max([one, *others]) / PAPER_CONVERGENT - 1:+.0%} |"
+    )
     run = paper_runs[1100]
-    print(f"| convergent velocity at 1100 m/s | {PAPER_TABLE4[1100]} m/s (stable run) | {run['convergence_speed']:.0f} m/s "
-          f"({'unstable' if run['unstable'] else 'stable'}) | - |")
+    print(
+        f"| convergent velocity at 1100 m/s | {PAPER_TABLE4[1100]} m/s (stable run) "
+        f"| {run['convergence_speed']:.0f} m/s "
+        f"({'unstable' if run['unstable'] else 'stable'}) | - |"
+    )
     paper_later = [PAPER_TABLE4[v] for v in (1120, 1140, 1160, 1180, 1200)]
     gaps = [ours / paper - 1 for ours, paper in zip(later, paper_later)]
-    print(f"| convergent velocity at 1120-1200 m/s | {', '.join(map(str, paper_later))} m/s | "
-          f"{', '.join(f'{v:.0f}' for v in later)} m/s | {min(gaps):+.0%} to {max(gaps):+.0%} |")
+    print(
+        f"| convergent velocity at 1120-1200 m/s | {', '.join(map(str, paper_later))} m/s | "
+        f"{', '.join(f'{v:.0f}' for v in later)} m/s | {min(gaps):+.0%} to {max(gaps):+.0%} |"
+    )
 
 
 def family() -> None:
@@ -67,18 +82,28 @@ def family() -> None:
         values = [convergent[key][i] for key in ("attack 1", "attack 5", "attack 1, oblique 10")]
         spread = (max(values) - min(values)) / statistics.mean(values)
         name = NAMES.get(ratio, "")
-        print(f"| {name} | {ratio * 100:.2f} | {results['critical_velocity'][i]:.0f} | "
-              + " | ".join(f"{v:.0f}" for v in values) + f" | {spread:.1%} |")
+        print(
+            f"| {name} | {ratio * 100:.2f} | {results['critical_velocity'][i]:.0f} | "
+            + " | ".join(f"{v:.0f}" for v in values)
+            + f" | {spread:.1%} |"
+        )
     fits = results["fits"]
     print()
-    print("Linear fits against Lc/L: " + "; ".join(
-        f"{name} = {fit['slope']:.0f} Lc/L + {fit['intercept']:.0f} m/s (R^2 = {fit['r2']:.3f})"
-        for name, fit in fits.items()) + ".")
+    print(
+        "Linear fits against Lc/L: "
+        + "; ".join(
+            f"{name} = {fit['slope']:.0f} Lc/L + {fit['intercept']:.0f} m/s (R^2 = {fit['r2']:.3f})"
+            for name, fit in fits.items()
+        )
+        + "."
+    )
     scales = results["inertia_scales"]
     print()
-    print("#3's critical speed with its transverse inertia scaled: " + ", ".join(
-        f"{v:.0f} m/s scaled by {s:g}" for s, v in zip(scales, results["critical_with_scaled_inertia"]))
-          + f" (1x: {results['critical_velocity'][results['ratios'].index(0.5636)]:.0f} m/s).")
+    print(
+        "#3's critical speed with its transverse inertia scaled: "
+        + ", ".join(f"{v:.0f} m/s scaled by {s:g}" for s, v in zip(scales, results["critical_with_scaled_inertia"]))
+        + f" (1x: {results['critical_velocity'][results['ratios'].index(0.5636)]:.0f} m/s)."
+    )
 
 
 def variants() -> None:
@@ -91,9 +116,14 @@ def variants() -> None:
         cells = ["(not buildable)" if v is None else f"{v:.0f}" for v in values]
         print(f"| {variant} | " + " | ".join(cells) + f" | {data['fits'][variant]['r2']:.3f} |")
     print()
-    print("Distance travelled (m) by #3 at 400 m/s (stable runs): " + "; ".join(
-        f"{variant} {lengths[data['ratios'].index(0.5636)]:.2f}"
-        for variant, lengths in data["path_length_at_400"].items()) + ".")
+    print(
+        "Distance travelled (m) by #3 at 400 m/s (stable runs): "
+        + "; ".join(
+            f"{variant} {lengths[data['ratios'].index(0.5636)]:.2f}"
+            for variant, lengths in data["path_length_at_400"].items()
+        )
+        + "."
+    )
 
 
 if __name__ == "__main__":

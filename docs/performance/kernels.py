@@ -43,16 +43,21 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args(argv)
-    print("| scene | numpy | compiled | ratio | steps (numpy / compiled) | load evaluations | depth difference |"
-          " path difference |")
+    print(
+        "| scene | numpy | compiled | ratio | steps (numpy / compiled) | load evaluations | depth difference |"
+        " path difference |"
+    )
     print("|---|---|---|---|---|---|---|---|")
     for name in SHIPPED_SCENES:
         (slow, a), (fast, b) = (_timed(name, kernel, args.repeats) for kernel in ("numpy", "compiled"))
         depth_a, depth_b = abs(a.position[-1][2]), abs(b.position[-1][2])
         path_a, path_b = a.path_length[-1], b.path_length[-1]
-        print(f"| {name} | {slow:.3f} s | {fast:.3f} s | {slow / fast:.1f}x | {a.statistics['steps']} /"
-              f" {b.statistics['steps']} | {a.statistics['load_evaluations']} / {b.statistics['load_evaluations']} |"
-              f" {_below(abs(depth_a - depth_b) / depth_a)} | {_below(abs(path_a - path_b) / path_a)} |", flush=True)
+        print(
+            f"| {name} | {slow:.3f} s | {fast:.3f} s | {slow / fast:.1f}x | {a.statistics['steps']} /"
+            f" {b.statistics['steps']} | {a.statistics['load_evaluations']} / {b.statistics['load_evaluations']} |"
+            f" {_below(abs(depth_a - depth_b) / depth_a)} | {_below(abs(path_a - path_b) / path_a)} |",
+            flush=True,
+        )
     print()
     print(stamp())
     return 0

@@ -26,9 +26,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[2]
 sys.path[:0] = [str(ROOT), str(ROOT / "tests" / "benchmarks"), str(ROOT / "docs")]
 
-from cases import load_scene, prepare_projectile, scene_path  # noqa: E402
 from measure import stamp  # noqa: E402
 from test_performance import _c_kernel, _median_per_call, _repeated_kernel, _state  # noqa: E402
+
+from cases import load_scene, prepare_projectile, scene_path  # noqa: E402
 
 MESHES = (0.04, 0.02, 0.01, 0.005)
 
@@ -40,22 +41,41 @@ def measure(mesh_size: float, depth: float, folder: Path) -> tuple[int, float, f
     scene = load_scene(scene_path("paper_p3"), {"numerics.mesh_size": mesh_size})
     loads = scene.loads(prepare_projectile(scene).quadrature)
     position, velocity, rotation, spin = _state(depth)
-    numpy = statistics.median(timeit.repeat(lambda: loads(position, velocity, rotation, spin), number=100,
-                                            repeat=15)) / 100
+    numpy = (
+        statistics.median(timeit.repeat(lambda: loads(position, velocity, rotation, spin), number=100, repeat=15)) / 100
+    )
     data, out, repeated = _import_compiled()[1].kernel_data(loads), np.zeros(6), _repeated_kernel()
     compiled = _median_per_call(lambda repeat: repeated(data, position, velocity, rotation, spin, out, repeat))
     lib, pointer = _c_kernel(folder)
     n = len(loads)
-    width = loads.contact_width + loads.contact_incidence * (np.linalg.norm(velocity)
-                                                             + np.linalg.norm(spin) * loads._max_radius)
+    width = loads.contact_width + loads.contact_incidence * (
+        np.linalg.norm(velocity) + np.linalg.norm(spin) * loads._max_radius
+    )
     weights = loads.quadrature.weights
-    arrays = [np.ascontiguousarray(a) for a in (loads._normal_arm_t, loads._points_t, loads.law.static_stress * weights,
-                                                loads.law.dynamic_density * weights, 1.0 / loads._entry_length,
-                                                np.concatenate([velocity @ rotation, spin]), rotation[2])]
+    arrays = [
+        np.ascontiguousarray(a)
+        for a in (
+            loads._normal_arm_t,
+            loads._points_t,
+            loads.law.static_stress * weights,
+            loads.law.dynamic_density * weights,
+            1.0 / loads._entry_length,
+            np.concatenate([velocity @ rotation, spin]),
+            rotation[2],
+        )
+    ]
     result = np.zeros(6)
-    c_loop = _median_per_call(lambda repeat: lib.dafl(n, *(a.ctypes.data_as(pointer) for a in arrays), position[2],
-                                                      1.0 / width, int(loads.fully_embedded(position)),
-                                                      result.ctypes.data_as(pointer), repeat))
+    c_loop = _median_per_call(
+        lambda repeat: lib.dafl(
+            n,
+            *(a.ctypes.data_as(pointer) for a in arrays),
+            position[2],
+            1.0 / width,
+            int(loads.fully_embedded(position)),
+            result.ctypes.data_as(pointer),
+            repeat,
+        )
+    )
     return n, numpy * 1e6, compiled * 1e6, c_loop * 1e6
 
 
@@ -68,8 +88,10 @@ def main() -> None:
             (n, *embedded), (_, *entering) = rows
             pairs = [f"{a:.1f} us / {b:.1f} us" for a, b in zip(embedded, entering)]
             ratio = f"{embedded[1] / embedded[2]:.2f}x / {entering[1] / entering[2]:.2f}x"
-            print(f"| {1e3 * size:g} mm | {format(n, ',').replace(',', ' ')} | {' | '.join(pairs)} | {ratio} |",
-                  flush=True)
+            print(
+                f"| {1e3 * size:g} mm | {format(n, ',').replace(',', ' ')} | {' | '.join(pairs)} | {ratio} |",
+                flush=True,
+            )
     print()
     print(stamp())
 

@@ -41,13 +41,29 @@ from cases.studies.paper import STUDY_NUMERICS  # noqa: E402
 
 MESHES = (0.04, 0.02, 0.01, 0.005)
 TIME_STEPS = (4e-5, 2e-5, 1e-5)
-FAMILY = ["--list", "docs/performance/disturbances.toml",
-          "--grid", "projectile.centre_of_mass_ratio=0.4448,0.5042,0.5636,0.6230"]
+FAMILY = [
+    "--list",
+    "docs/performance/disturbances.toml",
+    "--grid",
+    "projectile.centre_of_mass_ratio=0.4448,0.5042,0.5636,0.6230",
+]
 SUBSETS = {  # runs: what they vary (the three disturbances of docs/performance/disturbances.toml in each)
-    6: ["--list", "docs/performance/disturbances.toml", "--grid", "projectile.centre_of_mass_ratio=0.4448,0.6230",
-        "--grid", "impact.speed=900"],
-    24: ["--list", "docs/performance/disturbances.toml", "--grid", "projectile.centre_of_mass_ratio=0.4448,0.6230",
-         "--grid", "impact.speed=700:1000:100"],
+    6: [
+        "--list",
+        "docs/performance/disturbances.toml",
+        "--grid",
+        "projectile.centre_of_mass_ratio=0.4448,0.6230",
+        "--grid",
+        "impact.speed=900",
+    ],
+    24: [
+        "--list",
+        "docs/performance/disturbances.toml",
+        "--grid",
+        "projectile.centre_of_mass_ratio=0.4448,0.6230",
+        "--grid",
+        "impact.speed=700:1000:100",
+    ],
     72: [*FAMILY, "--grid", "impact.speed=700:1200:100"],
 }
 
@@ -65,16 +81,25 @@ def _run_times(overrides: dict, repeats: int) -> tuple[list[float], dict, int]:
 
 
 def points_table(repeats: int) -> str:
-    rows = ["| mesh | surface points | kernel | steps | integration (s) | per step (us) | per step and point (ns) |",
-            "|---|---|---|---|---|---|---|"]
+    rows = [
+        "| mesh | surface points | kernel | steps | integration (s) | per step (us) | per step and point (ns) |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for size in MESHES:
         for kernel in ("numpy", "compiled"):
-            overrides = {"numerics.mesh_size": size, "numerics.integrator": "rk4", "numerics.time_step": 2e-5,
-                         "impact.speed": 900.0, "numerics.kernel": kernel}
+            overrides = {
+                "numerics.mesh_size": size,
+                "numerics.integrator": "rk4",
+                "numerics.time_step": 2e-5,
+                "impact.speed": 900.0,
+                "numerics.kernel": kernel,
+            }
             times, stats, points = _run_times(overrides, repeats)
             steps = stats["steps"]
-            rows.append(f"| {size * 1000:g} mm | {points} | {kernel} | {steps} | {_spread(times)} |"
-                        f" {_spread(times, 1e6 / steps)} | {_spread(times, 1e9 / steps / points)} |")
+            rows.append(
+                f"| {size * 1000:g} mm | {points} | {kernel} | {steps} | {_spread(times)} |"
+                f" {_spread(times, 1e6 / steps)} | {_spread(times, 1e9 / steps / points)} |"
+            )
             print(rows[-1], flush=True)
     return "\n".join(rows)
 
@@ -83,11 +108,18 @@ def steps_table(repeats: int) -> str:
     rows = ["| RK4 step (s) | kernel | steps | integration (s) | per step (us) |", "|---|---|---|---|---|"]
     for step in TIME_STEPS:
         for kernel in ("numpy", "compiled"):
-            overrides = {"numerics.mesh_size": 0.02, "numerics.integrator": "rk4", "numerics.time_step": step,
-                         "impact.speed": 900.0, "numerics.kernel": kernel}
+            overrides = {
+                "numerics.mesh_size": 0.02,
+                "numerics.integrator": "rk4",
+                "numerics.time_step": step,
+                "impact.speed": 900.0,
+                "numerics.kernel": kernel,
+            }
             times, stats, _ = _run_times(overrides, repeats)
-            rows.append(f"| {step:g} | {kernel} | {stats['steps']} | {_spread(times)} |"
-                        f" {_spread(times, 1e6 / stats['steps'])} |")
+            rows.append(
+                f"| {step:g} | {kernel} | {stats['steps']} | {_spread(times)} |"
+                f" {_spread(times, 1e6 / stats['steps'])} |"
+            )
             print(rows[-1], flush=True)
     return "\n".join(rows)
 
@@ -95,8 +127,17 @@ def steps_table(repeats: int) -> str:
 def _sweep_seconds(runs: int, where: list[str], work: Path) -> float:
     store = Path(tempfile.mkdtemp(dir=work))
     numerics = [arg for key, value in STUDY_NUMERICS.items() for arg in ("--set", f"{key}={value}")]
-    command = [str(Path(sys.executable).parent / "penetrate"), "sweep", "cases/paper_p3.toml", *numerics,
-               *SUBSETS[runs], "--store", str(store), "--no-progress", *where]
+    command = [
+        str(Path(sys.executable).parent / "penetrate"),
+        "sweep",
+        "cases/paper_p3.toml",
+        *numerics,
+        *SUBSETS[runs],
+        "--store",
+        str(store),
+        "--no-progress",
+        *where,
+    ]
     start = time.perf_counter()
     subprocess.run(command, cwd=ROOT, check=True, capture_output=True)
     seconds = time.perf_counter() - start
@@ -132,20 +173,27 @@ def sweeps_table(repeats: int) -> str:
         print(rows[-1], flush=True)
     dask = str(Path(sys.executable).parent / "dask")
     address = f"tcp://127.0.0.1:{_free_port()}"
-    scheduler = subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", address.rsplit(":", 1)[1],
-                                  "--dashboard-address", ":0"], env=env, stdout=subprocess.DEVNULL,
-                                 stderr=subprocess.DEVNULL)
-    worker = subprocess.Popen([dask, "worker", address, "--nworkers", "2", "--nthreads", "1",
-                               "--dashboard-address", ":0"], env=env, stdout=subprocess.DEVNULL,
-                              stderr=subprocess.DEVNULL)
+    scheduler = subprocess.Popen(
+        [dask, "scheduler", "--host", "127.0.0.1", "--port", address.rsplit(":", 1)[1], "--dashboard-address", ":0"],
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    worker = subprocess.Popen(
+        [dask, "worker", address, "--nworkers", "2", "--nthreads", "1", "--dashboard-address", ":0"],
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     try:
         with distributed.Client(address, timeout=60) as client:
             client.wait_for_workers(2, timeout=60)
         where = ["--scheduler", address]
         _sweep_seconds(6, where, work)
         times = [_sweep_seconds(72, where, work) for _ in range(repeats)]
-        rows.append(f"| 72 | `dask scheduler` + `dask worker --nworkers 2` | {_spread(times)} |"
-                    f" {_spread(times, 1 / 72)} |")
+        rows.append(
+            f"| 72 | `dask scheduler` + `dask worker --nworkers 2` | {_spread(times)} | {_spread(times, 1 / 72)} |"
+        )
         print(rows[-1], flush=True)
     finally:
         for proc in (worker, scheduler):
@@ -162,14 +210,27 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default=str(ROOT / "docs" / "performance" / "scaling.md"))
     parser.add_argument("--skip-sweeps", action="store_true")
     args = parser.parse_args(argv)
-    parts = ["# Scaling (`docs/performance/scaling.py`)", "",
-             f"Medians of {args.repeats} (min-max). Generated by `.venv/bin/python docs/performance/scaling.py"
-             f" --repeats {args.repeats}`.", "",
-             "## Run time and surface points (#3 at 900 m/s to rest, RK4 at 2e-5 s)", "", points_table(args.repeats),
-             "", "## Run time and steps (20 mm)", "", steps_table(args.repeats)]
+    parts = [
+        "# Scaling (`docs/performance/scaling.py`)",
+        "",
+        f"Medians of {args.repeats} (min-max). Generated by `.venv/bin/python docs/performance/scaling.py"
+        f" --repeats {args.repeats}`.",
+        "",
+        "## Run time and surface points (#3 at 900 m/s to rest, RK4 at 2e-5 s)",
+        "",
+        points_table(args.repeats),
+        "",
+        "## Run time and steps (20 mm)",
+        "",
+        steps_table(args.repeats),
+    ]
     if not args.skip_sweeps:
-        parts += ["", "## Sweep time, runs and workers (the 155 mm family, study numerics, whole command)", "",
-                  sweeps_table(args.repeats)]
+        parts += [
+            "",
+            "## Sweep time, runs and workers (the 155 mm family, study numerics, whole command)",
+            "",
+            sweeps_table(args.repeats),
+        ]
     Path(args.out).write_text("\n".join(parts) + "\n")
     print(f"wrote {args.out}")
     return 0

@@ -26,8 +26,10 @@ from measure import stamp  # noqa: E402
 
 GROUPS = (  # (label, module prefixes); the first that matches takes the module
     ("numpy (all its modules)", ("numpy",)),
-    ("pydantic and its typing helpers", ("pydantic", "pydantic_core", "typing_extensions", "annotated_types",
-                                         "typing_inspection")),
+    (
+        "pydantic and its typing helpers",
+        ("pydantic", "pydantic_core", "typing_extensions", "annotated_types", "typing_inspection"),
+    ),
     ("mesh, fem_loads, dynamics", ("mesh", "fem_loads", "dynamics")),
     ("cases.scene (the scene models)", ("cases.scene",)),
     ("cases.run (the summary model)", ("cases.run",)),
@@ -40,8 +42,13 @@ LINE = re.compile(r"import time:\s+(\d+) \|\s+\d+ \|(\s*)(\S+)")
 def one_run() -> tuple[dict[str, float], float]:
     """Self import time (ms) by group, and the process's wall time (s)."""
     start = time.perf_counter()
-    done = subprocess.run([sys.executable, "-X", "importtime", "-m", "cases.cli", "run",
-                           "cases/forrestal_luk_test2.toml"], cwd=ROOT, capture_output=True, text=True, check=True)
+    done = subprocess.run(
+        [sys.executable, "-X", "importtime", "-m", "cases.cli", "run", "cases/forrestal_luk_test2.toml"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     wall = time.perf_counter() - start
     totals = dict.fromkeys([label for label, _ in GROUPS] + ["the rest of the standard library and site"], 0.0)
     for line in done.stderr.splitlines():
@@ -49,9 +56,10 @@ def one_run() -> tuple[dict[str, float], float]:
         if match is None:
             continue
         self_us, module = int(match.group(1)), match.group(3)
-        label = next((label for label, prefixes in GROUPS
-                      if any(module == p or module.startswith(p + ".") for p in prefixes)),
-                     "the rest of the standard library and site")
+        label = next(
+            (label for label, prefixes in GROUPS if any(module == p or module.startswith(p + ".") for p in prefixes)),
+            "the rest of the standard library and site",
+        )
         totals[label] += self_us / 1e3
     return totals, wall
 

@@ -49,9 +49,14 @@ def main() -> None:
     start = time.perf_counter()
     evaluator = FieldEvaluator(result)
     setup_seconds = time.perf_counter() - start
-    rows_out = [("the run and the field evaluator", f"{run_seconds:.1f} s and {setup_seconds:.2f} s "
-                 f"({len(evaluator)} recorded steps, {evaluator.surface.n_facets} facets drawn as "
-                 f"{len(evaluator.surface.triangles)} triangles)")]
+    rows_out = [
+        (
+            "the run and the field evaluator",
+            f"{run_seconds:.1f} s and {setup_seconds:.2f} s "
+            f"({len(evaluator)} recorded steps, {evaluator.surface.n_facets} facets drawn as "
+            f"{len(evaluator.surface.triangles)} triangles)",
+        )
+    ]
 
     rows = np.linspace(0, len(evaluator) - 1, 55).astype(int)
     timings: dict[str, list[float]] = {"whole frame": [], "field evaluation": [], "side panel": []}
@@ -75,10 +80,15 @@ def main() -> None:
         after = rss_bytes()
     medians = {name: statistics.median(values) for name, values in timings.items()}
     medians["3-D view (the rest)"] = medians["whole frame"] - medians["field evaluation"] - medians["side panel"]
-    rows_out.append(("one field image, 1280x640 (median of 50 frames)", ", ".join(
-        f"{name} {value * 1e3:.0f} ms" for name, value in medians.items())))
-    rows_out.append(("resident memory over those 50 frames", f"{before / 1e6:.0f} MB before, "
-                     f"{after / 1e6:.0f} MB after"))
+    rows_out.append(
+        (
+            "one field image, 1280x640 (median of 50 frames)",
+            ", ".join(f"{name} {value * 1e3:.0f} ms" for name, value in medians.items()),
+        )
+    )
+    rows_out.append(
+        ("resident memory over those 50 frames", f"{before / 1e6:.0f} MB before, {after / 1e6:.0f} MB after")
+    )
 
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp)
@@ -93,12 +103,18 @@ def main() -> None:
         written = write_paraview(evaluator, out / "paraview", steps=100)
         t4 = time.perf_counter()
         size = sum(p.stat().st_size for p in (out / "paraview").rglob("*") if p.is_file())
-        rows_out += [(f"the {len(paths)} field images", f"{t1 - t0:.1f} s "
-                      f"({sum(p.stat().st_size for p in paths) / 1e3:.0f} kB)"),
-                     ("the trajectory view", f"{t2 - t1:.1f} s"),
-                     (f"the animation, {movie['frames']} frames at 960x480",
-                      f"{t3 - t2:.1f} s ({movie['seconds_per_frame']:.2f} s a frame, {movie['bytes'] / 1e6:.1f} MB)"),
-                     (f"ParaView, {len(written['surfaces'])} steps", f"{t4 - t3:.1f} s ({size / 1e6:.0f} MB)")]
+        rows_out += [
+            (
+                f"the {len(paths)} field images",
+                f"{t1 - t0:.1f} s ({sum(p.stat().st_size for p in paths) / 1e3:.0f} kB)",
+            ),
+            ("the trajectory view", f"{t2 - t1:.1f} s"),
+            (
+                f"the animation, {movie['frames']} frames at 960x480",
+                f"{t3 - t2:.1f} s ({movie['seconds_per_frame']:.2f} s a frame, {movie['bytes'] / 1e6:.1f} MB)",
+            ),
+            (f"ParaView, {len(written['surfaces'])} steps", f"{t4 - t3:.1f} s ({size / 1e6:.0f} MB)"),
+        ]
     print("| what | measured |")
     print("|---|---|")
     for what, measured in rows_out:

@@ -35,13 +35,18 @@ def main() -> None:
     summary = summarise(result)
     evaluator = FieldEvaluator(result)
     normals = facet_normals(evaluator)
-    print(f"The run is {'unstable' if summary.axis_angle_change >= 30 else 'stable'}: the attack angle "
-          f"peaks at {summary.max_attack_angle:.1f} degrees, the path turns by {summary.axis_angle_change:.0f} "
-          f"degrees, the attack angle converges at {convergence_speed(evaluator.history):.0f} m/s and the run ends "
-          f"({summary.end_reason}) at {summary.final_speed:.0f} m/s; {len(evaluator)} recorded steps, "
-          f"{evaluator.surface.n_facets} facets drawn as {len(evaluator.surface.triangles)} triangles.")
+    print(
+        f"The run is {'unstable' if summary.axis_angle_change >= 30 else 'stable'}: the attack angle "
+        f"peaks at {summary.max_attack_angle:.1f} degrees, the path turns by {summary.axis_angle_change:.0f} "
+        f"degrees, the attack angle converges at {convergence_speed(evaluator.history):.0f} m/s and the run ends "
+        f"({summary.end_reason}) at {summary.final_speed:.0f} m/s; {len(evaluator)} recorded steps, "
+        f"{evaluator.surface.n_facets} facets drawn as {len(evaluator.surface.triangles)} triangles."
+    )
     print()
-    print("| instant | t (ms) | speed (m/s) | attack (deg) | largest facet `sigma_n` (MPa) | windward / leeward mean (MPa) |")
+    print(
+        "| instant | t (ms) | speed (m/s) | attack (deg) | largest facet `sigma_n` (MPa) "
+        "| windward / leeward mean (MPa) |"
+    )
     print("|---|---|---|---|---|---|")
     embedded = None
     for name, row in key_instants(evaluator).items():
@@ -49,8 +54,10 @@ def main() -> None:
         if name == "embedded":
             embedded = field
         if not field.sigma_n.any():
-            print(f"| {NAMES[name]} | {field.time * 1e3:.2f} | {field.speed:.0f} | {field.attack_angle:+.2f} "
-                  "| 0 (out of the target) | - |")
+            print(
+                f"| {NAMES[name]} | {field.time * 1e3:.2f} | {field.speed:.0f} | {field.attack_angle:+.2f} "
+                "| 0 (out of the target) | - |"
+            )
             continue
         # the transverse velocity in the body frame sets the windward side
         velocity = field.rotation.T @ field.velocity
@@ -59,17 +66,22 @@ def main() -> None:
         facing = normals @ direction
         hottest = int(np.argmax(field.sigma_n))
         where = " (the tip)" if hottest in np.argsort(-normals[:, 0])[:50] else ""
-        print(f"| {NAMES[name]} | {field.time * 1e3:.2f} | {field.speed:.0f} | {field.attack_angle:+.2f} "
-              f"| {field.sigma_n[hottest] / 1e6:.1f}{where} | {field.sigma_n[facing > WINDWARD_COSINE].mean() / 1e6:.1f} / "
-              f"{field.sigma_n[facing < -WINDWARD_COSINE].mean() / 1e6:.1f} |")
+        print(
+            f"| {NAMES[name]} | {field.time * 1e3:.2f} | {field.speed:.0f} | {field.attack_angle:+.2f} "
+            f"| {field.sigma_n[hottest] / 1e6:.1f}{where} "
+            f"| {field.sigma_n[facing > WINDWARD_COSINE].mean() / 1e6:.1f} / "
+            f"{field.sigma_n[facing < -WINDWARD_COSINE].mean() / 1e6:.1f} |"
+        )
     if embedded is not None:
         law = build_law(scene.target.law)
         tip_angle = math.asin(math.sqrt(1.0 - ((5.0 - 0.5) / 5.0) ** 2))  # CRH 5: cos(theta) = (psi - 1/2) / psi
         tip = law.static_stress + law.dynamic_density * (embedded.speed * math.sin(tip_angle)) ** 2
         print()
-        print(f"At the embedded instant the hottest facet's mean is {embedded.sigma_n.max() / 1e6:.1f} MPa against "
-              f"`A sigma_0 + B rho_0 (V sin {math.degrees(tip_angle):.1f} deg)^2 = {tip / 1e6:.0f} MPa` at the tip "
-              "point itself.")
+        print(
+            f"At the embedded instant the hottest facet's mean is {embedded.sigma_n.max() / 1e6:.1f} MPa against "
+            f"`A sigma_0 + B rho_0 (V sin {math.degrees(tip_angle):.1f} deg)^2 = {tip / 1e6:.0f} MPa` at the tip "
+            "point itself."
+        )
 
 
 if __name__ == "__main__":

@@ -15,29 +15,46 @@ from pathlib import Path
 MODULE = Path(__file__).resolve().parents[2] / "tests" / "robustness" / "test_fuzz.py"
 PROPERTIES = {  # test -> (property, what is generated)
     "test_mutated_scenes_validate_or_explain": (
-        "mutated scenes (dicts)", "shipped scenes with 1-4 leaves replaced (wrong types, 0, -0.0, negatives, NaN, inf,"
+        "mutated scenes (dicts)",
+        "shipped scenes with 1-4 leaves replaced (wrong types, 0, -0.0, negatives, NaN, inf,"
         " 1e308, 10^400, dates, empty strings, lists and tables, code), numbers at, inside and just outside their"
-        " ranges, keys deleted, unknown keys added"),
+        " ranges, keys deleted, unknown keys added",
+    ),
     "test_profile_noses_validate_or_explain": (
-        "measured noses", "test 2 with a table of 3 to 40 points sampled from its ogive, with up to three defects (a"
-        " point dropped, swapped, duplicated, a coordinate replaced, the shank radius missed, a point not a pair)"),
+        "measured noses",
+        "test 2 with a table of 3 to 40 points sampled from its ogive, with up to three defects (a"
+        " point dropped, swapped, duplicated, a coordinate replaced, the shank radius missed, a point not a pair)",
+    ),
     "test_measured_bodies_validate_or_explain": (
-        "measured bodies", "test 2 with a boat tail or flare of 2 to 12 points, with up to three defects, or a"
-        " scalar, or no points"),
+        "measured bodies",
+        "test 2 with a boat tail or flare of 2 to 12 points, with up to three defects, or a scalar, or no points",
+    ),
     "test_geometry_projectiles_validate_or_explain": (
-        "projectiles from files", "the geometry table's keys (file, unit, axis, cell_field) valid or not, with or"
-        " without the mass, the materials and the analytic keys it excludes"),
+        "projectiles from files",
+        "the geometry table's keys (file, unit, axis, cell_field) valid or not, with or"
+        " without the mass, the materials and the analytic keys it excludes",
+    ),
     "test_mutated_scene_files_validate_or_explain": ("mutated scene files", "the mutated scenes, written as TOML"),
     "test_random_bytes_and_text": ("random bytes and text", "binary, invalid UTF-8, random Unicode"),
     "test_random_toml_documents": ("random TOML documents", "random keys (schema names and text) and nested values"),
-    "test_edited_scene_files": ("edited scene files", "shipped files with random characters deleted, inserted,"
-                                " replaced"),
-    "test_malformed_overrides": ("`--set` strings", "no `=`, empty keys, `a..b`, unknown paths, 5000-character keys"
-                                 " and values, deep nesting, random text, in-range and out-of-range values"),
-    "test_command_line_bad_input": ("command lines", "each command with a bad scene file or a bad option, plus"
-                                    " random noise; must exit 2"),
-    "test_valid_runs_write_finite_numbers": ("valid runs", "speeds, angles, spins, integrators, friction, history"
-                                             " thinning, time limits; must exit 0 and write finite numbers"),
+    "test_edited_scene_files": (
+        "edited scene files",
+        "shipped files with random characters deleted, inserted, replaced",
+    ),
+    "test_malformed_overrides": (
+        "`--set` strings",
+        "no `=`, empty keys, `a..b`, unknown paths, 5000-character keys"
+        " and values, deep nesting, random text, in-range and out-of-range values",
+    ),
+    "test_command_line_bad_input": (
+        "command lines",
+        "each command with a bad scene file or a bad option, plus random noise; must exit 2",
+    ),
+    "test_valid_runs_write_finite_numbers": (
+        "valid runs",
+        "speeds, angles, spins, integrators, friction, history"
+        " thinning, time limits; must exit 0 and write finite numbers",
+    ),
 }
 
 

@@ -38,15 +38,36 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 CLI = "import sys; from cases.cli import main; sys.exit(main(sys.argv[1:]))"
 # RK4 named explicitly, so that both sides do the same work whatever their scenes' default integrator
-P3_900 = ["run", "cases/paper_p3.toml", "--set", "numerics.mesh_size=0.02", "--set", "numerics.integrator=rk4",
-          "--set", "impact.speed=900", "--json"]
+P3_900 = [
+    "run",
+    "cases/paper_p3.toml",
+    "--set",
+    "numerics.mesh_size=0.02",
+    "--set",
+    "numerics.integrator=rk4",
+    "--set",
+    "impact.speed=900",
+    "--json",
+]
 P3_1120 = ["run", "cases/paper_p3.toml", "--set", "impact.speed=1120", "--set", "numerics.mesh_size=0.02", "--json"]
 TEST2 = ["run", "cases/forrestal_luk_test2.toml", "--json"]
-FAMILY = ["sweep", "cases/paper_p3.toml", "--set", "numerics.mesh_size=0.02", "--set", "numerics.integrator=rk4",
-          "--set", "numerics.time_step=2e-5",
-          "--list", "docs/performance/disturbances.toml",
-          "--grid", "projectile.centre_of_mass_ratio=0.4448,0.5042,0.5636,0.6230",
-          "--grid", "impact.speed=700:1200:100", "--no-progress"]
+FAMILY = [
+    "sweep",
+    "cases/paper_p3.toml",
+    "--set",
+    "numerics.mesh_size=0.02",
+    "--set",
+    "numerics.integrator=rk4",
+    "--set",
+    "numerics.time_step=2e-5",
+    "--list",
+    "docs/performance/disturbances.toml",
+    "--grid",
+    "projectile.centre_of_mass_ratio=0.4448,0.5042,0.5636,0.6230",
+    "--grid",
+    "impact.speed=700:1200:100",
+    "--no-progress",
+]
 
 
 STUDIES = {"sweep", "critical", "convergent", "compare", "accuracy", "contact", "entry", "paper"}
@@ -67,8 +88,7 @@ def _timed(checkout: Path, cache: Path, args: list[str]) -> tuple[float, dict | 
 
 def _row(name: str, a: list[float], b: list[float]) -> str:
     ma, mb = statistics.median(a), statistics.median(b)
-    return (f"| {name} | {mb:.3f} ({min(b):.3f}-{max(b):.3f}) | {ma:.3f} ({min(a):.3f}-{max(a):.3f}) |"
-            f" {ma / mb:.3f} |")
+    return f"| {name} | {mb:.3f} ({min(b):.3f}-{max(b):.3f}) | {ma:.3f} ({min(a):.3f}-{max(a):.3f}) | {ma / mb:.3f} |"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -76,29 +96,49 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--against", required=True, metavar="REV")
     parser.add_argument("--repeats", type=int, default=7)
     parser.add_argument("--skip-sweep", action="store_true")
-    parser.add_argument("--pair", action="append", default=[], metavar="NAME::REV_ARGS::THIS_ARGS",
-                        help="a run whose arguments differ between the sides (integration time compared)")
-    parser.add_argument("--process-pair", action="append", default=[], metavar="NAME::REV_ARGS::THIS_ARGS",
-                        help="a whole penetrate command whose arguments differ between the sides (process time"
-                             " compared; a study command gets a fresh --store each time)")
+    parser.add_argument(
+        "--pair",
+        action="append",
+        default=[],
+        metavar="NAME::REV_ARGS::THIS_ARGS",
+        help="a run whose arguments differ between the sides (integration time compared)",
+    )
+    parser.add_argument(
+        "--process-pair",
+        action="append",
+        default=[],
+        metavar="NAME::REV_ARGS::THIS_ARGS",
+        help="a whole penetrate command whose arguments differ between the sides (process time"
+        " compared; a study command gets a fresh --store each time)",
+    )
     parser.add_argument("--only-pairs", action="store_true", help="only the --pair and --process-pair workloads")
     args = parser.parse_args(argv)
-    commit = subprocess.run(["git", "rev-parse", args.against], cwd=ROOT, check=True, capture_output=True,
-                            text=True).stdout.strip()
+    commit = subprocess.run(
+        ["git", "rev-parse", args.against], cwd=ROOT, check=True, capture_output=True, text=True
+    ).stdout.strip()
     work = Path(tempfile.mkdtemp(prefix="ab-"))
     other = work / commit[:12]
-    subprocess.run(["git", "worktree", "add", "--detach", str(other), commit], cwd=ROOT, check=True,
-                   capture_output=True)
+    subprocess.run(
+        ["git", "worktree", "add", "--detach", str(other), commit], cwd=ROOT, check=True, capture_output=True
+    )
     sides = {"this": (ROOT, work / "cache-this"), "rev": (other, work / "cache-rev")}
     try:
-        workloads = {} if args.only_pairs else {"penetrate run test 2 (process, s)": TEST2,
-                                                "penetrate run #3 900 m/s 20 mm (process, s)": P3_900,
-                                                "penetrate run #3 1120 m/s 20 mm (process, s)": P3_1120}
+        workloads = (
+            {}
+            if args.only_pairs
+            else {
+                "penetrate run test 2 (process, s)": TEST2,
+                "penetrate run #3 900 m/s 20 mm (process, s)": P3_900,
+                "penetrate run #3 1120 m/s 20 mm (process, s)": P3_1120,
+            }
+        )
         pairs = {}
         for text in args.pair:
             name, rev_args, this_args = text.split("::")
-            pairs[f"{name} (integration, s)"] = {"rev": ["run", *rev_args.split(), "--json"],
-                                                 "this": ["run", *this_args.split(), "--json"]}
+            pairs[f"{name} (integration, s)"] = {
+                "rev": ["run", *rev_args.split(), "--json"],
+                "this": ["run", *this_args.split(), "--json"],
+            }
         processes = {}
         for text in args.process_pair:
             name, rev_args, this_args = text.split("::")

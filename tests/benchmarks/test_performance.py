@@ -68,8 +68,15 @@ void dafl(long n, const double *normal_arm /* 6 x n */, const double *points /* 
 }
 """
 # the licence numba's kernel has (reassociation, fused multiply-adds; fem_loads/compiled.py), and no more
-C_FLAGS = ["-O3", "-march=native", "-fno-math-errno", "-fno-trapping-math", "-fno-signed-zeros",
-           "-fassociative-math", "-ffp-contract=fast"]
+C_FLAGS = [
+    "-O3",
+    "-march=native",
+    "-fno-math-errno",
+    "-fno-trapping-math",
+    "-fno-signed-zeros",
+    "-fassociative-math",
+    "-ffp-contract=fast",
+]
 
 
 def _c_kernel(tmp_path: Path):
@@ -81,8 +88,21 @@ def _c_kernel(tmp_path: Path):
     subprocess.run([compiler, *C_FLAGS, "-shared", "-fPIC", "-o", str(library), str(source)], check=True)
     lib = ctypes.CDLL(str(library))
     pointer = ctypes.POINTER(ctypes.c_double)
-    lib.dafl.argtypes = [ctypes.c_long, pointer, pointer, pointer, pointer, pointer, pointer, pointer,
-                         ctypes.c_double, ctypes.c_double, ctypes.c_int, pointer, ctypes.c_long]
+    lib.dafl.argtypes = [
+        ctypes.c_long,
+        pointer,
+        pointer,
+        pointer,
+        pointer,
+        pointer,
+        pointer,
+        pointer,
+        ctypes.c_double,
+        ctypes.c_double,
+        ctypes.c_int,
+        pointer,
+        ctypes.c_long,
+    ]
     return lib, pointer
 
 
@@ -129,17 +149,34 @@ def test_load_evaluation(benchmark, tmp_path, mesh_size, depth):
     lib, pointer = _c_kernel(tmp_path)
     n = len(loads)
     g = np.concatenate([velocity @ rotation, spin])
-    width = loads.contact_width + loads.contact_incidence * (np.linalg.norm(velocity)
-                                                             + np.linalg.norm(spin) * loads._max_radius)
+    width = loads.contact_width + loads.contact_incidence * (
+        np.linalg.norm(velocity) + np.linalg.norm(spin) * loads._max_radius
+    )
     out = np.zeros(6)
     weights = loads.quadrature.weights  # the C loop runs over every point (no mirror images)
-    arrays = [np.ascontiguousarray(a) for a in (loads._normal_arm_t, loads._points_t, loads.law.static_stress * weights,
-                                                loads.law.dynamic_density * weights, 1.0 / loads._entry_length, g,
-                                                rotation[2])]
+    arrays = [
+        np.ascontiguousarray(a)
+        for a in (
+            loads._normal_arm_t,
+            loads._points_t,
+            loads.law.static_stress * weights,
+            loads.law.dynamic_density * weights,
+            1.0 / loads._entry_length,
+            g,
+            rotation[2],
+        )
+    ]
 
     def c_loop(repeat: int) -> np.ndarray:
-        lib.dafl(n, *(a.ctypes.data_as(pointer) for a in arrays), position[2], 1.0 / width,
-                 int(loads.fully_embedded(position)), out.ctypes.data_as(pointer), repeat)
+        lib.dafl(
+            n,
+            *(a.ctypes.data_as(pointer) for a in arrays),
+            position[2],
+            1.0 / width,
+            int(loads.fully_embedded(position)),
+            out.ctypes.data_as(pointer),
+            repeat,
+        )
         return out
 
     from cases.run.compiled import _import_compiled
@@ -155,14 +192,18 @@ def test_load_evaluation(benchmark, tmp_path, mesh_size, depth):
     force, moment = loads(position, velocity, rotation, spin)
     reference = np.concatenate([rotation.T @ force, moment])
     np.testing.assert_allclose(c_loop(1), reference, rtol=0, atol=1e-9 * np.abs(reference).max())
-    np.testing.assert_allclose(kernel(1), np.concatenate([force, moment]), rtol=0,
-                               atol=1e-12 * np.abs(reference).max())
+    np.testing.assert_allclose(kernel(1), np.concatenate([force, moment]), rtol=0, atol=1e-12 * np.abs(reference).max())
     lower_bound, compiled = _median_per_call(c_loop), _median_per_call(kernel)
     benchmark(loads, position, velocity, rotation, spin)
     median = benchmark.stats.stats.median
-    benchmark.extra_info.update(points=n, numpy_ns_per_point=median / n * 1e9, c_loop_us=lower_bound * 1e6,
-                                compiled_kernel_us=compiled * 1e6, numpy_to_c_loop=median / lower_bound,
-                                compiled_to_c_loop=compiled / lower_bound)
+    benchmark.extra_info.update(
+        points=n,
+        numpy_ns_per_point=median / n * 1e9,
+        c_loop_us=lower_bound * 1e6,
+        compiled_kernel_us=compiled * 1e6,
+        numpy_to_c_loop=median / lower_bound,
+        compiled_to_c_loop=compiled / lower_bound,
+    )
 
 
 def test_integrator_steps_free_load(benchmark):
@@ -173,8 +214,9 @@ def test_integrator_steps_free_load(benchmark):
     def loads(position, velocity, rotation, angular_velocity):
         return zero, zero
 
-    start = State(0.0, np.zeros(3), np.array([800.0, 0.0, 0.0]), from_rotation_matrix(np.eye(3)),
-                  np.array([0.0, 0.5, 2.0]))
+    start = State(
+        0.0, np.zeros(3), np.array([800.0, 0.0, 0.0]), from_rotation_matrix(np.eye(3)), np.array([0.0, 0.5, 2.0])
+    )
     steps = 2000
     trajectory = benchmark(simulate, body, loads, start, RK4(), FixedStep(1e-5), time_limit=steps * 1e-5)
     assert trajectory.statistics["steps"] == steps
@@ -184,15 +226,24 @@ def test_integrator_steps_free_load(benchmark):
 @pytest.mark.parametrize("mesh_size", [0.04, 0.02, 0.01])
 def test_integrator_steps_dafl(benchmark, mesh_size):
     """Steps per second of #3 at 900 m/s (a whole run to rest), against the surface points."""
-    scene = load_scene(scene_path("paper_p3"), {"numerics.mesh_size": mesh_size, "numerics.integrator": "rk4",
-                                                "numerics.time_step": 2e-5,
-                                                "impact.speed": 900})
+    scene = load_scene(
+        scene_path("paper_p3"),
+        {
+            "numerics.mesh_size": mesh_size,
+            "numerics.integrator": "rk4",
+            "numerics.time_step": 2e-5,
+            "impact.speed": 900,
+        },
+    )
     run_scene(scene)  # prepare (mesh, mass properties, quadrature) outside the timing
     result = benchmark.pedantic(run_scene, args=(scene,), rounds=3, iterations=1)
     steps = result.trajectory.statistics["steps"]
-    benchmark.extra_info.update(points=len(result.prepared.quadrature), steps=steps,
-                                steps_per_second=steps / benchmark.stats.stats.median,
-                                evaluations=result.trajectory.statistics["load_evaluations"])
+    benchmark.extra_info.update(
+        points=len(result.prepared.quadrature),
+        steps=steps,
+        steps_per_second=steps / benchmark.stats.stats.median,
+        evaluations=result.trajectory.statistics["load_evaluations"],
+    )
 
 
 def test_one_run_in_process(benchmark):
@@ -207,8 +258,9 @@ def test_one_run_process(benchmark):
     """``penetrate run cases/forrestal_luk_test2.toml``: the whole command, interpreter start included."""
     command = [str(Path(sys.executable).parent / "penetrate"), "run", str(scene_path("forrestal_luk_test2")), "--json"]
     subprocess.run(command, check=True, capture_output=True)  # fill the disk cache
-    benchmark.pedantic(subprocess.run, args=(command,), kwargs={"check": True, "capture_output": True},
-                       rounds=7, iterations=1)
+    benchmark.pedantic(
+        subprocess.run, args=(command,), kwargs={"check": True, "capture_output": True}, rounds=7, iterations=1
+    )
 
 
 @pytest.mark.parametrize(("numerics", "cache"), [("study", "warm"), ("study", "cold"), ("shipped", "warm")])
@@ -222,8 +274,12 @@ def test_sweep_72_runs(benchmark, tmp_path, monkeypatch, numerics, cache):
     """
     variations = [
         Variation({**g.values, **v.values})
-        for g in grid({"projectile.centre_of_mass_ratio": [float(x) for x in FAMILY_RATIOS.split(",")],
-                       "impact.speed": [700.0, 800.0, 900.0, 1000.0, 1100.0, 1200.0]})
+        for g in grid(
+            {
+                "projectile.centre_of_mass_ratio": [float(x) for x in FAMILY_RATIOS.split(",")],
+                "impact.speed": [700.0, 800.0, 900.0, 1000.0, 1100.0, 1200.0],
+            }
+        )
         for v in read_variations(ROOT / "docs" / "performance" / "disturbances.toml")
     ]
     assert len(variations) == 72
@@ -240,5 +296,6 @@ def test_sweep_72_runs(benchmark, tmp_path, monkeypatch, numerics, cache):
         run_sweep(sweep, RunStore(tmp_path / "fill"), Pool(progress=False))
     table = benchmark.pedantic(run_sweep, setup=setup, rounds=3, iterations=1).table()
     assert len(table) == 72 and ("error" not in table or table["error"].isna().all())
-    benchmark.extra_info.update(runs=72, steps_total=int(table["steps"].sum()),
-                                points=int(table["surface_points"].iloc[0]))
+    benchmark.extra_info.update(
+        runs=72, steps_total=int(table["steps"].sum()), points=int(table["surface_points"].iloc[0])
+    )

@@ -16,8 +16,7 @@ from cases.cli import main
 from cases.run import HISTORY_UNITS
 
 FAST = ["--set", "numerics.mesh_size=0.03"]
-REQUIRED = {"depth", "path_length", "end_reason", "final_speed", "max_attack_angle", "axis_angle_change",
-            "wall_time"}
+REQUIRED = {"depth", "path_length", "end_reason", "final_speed", "max_attack_angle", "axis_angle_change", "wall_time"}
 
 
 def penetrate(*args):
@@ -29,7 +28,7 @@ def test_run_json_and_outputs(tmp_path):
     done = penetrate("run", str(scene_path("forrestal_luk_test5")), *FAST, "--json", "--out", str(out))
     assert done.returncode == 0, done.stderr
     record = json.loads(done.stdout)
-    assert REQUIRED <= record.keys() and record["end_reason"] == "stopped"
+    assert record.keys() >= REQUIRED and record["end_reason"] == "stopped"
     assert 4.5 < record["path_length"] < 5.5 and record["depth"] <= record["path_length"]
     written = json.loads((out / "summary.json").read_text())
     assert written["depth"] == record["depth"]
@@ -46,11 +45,14 @@ def test_run_human_summary():
     assert "depth" in done.stdout and "stopped" in done.stdout
 
 
-@pytest.mark.parametrize("args, message", [
-    (["--set", "impact.attack_angle=95"], "impact.attack_angle = 95: must be <= 90"),
-    (["--set", "impact.speed"], "--set 'impact.speed': expected KEY=VALUE"),
-    (["--set", "numerics.bogus=1"], "numerics.bogus: unknown key"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--set", "impact.attack_angle=95"], "impact.attack_angle = 95: must be <= 90"),
+        (["--set", "impact.speed"], "--set 'impact.speed': expected KEY=VALUE"),
+        (["--set", "numerics.bogus=1"], "numerics.bogus: unknown key"),
+    ],
+)
 def test_bad_input_is_one_line_and_exit_2(args, message, tmp_path):
     done = penetrate("run", str(scene_path("forrestal_luk_test2")), *args, "--out", str(tmp_path / "o"))
     assert done.returncode == 2
@@ -66,8 +68,16 @@ def test_missing_scene_file(tmp_path):
 
 def test_an_override_replaces_the_scene_files_alternative(tmp_path):
     """``--set target.layers=[...]`` on a scene that names ``target.law`` means the layers instead."""
-    done = penetrate("run", str(scene_path("forrestal_luk_test2")), *FAST, "--json", "--out", str(tmp_path / "o"),
-                     "--set", 'target.layers=[{thickness = 2.0, law = "soil"}, {law = "softer_soil"}]')
+    done = penetrate(
+        "run",
+        str(scene_path("forrestal_luk_test2")),
+        *FAST,
+        "--json",
+        "--out",
+        str(tmp_path / "o"),
+        "--set",
+        'target.layers=[{thickness = 2.0, law = "soil"}, {law = "softer_soil"}]',
+    )
     assert done.returncode == 0, done.stderr
     resolved = json.loads((tmp_path / "o" / "summary.json").read_text())["scene_resolved"]["target"]
     assert [layer["law"] for layer in resolved["layers"]] == ["soil", "softer_soil"]
@@ -78,23 +88,59 @@ def test_an_override_replaces_the_scene_files_alternative(tmp_path):
 @pytest.mark.slow  # 3 s of runs; the compare study's own tests stay in the default run
 def test_compare_says_where_it_wrote(tmp_path):
     out = tmp_path / "cmp"
-    done = penetrate("compare", str(scene_path("forrestal_luk_test2")), *FAST, "--set", "numerics.time_limit=0.002",
-                     "--laws", "soil,softer_soil", "--out", str(out), "--store", str(tmp_path / "s"),
-                     "--no-progress", "--workers", "1")
+    done = penetrate(
+        "compare",
+        str(scene_path("forrestal_luk_test2")),
+        *FAST,
+        "--set",
+        "numerics.time_limit=0.002",
+        "--laws",
+        "soil,softer_soil",
+        "--out",
+        str(out),
+        "--store",
+        str(tmp_path / "s"),
+        "--no-progress",
+        "--workers",
+        "1",
+    )
     assert done.returncode == 0, done.stderr
     written = [line for line in done.stdout.splitlines() if line.startswith("written")]
     assert written and all(str(out / name) in written[0] for name in ("compare.md", "compare.csv", "compare.png"))
     assert {p.name for p in out.iterdir()} == {"compare.md", "compare.csv", "compare.png"}
-    bad = penetrate("compare", str(scene_path("forrestal_luk_test2")), "--laws", "soil,clay", "--out",
-                    str(tmp_path / "bad"), "--store", str(tmp_path / "s2"), "--no-progress")
+    bad = penetrate(
+        "compare",
+        str(scene_path("forrestal_luk_test2")),
+        "--laws",
+        "soil,clay",
+        "--out",
+        str(tmp_path / "bad"),
+        "--store",
+        str(tmp_path / "s2"),
+        "--no-progress",
+    )
     assert bad.returncode == 2 and "--laws: law = 'clay'" in bad.stderr and not (tmp_path / "bad").exists()
 
 
 # what a run of a cached projectile never imports: pictures, tables, clusters, meshing and its libraries
 # (scipy alone 0.45 s), the compiled kernel (numba, for studies), numpy.random, the e-mail parser (package
 # metadata parsed whole), the explanations of bad scenes, and a study worker's gzip
-NOT_IMPORTED_BY_A_RUN = ("pandas", "pyvista", "matplotlib", "distributed", "vtk", "gmsh", "meshio", "skfem", "scipy",
-                         "numba", "numpy.random", "email.parser", "cases.scene.explain", "gzip")
+NOT_IMPORTED_BY_A_RUN = (
+    "pandas",
+    "pyvista",
+    "matplotlib",
+    "distributed",
+    "vtk",
+    "gmsh",
+    "meshio",
+    "skfem",
+    "scipy",
+    "numba",
+    "numpy.random",
+    "email.parser",
+    "cases.scene.explain",
+    "gzip",
+)
 
 
 def test_a_run_imports_only_what_it_needs(tmp_path):
@@ -102,11 +148,17 @@ def test_a_run_imports_only_what_it_needs(tmp_path):
     :data:`NOT_IMPORTED_BY_A_RUN`: start-up is most of a short run's time (pandas alone takes 0.16 s to
     import, numpy.random 4-8 ms)."""
     assert penetrate("run", str(scene_path("forrestal_luk_test2")), *FAST, "--json").returncode == 0  # mesh it
-    code = ("import sys; from cases.cli import main; main(sys.argv[1:]); "
-            f"print(sorted(m for m in {NOT_IMPORTED_BY_A_RUN!r} if m in sys.modules))")
+    code = (
+        "import sys; from cases.cli import main; main(sys.argv[1:]); "
+        f"print(sorted(m for m in {NOT_IMPORTED_BY_A_RUN!r} if m in sys.modules))"
+    )
     for extra in ([], ["--out", str(tmp_path / "run")]):
-        done = subprocess.run([sys.executable, "-c", code, "run", str(scene_path("forrestal_luk_test2")), *FAST,
-                               "--json", *extra], capture_output=True, text=True, timeout=300)
+        done = subprocess.run(
+            [sys.executable, "-c", code, "run", str(scene_path("forrestal_luk_test2")), *FAST, "--json", *extra],
+            capture_output=True,
+            text=True,
+            timeout=300,
+        )
         assert done.returncode == 0, done.stderr
         assert done.stdout.splitlines()[-1] == "[]"
     assert (tmp_path / "run" / "history.csv").exists()
@@ -115,8 +167,10 @@ def test_a_run_imports_only_what_it_needs(tmp_path):
 def test_the_command_line_imports_nothing_before_a_command():
     """Importing the command line (and parsing, ``--help``) loads neither numpy nor pydantic: each command
     imports what it uses, and ``run`` does so with the garbage collector at rest (cases.cli.options.quiet_start)."""
-    code = ("import sys; import cases.cli; "
-            "print(sorted(m for m in ('numpy', 'pydantic', 'cases.scene.load', 'cases.run') if m in sys.modules))")
+    code = (
+        "import sys; import cases.cli; "
+        "print(sorted(m for m in ('numpy', 'pydantic', 'cases.scene.load', 'cases.run') if m in sys.modules))"
+    )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "[]"

@@ -49,10 +49,19 @@ class FakeRuns:
         self.rounds.append([scene.impact.speed for scene in sweep.scenes])
         runs = []
         for scene in sweep.scenes:
-            summary = SimpleNamespace(max_attack_angle=1.0, end_reason="stopped",
-                                      axis_angle_change=-self.turn(scene.impact.speed, self.critical(scene)))
-            runs.append(SimpleNamespace(failed=False, error=None, summary=summary,
-                                        key=f"{scene.projectile.centre_of_mass_ratio}@{scene.impact.speed}"))
+            summary = SimpleNamespace(
+                max_attack_angle=1.0,
+                end_reason="stopped",
+                axis_angle_change=-self.turn(scene.impact.speed, self.critical(scene)),
+            )
+            runs.append(
+                SimpleNamespace(
+                    failed=False,
+                    error=None,
+                    summary=summary,
+                    key=f"{scene.projectile.centre_of_mass_ratio}@{scene.impact.speed}",
+                )
+            )
         return SimpleNamespace(runs=runs)
 
     @property
@@ -68,8 +77,9 @@ def base():
 def search(monkeypatch, base, critical: float, workers: int = 2, guess=None, speeds=RANGE, resolution=5.0):
     fake = FakeRuns(lambda scene: critical)
     monkeypatch.setattr(speeds_module, "run_sweep", fake)
-    result = find_critical_velocity(base, store=None, speeds=speeds, resolution=resolution,
-                                    pool=Pool(workers=workers, progress=False), guess=guess)
+    result = find_critical_velocity(
+        base, store=None, speeds=speeds, resolution=resolution, pool=Pool(workers=workers, progress=False), guess=guess
+    )
     return result, fake
 
 
@@ -131,8 +141,10 @@ def test_a_gradual_change_is_bracketed_where_the_turn_reaches_30_degrees(monkeyp
     assert result.critical_velocity - jump == pytest.approx(8, abs=2.5)
 
 
-@pytest.mark.parametrize("critical, message", [(1700.0, "every run is stable, up to 1600 m/s"),
-                                               (150.0, "every run is unstable, down to 200 m/s")])
+@pytest.mark.parametrize(
+    "critical, message",
+    [(1700.0, "every run is stable, up to 1600 m/s"), (150.0, "every run is unstable, down to 200 m/s")],
+)
 def test_no_change_in_the_range(monkeypatch, base, critical, message):
     result, fake = search(monkeypatch, base, critical)
     assert result.critical_velocity is None and result.bracket is None
@@ -163,18 +175,31 @@ def test_a_family_shares_the_workers_round_by_round(monkeypatch, base):
 def test_bad_ranges_and_guesses_are_refused_before_anything_runs(monkeypatch, base):
     fake = FakeRuns(lambda scene: 900.0)
     monkeypatch.setattr(speeds_module, "run_sweep", fake)
-    for speeds, guess in [((900, 900), None), ((0, 1600), None), (RANGE, (100, 300)), (RANGE, (900, 900)),
-                          ((200, 1e9), None)]:
+    for speeds, guess in [
+        ((900, 900), None),
+        ((0, 1600), None),
+        (RANGE, (100, 300)),
+        (RANGE, (900, 900)),
+        ((200, 1e9), None),
+    ]:
         with pytest.raises(InputError):
             find_critical_velocity(base, None, speeds, 5.0, Pool(workers=2, progress=False), guess)
     assert fake.rounds == []
 
 
 @settings(max_examples=400, deadline=None)
-@given(critical=st.floats(201, 1599), workers=st.integers(1, 5), resolution=st.sampled_from([1.0, 5.0, 20.0]),
-       guess=st.one_of(st.none(), st.tuples(st.floats(200, 1600), st.floats(1, 800)).map(
-           lambda g: (g[0], min(g[0] + g[1], 1600.0))).filter(lambda g: g[1] > g[0])),
-       shape=st.sampled_from([turn, gradual_turn]))
+@given(
+    critical=st.floats(201, 1599),
+    workers=st.integers(1, 5),
+    resolution=st.sampled_from([1.0, 5.0, 20.0]),
+    guess=st.one_of(
+        st.none(),
+        st.tuples(st.floats(200, 1600), st.floats(1, 800))
+        .map(lambda g: (g[0], min(g[0] + g[1], 1600.0)))
+        .filter(lambda g: g[1] > g[0]),
+    ),
+    shape=st.sampled_from([turn, gradual_turn]),
+)
 def test_any_critical_speed_workers_resolution_and_guess(base, critical, workers, resolution, guess, shape):
     """Whatever the guess, the bracket is confirmed and narrow; without a guess it takes no more rounds
     than splitting the range into workers + 1 parts a round needs, plus one (the grid) and one (an end)."""
@@ -206,6 +231,7 @@ def test_the_command_passes_range_and_guess_and_says_runs_and_rounds(monkeypatch
     assert main(["critical", scene, "--speeds", "1000:1600:100", *common]) == 1  # 907 m/s is below the range
     assert capsys.readouterr().out.splitlines()[-1].startswith("every run is unstable, down to 1000 m/s (")
     assert main(["critical", scene, "--speeds", "800,1000", *common]) == 0  # a list counts by its ends
-    assert capsys.readouterr().out.splitlines()[-1] == ("critical impact velocity 907.5 m/s (between 905 and 910 m/s;"
-                                                        " 7 runs in 4 rounds)")
+    assert capsys.readouterr().out.splitlines()[-1] == (
+        "critical impact velocity 907.5 m/s (between 905 and 910 m/s; 7 runs in 4 rounds)"
+    )
     assert min(fake.rounds[-4]) > 800 and max(fake.rounds[-4]) < 1000

@@ -6,12 +6,21 @@ import numpy as np
 import pandas as pd
 import pytest
 from scipy.stats import binom, binomtest
+from support import dask_cluster
 
 from cases import scene_path
 from cases.scene import InputError, load_scene
-from cases.studies.ensemble import (Estimate, curve, draw, estimate, parse_bins, parse_sample, unit_points,
-                                    variations, wilson_interval)
-from support import dask_cluster
+from cases.studies.ensemble import (
+    Estimate,
+    curve,
+    draw,
+    estimate,
+    parse_bins,
+    parse_sample,
+    unit_points,
+    variations,
+    wilson_interval,
+)
 
 
 @pytest.fixture(scope="module")
@@ -19,15 +28,18 @@ def base():
     return load_scene(scene_path("forrestal_luk_test2"))
 
 
-@pytest.mark.parametrize("text, mean, sd", [
-    ("impact.speed=normal:300:10", 300.0, 10.0),
-    ("impact.speed=truncnormal:300:20:280:340", None, None),
-    ("impact.speed=uniform:250:350", 300.0, 100 / 12 ** 0.5),
-    ("impact.speed=lognormal:300:0.1", 300 * np.exp(0.005), 300 * np.sqrt((np.exp(0.01) - 1) * np.exp(0.01))),
-    ("impact.speed=choice:260,280,330", 290.0, np.std([260, 280, 330])),
-    # |N(0, s)|: mean s sqrt(2/pi), SD s sqrt(1 - 2/pi)
-    ("impact.attack_angle=halfnormal:2", 2 * np.sqrt(2 / np.pi), 2 * np.sqrt(1 - 2 / np.pi)),
-])
+@pytest.mark.parametrize(
+    "text, mean, sd",
+    [
+        ("impact.speed=normal:300:10", 300.0, 10.0),
+        ("impact.speed=truncnormal:300:20:280:340", None, None),
+        ("impact.speed=uniform:250:350", 300.0, 100 / 12**0.5),
+        ("impact.speed=lognormal:300:0.1", 300 * np.exp(0.005), 300 * np.sqrt((np.exp(0.01) - 1) * np.exp(0.01))),
+        ("impact.speed=choice:260,280,330", 290.0, np.std([260, 280, 330])),
+        # |N(0, s)|: mean s sqrt(2/pi), SD s sqrt(1 - 2/pi)
+        ("impact.attack_angle=halfnormal:2", 2 * np.sqrt(2 / np.pi), 2 * np.sqrt(1 - 2 / np.pi)),
+    ],
+)
 def test_sample_mean_and_sd_within_two_percent(text, mean, sd):
     dist = parse_sample(text)
     if mean is None:  # the truncated normal's moments from scipy's closed form
@@ -93,8 +105,14 @@ def test_wilson_interval_covers_about_95_percent(p, n):
 
 
 def test_estimates_count_failed_runs_apart():
-    table = pd.DataFrame({"unstable": [True, False, False, False], "exited": [False] * 4,
-                          "stopped": [False, True, True, False], "failed": [False, False, False, True]})
+    table = pd.DataFrame(
+        {
+            "unstable": [True, False, False, False],
+            "exited": [False] * 4,
+            "stopped": [False, True, True, False],
+            "failed": [False, False, False, True],
+        }
+    )
     estimates = estimate(table)
     assert estimates["failed"].probability == 0.25 and estimates["failed"].runs == 4
     assert estimates["stopped"].probability == pytest.approx(2 / 3) and estimates["stopped"].runs == 3
@@ -106,35 +124,44 @@ def test_curve_bins_by_a_sampled_key():
     assert key == "impact.speed" and list(edges) == [200, 250, 300]
     assert list(parse_bins("impact.speed=0:10:4", ["impact.speed"])[1]) == [0, 4, 8, 10]
     values = np.array([210.0, 240.0, 260.0, 300.0, 310.0])
-    table = pd.DataFrame({"unstable": [False, False, True, True, True], "exited": [False] * 5,
-                          "stopped": [True, True, False, False, False], "failed": [False] * 5})
+    table = pd.DataFrame(
+        {
+            "unstable": [False, False, True, True, True],
+            "exited": [False] * 5,
+            "stopped": [True, True, False, False, False],
+            "failed": [False] * 5,
+        }
+    )
     bins = curve(values, table, edges)
     assert [b["runs"] for b in bins] == [2, 2]  # 310 lies outside; 300 is in the last bin
     assert bins[0]["unstable"] == 0.0 and bins[1]["unstable"] == 1.0
     assert bins[1]["interval"]["unstable"][1] == 1.0 and bins[1]["bin"] == [250.0, 300.0]
 
 
-@pytest.mark.parametrize("text, message", [
-    ("impact.speed=gauss:1:2", "expected KEY=DIST with DIST one of normal:MEAN:SD"),
-    ("impact.speed=normal:300", "expected normal:MEAN:SD"),
-    ("impact.speed=uniform:1:2:3", "expected uniform:LO:HI"),
-    ("impact.speed=normal:300:0", "need SD > 0"),
-    ("impact.speed=truncnormal:300:10:320:280", "need LO < HI"),
-    ("impact.speed=uniform:5:5", "need LO < HI"),
-    ("impact.speed=lognormal:-1:0.1", "need MEDIAN > 0"),
-    ("impact.attack_angle=halfnormal:0", "need SCALE > 0"),
-    ("impact.attack_angle=halfnormal:1:2", "expected halfnormal:SCALE"),
-    ("impact.speed=normal:fast:10", "the parameters must be numbers"),
-    ("impact.speed=normal:inf:10", "must be finite numbers"),
-    ("impact.speed=choice:", "expected choice:V1,V2,..."),
-    ("impact.speed=choice:1,,2", "expected choice:V1,V2,..."),
-    ("impact.speed", "expected KEY=DIST"),
-    ("target.law=choice:1,2", "target.law is not a numeric key of the scene"),
-    ("impact.sped=normal:1:1", "impact.sped is not a numeric key of the scene"),
-    ("numerics.quadrature_order=uniform:1:4", "is a whole number; sample it with choice"),
-    ("numerics.quadrature_order=choice:2,2.5", "must be whole numbers"),
-    ("impact..speed=normal:1:1", "the key must be a dotted path"),
-])
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("impact.speed=gauss:1:2", "expected KEY=DIST with DIST one of normal:MEAN:SD"),
+        ("impact.speed=normal:300", "expected normal:MEAN:SD"),
+        ("impact.speed=uniform:1:2:3", "expected uniform:LO:HI"),
+        ("impact.speed=normal:300:0", "need SD > 0"),
+        ("impact.speed=truncnormal:300:10:320:280", "need LO < HI"),
+        ("impact.speed=uniform:5:5", "need LO < HI"),
+        ("impact.speed=lognormal:-1:0.1", "need MEDIAN > 0"),
+        ("impact.attack_angle=halfnormal:0", "need SCALE > 0"),
+        ("impact.attack_angle=halfnormal:1:2", "expected halfnormal:SCALE"),
+        ("impact.speed=normal:fast:10", "the parameters must be numbers"),
+        ("impact.speed=normal:inf:10", "must be finite numbers"),
+        ("impact.speed=choice:", "expected choice:V1,V2,..."),
+        ("impact.speed=choice:1,,2", "expected choice:V1,V2,..."),
+        ("impact.speed", "expected KEY=DIST"),
+        ("target.law=choice:1,2", "target.law is not a numeric key of the scene"),
+        ("impact.sped=normal:1:1", "impact.sped is not a numeric key of the scene"),
+        ("numerics.quadrature_order=uniform:1:4", "is a whole number; sample it with choice"),
+        ("numerics.quadrature_order=choice:2,2.5", "must be whole numbers"),
+        ("impact..speed=normal:1:1", "the key must be a dotted path"),
+    ],
+)
 def test_bad_samples_are_one_line_naming_the_option(base, text, message):
     with pytest.raises(InputError) as caught:
         parse_sample(text, base)
@@ -142,12 +169,15 @@ def test_bad_samples_are_one_line_naming_the_option(base, text, message):
     assert "\n" not in str(caught.value)
 
 
-@pytest.mark.parametrize("text, message", [
-    ("impact.attack_angle=0:1:0.5", "KEY one of the sampled keys"),
-    ("impact.speed=200:300", "three finite numbers"),
-    ("impact.speed=300:200:10", "need STEP > 0 and STOP > START"),
-    ("impact.speed=200:300:0", "need STEP > 0"),
-])
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("impact.attack_angle=0:1:0.5", "KEY one of the sampled keys"),
+        ("impact.speed=200:300", "three finite numbers"),
+        ("impact.speed=300:200:10", "need STEP > 0 and STOP > START"),
+        ("impact.speed=200:300:0", "need STEP > 0"),
+    ],
+)
 def test_bad_bins(text, message):
     with pytest.raises(InputError, match=message):
         parse_bins(text, ["impact.speed"])
@@ -168,9 +198,27 @@ CHEAP = ["--set", "numerics.mesh_size=0.04", "--set", "numerics.quadrature_order
 def _ensemble(tmp_path, count, *extra):
     from cases.cli import main
 
-    return main(["ensemble", str(scene_path("forrestal_luk_test2")), *CHEAP, "--sample", "impact.speed=uniform:250:310",
-                 "-n", str(count), "--seed", "4", "--workers", "1", "--no-progress", "--store", str(tmp_path / "store"),
-                 "--out", str(tmp_path / "out"), *extra])
+    return main(
+        [
+            "ensemble",
+            str(scene_path("forrestal_luk_test2")),
+            *CHEAP,
+            "--sample",
+            "impact.speed=uniform:250:310",
+            "-n",
+            str(count),
+            "--seed",
+            "4",
+            "--workers",
+            "1",
+            "--no-progress",
+            "--store",
+            str(tmp_path / "store"),
+            "--out",
+            str(tmp_path / "out"),
+            *extra,
+        ]
+    )
 
 
 def test_ensemble_command_on_test_2(tmp_path, capsys):
@@ -183,8 +231,13 @@ def test_ensemble_command_on_test_2(tmp_path, capsys):
     assert sum(b["runs"] for b in record["curve"]) == 5
     assert all(b["stopped"] == 1.0 and len(b["interval"]["stopped"]) == 2 for b in record["curve"] if b["runs"])
     out = tmp_path / "out"
-    assert {p.name for p in out.iterdir()} == {"ensemble.md", "ensemble.csv", "ensemble.json", "ensemble_curve.png",
-                                               "ensemble_histograms.png"}
+    assert {p.name for p in out.iterdir()} == {
+        "ensemble.md",
+        "ensemble.csv",
+        "ensemble.json",
+        "ensemble_curve.png",
+        "ensemble_histograms.png",
+    }
     assert json.loads((out / "ensemble.json").read_text()) == record
     first = pd.read_csv(out / "ensemble.csv")
     assert list(first.columns[:6]) == ["sample", "impact.speed", "unstable", "exited", "stopped", "failed"]
@@ -206,13 +259,37 @@ def test_ensemble_command_on_test_2(tmp_path, capsys):
 def test_ensemble_command_bad_input(tmp_path, capsys):
     from cases.cli import main
 
-    code = main(["ensemble", str(scene_path("forrestal_luk_test2")), "--sample", "impact.speed=gauss:1:2", "-n", "3",
-                 "--out", str(tmp_path / "out"), "--store", str(tmp_path / "store")])
+    code = main(
+        [
+            "ensemble",
+            str(scene_path("forrestal_luk_test2")),
+            "--sample",
+            "impact.speed=gauss:1:2",
+            "-n",
+            "3",
+            "--out",
+            str(tmp_path / "out"),
+            "--store",
+            str(tmp_path / "store"),
+        ]
+    )
     error = capsys.readouterr().err
     assert code == 2 and "--sample 'impact.speed=gauss:1:2'" in error and len(error.strip().splitlines()) == 1
     assert not (tmp_path / "out").exists()
-    code = main(["ensemble", str(scene_path("forrestal_luk_test2")), "--sample", "impact.speed=normal:10:100", "-n",
-                 "20", "--out", str(tmp_path / "out"), "--store", str(tmp_path / "store")])
+    code = main(
+        [
+            "ensemble",
+            str(scene_path("forrestal_luk_test2")),
+            "--sample",
+            "impact.speed=normal:10:100",
+            "-n",
+            "20",
+            "--out",
+            str(tmp_path / "out"),
+            "--store",
+            str(tmp_path / "store"),
+        ]
+    )
     assert code == 2 and "keep the samples in range" in capsys.readouterr().err
 
 
@@ -224,10 +301,30 @@ def test_the_same_seed_writes_the_same_csv_on_one_two_workers_and_a_dask_cluster
     from cases.cli import main
 
     def ensemble(name, *where):
-        assert main(["ensemble", str(scene_path("forrestal_luk_test2")), *CHEAP, "--sample",
-                     "impact.speed=uniform:250:310", "--sample", "impact.attack_angle=normal:0:1", "-n", "6",
-                     "--seed", "11", "--no-progress", "--store", str(tmp_path / f"store-{name}"),
-                     "--out", str(tmp_path / name), *where]) == 0
+        assert (
+            main(
+                [
+                    "ensemble",
+                    str(scene_path("forrestal_luk_test2")),
+                    *CHEAP,
+                    "--sample",
+                    "impact.speed=uniform:250:310",
+                    "--sample",
+                    "impact.attack_angle=normal:0:1",
+                    "-n",
+                    "6",
+                    "--seed",
+                    "11",
+                    "--no-progress",
+                    "--store",
+                    str(tmp_path / f"store-{name}"),
+                    "--out",
+                    str(tmp_path / name),
+                    *where,
+                ]
+            )
+            == 0
+        )
         return [(tmp_path / name / f"ensemble.{kind}").read_bytes() for kind in ("csv", "json")]
 
     one, two = ensemble("one", "--workers", "1"), ensemble("two", "--workers", "2")
@@ -252,9 +349,25 @@ def test_a_dask_worker_killed_mid_ensemble_loses_no_run_and_changes_nothing(tmp_
     from cases.cli import main
 
     def ensemble(name, *where):
-        return main(["ensemble", str(scene_path("paper_p3")), *CHEAP, "--sample", "impact.speed=uniform:700:1100",
-                     "-n", "16", "--seed", "5", "--no-progress", "--store", str(tmp_path / f"store-{name}"),
-                     "--out", str(tmp_path / name), *where])
+        return main(
+            [
+                "ensemble",
+                str(scene_path("paper_p3")),
+                *CHEAP,
+                "--sample",
+                "impact.speed=uniform:700:1100",
+                "-n",
+                "16",
+                "--seed",
+                "5",
+                "--no-progress",
+                "--store",
+                str(tmp_path / f"store-{name}"),
+                "--out",
+                str(tmp_path / name),
+                *where,
+            ]
+        )
 
     assert ensemble("quiet", "--workers", "2") == 0
     records = tmp_path / "store-killed" / "run"
@@ -266,8 +379,11 @@ def test_a_dask_worker_killed_mid_ensemble_loses_no_run_and_changes_nothing(tmp_
         while not (records.is_dir() and list(records.glob("*.json"))) and time.monotonic() < deadline:
             time.sleep(0.05)
         finished_before = {p.name: p.read_bytes() for p in records.glob("*.json")}
-        cli = [p for p in psutil.process_iter(["cmdline"]) if "worker" in " ".join(p.info["cmdline"] or [])
-               and address in " ".join(p.info["cmdline"] or [])]
+        cli = [
+            p
+            for p in psutil.process_iter(["cmdline"])
+            if "worker" in " ".join(p.info["cmdline"] or []) and address in " ".join(p.info["cmdline"] or [])
+        ]
         workers = [child for process in cli for child in process.children(recursive=True)]
         assert workers, "no dask worker process found"
         os.kill(workers[0].pid, signal.SIGKILL)
@@ -278,7 +394,9 @@ def test_a_dask_worker_killed_mid_ensemble_loses_no_run_and_changes_nothing(tmp_
         assert (records / name).read_bytes() == content
     assert len(list(records.glob("*.json"))) == 16
     for kind in ("csv", "json"):
-        assert (tmp_path / "killed" / f"ensemble.{kind}").read_bytes() == (tmp_path / "quiet" / f"ensemble.{kind}").read_bytes()
+        assert (tmp_path / "killed" / f"ensemble.{kind}").read_bytes() == (
+            tmp_path / "quiet" / f"ensemble.{kind}"
+        ).read_bytes()
 
 
 @pytest.mark.slow
@@ -295,8 +413,16 @@ def test_the_probability_of_instability_has_a_known_answer(tmp_path):
     search = find_critical_velocity(Sweep.from_file(scene_path("paper_p3"), overrides), store, (850.0, 1000.0), 1.0)
     low, high = search.bracket
     exact = ((1000.0 - high) / 150.0, (1000.0 - low) / 150.0)
-    record = run_ensemble(scene_path("paper_p3"), overrides, ["impact.speed=uniform:850:1000"], 64, store,
-                          tmp_path / "out", seed=2, design="sobol")
+    record = run_ensemble(
+        scene_path("paper_p3"),
+        overrides,
+        ["impact.speed=uniform:850:1000"],
+        64,
+        store,
+        tmp_path / "out",
+        seed=2,
+        design="sobol",
+    )
     interval = record["interval"]["unstable"]
     assert interval[0] <= exact[0] and exact[1] <= interval[1], (record["probability"]["unstable"], interval, exact)
     assert record["probability"]["failed"] == 0.0

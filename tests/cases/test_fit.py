@@ -2,6 +2,7 @@
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -32,7 +33,7 @@ def truth(scene: str, quantity: str) -> float:
 
 def scene_at_speed(tmp_path, speed: float) -> str:
     path = tmp_path / f"test2_{speed:g}.toml"
-    path.write_text(open(TEST2).read().replace("speed = 280.0", f"speed = {speed}"))
+    path.write_text(Path(TEST2).read_text().replace("speed = 280.0", f"speed = {speed}"))
     return str(path)
 
 
@@ -54,8 +55,9 @@ def assert_recovered(result, keys):
 def test_one_parameter_from_one_scene(store):
     rng = np.random.default_rng(1)
     observation = observe(TEST2, "depth", 0.01, rng, own=TEST2)
-    result = fit(TEST2, [("target.law", START_B), COARSE], ["target.law.B=0.3:3"], [observation], store,
-                 Pool(progress=False))
+    result = fit(
+        TEST2, [("target.law", START_B), COARSE], ["target.law.B=0.3:3"], [observation], store, Pool(progress=False)
+    )
     assert_recovered(result, ["target.law.B"])
     # one observation, one parameter: the error is the noise over the slope, so the fit meets it exactly
     assert abs(result.observations[0]["residual"]) < 1e-6
@@ -65,8 +67,14 @@ def test_two_parameters_from_one_scene(store):
     """Depth and stopping time of one shot tell A from B (the time weighs the slow end, where A rules)."""
     rng = np.random.default_rng(2)
     observations = [observe(TEST2, "depth", 0.005, rng, own=TEST2), observe(TEST2, "final_time", 5e-5, rng, own=TEST2)]
-    result = fit(TEST2, [("target.law", START), COARSE], ["target.law.B=0.3:3", "target.law.A=0.5:3"],
-                 observations, store, Pool(progress=False))
+    result = fit(
+        TEST2,
+        [("target.law", START), COARSE],
+        ["target.law.B=0.3:3", "target.law.A=0.5:3"],
+        observations,
+        store,
+        Pool(progress=False),
+    )
     assert_recovered(result, ["target.law.A", "target.law.B"])
     correlation = np.array(result.correlation)
     assert correlation.shape == (2, 2) and np.allclose(np.diag(correlation), 1.0) and correlation[0, 1] < -0.5
@@ -77,24 +85,46 @@ def test_one_and_two_parameters_from_several_scenes(store, tmp_path):
     rng = np.random.default_rng(3)
     scenes = [scene_at_speed(tmp_path, v) for v in (150.0, 280.0, 600.0)]
     observations = [observe(s, "depth", 0.005, rng) for s in scenes]
-    one = fit(TEST2, [("target.law", START_B), COARSE], ["target.law.B=0.3:3"],
-              observations, store, Pool(progress=False))
+    one = fit(
+        TEST2, [("target.law", START_B), COARSE], ["target.law.B=0.3:3"], observations, store, Pool(progress=False)
+    )
     assert {row["scene"] for row in one.observations} == set(scenes)
     assert_recovered(one, ["target.law.B"])
-    two = fit(TEST2, [("target.law", START), COARSE], ["target.law.B=0.3:3", "target.law.A=0.5:3"],
-              observations, store, Pool(progress=False))
+    two = fit(
+        TEST2,
+        [("target.law", START), COARSE],
+        ["target.law.B=0.3:3", "target.law.A=0.5:3"],
+        observations,
+        store,
+        Pool(progress=False),
+    )
     assert_recovered(two, ["target.law.A", "target.law.B"])
     # B alone with A held at a wrong value absorbs what it can; the residuals show what it cannot
-    wrong = fit(TEST2, [("target.law", START), COARSE], ["target.law.B=0.3:3"], observations, store,
-                Pool(progress=False))
+    wrong = fit(
+        TEST2, [("target.law", START), COARSE], ["target.law.B=0.3:3"], observations, store, Pool(progress=False)
+    )
     assert sum(r["residual"] ** 2 for r in wrong.observations) > 4 * sum(r["residual"] ** 2 for r in two.observations)
 
 
 def test_the_acceptance_fit_reaches_the_depth_in_at_most_ten_runs(tmp_path, capsys):
     """Test 2 at its shipped numerics: the B whose run gives 5.5 m, within 0.2 %, in at most 10 runs."""
     law = "target.law={A = 1.718, sigma_0 = 10e6, B = 1.227, rho_0 = 1860}"
-    arguments = ["fit", TEST2, "--set", law, "--param", "target.law.B=0.3:3", "--observe", "depth=5.5",
-                 "--store", str(tmp_path / "store"), "--out", str(tmp_path / "out"), "--no-progress", "--json"]
+    arguments = [
+        "fit",
+        TEST2,
+        "--set",
+        law,
+        "--param",
+        "target.law.B=0.3:3",
+        "--observe",
+        "depth=5.5",
+        "--store",
+        str(tmp_path / "store"),
+        "--out",
+        str(tmp_path / "out"),
+        "--no-progress",
+        "--json",
+    ]
     assert main(arguments) == 0
     record = json.loads(capsys.readouterr().out)
     assert set(record) >= {"parameters", "standard_errors", "observations", "runs"}
@@ -103,7 +133,13 @@ def test_the_acceptance_fit_reaches_the_depth_in_at_most_ten_runs(tmp_path, caps
     check = summarise(run_scene(load_scene(TEST2, [("target.law", {**TRUTH, "B": b})])))
     assert abs(check.depth / 5.5 - 1) < 2e-3
     assert record["observations"][0] | {"fitted": 0, "residual": 0} == {
-        "scene": TEST2, "quantity": "depth", "observed": 5.5, "sigma": None, "fitted": 0, "residual": 0}
+        "scene": TEST2,
+        "quantity": "depth",
+        "observed": 5.5,
+        "sigma": None,
+        "fitted": 0,
+        "residual": 0,
+    }
     assert {p.name for p in (tmp_path / "out").iterdir()} == {"fit.md", "fit.json", "fit.png"}
     # the same fit again: every run is in the store, none is made
     assert main(arguments) == 0
@@ -113,8 +149,14 @@ def test_the_acceptance_fit_reaches_the_depth_in_at_most_ten_runs(tmp_path, caps
 
 def test_two_parameters_from_one_observation_are_not_identifiable(store):
     with pytest.raises(NotIdentifiable, match=r"2 parameters .* from 1 observation"):
-        fit(TEST2, [("target.law", START), COARSE], ["target.law.B=0.3:3", "target.law.A=0.5:3"],
-            ["depth=5.0"], store, Pool(progress=False))
+        fit(
+            TEST2,
+            [("target.law", START), COARSE],
+            ["target.law.B=0.3:3", "target.law.A=0.5:3"],
+            ["depth=5.0"],
+            store,
+            Pool(progress=False),
+        )
 
 
 def test_a_flat_parameter_is_not_identifiable(store):
@@ -126,38 +168,69 @@ def test_a_flat_parameter_is_not_identifiable(store):
 def test_collinear_parameters_are_not_identifiable(store):
     """Two shots at 280 m/s move with A and B together (docs/calibration.md): a combination only."""
     with pytest.raises(NotIdentifiable, match="collinear"):
-        fit(TEST2, [("target.law", START), COARSE], ["target.law.B=0.3:3", "target.law.A=0.5:3"],
-            ["depth=5.0", "cases/forrestal_luk_test5.toml:path_length=5.0"], store, Pool(progress=False))
+        fit(
+            TEST2,
+            [("target.law", START), COARSE],
+            ["target.law.B=0.3:3", "target.law.A=0.5:3"],
+            ["depth=5.0", "cases/forrestal_luk_test5.toml:path_length=5.0"],
+            store,
+            Pool(progress=False),
+        )
 
 
 def test_not_identifiable_is_one_line_and_exit_code_1(tmp_path, capsys):
-    assert main(["fit", TEST2, "--set", "numerics.mesh_size=0.04", "--param", "numerics.time_limit=0.5:2",
-                 "--observe", "depth=5", "--store", str(tmp_path / "s"), "--out", str(tmp_path / "o"),
-                 "--no-progress"]) == 1
+    assert (
+        main(
+            [
+                "fit",
+                TEST2,
+                "--set",
+                "numerics.mesh_size=0.04",
+                "--param",
+                "numerics.time_limit=0.5:2",
+                "--observe",
+                "depth=5",
+                "--store",
+                str(tmp_path / "s"),
+                "--out",
+                str(tmp_path / "o"),
+                "--no-progress",
+            ]
+        )
+        == 1
+    )
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("penetrate fit: not identifiable")
     assert not (tmp_path / "o").exists()
 
 
-@pytest.mark.parametrize("options, message", [
-    (["--param", "target.law.B=0.3:3", "--observe", "depth=5.5"], "holds no number at target.law.B"),
-    (["--param", "impact.speed=400:100", "--observe", "depth=5.5"], "need LO < HI"),
-    (["--param", "impact.speed=1:nan", "--observe", "depth=5.5"], "must be a finite number"),
-    (["--param", "impact.speed=1:2", "--observe", "depth=5.5"], "must lie inside 1:2"),
-    (["--param", "impact.speed", "--observe", "depth=5.5"], "expected KEY=LO:HI"),
-    (["--param", "impact..speed=1:2", "--observe", "depth=5.5"], "dotted path"),
-    (["--param", "impact.speed=100:400", "--observe", "dept=5.5"], "unknown quantity 'dept'"),
-    (["--param", "impact.speed=100:400", "--observe", "depth"], "expected [SCENE:]QUANTITY=VALUE"),
-    (["--param", "impact.speed=100:400", "--observe", "depth=5+-0"], "standard deviation must be > 0"),
-    (["--param", "impact.speed=100:400", "--observe", "nope.toml:depth=5"], "scene file 'nope.toml' not found"),
-    (["--param", "impact.speed=100:400"], "give at least one observation"),
-    (["--observe", "depth=5"], "give at least one parameter"),
-    (["--param", "impact.speed=100:400", "--param", "impact.speed=100:400", "--observe", "depth=5"], "each key once"),
-    (["--param", "impact.speed=100:400", "--observe", "depth=5", "--step", "2"], "must be below 1"),
-])
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        (["--param", "target.law.B=0.3:3", "--observe", "depth=5.5"], "holds no number at target.law.B"),
+        (["--param", "impact.speed=400:100", "--observe", "depth=5.5"], "need LO < HI"),
+        (["--param", "impact.speed=1:nan", "--observe", "depth=5.5"], "must be a finite number"),
+        (["--param", "impact.speed=1:2", "--observe", "depth=5.5"], "must lie inside 1:2"),
+        (["--param", "impact.speed", "--observe", "depth=5.5"], "expected KEY=LO:HI"),
+        (["--param", "impact..speed=1:2", "--observe", "depth=5.5"], "dotted path"),
+        (["--param", "impact.speed=100:400", "--observe", "dept=5.5"], "unknown quantity 'dept'"),
+        (["--param", "impact.speed=100:400", "--observe", "depth"], "expected [SCENE:]QUANTITY=VALUE"),
+        (["--param", "impact.speed=100:400", "--observe", "depth=5+-0"], "standard deviation must be > 0"),
+        (["--param", "impact.speed=100:400", "--observe", "nope.toml:depth=5"], "scene file 'nope.toml' not found"),
+        (["--param", "impact.speed=100:400"], "give at least one observation"),
+        (["--observe", "depth=5"], "give at least one parameter"),
+        (
+            ["--param", "impact.speed=100:400", "--param", "impact.speed=100:400", "--observe", "depth=5"],
+            "each key once",
+        ),
+        (["--param", "impact.speed=100:400", "--observe", "depth=5", "--step", "2"], "must be below 1"),
+    ],
+)
 def test_bad_fit_input_is_one_line_exit_2(options, message, tmp_path, capsys):
-    assert main(["fit", TEST2, *options, "--store", str(tmp_path / "s"), "--out", str(tmp_path / "o"),
-                 "--no-progress"]) == 2
+    assert (
+        main(["fit", TEST2, *options, "--store", str(tmp_path / "s"), "--out", str(tmp_path / "o"), "--no-progress"])
+        == 2
+    )
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err, err
     assert not (tmp_path / "s").exists() and not (tmp_path / "o").exists()
@@ -171,8 +244,9 @@ def test_standard_errors_cover_the_truth_about_as_often_as_they_say(store):
     depth = truth(TEST2, "depth")
     for _ in range(30):
         observation = f"depth={depth + rng.normal(0.0, 0.02)!r}+-0.02"
-        result = fit(TEST2, [("target.law", START_B), COARSE], ["target.law.B=0.3:3"], [observation], store,
-                     Pool(progress=False))
+        result = fit(
+            TEST2, [("target.law", START_B), COARSE], ["target.law.B=0.3:3"], [observation], store, Pool(progress=False)
+        )
         inside += abs(result.parameters["target.law.B"] - TRUTH["B"]) < result.standard_errors["target.law.B"]
     assert 14 <= inside <= 26, inside
 
@@ -180,9 +254,15 @@ def test_standard_errors_cover_the_truth_about_as_often_as_they_say(store):
 @pytest.mark.slow
 def test_a_characteristic_speed_is_fitted_through_its_search(store):
     """#3 at 40 mm: the transverse inertia scale whose critical speed is 1000 m/s, +-10 m/s."""
-    result = fit("cases/paper_p3.toml", [COARSE, ("projectile.transverse_inertia_scale", 1.5)],
-                 ["projectile.transverse_inertia_scale=1:3"], ["critical_velocity=1000+-10"], store,
-                 Pool(progress=False), resolution=5.0)
+    result = fit(
+        "cases/paper_p3.toml",
+        [COARSE, ("projectile.transverse_inertia_scale", 1.5)],
+        ["projectile.transverse_inertia_scale=1:3"],
+        ["critical_velocity=1000+-10"],
+        store,
+        Pool(progress=False),
+        resolution=5.0,
+    )
     scale = result.parameters["projectile.transverse_inertia_scale"]
     assert 1.0 < scale < 3.0 and math.isfinite(result.standard_errors["projectile.transverse_inertia_scale"])
     assert abs(result.observations[0]["fitted"] - 1000.0) <= 10.0
@@ -191,8 +271,9 @@ def test_a_characteristic_speed_is_fitted_through_its_search(store):
 @pytest.mark.slow
 def test_the_calibrated_family_reproduces_3s_critical_speed(tmp_path, capsys):
     """cases/paper_fitted_p3.toml at its shipped numerics: within 2 % of the paper's 1110 m/s."""
-    assert main(["critical", "cases/paper_fitted_p3.toml", "--store", str(tmp_path / "s"), "--no-progress",
-                 "--json"]) == 0
+    assert (
+        main(["critical", "cases/paper_fitted_p3.toml", "--store", str(tmp_path / "s"), "--no-progress", "--json"]) == 0
+    )
     critical = json.loads(capsys.readouterr().out)["critical_velocity"]
     assert abs(critical / 1110.0 - 1.0) < 0.02, critical
 

@@ -12,12 +12,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from bodies import VALIDATION, write_body, write_volume_mesh
 
 from cases import load_scene, run_scene, scene_path, summarise
 from cases.run import prepare_projectile
 from cases.scene import InputError
-
-from bodies import VALIDATION, write_body, write_volume_mesh
 
 TEST2 = scene_path("forrestal_luk_test2")
 
@@ -77,9 +76,12 @@ def test_volume_mesh_is_test_2(folder, suffix):
 def test_relative_file_is_found_beside_the_scene(folder, monkeypatch, tmp_path):
     write_body(folder / "beside.step")
     scene_file = folder / "beside.toml"
-    scene_file.write_text(TEST2.read_text().replace(
-        'diameter = 0.0952', 'geometry = { file = "beside.step" }\n#').replace(
-        'length = 1.4 ', '# length').replace('nose = {', '# nose = {'))
+    scene_file.write_text(
+        TEST2.read_text()
+        .replace("diameter = 0.0952", 'geometry = { file = "beside.step" }\n#')
+        .replace("length = 1.4 ", "# length")
+        .replace("nose = {", "# nose = {")
+    )
     monkeypatch.chdir(tmp_path)
     scene = load_scene(scene_file)
     assert Path(scene.projectile.geometry.file) == folder / "beside.step"
@@ -101,15 +103,22 @@ def penetrate(*args):
     return subprocess.run([sys.executable, "-m", "cases.cli", *args], capture_output=True, text=True, timeout=300)
 
 
-@pytest.mark.parametrize("make, message", [
-    (lambda f: f / "nowhere.step", "nowhere.step': cannot read it"),
-    (lambda f: write_body(f / "huge.step", scale=1e-3), r'unit = "m": the body is 1400 m across.*say unit = "mm"'),
-    (lambda f: f / "body.dxf", r"projectile.geometry: file = .*body.dxf': not a CAD or mesh file \(allowed suffixes"),
-])
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (lambda f: f / "nowhere.step", "nowhere.step': cannot read it"),
+        (lambda f: write_body(f / "huge.step", scale=1e-3), r'unit = "m": the body is 1400 m across.*say unit = "mm"'),
+        (
+            lambda f: f / "body.dxf",
+            r"projectile.geometry: file = .*body.dxf': not a CAD or mesh file \(allowed suffixes",
+        ),
+    ],
+)
 def test_bad_geometry_is_one_line_and_exit_2(folder, tmp_path, make, message):
     path = make(folder)
-    done = penetrate("run", str(TEST2), "--set", f'projectile.geometry={{file = "{path}"}}', "--out",
-                     str(tmp_path / "o"))
+    done = penetrate(
+        "run", str(TEST2), "--set", f'projectile.geometry={{file = "{path}"}}', "--out", str(tmp_path / "o")
+    )
     assert done.returncode == 2, done.stderr
     assert "Traceback" not in done.stderr and len(done.stderr.strip().splitlines()) == 1
     assert "projectile.geometry" in done.stderr
@@ -119,7 +128,9 @@ def test_bad_geometry_is_one_line_and_exit_2(folder, tmp_path, make, message):
 
 def test_exact_normals_need_a_cad_file(folder):
     path = write_volume_mesh(folder / "n.msh", 0.03)
-    with pytest.raises(InputError, match=r"numerics.normals = 'exact'.*a mesh file has none: set numerics.normals = 'mesh'"):
+    with pytest.raises(
+        InputError, match=r"numerics.normals = 'exact'.*a mesh file has none: set numerics.normals = 'mesh'"
+    ):
         prepare_projectile(from_file({"file": str(path)}))
 
 
@@ -128,8 +139,9 @@ def test_flat_facets_come_with_their_error(folder):
     """A first-order mesh with its own (flat-facet) normals runs, and its summary says what that costs; the
     statement's figure for 20 mm facets (7 % short on test 2) is held to what a run measures."""
     path = write_volume_mesh(folder / "flat.msh", 0.02, order=1)
-    summary = summarise(run_scene(from_file({"file": str(path)}, **{"numerics.normals": "mesh",
-                                                                    "numerics.geometry_order": 1})))
+    summary = summarise(
+        run_scene(from_file({"file": str(path)}, **{"numerics.normals": "mesh", "numerics.geometry_order": 1}))
+    )
     assert any("flat facets" in w and "7 % short at 20 mm" in w for w in summary.warnings)
     assert summary.depth / analytic()[1] - 1.0 == pytest.approx(-0.072, abs=0.01)
     assert not any("flat facets" in w for w in summarise(run_scene(load_scene(TEST2))).warnings)
@@ -158,8 +170,19 @@ def test_a_file_body_renders_its_field(folder, tmp_path):
     bounds = law.static_stress + law.dynamic_density * (axial_speed * n_x) ** 2
     assert bounds.min() * (1 - 1e-9) <= sigma.min() and sigma.max() <= bounds.max() * (1 + 1e-9)
     out = tmp_path / "render"
-    done = penetrate("render", str(TEST2), "--set", f'projectile.geometry={{file = "{path}", unit = "mm"}}',
-                     "--times", "embedded,end", "--out", str(out), "--paraview", "--steps", "3")
+    done = penetrate(
+        "render",
+        str(TEST2),
+        "--set",
+        f'projectile.geometry={{file = "{path}", unit = "mm"}}',
+        "--times",
+        "embedded,end",
+        "--out",
+        str(out),
+        "--paraview",
+        "--steps",
+        "3",
+    )
     assert done.returncode == 0, done.stderr
     assert {"field_nose_embedded.png", "field_end.png", "polar.png", "paraview"} <= {p.name for p in out.iterdir()}
 
@@ -171,9 +194,26 @@ def test_a_mesh_file_run_prints_nothing_but_its_json(folder):
     import json
 
     path = write_volume_mesh(folder / "quiet.msh", 0.05, order=1)
-    done = subprocess.run([sys.executable, "-m", "cases.cli", "run", str(TEST2), "--json", "--set",
-                           f"projectile.geometry={{file = '{path}'}}", "--set", "numerics.normals=mesh", "--set",
-                           "numerics.geometry_order=1", "--set", "numerics.mesh_size=0.05"],
-                          capture_output=True, text=True, timeout=300)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "cases.cli",
+            "run",
+            str(TEST2),
+            "--json",
+            "--set",
+            f"projectile.geometry={{file = '{path}'}}",
+            "--set",
+            "numerics.normals=mesh",
+            "--set",
+            "numerics.geometry_order=1",
+            "--set",
+            "numerics.mesh_size=0.05",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert done.returncode == 0, done.stderr
     assert done.stdout.startswith("{") and json.loads(done.stdout)["depth"] > 0

@@ -39,8 +39,10 @@ def _compare(name: str, overrides: dict | None = None) -> tuple[float, float]:
     return abs(compiled_depth - numpy_depth) / numpy_depth, bound
 
 
-@pytest.mark.parametrize(("name", "overrides"), [("forrestal_luk_test2", None),
-                                                 ("paper_p3", {"numerics.mesh_size": 0.04, "impact.speed": 800.0})])
+@pytest.mark.parametrize(
+    ("name", "overrides"),
+    [("forrestal_luk_test2", None), ("paper_p3", {"numerics.mesh_size": 0.04, "impact.speed": 800.0})],
+)
 def test_compiled_and_numpy_kernels_agree(name, overrides):
     difference, _ = _compare(name, overrides)
     assert difference <= 1e-9

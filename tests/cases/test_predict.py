@@ -11,8 +11,8 @@ import pytest
 from cases import load_scene, run_scene, scene_path, summarise
 from cases.run import convergence_speed, history_table, prepare_projectile
 from cases.scene import InputError
-from cases.studies.predict import ReducedModel, predict
 from cases.studies.paper.plan import STUDY_NUMERICS
+from cases.studies.predict import ReducedModel, predict
 
 P3_STUDY = {**STUDY_NUMERICS, "numerics.rtol": 1e-6}  # the paper study's 20 mm mesh; rtol 1e-6 keeps the run at 1 s
 
@@ -26,12 +26,16 @@ def p3():
 FINE = {"rtol": 1e-6, "rings": {"nose_rings": 48, "shank_rings": 24, "face_rings": 4}}
 
 
-@pytest.mark.parametrize("speed, settings, bounds", [
-    (1200.0, FINE, (0.005, 0.5, 0.005)),
-    (900.0, FINE, (0.005, 0.5, 0.005)),
-    (1200.0, {}, (0.005, 0.5, 0.005)),
-    (900.0, {}, (0.06, 2.0, 0.03)),
-], ids=["unstable, fine", "stable, fine", "unstable, shipped", "stable, shipped"])
+@pytest.mark.parametrize(
+    "speed, settings, bounds",
+    [
+        (1200.0, FINE, (0.005, 0.5, 0.005)),
+        (900.0, FINE, (0.005, 0.5, 0.005)),
+        (1200.0, {}, (0.005, 0.5, 0.005)),
+        (900.0, {}, (0.06, 2.0, 0.03)),
+    ],
+    ids=["unstable, fine", "stable, fine", "unstable, shipped", "stable, shipped"],
+)
 def test_a_reduced_run_is_the_full_run(p3, speed, settings, bounds):
     """#3 at 1 degree, unstable at 1200 m/s and stable at 900 m/s (1 % below its critical speed): the reduced
     model (rings of the exact surface, three degrees of freedom) against the full model (the 20 mm mesh's
@@ -83,15 +87,19 @@ def test_no_disturbance_no_instability():
     assert any("no unstable reduced run" in message for message in prediction.messages)
 
 
-@pytest.mark.parametrize("overrides, field", [
-    ({"projectile.geometry.unit": "mm"}, "projectile.geometry"),
-    ({"target": {"layers": [{"law": "soil", "thickness": 1.0}, {"law": "softer_soil"}]}}, "target.layers"),
-    ({"impact.yaw_angle": 2.0}, "impact.yaw_angle"),
-    ({"effects.free_surface": {"depth": 0.5}}, "effects.free_surface"),
-])
+@pytest.mark.parametrize(
+    "overrides, field",
+    [
+        ({"projectile.geometry.unit": "mm"}, "projectile.geometry"),
+        ({"target": {"layers": [{"law": "soil", "thickness": 1.0}, {"law": "softer_soil"}]}}, "target.layers"),
+        ({"impact.yaw_angle": 2.0}, "impact.yaw_angle"),
+        ({"effects.free_surface": {"depth": 0.5}}, "effects.free_surface"),
+    ],
+)
 def test_what_the_model_cannot_take_is_refused_in_one_line(overrides, field):
-    scene = load_scene(scene_path("eroded_test2" if field == "projectile.geometry" else "forrestal_luk_test2"),
-                       overrides)
+    scene = load_scene(
+        scene_path("eroded_test2" if field == "projectile.geometry" else "forrestal_luk_test2"), overrides
+    )
     with pytest.raises(InputError, match=field.replace(".", r"\.")) as error:
         ReducedModel(scene, None)
     assert "\n" not in str(error.value)
@@ -121,6 +129,7 @@ def test_the_speeds_scale_with_the_square_root_of_the_static_strength():
     every speed times sqrt(2) is the same run, faster: the full model (not only the reduced one) gives the same
     largest attack angle, axis turn and path to the convergence, and a convergence speed sqrt(2) higher; the
     predicted speeds scale by sqrt(2) too (the critical one to the bisection's resolution)."""
+
     def scene(factor):
         law = {"A": 1.718, "sigma_0": 10e6 * factor, "B": 1.227, "rho_0": 1860.0}
         return load_scene(scene_path("paper_p3"), {**P3_STUDY, "target.law": law, "impact.speed": 1000.0 * factor**0.5})
@@ -139,5 +148,6 @@ def test_the_speeds_scale_with_the_square_root_of_the_static_strength():
     # the reduced runs: the same, to their tolerance (1e-4) and their own interpolation between steps (measured 3e-4)
     predicted = [predict(scene(factor)) for factor in (1.0, 2.0)]
     assert predicted[1].characteristic_convergent_velocity == pytest.approx(
-        2**0.5 * predicted[0].characteristic_convergent_velocity, rel=1e-3)
+        2**0.5 * predicted[0].characteristic_convergent_velocity, rel=1e-3
+    )
     assert predicted[1].critical_velocity == pytest.approx(2**0.5 * predicted[0].critical_velocity, abs=2**0.5 * 5.0)

@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 from PIL import Image
 from scipy.spatial import cKDTree
+from support import rss_bytes
 
 from cases import load_scene, run_scene, scene_path
 from cases.scene import InputError
@@ -27,7 +28,6 @@ from cases.viz.frames import FrameRenderer, render_animation, render_snapshots
 from cases.viz.panels import default_station, ring_stress
 from cases.viz.paraview import write_paraview
 from cases.viz.trajectory import render_trajectory
-from support import rss_bytes
 
 COARSE = {"numerics.mesh_size": 0.04, "numerics.integrator": "rk4", "numerics.time_step": 4e-5}
 COARSE_SET = ["numerics.mesh_size=0.04", "numerics.integrator=rk4", "numerics.time_step=4e-5"]
@@ -43,8 +43,10 @@ def unstable():
 @pytest.fixture(scope="module")
 def axial():
     """Projectile #3 at 1120 m/s straight along its axis, until the nose and 0.4 m more are in."""
-    scene = load_scene(scene_path("paper_p3"), {"impact.speed": 1120, "impact.attack_angle": 0,
-                                                "numerics.time_limit": 0.0007, **COARSE})
+    scene = load_scene(
+        scene_path("paper_p3"),
+        {"impact.speed": 1120, "impact.attack_angle": 0, "numerics.time_limit": 0.0007, **COARSE},
+    )
     return FieldEvaluator(run_scene(scene))
 
 
@@ -60,7 +62,7 @@ def _decode(image: np.ndarray, renderer: FrameRenderer, name: str = "sigma_n", t
     values = lo + (index + 0.5) / len(colours) * (hi - lo)
     values[~np.isfinite(distance)] = np.nan
     values = values.reshape(image.shape[:2])
-    values[:, int(0.84 * image.shape[1]):] = np.nan
+    values[:, int(0.84 * image.shape[1]) :] = np.nan
     return values
 
 
@@ -89,8 +91,7 @@ def test_the_drawn_field_is_the_integrated_field(unstable):
         fld = ev.at(row)
         areas = q.weights.reshape(-1, ev.surface.points_per_facet).sum(axis=1)
         assert np.sum(fld.sigma_n * areas) == pytest.approx(np.sum(fld.point_sigma_n * q.weights), rel=1e-12)
-        sigma, _ = ev.loads.stress(fld.position, fld.velocity, fld.rotation,
-                                   ev.result.trajectory.angular_velocity[row])
+        sigma, _ = ev.loads.stress(fld.position, fld.velocity, fld.rotation, ev.result.trajectory.angular_velocity[row])
         np.testing.assert_array_equal(fld.point_sigma_n, sigma)
     # every facet drawn; flat triangles through the curved surface's nodes: area within 1 % of the exact
     assert set(np.unique(ev.surface.facet)) == set(range(ev.surface.n_facets))
@@ -134,7 +135,8 @@ def test_axial_motion_has_no_peak_or_convergence_by_default(axial):
 
 
 def test_nose_tip_hottest_in_axial_motion(axial):
-    """Axial motion: sigma_n = A sigma_0 + B rho_0 (V n_x)^2 falls from the tip along the nose; the shank carries none."""
+    """Axial motion: sigma_n = A sigma_0 + B rho_0 (V n_x)^2 falls from the tip along the nose; the shank
+    carries none."""
     ev = axial
     fld = ev.at(-1)
     nose = ev.prepared.profile.nose_length
@@ -162,7 +164,8 @@ def test_nose_tip_hottest_in_axial_motion(axial):
 
 
 def test_windward_side_hotter_than_leeward(unstable):
-    """At the peak attack angle the side facing the transverse velocity carries the load, in the field and in the image."""
+    """At the peak attack angle the side facing the transverse velocity carries the load, in the field and in
+    the image."""
     ev = unstable
     row = key_instants(ev)["peak"]
     fld = ev.at(row)
@@ -199,8 +202,12 @@ def test_snapshots_are_images_of_the_field(unstable, tmp_path):
     ev = unstable
     instants = resolve_instants(ev, None)
     paths = render_snapshots(ev, tmp_path, instants, size=(800, 400))
-    assert [p.name for p in paths] == ["field_nose_embedded.png", "field_peak_attack_angle.png",
-                                       "field_converged.png", "field_end.png"]
+    assert [p.name for p in paths] == [
+        "field_nose_embedded.png",
+        "field_peak_attack_angle.png",
+        "field_converged.png",
+        "field_end.png",
+    ]
     for path in paths:
         image = np.asarray(Image.open(path).convert("RGB"))
         assert image.shape == (400, 800, 3)
@@ -219,9 +226,16 @@ def test_snapshots_are_images_of_the_field(unstable, tmp_path):
 
 
 def test_friction_adds_the_tangential_stress_panel(tmp_path):
-    scene = load_scene(scene_path("paper_p3"), {"impact.speed": 1120, "numerics.time_limit": 0.001,
-                                                "effects.friction.model": "coulomb",
-                                                "effects.friction.coefficient": 0.1, **COARSE})
+    scene = load_scene(
+        scene_path("paper_p3"),
+        {
+            "impact.speed": 1120,
+            "numerics.time_limit": 0.001,
+            "effects.friction.model": "coulomb",
+            "effects.friction.coefficient": 0.1,
+            **COARSE,
+        },
+    )
     ev = FieldEvaluator(run_scene(scene))
     fld = ev.at(-1)
     assert fld.tau is not None and fld.tau.max() > 0
@@ -258,8 +272,9 @@ def test_paraview_files_reopen_with_the_same_values(unstable, tmp_path):
         np.testing.assert_array_equal(mesh.points, ev.world_points(row))
         np.testing.assert_array_equal(mesh.cells_dict["triangle"], ev.surface.triangles)
         np.testing.assert_array_equal(mesh.cell_data_dict["sigma_n"]["triangle"], ev.cell_values(fld.sigma_n))
-        np.testing.assert_array_equal(mesh.cell_data_dict["normal_velocity"]["triangle"],
-                                      ev.cell_values(fld.normal_velocity))
+        np.testing.assert_array_equal(
+            mesh.cell_data_dict["normal_velocity"]["triangle"], ev.cell_values(fld.normal_velocity)
+        )
     # the index: one surface (part 0) and the path (part 1) per time, in time order, files present
     root = ET.parse(written["index"]).getroot()
     sets = root.findall("./Collection/DataSet")
@@ -358,17 +373,46 @@ def test_ring_stress_on_the_nose_is_the_closed_form_and_the_shank_windward(axial
 @pytest.mark.slow  # 5 s: the whole command; the snapshots are tested in the default run
 def test_render_command(tmp_path):
     out = tmp_path / "render"
-    args = [sys.executable, "-m", "cases.cli", "render", str(scene_path("paper_p3")), "--set", "impact.speed=1120",
-            "--set", "numerics.time_limit=0.004", *[a for s in COARSE_SET for a in ("--set", s)],
-            "--times", "embedded,0.002,end", "--out", str(out), "--paraview", "--steps", "3", "--animation",
-            "--frames", "3", "--size", "640x320", "--json"]
+    args = [
+        sys.executable,
+        "-m",
+        "cases.cli",
+        "render",
+        str(scene_path("paper_p3")),
+        "--set",
+        "impact.speed=1120",
+        "--set",
+        "numerics.time_limit=0.004",
+        *[a for s in COARSE_SET for a in ("--set", s)],
+        "--times",
+        "embedded,0.002,end",
+        "--out",
+        str(out),
+        "--paraview",
+        "--steps",
+        "3",
+        "--animation",
+        "--frames",
+        "3",
+        "--size",
+        "640x320",
+        "--json",
+    ]
     done = subprocess.run(args, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     record = json.loads(done.stdout)
-    assert {p.name for p in out.iterdir()} == {"animation.gif", "field_nose_embedded.png", "field_t2.000ms.png",
-                                                "field_end.png", "paraview", "polar.png", "resistance_centre.png",
-                                                "trajectory.png"}
+    assert {p.name for p in out.iterdir()} == {
+        "animation.gif",
+        "field_nose_embedded.png",
+        "field_t2.000ms.png",
+        "field_end.png",
+        "paraview",
+        "polar.png",
+        "resistance_centre.png",
+        "trajectory.png",
+    }
     assert record["paraview_steps"] == 3 and (out / "paraview" / "run.pvd").exists()
-    bad = subprocess.run(args[:5] + ["--times", "soon", "--out", str(tmp_path / "bad")], capture_output=True,
-                         text=True, timeout=300)
+    bad = subprocess.run(
+        args[:5] + ["--times", "soon", "--out", str(tmp_path / "bad")], capture_output=True, text=True, timeout=300
+    )
     assert bad.returncode == 2 and "--times" in bad.stderr and "Traceback" not in bad.stderr

@@ -14,12 +14,15 @@ from dynamics.quaternion import from_rotation_matrix, multiply
 
 SHARP = (("effects.contact_incidence", 0.0), ("numerics.entry_smoothing", 0.0))  # the paper's switches
 TABLE3 = {  # test: (paper's prediction of the distance travelled, m)
-    "forrestal_luk_test2": 5.05, "forrestal_luk_test3": 5.00, "forrestal_luk_test4": 5.05,
-    "forrestal_luk_test5": 5.01, "forrestal_luk_test6": 5.00,
+    "forrestal_luk_test2": 5.05,
+    "forrestal_luk_test3": 5.00,
+    "forrestal_luk_test4": 5.05,
+    "forrestal_luk_test5": 5.01,
+    "forrestal_luk_test6": 5.00,
 }
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _run(name, *overrides):
     """Run a shipped scene with (key, value) overrides, once per test session."""
     scene = load_scene(scene_path(name), overrides)
@@ -32,8 +35,9 @@ def test_normal_impact_matches_the_1d_integration():
     result, history = _run("forrestal_luk_test2")
     scene = result.scene
     profile, law, mass = result.prepared.profile, scene.target.build(), result.prepared.mass.mass
-    reference, _ = axial_depth_1d(profile, law, mass, scene.impact.speed, scene.numerics.stop_speed,
-                                  **scene.effects.contact)
+    reference, _ = axial_depth_1d(
+        profile, law, mass, scene.impact.speed, scene.numerics.stop_speed, **scene.effects.contact
+    )
     assert result.trajectory.end_reason == "stopped"
     assert history["tip_depth"].max() == pytest.approx(reference, rel=1e-3)
 
@@ -69,13 +73,17 @@ def test_the_contact_incidence_converges_to_the_sharp_law():
     result, _ = _run("forrestal_luk_test2")
     profile, law, mass = result.prepared.profile, result.scene.target.build(), result.prepared.mass.mass
     sharp, _ = axial_depth_1d(profile, law, mass, 280.0, 0.5)
-    excess = [axial_depth_1d(profile, law, mass, 280.0, 0.5, contact_incidence=d)[0] - sharp
-              for d in (0.02, 0.01, 0.005)]
+    excess = [
+        axial_depth_1d(profile, law, mass, 280.0, 0.5, contact_incidence=d)[0] - sharp for d in (0.02, 0.01, 0.005)
+    ]
     assert 0 < excess[2] < excess[1] < excess[0] < 1e-3 * sharp
     assert 3.0 < excess[0] / excess[1] < 5 and 3.0 < excess[1] / excess[2] < 5
+
     def excess_at(stop: float, **contact: float) -> float:
-        return axial_depth_1d(profile, law, mass, 280.0, stop, **contact)[0] - axial_depth_1d(profile, law, mass,
-                                                                                              280.0, stop)[0]
+        return (
+            axial_depth_1d(profile, law, mass, 280.0, stop, **contact)[0]
+            - axial_depth_1d(profile, law, mass, 280.0, stop)[0]
+        )
 
     assert abs(excess_at(0.1, contact_incidence=0.005) - excess[2]) < 1e-6 * sharp
     creep = [excess_at(stop, contact_width=1.5) for stop in (0.5, 0.1)]
@@ -128,8 +136,13 @@ def test_rotating_the_scene_about_the_normal_rotates_the_trajectory():
     angle = math.radians(37.0)
     c, s = math.cos(angle), math.sin(angle)
     spin = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-    turned = State(0.0, spin @ start.position, spin @ start.velocity,
-                   multiply(from_rotation_matrix(spin), start.attitude), start.angular_velocity)
+    turned = State(
+        0.0,
+        spin @ start.position,
+        spin @ start.velocity,
+        multiply(from_rotation_matrix(spin), start.attitude),
+        start.angular_velocity,
+    )
     base, rotated = run_scene(scene).trajectory, run_scene(scene, turned).trajectory
     assert rotated.end_reason == base.end_reason and len(rotated.time) == len(base.time)
     np.testing.assert_allclose(rotated.position, base.position @ spin.T, atol=1e-9)
@@ -179,8 +192,12 @@ def test_runs_warn_when_the_numerics_do_not_suit_the_scene():
     """Test 5 with RK4 at 2e-4 s, twice the coarsest step its contact ramp keeps stable (docs/model.md, "Why
     delta = 0.005"): the energy guard retakes nearly every step (measured: 9101 for 9551) and the run rides
     to the time limit; the summary says both. The shipped scene itself carries no warning."""
-    coarse, _ = _run("forrestal_luk_test5", ("numerics.integrator", "rk4"), ("numerics.quadrature_order", 2),
-                     ("numerics.time_step", 2e-4))
+    coarse, _ = _run(
+        "forrestal_luk_test5",
+        ("numerics.integrator", "rk4"),
+        ("numerics.quadrature_order", 2),
+        ("numerics.time_step", 2e-4),
+    )
     record = summarise(coarse)
     assert record.energy_rejections > 0.1 * record.steps
     assert any("energy guard" in text for text in record.warnings)
@@ -196,8 +213,11 @@ def test_the_summary_is_typed_with_units_and_round_trips_through_json():
     result, history = _run("forrestal_luk_test2")
     summary = summarise(result, history)
     assert RunSummary.model_fields["depth"].json_schema_extra["unit"] == "m"
-    assert all(f.json_schema_extra and "unit" in f.json_schema_extra for name, f in RunSummary.model_fields.items()
-               if f.annotation in (float, int) or name in ("depth", "wall_time", "final_position"))
+    assert all(
+        f.json_schema_extra and "unit" in f.json_schema_extra
+        for name, f in RunSummary.model_fields.items()
+        if f.annotation in (float, int) or name in ("depth", "wall_time", "final_position")
+    )
     record = summary.record()
     assert RunSummary.from_record({**record, "scene_resolved": {}}) == summary
     nan_free = summary.model_copy(update={"final_speed": math.nan}).record()

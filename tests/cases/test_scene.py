@@ -30,24 +30,32 @@ def test_paper_family_scenes_place_their_counterweight(number, ratio):
     assert (scene.impact.speed, scene.impact.attack_angle, scene.impact.oblique_angle) == (1200, 1, 0)
 
 
-@pytest.mark.parametrize("override, expected", [
-    ("impact.attack_angle=120", "impact.attack_angle = 120: must be <= 90 (allowed: -90 <= impact.attack_angle <= 90 deg)"),
-    ("impact.speed=-3", "impact.speed = -3: must be > 0 (allowed: 0 < impact.speed <= 10000 m/s)"),
-    ("impact.speed=nan", "impact.speed = nan: must be a finite number"),
-    ("impact.speed=inf", "impact.speed = inf: must be a finite number"),
-    ("impact.colour=1", "impact.colour: unknown key (allowed here: angular_velocity, attack_angle,"),
-    ("projectile.nose.crh=0.2", "projectile.nose.crh = 0.2: must be >= 0.5"),
-    ("numerics.mesh_size=0", "numerics.mesh_size = 0: must be > 0 (allowed: 0 < numerics.mesh_size <= 10 m)"),
-    ("numerics.geometry_order=3", "numerics.geometry_order = 3: input should be 1 or 2"),
-    ("numerics.integrator=euler", "numerics.integrator = 'euler': input should be 'rk4' or 'dopri54'"),
-    ("target.law=clay", "target.law: unknown law 'clay': must be one of softer_soil, soil,"),
-    ("target.law={A=1,B=1,sigma_0=-1,rho_0=1}", "target.law.sigma_0 = -1: must be > 0"),
-    ("projectile.nose.shape=sphere", "projectile.nose.shape = 'sphere': unknown shape (allowed: 'ogive', 'cone',"),
-    ("impact.speed='fast'", "impact.speed = 'fast': input should be a valid number"),
-    ("projectile.mass_properties={mass=20,centre_of_mass=0.7,axial_inertia=7,transverse_inertia=3}",
-     "axial_inertia = 7: more than twice transverse_inertia = 3"),
-    ("projectile.centre_of_mass=0.5", "centre_of_mass places a counterweight"),
-])
+@pytest.mark.parametrize(
+    "override, expected",
+    [
+        (
+            "impact.attack_angle=120",
+            "impact.attack_angle = 120: must be <= 90 (allowed: -90 <= impact.attack_angle <= 90 deg)",
+        ),
+        ("impact.speed=-3", "impact.speed = -3: must be > 0 (allowed: 0 < impact.speed <= 10000 m/s)"),
+        ("impact.speed=nan", "impact.speed = nan: must be a finite number"),
+        ("impact.speed=inf", "impact.speed = inf: must be a finite number"),
+        ("impact.colour=1", "impact.colour: unknown key (allowed here: angular_velocity, attack_angle,"),
+        ("projectile.nose.crh=0.2", "projectile.nose.crh = 0.2: must be >= 0.5"),
+        ("numerics.mesh_size=0", "numerics.mesh_size = 0: must be > 0 (allowed: 0 < numerics.mesh_size <= 10 m)"),
+        ("numerics.geometry_order=3", "numerics.geometry_order = 3: input should be 1 or 2"),
+        ("numerics.integrator=euler", "numerics.integrator = 'euler': input should be 'rk4' or 'dopri54'"),
+        ("target.law=clay", "target.law: unknown law 'clay': must be one of softer_soil, soil,"),
+        ("target.law={A=1,B=1,sigma_0=-1,rho_0=1}", "target.law.sigma_0 = -1: must be > 0"),
+        ("projectile.nose.shape=sphere", "projectile.nose.shape = 'sphere': unknown shape (allowed: 'ogive', 'cone',"),
+        ("impact.speed='fast'", "impact.speed = 'fast': input should be a valid number"),
+        (
+            "projectile.mass_properties={mass=20,centre_of_mass=0.7,axial_inertia=7,transverse_inertia=3}",
+            "axial_inertia = 7: more than twice transverse_inertia = 3",
+        ),
+        ("projectile.centre_of_mass=0.5", "centre_of_mass places a counterweight"),
+    ],
+)
 def test_errors_name_the_field_and_the_allowed_range(override, expected):
     with pytest.raises(SceneError) as info:
         scene_from_dict(apply_overrides(BASE, [parse_override(override)]))
@@ -56,9 +64,18 @@ def test_errors_name_the_field_and_the_allowed_range(override, expected):
 
 
 def test_overrides_parse_toml_values():
-    data = apply_overrides(BASE, [parse_override(text) for text in (
-        "impact.speed=1120", "target.law=softer_soil", "impact.angular_velocity=[0.0, 1.5, 0.0]",
-        "numerics.normals=\"mesh\"")])
+    data = apply_overrides(
+        BASE,
+        [
+            parse_override(text)
+            for text in (
+                "impact.speed=1120",
+                "target.law=softer_soil",
+                "impact.angular_velocity=[0.0, 1.5, 0.0]",
+                'numerics.normals="mesh"',
+            )
+        ],
+    )
     scene = scene_from_dict(data)
     assert scene.impact.speed == 1120.0 and scene.target.law == "softer_soil"
     assert scene.impact.angular_velocity == (0.0, 1.5, 0.0) and scene.numerics.normals == "mesh"
@@ -77,33 +94,50 @@ def test_overrides_are_typed_pairs():
     with pytest.raises(SceneError, match="the key must be a dotted path"):
         apply_overrides(BASE, {"impact..speed": 3})
     # a value is used as it is: a table stays a table, a string a string (no text round trip)
-    data = apply_overrides(BASE, {"target.law": {"A": 1.0, "sigma_0": 1e6, "B": 1.0, "rho_0": 1000.0},
-                                  "name": "speed=1120"})
+    data = apply_overrides(
+        BASE, {"target.law": {"A": 1.0, "sigma_0": 1e6, "B": 1.0, "rho_0": 1000.0}, "name": "speed=1120"}
+    )
     scene = scene_from_dict(data)
     assert scene.target.law.A == 1.0 and scene.name == "speed=1120"
 
 
 def test_an_override_replaces_its_alternatives():
     """A user who sets target.layers means the layers instead of the law, and so on for every one-of key."""
-    layered = scene_from_dict(apply_overrides({**BASE, "target": {"law": "soil"}},
-                                              {"target.layers": [{"thickness": 1.0, "law": "soil"},
-                                                                 {"law": "softer_soil"}]}))
+    layered = scene_from_dict(
+        apply_overrides(
+            {**BASE, "target": {"law": "soil"}},
+            {"target.layers": [{"thickness": 1.0, "law": "soil"}, {"law": "softer_soil"}]},
+        )
+    )
     assert isinstance(layered.target.build(), LayeredTarget)
     back = scene_from_dict(apply_overrides({**BASE, "target": {"layers": [{"law": "soil"}]}}, {"target.law": "soil"}))
     assert back.target.layers is None and isinstance(back.target.build(), ResistanceLaw)
     cone = scene_from_dict(apply_overrides(BASE, {"projectile.nose.shape": "cone", "projectile.nose.half_angle": 12.0}))
     assert cone.projectile.nose.build() == ConeNose(12.0)
-    coulomb = scene_from_dict(apply_overrides({**BASE, "effects": {"friction": {"model": "capped", "cap": 1e7}}},
-                                              {"effects.friction.model": "coulomb"}))
+    coulomb = scene_from_dict(
+        apply_overrides(
+            {**BASE, "effects": {"friction": {"model": "capped", "cap": 1e7}}}, {"effects.friction.model": "coulomb"}
+        )
+    )
     assert coulomb.effects.friction.cap is None
     by_density = scene_from_dict(apply_overrides(BASE, {"projectile.body_density": 7850.0}))
     assert by_density.projectile.mass is None and by_density.projectile.body_density == 7850.0
-    paper = load_scene(scene_path("paper_p3"), {"projectile.counterweight.start": 0.4,
-                                                "projectile.counterweight.end": 0.6})
+    paper = load_scene(
+        scene_path("paper_p3"), {"projectile.counterweight.start": 0.4, "projectile.counterweight.end": 0.6}
+    )
     assert paper.projectile.mass is None and paper.projectile.centre_of_mass_ratio is None
     assert paper.projectile.shape().counterweight == (0.4, 0.6)
-    given = load_scene(scene_path("paper_p3"), {"projectile.mass_properties": {
-        "mass": 75.67, "centre_of_mass": 0.52, "axial_inertia": 0.25, "transverse_inertia": 4.0}})
+    given = load_scene(
+        scene_path("paper_p3"),
+        {
+            "projectile.mass_properties": {
+                "mass": 75.67,
+                "centre_of_mass": 0.52,
+                "axial_inertia": 0.25,
+                "transverse_inertia": 4.0,
+            }
+        },
+    )
     assert given.projectile.mass is None and given.projectile.shape().counterweight is None
     ratio = load_scene(scene_path("paper_p3"), {"projectile.centre_of_mass": 0.5})
     assert ratio.projectile.centre_of_mass_ratio is None and ratio.projectile.centre_target == 0.5
@@ -141,10 +175,17 @@ TABLE = [[0.0, 0.0], [0.05, 0.03], [0.1, 0.044], [0.15, 0.0476]]  # m: a measure
 
 
 def test_profile_nose_reads_from_a_file_and_builds(tmp_path):
-    text = scene_path("forrestal_luk_test2").read_text().replace(
-        'nose = { shape = "ogive", crh = 3.0 }\n', "").replace(
-        "[target]", '[projectile.nose]\nshape = "profile"\npoints = [\n'
-        + "".join(f"  [{x}, {r}],\n" for x, r in TABLE) + "]\n\n[target]")
+    text = (
+        scene_path("forrestal_luk_test2")
+        .read_text()
+        .replace('nose = { shape = "ogive", crh = 3.0 }\n', "")
+        .replace(
+            "[target]",
+            '[projectile.nose]\nshape = "profile"\npoints = [\n'
+            + "".join(f"  [{x}, {r}],\n" for x, r in TABLE)
+            + "]\n\n[target]",
+        )
+    )
     path = tmp_path / "measured.toml"
     path.write_text(text)
     scene = load_scene(path)
@@ -155,20 +196,32 @@ def test_profile_nose_reads_from_a_file_and_builds(tmp_path):
     assert back.projectile.nose.crh == 3.0
 
 
-@pytest.mark.parametrize("points, expected", [
-    (TABLE[:2], "projectile.nose.points = [[0.0, 0.0], [0.05, 0.03]]: list should have at least 3 items"),
-    ([[0.0, 0.01]] + TABLE[1:], "projectile: nose.points[0] = [0, 0.01]: must be the tip (allowed: [0, 0]"),
-    (TABLE[:2] + [[0.05, 0.04]] + TABLE[3:], "nose.points[2] = [0.05, 0.04]: x must exceed the previous point's"
-                                             " x = 0.05 m (allowed: x strictly increasing)"),
-    (TABLE[:2] + [[0.1, 0.02]] + TABLE[3:], "nose.points[2] = [0.1, 0.02]: r must be at least the previous"
-                                            " point's r = 0.03 m (allowed: r non-decreasing)"),
-    (TABLE[:3] + [[0.15, 0.0477]], "nose.points[3]: r = 0.0477 m must be the shank radius (allowed: diameter/2"
-                                   " = 0.0476 m, within 1e-06 of it)"),
-    (TABLE[:3] + [[0.15, float("nan")]], "projectile.nose.points.3.1 = nan: must be a finite number"),
-    (TABLE[:3] + [[0.15, -1.0]], "projectile.nose.points.3.1 = -1.0: must be >= 0"),
-    (TABLE[:3] + [[0.15]], "projectile.nose.points.3.1: missing (required)"),
-    (TABLE[:3] + [[2.0, 0.0476]], "projectile: length = 1.4: must exceed the nose length 2 m"),
-])
+@pytest.mark.parametrize(
+    "points, expected",
+    [
+        (TABLE[:2], "projectile.nose.points = [[0.0, 0.0], [0.05, 0.03]]: list should have at least 3 items"),
+        ([[0.0, 0.01]] + TABLE[1:], "projectile: nose.points[0] = [0, 0.01]: must be the tip (allowed: [0, 0]"),
+        (
+            TABLE[:2] + [[0.05, 0.04]] + TABLE[3:],
+            "nose.points[2] = [0.05, 0.04]: x must exceed the previous point's"
+            " x = 0.05 m (allowed: x strictly increasing)",
+        ),
+        (
+            TABLE[:2] + [[0.1, 0.02]] + TABLE[3:],
+            "nose.points[2] = [0.1, 0.02]: r must be at least the previous"
+            " point's r = 0.03 m (allowed: r non-decreasing)",
+        ),
+        (
+            TABLE[:3] + [[0.15, 0.0477]],
+            "nose.points[3]: r = 0.0477 m must be the shank radius (allowed: diameter/2"
+            " = 0.0476 m, within 1e-06 of it)",
+        ),
+        (TABLE[:3] + [[0.15, float("nan")]], "projectile.nose.points.3.1 = nan: must be a finite number"),
+        (TABLE[:3] + [[0.15, -1.0]], "projectile.nose.points.3.1 = -1.0: must be >= 0"),
+        (TABLE[:3] + [[0.15]], "projectile.nose.points.3.1: missing (required)"),
+        (TABLE[:3] + [[2.0, 0.0476]], "projectile: length = 1.4: must exceed the nose length 2 m"),
+    ],
+)
 def test_bad_profile_noses_are_explained(points, expected):
     with pytest.raises(SceneError) as info:
         scene_from_dict(apply_overrides(BASE, {"projectile.nose": {"shape": "profile", "points": points}}))

@@ -9,14 +9,14 @@ import math
 
 import numpy as np
 import pytest
-
 from bodies import occ_mass_properties
+from support import slow_except
+
 from cases import load_scene, run_scene, summarise
 from cases.run import initial_state, prepare_projectile
 from cases.scene.target import build_law
 from dynamics.quaternion import rotation_matrix
 from fem_loads.ramps import smooth_step
-from support import slow_except
 
 SCENES = {"eroded": "cases/eroded_test2.toml", "finned": "cases/finned_test2.toml"}
 FILES = {"eroded": "cases/bodies/eroded_test2.step", "finned": "cases/bodies/finned_test2.step"}
@@ -75,8 +75,16 @@ def test_the_finned_body_stays_on_its_axis():
     assert summary.path_length < plain.path_length
 
 
-def eroded_nose_loads(speed: float, static: float, dynamic: float, incidence: float, centre: np.ndarray,
-                      nx: int = 4000, nphi: int = 1440, nplane: int = 1500) -> tuple[np.ndarray, np.ndarray]:
+def eroded_nose_loads(
+    speed: float,
+    static: float,
+    dynamic: float,
+    incidence: float,
+    centre: np.ndarray,
+    nx: int = 4000,
+    nphi: int = 1440,
+    nplane: int = 1500,
+) -> tuple[np.ndarray, np.ndarray]:
     """Force and moment about ``centre`` (file frame, m) of the eroded nose in axial motion at ``speed``
     (m/s, along +x), fully embedded, by a midpoint rule over the exact surfaces: the CRH 3 ogive in
     (x, phi) with the points the cut removed left out, and the cut face as a grid on its plane, kept
@@ -85,7 +93,7 @@ def eroded_nose_loads(speed: float, static: float, dynamic: float, incidence: fl
     bodies = make_bodies()
     length, a = bodies.LENGTH / 1000, bodies.DIAMETER / 2000
     radius = bodies.CRH * 2 * a
-    nose = math.sqrt(radius ** 2 - (radius - a) ** 2)
+    nose = math.sqrt(radius**2 - (radius - a) ** 2)
     start = length - nose
     angle = math.radians(bodies.ERODED_ANGLE)
     normal = np.array([math.cos(angle), 0.0, math.sin(angle)])
@@ -93,16 +101,16 @@ def eroded_nose_loads(speed: float, static: float, dynamic: float, incidence: fl
 
     def sigma(vn):
         ramp = smooth_step(np.clip(vn / (incidence * speed), 0.0, 1.0))
-        return np.where(vn > 0, ramp * (static + dynamic * vn ** 2), 0.0)
+        return np.where(vn > 0, ramp * (static + dynamic * vn**2), 0.0)
 
     def r_of(x):
-        return (a - radius) + np.sqrt(np.clip(radius ** 2 - (x - start) ** 2, 0.0, None))
+        return (a - radius) + np.sqrt(np.clip(radius**2 - (x - start) ** 2, 0.0, None))
 
     x = start + nose * (np.arange(nx) + 0.5) / nx
     phi = 2 * math.pi * (np.arange(nphi) + 0.5) / nphi
     X, PHI = np.meshgrid(x, phi, indexing="ij")
-    r, slope = r_of(X), -(X - start) / np.sqrt(radius ** 2 - (X - start) ** 2)
-    stretch = np.sqrt(1 + slope ** 2)
+    r, slope = r_of(X), -(X - start) / np.sqrt(radius**2 - (X - start) ** 2)
+    stretch = np.sqrt(1 + slope**2)
     points = np.stack([X, r * np.cos(PHI), r * np.sin(PHI)], -1)
     normals = np.stack([-slope, np.cos(PHI), np.sin(PHI)], -1) / stretch[..., None]
     area = r * stretch * (nose / nx) * (2 * math.pi / nphi) * (((points - origin) @ normal) < 0)
@@ -136,15 +144,17 @@ def test_the_eroded_nose_pushes_away_from_its_cut_side(size, tolerance):
     state = initial_state(scene, prepared)
     rotation = rotation_matrix(state.attitude)
     speed = 300.0
-    force, moment = scene.loads(prepared.quadrature)(state.position + np.array([0.0, 0.0, -3.0]),
-                                                      np.array([0.0, 0.0, -speed]), rotation, np.zeros(3))
+    force, moment = scene.loads(prepared.quadrature)(
+        state.position + np.array([0.0, 0.0, -3.0]), np.array([0.0, 0.0, -speed]), rotation, np.zeros(3)
+    )
     body_force = rotation.T @ force
     assert body_force[2] < 0 < moment[1]
     assert abs(body_force[1]) < 1e-3 * abs(body_force[2]) and abs(moment[0]) < 1e-3 * moment[1]
     law = build_law(scene.target.law)
     _, centre, _ = occ_mass_properties(FILES["eroded"], scale=1e-3)
-    exact_force, exact_moment = eroded_nose_loads(speed, law.static_stress, law.dynamic_density,
-                                                  scene.effects.contact_incidence, centre)
+    exact_force, exact_moment = eroded_nose_loads(
+        speed, law.static_stress, law.dynamic_density, scene.effects.contact_incidence, centre
+    )
     assert body_force[0] == pytest.approx(exact_force[0], rel=tolerance / 4)
     assert body_force[2] == pytest.approx(exact_force[2], rel=tolerance)
     assert moment[1] == pytest.approx(exact_moment[1], rel=tolerance)
@@ -168,15 +178,21 @@ def _weighted_occ_properties(path, densities):
         gmsh.option.setString("Geometry.OCCTargetUnit", "")
         volumes = [t for d, t in gmsh.model.occ.importShapes(str(path)) if d == 3]
         gmsh.model.occ.synchronize()
-        parts = [(density * gmsh.model.occ.getMass(3, v), np.array(gmsh.model.occ.getCenterOfMass(3, v)),
-                  density * np.array(gmsh.model.occ.getMatrixOfInertia(3, v)).reshape(3, 3))
-                 for v, density in zip(volumes, densities)]
+        parts = [
+            (
+                density * gmsh.model.occ.getMass(3, v),
+                np.array(gmsh.model.occ.getCenterOfMass(3, v)),
+                density * np.array(gmsh.model.occ.getMatrixOfInertia(3, v)).reshape(3, 3),
+            )
+            for v, density in zip(volumes, densities)
+        ]
     finally:
         gmsh.finalize()
     mass = sum(m for m, _, _ in parts)
     centre = sum(m * c for m, c, _ in parts) / mass
-    inertia = sum(i + m * ((c - centre) @ (c - centre) * np.eye(3) - np.outer(c - centre, c - centre))
-                  for m, c, i in parts)
+    inertia = sum(
+        i + m * ((c - centre) @ (c - centre) * np.eye(3) - np.outer(c - centre, c - centre)) for m, c, i in parts
+    )
     return mass, centre, inertia
 
 

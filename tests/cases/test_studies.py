@@ -53,8 +53,10 @@ def test_critical_velocity_brackets_the_jump(store):
 def test_convergent_velocity_barely_moves_with_the_threshold(store):
     """In an unstable run the attack angle collapses: 0.05 to 1 degree moves the speed by < 2 %."""
     sweep = Sweep.from_file(scene_path("paper_p3"), {**STUDY, "impact.speed": 1000})
-    values = [measure_convergent_velocity(sweep, store, threshold, pool=SERIAL).characteristic_convergent_velocity
-              for threshold in (0.05, 0.1, 0.5, 1.0)]
+    values = [
+        measure_convergent_velocity(sweep, store, threshold, pool=SERIAL).characteristic_convergent_velocity
+        for threshold in (0.05, 0.1, 0.5, 1.0)
+    ]
     assert all(v is not None for v in values)
     assert (max(values) - min(values)) / min(values) < 0.02
 
@@ -68,10 +70,28 @@ def test_convergent_raises_a_stable_scene_and_says_so(store):
 
 
 def test_cli_convergent_json(store):
-    done = subprocess.run([sys.executable, "-m", "cases.cli", "convergent", str(scene_path("paper_p3")),
-                           "--set", "numerics.mesh_size=0.02", "--set", "numerics.time_step=2e-5",
-                           "--set", "impact.speed=1000", "--store", str(store.root), "--json", "--no-progress"],
-                          capture_output=True, text=True, timeout=600)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "cases.cli",
+            "convergent",
+            str(scene_path("paper_p3")),
+            "--set",
+            "numerics.mesh_size=0.02",
+            "--set",
+            "numerics.time_step=2e-5",
+            "--set",
+            "impact.speed=1000",
+            "--store",
+            str(store.root),
+            "--json",
+            "--no-progress",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert done.returncode == 0, done.stderr
     record = json.loads(done.stdout)
     assert record["characteristic_convergent_velocity"] > 0 and record["runs"][0]["unstable"]

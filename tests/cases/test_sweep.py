@@ -10,17 +10,25 @@ import time
 
 import pandas as pd
 import pytest
+from support import dask_cluster
 
 from cases import InputError, SceneError, scene_path
 from cases.run import RunStore
 from cases.studies import Pool, Sweep, grid, parse_grid, read_variations, run_sweep
-from support import dask_cluster
 
 # short runs of projectile #3: coarse mesh, 4 ms of penetration
-QUICK = {"numerics.mesh_size": 0.03, "numerics.integrator": "rk4", "numerics.time_step": 2e-5,
-         "numerics.time_limit": 0.004}
-QUICK_SET = ["numerics.mesh_size=0.03", "numerics.integrator=rk4", "numerics.time_step=2e-5",
-             "numerics.time_limit=0.004"]
+QUICK = {
+    "numerics.mesh_size": 0.03,
+    "numerics.integrator": "rk4",
+    "numerics.time_step": 2e-5,
+    "numerics.time_limit": 0.004,
+}
+QUICK_SET = [
+    "numerics.mesh_size=0.03",
+    "numerics.integrator=rk4",
+    "numerics.time_step=2e-5",
+    "numerics.time_limit=0.004",
+]
 VOLATILE = ["wall_time", "integration_time"]
 
 
@@ -36,12 +44,15 @@ def _stable(table: pd.DataFrame) -> pd.DataFrame:
     return table.drop(columns=[c for c in VOLATILE if c in table]).reset_index(drop=True)
 
 
-@pytest.mark.parametrize("text, key, values", [
-    ("impact.speed=1000:1200:100", "impact.speed", [1000, 1100, 1200]),
-    ("impact.attack_angle=0.5:1.5:0.5", "impact.attack_angle", [0.5, 1.0, 1.5]),
-    ("target.law=soil,softer_soil", "target.law", ["soil", "softer_soil"]),
-    ("impact.oblique_angle=10,20.5", "impact.oblique_angle", [10, 20.5]),
-])
+@pytest.mark.parametrize(
+    "text, key, values",
+    [
+        ("impact.speed=1000:1200:100", "impact.speed", [1000, 1100, 1200]),
+        ("impact.attack_angle=0.5:1.5:0.5", "impact.attack_angle", [0.5, 1.0, 1.5]),
+        ("target.law=soil,softer_soil", "target.law", ["soil", "softer_soil"]),
+        ("impact.oblique_angle=10,20.5", "impact.oblique_angle", [10, 20.5]),
+    ],
+)
 def test_parse_grid(text, key, values):
     assert parse_grid(text) == (key, values)
 
@@ -54,14 +65,21 @@ def test_parse_grid_errors(bad):
 
 def test_grid_is_a_cartesian_product():
     variations = grid({"a": [1, 2], "b": ["x", "y", "z"]})
-    assert [v.values for v in variations][:4] == [{"a": 1, "b": "x"}, {"a": 1, "b": "y"}, {"a": 1, "b": "z"},
-                                                   {"a": 2, "b": "x"}]
+    assert [v.values for v in variations][:4] == [
+        {"a": 1, "b": "x"},
+        {"a": 1, "b": "y"},
+        {"a": 1, "b": "z"},
+        {"a": 2, "b": "x"},
+    ]
 
 
 def test_variation_values_reach_the_scene_as_they_are():
     """A table value in a list file stays a table (it used to go through text and come back a string)."""
-    sweep = Sweep.from_file(scene_path("paper_p3"), QUICK, read_variations_text(
-        '[[run]]\n"effects.friction" = { model = "capped", coefficient = 0.1, cap = 1e7 }\n'))
+    sweep = Sweep.from_file(
+        scene_path("paper_p3"),
+        QUICK,
+        read_variations_text('[[run]]\n"effects.friction" = { model = "capped", coefficient = 0.1, cap = 1e7 }\n'),
+    )
     assert sweep.scenes[0].effects.friction.cap == 1e7
 
 
@@ -112,15 +130,15 @@ def test_rounds_of_a_study_reuse_warm_workers(tmp_path):
     second = run_sweep(_sweep(speeds=(1100, 1200)), RunStore(tmp_path / "a"), Pool(workers=2, progress=False))
     assert pool_module._WARM[2] is executor and workers <= set(executor._processes)  # started lazily, kept
     one = run_sweep(_sweep(speeds=(1000, 1100, 1200)), RunStore(tmp_path / "b"), Pool(workers=1, progress=False))
-    pd.testing.assert_frame_equal(_stable(pd.concat([first, second.table()], ignore_index=True)),
-                                  _stable(one.table()), check_dtype=False)
+    pd.testing.assert_frame_equal(
+        _stable(pd.concat([first, second.table()], ignore_index=True)), _stable(one.table()), check_dtype=False
+    )
 
 
 def test_a_failed_run_is_recorded_and_does_not_stop_the_others(tmp_path):
     store = RunStore(tmp_path)
     # a centre of mass the counterweight cannot reach fails at run time, in the worker
-    sweep = Sweep.from_file(scene_path("paper_p3"), QUICK,
-                            grid({"projectile.centre_of_mass_ratio": [0.5636, 0.2]}))
+    sweep = Sweep.from_file(scene_path("paper_p3"), QUICK, grid({"projectile.centre_of_mass_ratio": [0.5636, 0.2]}))
     result = run_sweep(sweep, store, Pool(workers=1, progress=False))
     assert not result.runs[0].failed and result.runs[1].failed
     table = result.table()
@@ -130,8 +148,22 @@ def test_a_failed_run_is_recorded_and_does_not_stop_the_others(tmp_path):
 
 
 def _cli_sweep(store, out, *extra):
-    args = [sys.executable, "-m", "cases.cli", "sweep", str(scene_path("paper_p3")), "--store", str(store),
-            "--out", str(out), "--workers", "1", "--no-progress", "--grid", "impact.speed=900:1400:100"]
+    args = [
+        sys.executable,
+        "-m",
+        "cases.cli",
+        "sweep",
+        str(scene_path("paper_p3")),
+        "--store",
+        str(store),
+        "--out",
+        str(out),
+        "--workers",
+        "1",
+        "--no-progress",
+        "--grid",
+        "impact.speed=900:1400:100",
+    ]
     for item in QUICK_SET:
         args += ["--set", item]
     return args + list(extra)
@@ -139,8 +171,9 @@ def _cli_sweep(store, out, *extra):
 
 def test_killed_sweep_loses_nothing_and_resumes(tmp_path):
     store, out = tmp_path / "store", tmp_path / "table.csv"
-    proc = subprocess.Popen(_cli_sweep(store, out), start_new_session=True,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    proc = subprocess.Popen(
+        _cli_sweep(store, out), start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+    )
     deadline = time.time() + 240
     while time.time() < deadline and len(_records(store)) < 2:
         time.sleep(0.05)
@@ -155,8 +188,7 @@ def test_killed_sweep_loses_nothing_and_resumes(tmp_path):
     assert all(p.stat().st_mtime_ns == stamp for p, stamp in finished.items())  # reused, not rerun
     resumed = pd.read_csv(out)
     fresh_out = tmp_path / "fresh.csv"
-    fresh = subprocess.run(_cli_sweep(tmp_path / "fresh-store", fresh_out), capture_output=True, text=True,
-                           timeout=600)
+    fresh = subprocess.run(_cli_sweep(tmp_path / "fresh-store", fresh_out), capture_output=True, text=True, timeout=600)
     assert fresh.returncode == 0, fresh.stderr
     pd.testing.assert_frame_equal(_stable(resumed), _stable(pd.read_csv(fresh_out)), check_exact=True)
     assert len(resumed) == 6
@@ -166,10 +198,10 @@ def test_dask_local_cluster_gives_the_same_table(tmp_path):
     distributed = pytest.importorskip("distributed")
     sweep = _sweep(speeds=(1000, 1200))
     local = run_sweep(sweep, RunStore(tmp_path / "local"), Pool(workers=2, progress=False)).table()
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster:
-        remote = run_sweep(sweep, RunStore(tmp_path / "dask"), Pool(scheduler=cluster.scheduler_address,
-                                                                   progress=False)).table()
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        remote = run_sweep(
+            sweep, RunStore(tmp_path / "dask"), Pool(scheduler=cluster.scheduler_address, progress=False)
+        ).table()
     pd.testing.assert_frame_equal(_stable(remote), _stable(local), check_exact=True)
 
 
@@ -196,23 +228,43 @@ def test_a_worker_running_other_code_is_refused(tmp_path, monkeypatch):
 
 def test_listed_variations_combine_with_a_grid(tmp_path):
     listing = tmp_path / "runs.toml"
-    listing.write_text('[[run]]\n"impact.speed" = 1000\n\n'
-                       '[[run]]\n"impact.speed" = 1100\n"impact.attack_angle" = 5.0\n')
-    args = [sys.executable, "-m", "cases.cli", "sweep", str(scene_path("paper_p3")), "--list", str(listing),
-            "--grid", "impact.oblique_angle=0,10", "--store", str(tmp_path / "s"), "--out", str(tmp_path / "t.csv"),
-            "--no-progress", "--workers", "2"]
+    listing.write_text(
+        '[[run]]\n"impact.speed" = 1000\n\n[[run]]\n"impact.speed" = 1100\n"impact.attack_angle" = 5.0\n'
+    )
+    args = [
+        sys.executable,
+        "-m",
+        "cases.cli",
+        "sweep",
+        str(scene_path("paper_p3")),
+        "--list",
+        str(listing),
+        "--grid",
+        "impact.oblique_angle=0,10",
+        "--store",
+        str(tmp_path / "s"),
+        "--out",
+        str(tmp_path / "t.csv"),
+        "--no-progress",
+        "--workers",
+        "2",
+    ]
     for item in QUICK_SET:
         args += ["--set", item]
     done = subprocess.run(args, capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr
     table = pd.read_csv(tmp_path / "t.csv")
-    assert list(zip(table["impact.oblique_angle"], table["impact.speed"])) == [(0, 1000), (0, 1100), (10, 1000),
-                                                                               (10, 1100)]
+    assert list(zip(table["impact.oblique_angle"], table["impact.speed"])) == [
+        (0, 1000),
+        (0, 1100),
+        (10, 1000),
+        (10, 1100),
+    ]
     assert table["impact.attack_angle"].isna().tolist() == [True, False, True, False]
 
 
 def test_bad_list_file(tmp_path):
     bad = tmp_path / "bad.toml"
-    bad.write_text('speed = 3\n')
+    bad.write_text("speed = 3\n")
     with pytest.raises(InputError, match=r"\[\[run\]\]"):
         read_variations(bad)

@@ -30,8 +30,15 @@ COMMANDS = readme_commands()
 
 def test_the_readme_shows_commands():
     assert len(COMMANDS) >= 10, COMMANDS
-    assert {shlex.split(line)[0] for line in COMMANDS} >= {"run", "sweep", "critical", "convergent", "paper",
-                                                          "compare", "ensemble"}
+    assert {shlex.split(line)[0] for line in COMMANDS} >= {
+        "run",
+        "sweep",
+        "critical",
+        "convergent",
+        "paper",
+        "compare",
+        "ensemble",
+    }
 
 
 @pytest.mark.parametrize("line", COMMANDS)

@@ -26,15 +26,35 @@ def _spring_and_vane(data, position, velocity, rotation, angular_velocity, out):
     for i in range(3):
         out[i] = -k * position[i] - d * velocity[i]
         out[3 + i] = -c * angular_velocity[i]
-    up0, up1, up2 = rotation[2, 0], rotation[2, 1], rotation[2, 2]  # R^T e_Z
+    up1, up2 = rotation[2, 1], rotation[2, 2]  # R^T e_Z
     out[4] += s * (-up2)  # e_x x up = (0, -up_z, up_y)
     out[5] += s * up1
 
 
 @njit(cache=True, error_model="numpy")
-def _spring_and_vane_step(data, constant_force, mass, inertia, inverse, A, b, b_error, fsal, x0, v0, q0, w0, h, given, has_given, out):
-    step.rk_step(_spring_and_vane, data, constant_force, mass, inertia, inverse, A, b, b_error, fsal, x0, v0, q0, w0, h, given, has_given,
-            out)
+def _spring_and_vane_step(
+    data, constant_force, mass, inertia, inverse, A, b, b_error, fsal, x0, v0, q0, w0, h, given, has_given, out
+):
+    step.rk_step(
+        _spring_and_vane,
+        data,
+        constant_force,
+        mass,
+        inertia,
+        inverse,
+        A,
+        b,
+        b_error,
+        fsal,
+        x0,
+        v0,
+        q0,
+        w0,
+        h,
+        given,
+        has_given,
+        out,
+    )
 
 
 def _load(k=4.0e5, d=0.0, c=0.0, s=0.0):
@@ -43,8 +63,13 @@ def _load(k=4.0e5, d=0.0, c=0.0, s=0.0):
 
 def _start() -> State:
     r0 = Rotation.from_rotvec([0.3, -0.5, 0.2]).as_matrix()
-    return State(0.0, np.array([0.1, -0.2, 0.05]), np.array([1.0, 2.0, 3.0]), from_rotation_matrix(r0),
-                 np.array([40.0, 3.0, -2.0]))
+    return State(
+        0.0,
+        np.array([0.1, -0.2, 0.05]),
+        np.array([1.0, 2.0, 3.0]),
+        from_rotation_matrix(r0),
+        np.array([40.0, 3.0, -2.0]),
+    )
 
 
 def test_compiled_rk4_converges_at_fourth_order_to_the_harmonic_oscillator():
@@ -67,17 +92,25 @@ def test_compiled_attitude_is_the_torque_free_top():
     trajectory = simulate(BODY, load, start, step.CompiledRungeKutta(RK4()), FixedStep(5e-4), time_limit=0.5)
     r0, w = rotation_matrix(start.attitude), start.angular_velocity
     lam = w[0] * (1 - I_AXIAL / I_TRANSVERSE)
-    exact = (Rotation.from_rotvec(0.5 * (r0 @ (BODY.inertia @ w)) / I_TRANSVERSE).as_matrix() @ r0
-             @ Rotation.from_rotvec([0.5 * lam, 0, 0]).as_matrix())
+    exact = (
+        Rotation.from_rotvec(0.5 * (r0 @ (BODY.inertia @ w)) / I_TRANSVERSE).as_matrix()
+        @ r0
+        @ Rotation.from_rotvec([0.5 * lam, 0, 0]).as_matrix()
+    )
     assert np.abs(rotation_matrix(trajectory.attitude[-1]) - exact).max() < 1e-8
     assert np.abs(np.linalg.norm(trajectory.attitude, axis=1) - 1.0).max() < 1e-14
 
 
-@pytest.mark.parametrize(("method", "control", "tolerance"), [
-    (RK4, lambda: FixedStep(2e-4), 1e-12),
-    # the error estimate is a small difference of the stages, its round-off moves each step's size by ~1e-12
-    # relative, and the states follow their shifted times: 1e-9 of each quantity's scale
-    (DormandPrince54, lambda: ErrorControl(1e-8), 1e-9)], ids=["rk4", "dopri54"])
+@pytest.mark.parametrize(
+    ("method", "control", "tolerance"),
+    [
+        (RK4, lambda: FixedStep(2e-4), 1e-12),
+        # the error estimate is a small difference of the stages, its round-off moves each step's size by ~1e-12
+        # relative, and the states follow their shifted times: 1e-9 of each quantity's scale
+        (DormandPrince54, lambda: ErrorControl(1e-8), 1e-9),
+    ],
+    ids=["rk4", "dopri54"],
+)
 def test_compiled_step_equals_the_python_step(method, control, tolerance):
     """The same load (the kernel, called from Python by the Python step): the same trajectory to round-off,
     the same steps and stop event (the stop's search may take a few more or fewer partial steps: its

@@ -6,8 +6,21 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from dynamics import (NON_FINITE, RK4, STEP_FLOOR, TIME_LIMIT, DormandPrince54, EnergyGuard, ErrorControl, Event,
-                      FixedStep, RigidBody, SpeedBelow, State, simulate)
+from dynamics import (
+    NON_FINITE,
+    RK4,
+    STEP_FLOOR,
+    TIME_LIMIT,
+    DormandPrince54,
+    EnergyGuard,
+    ErrorControl,
+    Event,
+    FixedStep,
+    RigidBody,
+    SpeedBelow,
+    State,
+    simulate,
+)
 from dynamics.quaternion import exp_map, from_rotation_matrix, multiply, rotation_matrix
 
 I_AXIAL, I_TRANSVERSE = 0.25, 2.3
@@ -17,8 +30,7 @@ NO_LOAD = lambda x, v, r, w: (np.zeros(3), np.zeros(3))  # noqa: E731
 
 def _spinning_start():
     r0 = Rotation.from_rotvec([0.3, -0.5, 0.2]).as_matrix()
-    return State(0.0, np.zeros(3), np.array([1.0, 2.0, 3.0]), from_rotation_matrix(r0),
-                 np.array([40.0, 3.0, -2.0]))
+    return State(0.0, np.zeros(3), np.array([1.0, 2.0, 3.0]), from_rotation_matrix(r0), np.array([40.0, 3.0, -2.0]))
 
 
 def _torque_free_exact(start: State, t: float) -> np.ndarray:
@@ -27,8 +39,11 @@ def _torque_free_exact(start: State, t: float) -> np.ndarray:
     w = start.angular_velocity
     momentum_world = r0 @ (BODY.inertia @ w)
     lam = w[0] * (1 - I_AXIAL / I_TRANSVERSE)
-    return (Rotation.from_rotvec(t * momentum_world / I_TRANSVERSE).as_matrix() @ r0
-            @ Rotation.from_rotvec([t * lam, 0, 0]).as_matrix())
+    return (
+        Rotation.from_rotvec(t * momentum_world / I_TRANSVERSE).as_matrix()
+        @ r0
+        @ Rotation.from_rotvec([t * lam, 0, 0]).as_matrix()
+    )
 
 
 def _attitude_error(h: float, method=RK4, **kw) -> float:
@@ -59,8 +74,7 @@ def test_unit_quaternion_and_momentum_over_a_long_run():
     for h in (1e-3, 5e-4):
         tr = simulate(BODY, NO_LOAD, start, RK4(), FixedStep(h), time_limit=5.0)
         assert np.abs(np.linalg.norm(tr.attitude, axis=1) - 1).max() < 1e-12
-        momentum = np.array([rotation_matrix(q) @ (BODY.inertia @ w)
-                             for q, w in zip(tr.attitude, tr.angular_velocity)])
+        momentum = np.array([rotation_matrix(q) @ (BODY.inertia @ w) for q, w in zip(tr.attitude, tr.angular_velocity)])
         drifts.append(np.abs(momentum - momentum[0]).max())
     assert 3.7 < math.log2(drifts[0] / drifts[1]) < 4.3
 
@@ -90,8 +104,9 @@ def test_rising_event_is_located():
     g = np.array([0.0, 0.0, -9.81 * BODY.mass])
     start = State(0.0, np.zeros(3), np.array([0.0, 0.0, 30.0]), np.array([1.0, 0, 0, 0]), np.zeros(3))
     height = Event("height", lambda s: s.position[2] - 20.0, direction=1)
-    tr = simulate(BODY, lambda x, v, r, w: (g, np.zeros(3)), start, RK4(), FixedStep(0.1), time_limit=5.0,
-                  events=[height])
+    tr = simulate(
+        BODY, lambda x, v, r, w: (g, np.zeros(3)), start, RK4(), FixedStep(0.1), time_limit=5.0, events=[height]
+    )
     assert tr.end_reason == "height"
     assert tr.time[-1] == pytest.approx((30 - math.sqrt(900 - 392.4)) / 9.81, rel=1e-12)
 
@@ -125,8 +140,10 @@ def test_bad_integrator_settings():
 
 def _pumping(gain: float):
     """A load that adds ``gain`` (relative) kinetic energy per second along the velocity: no dissipative system."""
+
     def loads(x, v, r, w):
         return 0.5 * gain * BODY.mass * v, np.zeros(3)
+
     return loads
 
 
@@ -149,14 +166,16 @@ def test_energy_guard_projects_small_gains_and_the_energy_never_rises():
 def test_energy_guard_retakes_large_gains_down_to_its_floor():
     """A gain of 1e-2 per second: every halving still gains above 1e-7, so the run ends at the step floor."""
     start = State(0.0, np.zeros(3), np.array([100.0, 0.0, 0.0]), np.array([1.0, 0, 0, 0]), np.zeros(3))
-    tr = simulate(BODY, _pumping(1.0), start, RK4(), FixedStep(1e-3), time_limit=0.01,
-                  guard=EnergyGuard(min_step=1e-3 / 1024))
+    tr = simulate(
+        BODY, _pumping(1.0), start, RK4(), FixedStep(1e-3), time_limit=0.01, guard=EnergyGuard(min_step=1e-3 / 1024)
+    )
     assert tr.end_reason == STEP_FLOOR and len(tr.time) == 1  # the history up to the failure: the start
     assert tr.statistics["energy_rejections"] == 10  # 1e-3 halved ten times reaches the floor
 
 
 def test_error_control_forces_steps_at_its_minimum():
     """A load that jumps every 1e-4 s: no step meets 1e-10; at forced_step each is accepted and counted."""
+
     def jumping(x, v, r, w):
         return np.array([0.0, 1e5 * (-1) ** int(x[0] / 1e-2), 0.0]), np.zeros(3)
 
@@ -166,8 +185,9 @@ def test_error_control_forces_steps_at_its_minimum():
     assert tr.end_reason == TIME_LIMIT
     assert tr.statistics["forced_steps"] == control.forced_steps > 0
     assert tr.statistics["smallest_step"] >= 1e-6 * (1 - 1e-12)
-    no_floor = simulate(BODY, jumping, start, DormandPrince54(), ErrorControl(1e-10, first_step=1e-6, min_step=1e-8),
-                        time_limit=2e-3)
+    no_floor = simulate(
+        BODY, jumping, start, DormandPrince54(), ErrorControl(1e-10, first_step=1e-6, min_step=1e-8), time_limit=2e-3
+    )
     assert no_floor.end_reason == STEP_FLOOR  # without forced steps the control shortens to its floor
 
 
@@ -180,19 +200,24 @@ def test_quaternion_helpers_agree_with_scipy():
         np.testing.assert_allclose(rotation_matrix(q), expected, atol=1e-14)
         np.testing.assert_allclose(rotation_matrix(from_rotation_matrix(expected)), expected, atol=1e-14)
         w = rng.normal(size=3)
-        np.testing.assert_allclose(rotation_matrix(multiply(exp_map(v), exp_map(w))),
-                                   expected @ Rotation.from_rotvec(w).as_matrix(), atol=1e-13)
+        np.testing.assert_allclose(
+            rotation_matrix(multiply(exp_map(v), exp_map(w))),
+            expected @ Rotation.from_rotvec(w).as_matrix(),
+            atol=1e-13,
+        )
     assert np.allclose(exp_map(np.array([1e-12, 0, 0])), [1, 5e-13, 0, 0])
     assert math.isclose(np.linalg.norm(exp_map(np.array([3.0, 4.0, 0.0]))), 1.0)
 
 
-
-@pytest.mark.parametrize(("function", "a", "b"), [
-    (math.cos, 0.0, 3.0),                               # smooth: pi/2
-    (lambda x: x**3 - 2.0 * x - 5.0, 2.0, 3.0),         # Newton's cubic
-    (lambda x: math.exp(x) - 1e6, 0.0, 30.0),           # very convex: regula falsi stalls without Illinois
-    (lambda x: -1.0 if x < 0.3 else 1.0, 0.0, 1.0),     # a jump: only bisection converges
-])
+@pytest.mark.parametrize(
+    ("function", "a", "b"),
+    [
+        (math.cos, 0.0, 3.0),  # smooth: pi/2
+        (lambda x: x**3 - 2.0 * x - 5.0, 2.0, 3.0),  # Newton's cubic
+        (lambda x: math.exp(x) - 1e6, 0.0, 30.0),  # very convex: regula falsi stalls without Illinois
+        (lambda x: -1.0 if x < 0.3 else 1.0, 0.0, 1.0),  # a jump: only bisection converges
+    ],
+)
 def test_find_root_agrees_with_brentq(function, a, b):
     from scipy.optimize import brentq
 

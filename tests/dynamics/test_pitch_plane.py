@@ -6,8 +6,7 @@ import numpy as np
 import pytest
 from numba import njit
 
-from dynamics.pitch_plane import (CONVERGED, EXITED, OUTCOME_FIELDS, STOPPED, TABLEAU, TIME_LIMIT, TURNED,
-                                  trajectory)
+from dynamics.pitch_plane import CONVERGED, EXITED, OUTCOME_FIELDS, STOPPED, TABLEAU, TIME_LIMIT, TURNED, trajectory
 
 CONSTANT_MOMENT, LINEAR_DRAG, PENDULUM = 0.0, 1.0, 2.0
 MASS, INERTIA = 2.0, 0.5
@@ -34,14 +33,50 @@ def _lowest(data, height, sin_theta, cos_theta):
 
 @njit(cache=True)
 def _run(data, y0, gravity, rtol, time_limit, turn_limit, threshold, stop_when_converged):
-    return trajectory(_load, _lowest, data, y0, MASS, INERTIA, gravity, rtol, np.ones(6), 1e-4, MAX_STEP, 1e-3,
-                      time_limit, turn_limit, threshold, 0.0, stop_when_converged, TABLEAU[0], TABLEAU[1])
+    return trajectory(
+        _load,
+        _lowest,
+        data,
+        y0,
+        MASS,
+        INERTIA,
+        gravity,
+        rtol,
+        np.ones(6),
+        1e-4,
+        MAX_STEP,
+        1e-3,
+        time_limit,
+        turn_limit,
+        threshold,
+        0.0,
+        stop_when_converged,
+        TABLEAU[0],
+        TABLEAU[1],
+    )
 
 
-def run(kind, value, y0, gravity=0.0, rtol=1e-8, time_limit=1.0, turn_limit=math.inf, threshold=0.0,
-        stop_when_converged=False):
-    outcome = _run(np.array([kind, value]), np.asarray(y0, dtype=float), gravity, rtol, time_limit, turn_limit,
-                   threshold, stop_when_converged)
+def run(
+    kind,
+    value,
+    y0,
+    gravity=0.0,
+    rtol=1e-8,
+    time_limit=1.0,
+    turn_limit=math.inf,
+    threshold=0.0,
+    stop_when_converged=False,
+):
+    outcome = _run(
+        np.array([kind, value]),
+        np.asarray(y0, dtype=float),
+        gravity,
+        rtol,
+        time_limit,
+        turn_limit,
+        threshold,
+        stop_when_converged,
+    )
     return dict(zip(OUTCOME_FIELDS, outcome))
 
 
@@ -84,7 +119,8 @@ def test_a_pendulum_swings_with_its_exact_period():
 
 
 def test_leaving_the_target_ends_the_run():
-    """A point thrown up from 1 m below the surface under gravity: it leaves at Z = 0, at t = (v - sqrt(v^2 - 2 g))/g."""
+    """A point thrown up from 1 m below the surface under gravity: it leaves at Z = 0, at t = (v - sqrt(v^2 -
+    2 g))/g."""
     g, v = 9.81, 10.0
     out = run(CONSTANT_MOMENT, 0.0, [0, -1.0, 0, 0, v, 0], gravity=g, rtol=1e-10)
     exact = (v - math.sqrt(v * v - 2 * g)) / g

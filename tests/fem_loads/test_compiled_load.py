@@ -7,13 +7,13 @@ import math
 
 import numpy as np
 import pytest
+from support import MIRROR_Y, mirrored_states
 
 from cases import load_scene, prepare_projectile, scene_path
 from cases.run.compiled import _import_compiled
 from dynamics.quaternion import normalize, rotation_matrix
 from fem_loads import DAFLLoads, SurfaceQuadrature, resistance_law
 from fem_loads.target import Friction
-from support import MIRROR_Y, mirrored_states
 
 _, compiled = _import_compiled()  # numba's cache in the folder named for the compiled code
 
@@ -21,8 +21,12 @@ COARSE = {"numerics.mesh_size": 0.04}
 SOIL = resistance_law("soil")
 # the scenes' default switches, and the sharp ones of the paper's law
 SMOOTH = {"contact_incidence": 0.005, "entry_smoothing": 4.0}
-MODES = {"smooth": SMOOTH, "sharp": {}, "sharp-contact": {"entry_smoothing": 4.0},
-         "sharp-entry": {"contact_incidence": 0.005, "contact_width": 1.0}}
+MODES = {
+    "smooth": SMOOTH,
+    "sharp": {},
+    "sharp-contact": {"entry_smoothing": 4.0},
+    "sharp-entry": {"contact_incidence": 0.005, "contact_width": 1.0},
+}
 
 
 @pytest.fixture(scope="module")
@@ -39,8 +43,12 @@ def _kernel_load(loads: DAFLLoads, state) -> np.ndarray:
 
 def _random_state(rng: np.random.Generator, depth: float):
     rotation = rotation_matrix(normalize(rng.normal(size=4)))
-    return (np.array([0.0, 0.0, depth]) + rng.normal(size=3) * 0.1, rng.normal(size=3) * 300.0, rotation,
-            rng.normal(size=3) * 20.0)
+    return (
+        np.array([0.0, 0.0, depth]) + rng.normal(size=3) * 0.1,
+        rng.normal(size=3) * 300.0,
+        rotation,
+        rng.normal(size=3) * 20.0,
+    )
 
 
 @pytest.mark.parametrize("mode", list(MODES))
@@ -80,13 +88,15 @@ def test_symmetric_states_give_exactly_symmetric_loads(quadrature, mode):
         position = np.array([0.0, 0.0, depth])
         for _ in range(10):
             body_velocity = np.array([rng.uniform(100, 900), rng.normal() * 50, 0.0])
-            load = _kernel_load(loads, (position, nose_down @ body_velocity, nose_down,
-                                        np.array([0.0, 0.0, rng.normal()])))
+            load = _kernel_load(
+                loads, (position, nose_down @ body_velocity, nose_down, np.array([0.0, 0.0, rng.normal()]))
+            )
             body_force = nose_down.T @ load[:3]
             assert body_force[2] == 0.0 and load[3] == 0.0 and load[4] == 0.0
             assert body_force[1] != 0.0 and load[5] != 0.0
-        load = _kernel_load(loads, (position, nose_down @ np.array([500.0, 0.0, 0.0]), nose_down,
-                                    np.array([30.0, 0.0, 0.0])))
+        load = _kernel_load(
+            loads, (position, nose_down @ np.array([500.0, 0.0, 0.0]), nose_down, np.array([30.0, 0.0, 0.0]))
+        )
         assert load[0] == load[1] == 0.0 and load[4] == load[5] == 0.0 and load[2] > 0
 
 
@@ -107,7 +117,8 @@ def test_lowest_height_equals_the_numpy_one(quadrature, mode):
     for _ in range(20):
         position, _, rotation, _ = _random_state(rng, -0.3)
         assert compiled.lowest_height_kernel(data, position, rotation[2]) == pytest.approx(
-            loads.lowest_height(position, rotation), abs=1e-14)
+            loads.lowest_height(position, rotation), abs=1e-14
+        )
 
 
 def test_effects_the_kernel_does_not_cover_are_refused(quadrature):

@@ -11,12 +11,12 @@ import math
 
 import numpy as np
 import pytest
+from support import meshed
 
 from fem_loads import DAFLLoads, mass_properties, resistance_law, surface_quadrature
 from fem_loads.ramps import MAX_SLOPE, smooth_step
 from fem_loads.target import FreeSurface, Friction, LayeredTarget
 from mesh import BODY, OgiveNose, Profile, ProjectileGeometry
-from support import meshed
 
 SOIL = resistance_law("soil")
 PROFILE = Profile(0.0952, 1.4, OgiveNose(3.0))  # the Forrestal-Luk body
@@ -43,7 +43,7 @@ def test_the_smooth_step_is_twice_differentiable_and_monotone():
         near = np.abs(t - edge) < 1e-3
         assert np.abs(first[near]).max() < 1e-4 and np.abs(second[near]).max() < 0.2
     inside = (t > 0.05) & (t < 0.95)
-    np.testing.assert_allclose(first[inside], 30 * t[inside]**2 * (1 - t[inside])**2, atol=1e-6)
+    np.testing.assert_allclose(first[inside], 30 * t[inside] ** 2 * (1 - t[inside]) ** 2, atol=1e-6)
 
 
 def _lateral(loads: DAFLLoads, lateral_speed: float) -> float:
@@ -106,10 +106,15 @@ def test_the_continuous_load_tends_to_the_sharp_law(quadrature):
     rng = np.random.default_rng(4)
     for _ in range(10):
         angle = rng.uniform(0.02, 0.2)
-        rotation = NOSE_DOWN @ np.array([[math.cos(angle), 0, -math.sin(angle)], [0, 1, 0],
-                                         [math.sin(angle), 0, math.cos(angle)]])
-        state = (np.array([0.0, 0.0, rng.uniform(-1.2, -0.2)]), np.array([0.0, 0.0, -rng.uniform(200, 900)]),
-                 rotation, rng.normal(size=3))
+        rotation = NOSE_DOWN @ np.array(
+            [[math.cos(angle), 0, -math.sin(angle)], [0, 1, 0], [math.sin(angle), 0, math.cos(angle)]]
+        )
+        state = (
+            np.array([0.0, 0.0, rng.uniform(-1.2, -0.2)]),
+            np.array([0.0, 0.0, -rng.uniform(200, 900)]),
+            rotation,
+            rng.normal(size=3),
+        )
         sharp = np.concatenate(DAFLLoads(quadrature, SOIL)(*state))
         for contact in ("contact_width", "contact_incidence"):
             errors = []
@@ -123,16 +128,24 @@ def test_the_continuous_load_tends_to_the_sharp_law(quadrature):
 def test_the_continuous_load_only_removes_energy(quadrature):
     """F . V + M . omega <= 0 at random states, with friction (its slip direction regularised too)."""
     rng = np.random.default_rng(5)
-    for friction, contact in ((None, {"contact_width": 1.5}), (None, {"contact_incidence": 0.005}),
-                              (Friction(0.1), {"contact_incidence": 0.005}), (Friction(0.1, 1e6), {"contact_width": 1.5})):
+    for friction, contact in (
+        (None, {"contact_width": 1.5}),
+        (None, {"contact_incidence": 0.005}),
+        (Friction(0.1), {"contact_incidence": 0.005}),
+        (Friction(0.1, 1e6), {"contact_width": 1.5}),
+    ):
         loads = DAFLLoads(quadrature, SOIL, friction=friction, **contact, entry_smoothing=1.0)
         for _ in range(30):
             q = rng.normal(size=4)
             q /= np.linalg.norm(q)
             w, x, y, z = q
-            rotation = np.array([[1 - 2 * (y*y + z*z), 2 * (x*y - w*z), 2 * (x*z + w*y)],
-                                 [2 * (x*y + w*z), 1 - 2 * (x*x + z*z), 2 * (y*z - w*x)],
-                                 [2 * (x*z - w*y), 2 * (y*z + w*x), 1 - 2 * (x*x + y*y)]])
+            rotation = np.array(
+                [
+                    [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                    [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                    [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+                ]
+            )
             velocity, spin = rng.normal(size=3) * rng.uniform(0.1, 500), rng.normal(size=3) * rng.uniform(0, 50)
             force, moment = loads(np.array([0.0, 0.0, rng.uniform(-1.5, 0.5)]), velocity, rotation, spin)
             assert force @ velocity + moment @ spin <= 1e-9 * (np.abs(force).sum() * np.abs(velocity).sum() + 1)

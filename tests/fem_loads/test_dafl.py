@@ -6,19 +6,19 @@ import math
 import numpy as np
 import pytest
 from scipy import integrate
+from support import meshed, slow_except
 
+from cases.studies.reference import embedded_axial_force
 from fem_loads import DAFLLoads, resistance_law, surface_quadrature
 from fem_loads.mass import mass_properties
 from mesh import BODY, ConeNose, OgiveNose, Profile, ProjectileGeometry
-from support import meshed, slow_except
-from cases.studies.reference import embedded_axial_force
 
 SOIL = resistance_law("soil")
 DOWN = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])  # body x -> world -Z
 DEEP = np.array([0.0, 0.0, -10.0])
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _loads(profile, size=0.01, model="exact", order=2, law=SOIL):
     mesh = meshed(ProjectileGeometry(profile), size, order)
     centre = mass_properties(mesh, {BODY: 1.0}).centre
@@ -99,8 +99,7 @@ def _random_states(n, seed=1):
     for _ in range(n):
         q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
         q *= np.sign(np.linalg.det(q))
-        yield (np.array([0.0, 0.0, rng.uniform(-1.0, 0.3)]), rng.normal(size=3) * 300, q,
-               rng.normal(size=3) * 50)
+        yield (np.array([0.0, 0.0, rng.uniform(-1.0, 0.3)]), rng.normal(size=3) * 300, q, rng.normal(size=3) * 50)
 
 
 def test_loads_never_do_positive_work():

@@ -6,13 +6,13 @@ import math
 import numpy as np
 import pytest
 from scipy import integrate
+from support import meshed, slow_except
 
 from cases import history_table, load_scene, run_scene, scene_path, summarise
 from cases.studies.reference import embedded_axial_force, nose_factors
 from fem_loads import DAFLLoads, mass_properties, resistance_law, surface_quadrature
 from fem_loads.target import FreeSurface, Friction, LayeredTarget
 from mesh import BODY, ConeNose, OgiveNose, Profile, ProjectileGeometry
-from support import meshed, slow_except
 
 SOIL = resistance_law("soil")
 DOWN = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
@@ -25,7 +25,7 @@ PROFILES = {
 COARSE = (("numerics.mesh_size", 0.02), ("numerics.quadrature_order", 2), ("numerics.integrator", "rk4"))
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _quadrature(profile):
     mesh = meshed(ProjectileGeometry(profile), 0.01, 2)
     return surface_quadrature(mesh, mass_properties(mesh, {BODY: 1.0}).centre, profile, "exact")
@@ -73,13 +73,16 @@ def test_capped_friction_is_the_cap_times_the_sliding_area():
 
 def _thaw(value):
     """Tuples of pairs back to tables and tuples to arrays (the cache below needs hashable arguments)."""
-    if isinstance(value, tuple) and value and all(isinstance(v, tuple) and len(v) == 2 and isinstance(v[0], str)
-                                                 for v in value):
+    if (
+        isinstance(value, tuple)
+        and value
+        and all(isinstance(v, tuple) and len(v) == 2 and isinstance(v[0], str) for v in value)
+    ):
         return {k: _thaw(v) for k, v in value}
     return [_thaw(v) for v in value] if isinstance(value, tuple) else value
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _run(name, *overrides):
     """Run a shipped scene with (key, value) overrides; a ``target.layers`` override replaces its law."""
     result = run_scene(load_scene(scene_path(name), [(k, _thaw(v)) for k, v in overrides]))
@@ -99,8 +102,9 @@ def test_friction_lowers_depth():
 
 def test_two_layers_of_one_law_are_the_homogeneous_target():
     one, _ = _run("forrestal_luk_test5", *COARSE)
-    two, _ = _run("forrestal_luk_test5", *COARSE,
-                  ("target.layers", ((("thickness", 2.0), ("law", "soil")), (("law", "soil"),))))
+    two, _ = _run(
+        "forrestal_luk_test5", *COARSE, ("target.layers", ((("thickness", 2.0), ("law", "soil")), (("law", "soil"),)))
+    )
     np.testing.assert_allclose(two.trajectory.position, one.trajectory.position, rtol=0, atol=1e-12)
     np.testing.assert_allclose(two.trajectory.velocity, one.trajectory.velocity, rtol=1e-13, atol=1e-10)
 
@@ -127,6 +131,7 @@ def test_crossing_into_a_stiffer_layer_at_an_angle_keeps_the_path():
     1e-5 s; at 0.00125 the ramp is too stiff for 2e-5 s and chatters, 0.26). The sharp law seemed to
     turn the path away from the normal (0.24 deg at 2e-5 s), but its turn falls with the step
     (0.089 deg at 5e-6 s): the chatter of its switch, not physics."""
+
     def direction_after_interface(h):
         i = int(np.searchsorted(h["tip_depth"].to_numpy(), 2.0))
         dx = h["position_x"].iloc[-1] - h["position_x"].iloc[i]
@@ -160,8 +165,10 @@ def test_gravity_adds_the_weight():
 
 
 def test_layers_pick_the_law_by_depth():
-    target = LayeredTarget((1.0, 2.0), (resistance_law("soil"), resistance_law("softer_soil"),
-                                        resistance_law("soil_dynamic_cavity_expansion")))
+    target = LayeredTarget(
+        (1.0, 2.0),
+        (resistance_law("soil"), resistance_law("softer_soil"), resistance_law("soil_dynamic_cavity_expansion")),
+    )
     static, _ = target.coefficients(np.array([0.5, 1.5, 2.9, 3.1, 100.0]))
     np.testing.assert_allclose(static, [17.18e6, 13.521e6, 13.521e6, 20.268e6, 20.268e6])
 
@@ -193,8 +200,12 @@ def test_fast_friction_sums_equal_the_pointwise_definition(cap):
     for _ in range(5):
         rotation, _ = np.linalg.qr(rng.normal(size=(3, 3)))
         rotation *= np.sign(np.linalg.det(rotation))
-        args = (np.array([0.0, 0.0, rng.uniform(-0.8, 0.2)]), rng.normal(size=3) * 300, rotation,
-                rng.normal(size=3) * 40)
+        args = (
+            np.array([0.0, 0.0, rng.uniform(-0.8, 0.2)]),
+            rng.normal(size=3) * 300,
+            rotation,
+            rng.normal(size=3) * 40,
+        )
         force, moment = with_friction(*args)
         base_force, base_moment = without(*args)
         ref_force, ref_moment = _friction_by_points(with_friction, *args)

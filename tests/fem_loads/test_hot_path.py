@@ -24,8 +24,9 @@ def _general(loads, position, velocity, rotation, spin):
     return rotation @ load[:3], load[3:]
 
 
-@pytest.mark.parametrize("depth", [-5.0, -0.4, 0.0, 0.3, 2.0], ids=["embedded", "entering", "at-surface",
-                                                                    "tip-in", "outside"])
+@pytest.mark.parametrize(
+    "depth", [-5.0, -0.4, 0.0, 0.3, 2.0], ids=["embedded", "entering", "at-surface", "tip-in", "outside"]
+)
 def test_hot_path_equals_the_definition(loads, depth):
     rng = np.random.default_rng(7)
     assert loads._plain

@@ -12,14 +12,16 @@ DEFAULT_SIZE = 0.01  # the shipped scenes' mesh size (m)
 def _errors(geometry, size, densities, order=2):
     exact = analytic_mass_properties(geometry, densities[BODY], densities.get(COUNTERWEIGHT, 0.0))
     fem = mass_properties(build_mesh(geometry, size, order), densities)
-    return np.array([
-        fem.volume / exact.volume - 1,
-        fem.mass / exact.mass - 1,
-        fem.centre_from_tip / exact.centre_from_tip - 1,
-        fem.axial_inertia / exact.axial_inertia - 1,
-        fem.inertia[1, 1] / exact.transverse_inertia - 1,
-        fem.inertia[2, 2] / exact.transverse_inertia - 1,
-    ]), fem
+    return np.array(
+        [
+            fem.volume / exact.volume - 1,
+            fem.mass / exact.mass - 1,
+            fem.centre_from_tip / exact.centre_from_tip - 1,
+            fem.axial_inertia / exact.axial_inertia - 1,
+            fem.inertia[1, 1] / exact.transverse_inertia - 1,
+            fem.inertia[2, 2] / exact.transverse_inertia - 1,
+        ]
+    ), fem
 
 
 @pytest.mark.parametrize("which", ["projectile3", "solid_ogive"])

@@ -4,13 +4,22 @@ import functools
 
 import numpy as np
 import pytest
+from support import meshed, slow_except
 
 from cases import load_scene, run_scene, scene_path, summarise
 from cases.studies.reference import axial_depth_1d, embedded_axial_force
 from fem_loads import DAFLLoads, mass_properties, resistance_law, surface_quadrature
-from mesh import (BODY, BluntOgiveNose, ConeNose, OgiveNose, Profile, ProfileNose, ProjectileGeometry,
-                  SecantOgiveNose, analytic_mass_properties)
-from support import meshed, slow_except
+from mesh import (
+    BODY,
+    BluntOgiveNose,
+    ConeNose,
+    OgiveNose,
+    Profile,
+    ProfileNose,
+    ProjectileGeometry,
+    SecantOgiveNose,
+    analytic_mass_properties,
+)
 
 
 def sampled_ogive(crh: float, diameter: float, length: float, n: int) -> ProfileNose:
@@ -33,7 +42,7 @@ SOIL = resistance_law("soil")
 DOWN = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _meshed(name):
     profile = Profile(0.155, 0.93, NOSES[name])
     mesh = meshed(ProjectileGeometry(profile), 0.01, 2)
@@ -69,8 +78,9 @@ def test_embedded_axial_force_matches_the_nose_factors(name, friction):
     from fem_loads.target import Friction
 
     profile, mesh, mass = _meshed(name)
-    loads = DAFLLoads(surface_quadrature(mesh, mass.centre, profile, "exact"), SOIL,
-                      friction=Friction(friction) if friction else None)
+    loads = DAFLLoads(
+        surface_quadrature(mesh, mass.centre, profile, "exact"), SOIL, friction=Friction(friction) if friction else None
+    )
     force, _ = loads(np.array([0.0, 0.0, -10.0]), np.array([0.0, 0.0, -500.0]), DOWN, np.zeros(3))
     assert force[2] == pytest.approx(embedded_axial_force(profile, SOIL, 500.0, friction), rel=5e-3)
 
@@ -82,8 +92,9 @@ def test_meshed_profile_nose_matches_the_ogive_it_was_sampled_from():
     ogive = Profile(0.0952, 1.4, OgiveNose(3.0))
     profile = Profile(0.0952, 1.4, sampled_ogive(3.0, 0.0952, 1.4, 30))
     exact = analytic_mass_properties(ProjectileGeometry(ogive), 1.0)
-    (mesh, mass), (_, ogive_mass) = ((m, mass_properties(m, {BODY: 1.0})) for m in
-                                     (meshed(ProjectileGeometry(p), 0.02, 2) for p in (profile, ogive)))
+    (mesh, mass), (_, ogive_mass) = (
+        (m, mass_properties(m, {BODY: 1.0})) for m in (meshed(ProjectileGeometry(p), 0.02, 2) for p in (profile, ogive))
+    )
     for name in ("volume", "centre_from_tip", "axial_inertia", "transverse_inertia"):
         assert getattr(mass, name) == pytest.approx(getattr(exact, name), rel=2e-4), name
         assert getattr(mass, name) == pytest.approx(getattr(ogive_mass, name), rel=1e-5), name
@@ -107,10 +118,16 @@ def test_profile_nose_of_30_points_gives_the_ogive_depth():
 
 
 def test_blunt_normal_impact_matches_the_1d_integration():
-    scene = load_scene(scene_path("forrestal_luk_test2"),
-                       {"projectile.nose": {"shape": "blunt", "crh": 3.0, "flat_radius": 0.01}})
+    scene = load_scene(
+        scene_path("forrestal_luk_test2"), {"projectile.nose": {"shape": "blunt", "crh": 3.0, "flat_radius": 0.01}}
+    )
     result = run_scene(scene)
-    reference, _ = axial_depth_1d(result.prepared.profile, scene.target.build(),
-                                  result.prepared.mass.mass, 280.0, scene.numerics.stop_speed,
-                                  **scene.effects.contact)
+    reference, _ = axial_depth_1d(
+        result.prepared.profile,
+        scene.target.build(),
+        result.prepared.mass.mass,
+        280.0,
+        scene.numerics.stop_speed,
+        **scene.effects.contact,
+    )
     assert summarise(result).depth == pytest.approx(reference, rel=1e-3)

@@ -4,10 +4,10 @@ import math
 
 import numpy as np
 import pytest
+from support import meshed
 
 from fem_loads import surface_quadrature
 from mesh import ProjectileGeometry, analytic_mass_properties, build_mesh
-from support import meshed
 
 DEFAULT_SIZE = 0.01
 

@@ -5,13 +5,13 @@ import math
 
 import numpy as np
 import pytest
+from support import meshed, slow_except
 
 from cases.studies.reference import embedded_axial_force
 from fem_loads import DAFLLoads, mass_properties, resistance_law, surface_quadrature
 from fem_loads.revolved import PitchPlaneLoad, law_data, lowest_height, revolved_surface
 from fem_loads.target import Friction
 from mesh import BODY, BluntOgiveNose, ConeNose, OgiveNose, Profile, ProjectileGeometry, analytic_mass_properties
-from support import meshed, slow_except
 
 SOIL = resistance_law("soil")
 PAPER = Profile(0.155, 0.93, OgiveNose(5.0))
@@ -24,7 +24,7 @@ def rotation(theta: float) -> np.ndarray:
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _mesh_case(friction: Friction | None):
     """The paper's body at 10 mm (the mesh test_dafl and test_effects use), its DAFL and the tip's place."""
     mesh = meshed(ProjectileGeometry(PAPER), 0.01, 2)
@@ -37,12 +37,21 @@ def _mesh_case(friction: Friction | None):
 
 def _rings(friction: Friction | None, tip: float, entry: float = ENTRY, **counts) -> PitchPlaneLoad:
     surface = revolved_surface(PAPER, tip, **counts)
-    law = law_data(SOIL.static_stress, SOIL.dynamic_density, 0.0, DELTA, entry, surface.max_radius,
-                   friction.coefficient if friction else 0.0, friction.cap if friction else None)
+    law = law_data(
+        SOIL.static_stress,
+        SOIL.dynamic_density,
+        0.0,
+        DELTA,
+        entry,
+        surface.max_radius,
+        friction.coefficient if friction else 0.0,
+        friction.cap if friction else None,
+    )
     return PitchPlaneLoad(surface, law)
 
 
-STATES = {  # height of the centre (m), axis tilt from straight down (deg), speed (m/s), attack (deg), pitch rate (rad/s)
+# height of the centre (m), axis tilt from straight down (deg), speed (m/s), attack (deg), pitch rate (rad/s)
+STATES = {
     "embedded, axial": (-5.0, 0.0, 800.0, 0.0, 0.0),
     "embedded, 5 deg attack": (-5.0, 0.0, 800.0, 5.0, 0.0),
     "embedded, turning": (-5.0, 30.0, 600.0, 15.0, -180.0),
@@ -85,8 +94,9 @@ def test_closed_form_arcs_are_the_integrals():
     surface = revolved_surface(PAPER, 0.5, nose_rings=16, shank_rings=8)
 
     def load(mu):
-        return PitchPlaneLoad(surface, law_data(SOIL.static_stress, SOIL.dynamic_density, 0.0, 0.0, 0.0,
-                                                surface.max_radius, mu))
+        return PitchPlaneLoad(
+            surface, law_data(SOIL.static_stress, SOIL.dynamic_density, 0.0, 0.0, 0.0, surface.max_radius, mu)
+        )
 
     exact, gauss = load(0.0), load(1e-300)
     rng = np.random.default_rng(7)
@@ -136,4 +146,6 @@ def test_outside_the_target_and_moving_away_nothing():
     assert lowest_height(surface.outline, 0.0, 1.0, 0.0) == -0.5  # straight down: the tip
     assert lowest_height(surface.outline, 0.0, -1.0, 0.0) == pytest.approx(-0.43, abs=1e-12)  # up: the tail face
     tilted = math.radians(60.0)  # 30 degrees from the vertical: the tip, not the shoulder, is lowest
-    assert lowest_height(surface.outline, 0.0, math.sin(tilted), math.cos(tilted)) == pytest.approx(-0.5 * math.sin(tilted))
+    assert lowest_height(surface.outline, 0.0, math.sin(tilted), math.cos(tilted)) == pytest.approx(
+        -0.5 * math.sin(tilted)
+    )

@@ -15,16 +15,27 @@ import sys
 
 import numpy as np
 import pytest
+from support import slow_except
 
 from cases import history_table, load_scene, prepare_projectile, run_scene, scene_path, summarise
 from cases.run import convergence_speed
 from cases.scene import SceneError, parse_override, read_toml, scene_from_dict
 from cases.studies import is_unstable
 from cases.studies.reference import axial_depth_1d
-from dynamics import (NON_FINITE, RK4, STEP_FLOOR, TIME_LIMIT, DormandPrince54, EnergyGuard, ErrorControl, FixedStep,
-                      RigidBody, State, simulate)
+from dynamics import (
+    NON_FINITE,
+    RK4,
+    STEP_FLOOR,
+    TIME_LIMIT,
+    DormandPrince54,
+    EnergyGuard,
+    ErrorControl,
+    FixedStep,
+    RigidBody,
+    State,
+    simulate,
+)
 from dynamics.quaternion import rotation_matrix
-from support import slow_except
 
 FL5, FL3, FL2, P3 = "forrestal_luk_test5", "forrestal_luk_test3", "forrestal_luk_test2", "paper_p3"
 MM20 = ("numerics.mesh_size=0.02", "numerics.quadrature_order=2")
@@ -33,7 +44,7 @@ RK4_2E5 = ("numerics.integrator=rk4", "numerics.time_step=2e-5")
 SHARP = ("effects.contact_incidence=0", "numerics.entry_smoothing=0")  # the paper's switches
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _run(name: str, *overrides: str):
     """Run a shipped scene with ``KEY=VALUE`` overrides, as a user types them after ``--set``:
     (result, history, summary), cached for the module."""
@@ -68,7 +79,8 @@ def test_attack_decay_adaptive_integrator_takes_long_steps(rtol):
     With the continuous load the attack angle decays smoothly and the error control can take the long
     steps the smooth phases allow.  Pass: the run stops with no forced step (none accepted above the
     tolerance) and at most 10 accepted and 5 rejected steps per simulated millisecond (measured: 1.4 and
-    0.7 at rtol 1e-4, 2.4 and 0.8 at 1e-6: 56 and 99 steps for the whole run).  The sharp law needs the forced steps: the next test.
+    0.7 at rtol 1e-4, 2.4 and 0.8 at 1e-6: 56 and 99 steps for the whole run).  The sharp law needs the
+    forced steps: the next test.
     """
     result, _, record = _run(FL5, *MM20, *DOPRI, f"numerics.rtol={rtol}")
     stats = result.trajectory.statistics
@@ -155,9 +167,15 @@ LADDER_SLOW = [(0.02, 1e-5), (0.01, 2e-5), (0.01, 1e-5)]
 
 def _critical_run(speed: float, size: float, step: float) -> dict:
     # on the compiled step (the same method and load as numpy's, tests/cases/test_kernels.py): five times faster
-    _, history, record = _run(P3, f"numerics.mesh_size={size}", "numerics.quadrature_order=2",
-                              *RK4_2E5[:1], f"numerics.time_step={step}", f"impact.speed={speed}",
-                              "numerics.kernel=compiled")
+    _, history, record = _run(
+        P3,
+        f"numerics.mesh_size={size}",
+        "numerics.quadrature_order=2",
+        *RK4_2E5[:1],
+        f"numerics.time_step={step}",
+        f"impact.speed={speed}",
+        "numerics.kernel=compiled",
+    )
     return {**record.model_dump(), "convergence_speed": convergence_speed(history)}
 
 
@@ -201,8 +219,17 @@ def test_near_critical_speed_converges_at_10_mm(side):
 # ---------------------------------------------------------------------------------------------------
 # 3. grazing impact and trajectories that turn back: the exit is located and nothing follows it
 
-GRAZING = [(FL3, 60.0), (FL3, 70.0), (FL3, 80.0), (FL3, 85.0), (FL3, 89.0),
-           (P3, 0.0), (P3, 30.0), (P3, 60.0), (P3, 80.0)]
+GRAZING = [
+    (FL3, 60.0),
+    (FL3, 70.0),
+    (FL3, 80.0),
+    (FL3, 85.0),
+    (FL3, 89.0),
+    (P3, 0.0),
+    (P3, 30.0),
+    (P3, 60.0),
+    (P3, 80.0),
+]
 
 
 @pytest.mark.parametrize(("name", "oblique"), slow_except(GRAZING, (FL3, 60.0), (FL3, 89.0), (P3, 80.0)))
@@ -215,7 +242,8 @@ def test_exit_is_located_and_ends_the_run(name, oblique):
     recorded state has it at or above the surface by at most 1e-9 m (located, not a step later), the
     band is inside from one of the first two steps on (the tip touches the surface at the start; the
     quadrature point nearest to it may need a step to reach the band) to the last (no exit missed),
-    and the state a millionth of the last step earlier is still inside.  A run that stays in ends ``stopped`` with the body inside.  The projectile may leave
+    and the state a millionth of the last step earlier is still inside.  A run that stays in ends ``stopped``
+    with the body inside.  The projectile may leave
     without ever being wholly inside (grazing: the tip itself stays above the surface at 85 deg and
     more).
     """
@@ -225,16 +253,23 @@ def test_exit_is_located_and_ends_the_run(name, oblique):
     inside = np.flatnonzero(lowest < 0.0)
     assert len(inside) and inside[0] <= 1
     if record.end_reason == "stopped":
-        assert np.all(lowest[inside[0]:] < 0.0)
+        assert np.all(lowest[inside[0] :] < 0.0)
         return
     assert record.end_reason == "exited"
     assert 0.0 <= lowest[-1] < 1e-9
-    assert np.all(lowest[inside[0]:-1] < 0.0)
+    assert np.all(lowest[inside[0] : -1] < 0.0)
     tr = result.trajectory
     before = tr.state(-2)
-    short = RK4().step(RigidBody(result.prepared.mass.mass, result.prepared.mass.inertia),
-                       result.scene.loads(result.prepared.quadrature), before,
-                       (tr.time[-1] - tr.time[-2]) * (1 - 1e-6)).state
+    short = (
+        RK4()
+        .step(
+            RigidBody(result.prepared.mass.mass, result.prepared.mass.inertia),
+            result.scene.loads(result.prepared.quadrature),
+            before,
+            (tr.time[-1] - tr.time[-2]) * (1 - 1e-6),
+        )
+        .state
+    )
     assert result.scene.loads(result.prepared.quadrature).lowest_height(short.position, short.rotation) < 0.0
     assert tr.time[-1] - tr.time[-2] <= 2e-5 * (1 + 1e-9)
 
@@ -242,14 +277,20 @@ def test_exit_is_located_and_ends_the_run(name, oblique):
 # ---------------------------------------------------------------------------------------------------
 # 4. extremes: very high and very low speeds, tiny and very fine meshes, extreme noses, long runs
 
+
 def _normal_impact_error(*overrides: str) -> float:
     """Relative error of the tip depth of a normal impact of the Forrestal-Luk projectile against the
     independent 1-D integration with exact nose entry and the same contact width (no mesh)."""
     result, _, record = _run(FL2, *overrides)
     scene = result.scene
-    reference, _ = axial_depth_1d(result.prepared.profile, scene.target.build(), result.prepared.mass.mass,
-                                  scene.impact.speed, scene.numerics.stop_speed,
-                                  **scene.effects.contact)
+    reference, _ = axial_depth_1d(
+        result.prepared.profile,
+        scene.target.build(),
+        result.prepared.mass.mass,
+        scene.impact.speed,
+        scene.numerics.stop_speed,
+        **scene.effects.contact,
+    )
     assert record.end_reason == "stopped"
     return record.depth / reference - 1.0
 
@@ -266,12 +307,29 @@ EXTREMES = {  # case: (overrides, |error| bound)
 }
 EXTREMES_SLOW = {
     "very fine mesh (5 mm)": (("numerics.mesh_size=0.005", "numerics.quadrature_order=2", *RK4_2E5), 5e-4),
-    "3000 m/s at 10 mm, 5e-6 s": (("numerics.mesh_size=0.01", "numerics.quadrature_order=2", "numerics.integrator=rk4",
-                                   "numerics.time_step=5e-6", "impact.speed=3000"), 2e-3),
-    "CRH 100 at 10 mm": (("numerics.mesh_size=0.01", "numerics.quadrature_order=2", *RK4_2E5,
-                          "projectile.nose={shape='ogive', crh=100}"), 2e-3),
-    "cone 2 deg at 20 mm": ((*MM20, *RK4_2E5, "projectile.nose={shape='cone', half_angle=2}", "projectile.length=1.6"),
-                            5e-3),
+    "3000 m/s at 10 mm, 5e-6 s": (
+        (
+            "numerics.mesh_size=0.01",
+            "numerics.quadrature_order=2",
+            "numerics.integrator=rk4",
+            "numerics.time_step=5e-6",
+            "impact.speed=3000",
+        ),
+        2e-3,
+    ),
+    "CRH 100 at 10 mm": (
+        (
+            "numerics.mesh_size=0.01",
+            "numerics.quadrature_order=2",
+            *RK4_2E5,
+            "projectile.nose={shape='ogive', crh=100}",
+        ),
+        2e-3,
+    ),
+    "cone 2 deg at 20 mm": (
+        (*MM20, *RK4_2E5, "projectile.nose={shape='cone', half_angle=2}", "projectile.length=1.6"),
+        5e-3,
+    ),
 }
 
 
@@ -373,9 +431,13 @@ def _mirror_difference(name: str, overrides: tuple[str, ...], key: str, value: f
     return a, b, ra, rb, difference
 
 
-@pytest.mark.parametrize(("key", "value", "flip"), slow_except([("impact.attack_angle", 3.5, (-1, 1, 1)),
-                                                                ("impact.yaw_angle", 3.5, (1, -1, 1))],
-                                                               ("impact.attack_angle", 3.5, (-1, 1, 1))))
+@pytest.mark.parametrize(
+    ("key", "value", "flip"),
+    slow_except(
+        [("impact.attack_angle", 3.5, (-1, 1, 1)), ("impact.yaw_angle", 3.5, (1, -1, 1))],
+        ("impact.attack_angle", 3.5, (-1, 1, 1)),
+    ),
+)
 def test_mirrored_disturbance_gives_the_mirrored_path(key, value, flip):
     """Test 5 with its attack angle (or a yaw angle) of +3.5 and -3.5 deg, 20 mm, RK4 2e-5 s.
 
@@ -398,8 +460,9 @@ def test_mirrored_disturbance_of_an_unstable_run():
     zeros in the mass properties, the summation order seeded different switches and the two paths
     parted by 7e-4 m over 17.5 m.
     """
-    a, b, ra, rb, difference = _mirror_difference(P3, (*MM20, "numerics.time_step=1e-5"), "impact.attack_angle", 1.0,
-                                                  np.array([-1.0, 1.0, 1.0]))
+    a, b, ra, rb, difference = _mirror_difference(
+        P3, (*MM20, "numerics.time_step=1e-5"), "impact.attack_angle", 1.0, np.array([-1.0, 1.0, 1.0])
+    )
     assert ra.end_reason == rb.end_reason == "exited"
     assert len(a.trajectory.time) == len(b.trajectory.time)
     assert difference.max() == 0.0
@@ -411,8 +474,10 @@ UNDISTURBED = {  # straight normal impacts: (scene, overrides)
     "Forrestal-Luk at 3000 m/s (32 m)": (FL2, (*MM20, *RK4_2E5, "impact.speed=3000")),
     "#3 at 1200 m/s (35 m)": (P3, (*MM20, *RK4_2E5, "impact.attack_angle=0")),
     "#3 at 1200 m/s, Dormand-Prince": (P3, (*MM20, *DOPRI, "numerics.rtol=1e-4", "impact.attack_angle=0")),
-    "test 5, quadratic mesh normals": (FL5, (*MM40, *RK4_2E5, "impact.attack_angle=0", "numerics.geometry_order=2",
-                                             "numerics.normals=mesh")),
+    "test 5, quadratic mesh normals": (
+        FL5,
+        (*MM40, *RK4_2E5, "impact.attack_angle=0", "numerics.geometry_order=2", "numerics.normals=mesh"),
+    ),
 }
 
 
@@ -450,6 +515,7 @@ def _start(speed: float = 280.0) -> State:
 @pytest.mark.parametrize("method", [RK4(), DormandPrince54()])
 def test_non_finite_loads_end_the_run_with_the_history(method):
     """Loads that turn NaN after 0.4 ms. Pass: ``non_finite``, a finite history to just before it."""
+
     def loads(x, v, r, w):
         return (np.full(3, np.nan) if -x[2] > 0.112 else np.array([0.0, 0.0, 1e5])), np.zeros(3)
 
@@ -464,6 +530,7 @@ def test_overflowing_rotation_ends_the_run_instead_of_raising():
     """A moment that overflows the angular velocity makes ``math.sin`` of an infinite rotation raise
     inside a step (what ``projectile.mass = 1e-300`` did: "math domain error").  Pass: the run ends
     ``non_finite`` with its finite history."""
+
     def loads(x, v, r, w):
         return np.zeros(3), np.array([0.0, 1e308 if -x[2] > 0.05 else 0.0, 0.0])
 
@@ -476,6 +543,7 @@ def test_energy_guard_below_the_floor_ends_the_run():
     step down to its floor and must then stop.  Pass: ``step_floor`` after the last accepted step,
     its history kept (before: the step at the floor was accepted silently, and the guard could go
     on halving to 1e-10 s: 5 minutes without an end for ``transverse_inertia_scale = 1e-6``)."""
+
     def loads(x, v, r, w):
         return (np.array([0.0, 0.0, -1e5]) if -x[2] > 0.05 else np.zeros(3)), np.zeros(3)
 
@@ -503,8 +571,9 @@ def test_error_control_below_the_floor_ends_the_run():
     tr = simulate(BODY, loads, start, DormandPrince54(), ErrorControl(1e-6, min_step=1e-8), time_limit=1e-3)
     assert tr.end_reason == STEP_FLOOR and tr.time[-1] < 1e-4
     assert np.isfinite(tr.velocity).all() and abs(tr.velocity[-1, 0]) < 1e-2
-    forced = simulate(BODY, loads, start, DormandPrince54(), ErrorControl(1e-6, min_step=1e-8, forced_step=1e-6),
-                      time_limit=1e-3)
+    forced = simulate(
+        BODY, loads, start, DormandPrince54(), ErrorControl(1e-6, min_step=1e-8, forced_step=1e-6), time_limit=1e-3
+    )
     assert forced.end_reason == TIME_LIMIT and forced.statistics["forced_steps"] > 900
     assert forced.statistics["steps"] <= 1010
 
@@ -512,13 +581,26 @@ def test_error_control_below_the_floor_ends_the_run():
 # ---------------------------------------------------------------------------------------------------
 # 7. valid-looking scenes that failed at run time without naming a field
 
-@pytest.mark.parametrize(("change", "expected"), [
-    ({"mass": 1e-300}, "projectile: mass = 1e-300: lighter than 100 kg/m^3 over the bounding cylinder"),
-    ({"mass": None, "mass_properties": {"mass": 23.1, "centre_of_mass": 0.8, "axial_inertia": 9.0,
-                                        "transverse_inertia": 4.0}},
-     "axial_inertia = 9: more than twice transverse_inertia"),
-    ({"numerics.mesh_size": 1.0}, "numerics.mesh_size = 1: coarser than the projectile"),
-])
+
+@pytest.mark.parametrize(
+    ("change", "expected"),
+    [
+        ({"mass": 1e-300}, "projectile: mass = 1e-300: lighter than 100 kg/m^3 over the bounding cylinder"),
+        (
+            {
+                "mass": None,
+                "mass_properties": {
+                    "mass": 23.1,
+                    "centre_of_mass": 0.8,
+                    "axial_inertia": 9.0,
+                    "transverse_inertia": 4.0,
+                },
+            },
+            "axial_inertia = 9: more than twice transverse_inertia",
+        ),
+        ({"numerics.mesh_size": 1.0}, "numerics.mesh_size = 1: coarser than the projectile"),
+    ],
+)
 def test_absurd_scenes_fail_early_naming_the_field(change, expected):
     """Pass: ``SceneError`` (exit 2) with one line naming the field and the allowed range, before
     anything is meshed.  Before: "math domain error" in the first step (mass), a run with an
@@ -542,8 +624,9 @@ def test_inertia_scale_below_the_rigid_body_limit_is_a_clear_run_error():
     """``transverse_inertia_scale = 1e-300``: the inertia is only known after meshing.  Pass: one
     line naming the field and the smallest allowed value (before: "inertia must be positive
     definite"; at 1e-6 the run went on for over 5 minutes)."""
-    scene = load_scene(scene_path(FL2), [parse_override(text) for text in
-                                         (*MM40, "projectile.transverse_inertia_scale=1e-300")])
+    scene = load_scene(
+        scene_path(FL2), [parse_override(text) for text in (*MM40, "projectile.transverse_inertia_scale=1e-300")]
+    )
     with pytest.raises(ValueError, match=r"projectile.transverse_inertia_scale = 1e-300: .* >= 0\.00"):
         prepare_projectile(scene)
 
@@ -552,9 +635,23 @@ def test_unmeshable_nose_is_a_clear_one_line_run_error(tmp_path):
     """A CRH 100 ogive at 40 mm: scikit-fem cannot map the distorted quadratic elements at its tip.
     Pass: exit 1 and one stderr line naming ``numerics.mesh_size`` and what usually works (before:
     "Exception: Newton iteration didn't converge up to TOL=1e-12")."""
-    done = subprocess.run([sys.executable, "-m", "cases.cli", "run", str(scene_path(FL2)), "--set",
-                           "numerics.mesh_size=0.04", "--set", "projectile.nose={shape='ogive', crh=100}"],
-                          capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "cases.cli",
+            "run",
+            str(scene_path(FL2)),
+            "--set",
+            "numerics.mesh_size=0.04",
+            "--set",
+            "projectile.nose={shape='ogive', crh=100}",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=tmp_path,
+    )
     assert done.returncode == 1
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and "numerics.mesh_size = 0.04" in lines[0] and "finer numerics.mesh_size" in lines[0]
@@ -564,9 +661,13 @@ def test_failed_mesher_prints_nothing_on_standard_output(tmp_path):
     """#3 at a 12 cm mesh: gmsh's HXT mesher fails.  Pass: exit 1, one stderr line naming
     ``numerics.mesh_size``, and an empty standard output (before: HXT's "PLC Error" lines, printed
     by C code past ``General.Terminal = 0``, came out on stdout)."""
-    done = subprocess.run([sys.executable, "-m", "cases.cli", "run", str(scene_path(P3)), "--set",
-                           "numerics.mesh_size=0.12", "--json"],
-                          capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    done = subprocess.run(
+        [sys.executable, "-m", "cases.cli", "run", str(scene_path(P3)), "--set", "numerics.mesh_size=0.12", "--json"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=tmp_path,
+    )
     assert done.returncode == 1
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and "numerics.mesh_size = 0.12" in lines[0] and "gmsh could not mesh" in lines[0]
@@ -624,8 +725,10 @@ def test_rk4_reaches_its_order_with_the_continuous_load():
     """
     steps = (2e-5, 1e-5, 5e-6, 2.5e-6)
     # on the compiled step, which reaches the order as the Python step does (tests/dynamics/test_compiled_step.py)
-    records = [_run(FL5, *MM20, "numerics.integrator=rk4", f"numerics.time_step={h}", "numerics.kernel=compiled")[2]
-               for h in steps]
+    records = [
+        _run(FL5, *MM20, "numerics.integrator=rk4", f"numerics.time_step={h}", "numerics.kernel=compiled")[2]
+        for h in steps
+    ]
     for quantity in ("path_length", "depth", "axis_angle_change"):
         values = np.array([getattr(r, quantity) for r in records])
         differences = np.abs(np.diff(values))

@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 import pytest
+from support import MIRROR_Y, meshed, mirrored_states
 
 from cases.run.runner import initial_attitude
 from dynamics.quaternion import rotation_matrix
@@ -20,19 +21,18 @@ from fem_loads.images import MirrorImages
 from fem_loads.mass import mirror_symmetric_axes
 from fem_loads.quadrature import MIRROR_SIGNS
 from mesh import BODY, OgiveNose, Profile, ProjectileGeometry
-from support import MIRROR_Y, meshed, mirrored_states
 
 PROFILE = Profile(0.155, 0.93, OgiveNose(5.0))
 SOIL = resistance_law("soil")
 SIGNS = [np.array([1.0, sy, sz]) for sy, sz in MIRROR_SIGNS]
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _mesh(order: int):
     return meshed(ProjectileGeometry(PROFILE), 0.04, order)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _quadrature(order: int, model: str) -> SurfaceQuadrature:
     mesh = _mesh(order)
     return surface_quadrature(mesh, mass_properties(mesh, {BODY: 1.0}).centre, PROFILE, model)
@@ -114,8 +114,12 @@ def test_asymmetric_points_have_no_mirror_quarters():
 
 def _random_state(rng: np.random.Generator):
     q = rng.normal(size=4)
-    return (np.array([0.0, 0.0, rng.uniform(-1.5, -0.2)]), rng.normal(size=3) * 300.0,
-            rotation_matrix(q / np.linalg.norm(q)), rng.normal(size=3) * 20.0)
+    return (
+        np.array([0.0, 0.0, rng.uniform(-1.5, -0.2)]),
+        rng.normal(size=3) * 300.0,
+        rotation_matrix(q / np.linalg.norm(q)),
+        rng.normal(size=3) * 20.0,
+    )
 
 
 def _plain_sum(loads: DAFLLoads, position, velocity, rotation, spin):
@@ -176,8 +180,11 @@ def test_mirrored_states_give_exactly_mirrored_loads():
 
 def test_images_scatter_and_gather_are_inverse():
     q = _quadrature(1, "exact")
-    images = MirrorImages(q.mirror_quarters, np.ascontiguousarray(np.hstack([q.normals, q.moment_arms]).T),
-                          np.ascontiguousarray(q.points.T))
+    images = MirrorImages(
+        q.mirror_quarters,
+        np.ascontiguousarray(np.hstack([q.normals, q.moment_arms]).T),
+        np.ascontiguousarray(q.points.T),
+    )
     values = np.random.default_rng(0).normal(size=len(q))
     assert np.array_equal(images.scatter(images.gather(values)), values)
 

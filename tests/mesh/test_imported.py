@@ -50,10 +50,20 @@ def assert_matches_analytic(props, exact, tol: float) -> None:
     assert np.abs(props.centre[1:]).max() < tol * exact.centre_from_tip
 
 
-@pytest.mark.parametrize("name, unit, scale", slow_except(
-    [("ogive.step", "m", 1.0), ("ogive_mm.step", "mm", 1e-3), ("ogive_cm.brep", "cm", 1e-2),
-     ("ogive_in.step", "in", 0.0254), ("ogive_mm.iges", "mm", 1e-3)],
-    ("ogive.step", "m", 1.0), ("ogive_mm.step", "mm", 1e-3)))  # units both ways by default
+@pytest.mark.parametrize(
+    "name, unit, scale",
+    slow_except(
+        [
+            ("ogive.step", "m", 1.0),
+            ("ogive_mm.step", "mm", 1e-3),
+            ("ogive_cm.brep", "cm", 1e-2),
+            ("ogive_in.step", "in", 0.0254),
+            ("ogive_mm.iges", "mm", 1e-3),
+        ],
+        ("ogive.step", "m", 1.0),
+        ("ogive_mm.step", "mm", 1e-3),
+    ),
+)  # units both ways by default
 def test_cad_formats_and_units_give_the_analytic_body(folder, name, unit, scale):
     """Each format, written in its unit's numbers and read with that unit, is the same body in metres;
     10 mm elements: the mesh's own error in the mass properties is ~1e-5."""
@@ -111,8 +121,11 @@ def test_named_and_numbered_solids_take_their_densities(folder):
     by_number = [body(brep, materials=(f"solid{k}",))[2].mass for k in (1, 2)]
     for masses in (by_name, by_number):
         np.testing.assert_allclose(sorted(masses), expected, rtol=2e-4)
-    with pytest.raises(GeometryError, match=r"projectile.materials.tungsten: no solid or group of that name.*"
-                                            r"counterweight"):
+    with pytest.raises(
+        GeometryError,
+        match=r"projectile.materials.tungsten: no solid or group of that name.*"
+        r"counterweight",
+    ):
         body(folder / "named1.step", materials=("tungsten",))
 
 
@@ -121,21 +134,23 @@ def test_exact_surface_rule_integrates_the_ogive_exactly(folder):
     against 1-D integrals of the profile (the facets only partition the exact surface)."""
     path = write_body(folder / "exact.step")
     mesh, tip, props = body(path)
-    q = surface_quadrature(mesh, props.centre, None, "exact", 4, surface=CadSurface(geometry(path), tip),
-                           facet_rule="shape")
+    q = surface_quadrature(
+        mesh, props.centre, None, "exact", 4, surface=CadSurface(geometry(path), tip), facet_rule="shape"
+    )
     profile = OGIVE.profile
     assert q.area == pytest.approx(profile.surface_area(), rel=2e-5)
     front = q.normals[:, 0] > 0
-    assert (q.normals[front, 0] * q.weights[front]).sum() == pytest.approx(math.pi * profile.radius ** 2, rel=2e-5)
+    assert (q.normals[front, 0] * q.weights[front]).sum() == pytest.approx(math.pi * profile.radius**2, rel=2e-5)
     s = np.linspace(0.0, profile.nose_length, 200001)
     n_forward, _ = profile.outward_normal(s)
     ds = np.gradient(s)
     lateral = 2 * math.pi * profile.radius_at(s) * np.sqrt(1 + profile.slope_at(s) ** 2) * ds
-    assert (q.normals[front, 0] ** 3 * q.weights[front]).sum() == pytest.approx((n_forward ** 3 * lateral).sum(),
-                                                                                 rel=1e-4)
+    assert (q.normals[front, 0] ** 3 * q.weights[front]).sum() == pytest.approx(
+        (n_forward**3 * lateral).sum(), rel=1e-4
+    )
     # every point on the exact surface, with the exact normal
     p = q.points + props.centre
-    on_side = (-p[:, 0] < profile.length - 1e-9)
+    on_side = -p[:, 0] < profile.length - 1e-9
     radius = np.hypot(p[on_side, 1], p[on_side, 2])
     np.testing.assert_allclose(radius, profile.radius_at(-p[on_side, 0]), atol=1e-12)
 
@@ -198,8 +213,12 @@ def test_bad_files_get_one_line_each(folder):
     gmsh.model.mesh.generate(2)  # a surface mesh only
     gmsh.write(str(folder / "surface.msh"))
     gmsh.finalize()
-    cases += [(folder / "open.brep", "no closed solid"), (folder / "two.step", "2 disjoint bodies"),
-              (folder / "surface.msh", "no tetrahedra"), (folder / "open.iges", "no closed solid.*export it as STEP or BREP")]
+    cases += [
+        (folder / "open.brep", "no closed solid"),
+        (folder / "two.step", "2 disjoint bodies"),
+        (folder / "surface.msh", "no tetrahedra"),
+        (folder / "open.iges", "no closed solid.*export it as STEP or BREP"),
+    ]
     for path, message in cases:
         with pytest.raises(GeometryError, match=message) as info:
             build_file_mesh(FileGeometry(str(path), "", "m"), 0.02)

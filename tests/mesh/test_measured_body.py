@@ -6,15 +6,23 @@ import math
 import numpy as np
 import pytest
 from scipy import integrate
+from support import meshed, slow_except
 
 from cases import load_scene, run_scene, scene_path, summarise
 from cases.scene import SceneError
 from cases.studies.reference import axial_depth_1d, check_nose_alone_presses, embedded_axial_force
 from fem_loads import DAFLLoads, mass_properties, resistance_law, surface_quadrature
 from fem_loads.revolved import PitchPlaneLoad, law_data, revolved_surface
-from mesh import (BODY, Interior, OgiveNose, Profile, ProfileBody, ProjectileGeometry, analytic_mass_properties,
-                  place_counterweight)
-from support import meshed, slow_except
+from mesh import (
+    BODY,
+    Interior,
+    OgiveNose,
+    Profile,
+    ProfileBody,
+    ProjectileGeometry,
+    analytic_mass_properties,
+    place_counterweight,
+)
 
 SOIL = resistance_law("soil")
 A = 0.0775  # m: the 155 mm family's shank radius
@@ -31,19 +39,28 @@ def test_the_body_joins_the_shank_and_ends_at_the_tail():
     assert 0.75 in p.breakpoints and 0.85 in p.breakpoints and 0.93 not in p.breakpoints
     s = np.linspace(0.75, 0.93, 1001)
     assert np.all(np.diff(p.radius_at(s)) <= 0.0)  # a narrowing table gives a narrowing body (no overshoot)
-    lateral = integrate.quad(lambda s: 2 * math.pi * float(p.radius_at(s)) * math.hypot(1, float(p.slope_at(s))),
-                             0, 0.93, points=p.breakpoints, limit=200, epsrel=1e-12)[0]
+    lateral = integrate.quad(
+        lambda s: 2 * math.pi * float(p.radius_at(s)) * math.hypot(1, float(p.slope_at(s))),
+        0,
+        0.93,
+        points=p.breakpoints,
+        limit=200,
+        epsrel=1e-12,
+    )[0]
     assert p.surface_area() == pytest.approx(lateral + math.pi * 0.062**2, rel=1e-10)
 
 
-@pytest.mark.parametrize("points, message", [
-    (((0.75, A),), r"at least 2"),
-    (((0.75, A), (0.74, 0.07), (0.93, 0.06)), r"body.points\[1\].*x strictly increasing"),
-    (((0.75, A), (0.85, 0.0), (0.93, 0.06)), r"body.points\[1\].*r must be > 0"),
-    (((0.75, 0.07), (0.93, 0.06)), r"body.points\[0\].*shank radius"),
-    (((0.2, A), (0.93, 0.06)), r"body.points\[0\].*lies on the nose"),
-    (((0.75, A), (0.9, 0.06)), r"body.points\[1\].*must be the tail"),
-])
+@pytest.mark.parametrize(
+    "points, message",
+    [
+        (((0.75, A),), r"at least 2"),
+        (((0.75, A), (0.74, 0.07), (0.93, 0.06)), r"body.points\[1\].*x strictly increasing"),
+        (((0.75, A), (0.85, 0.0), (0.93, 0.06)), r"body.points\[1\].*r must be > 0"),
+        (((0.75, 0.07), (0.93, 0.06)), r"body.points\[0\].*shank radius"),
+        (((0.2, A), (0.93, 0.06)), r"body.points\[0\].*lies on the nose"),
+        (((0.75, A), (0.9, 0.06)), r"body.points\[1\].*must be the tail"),
+    ],
+)
 def test_bad_tables_say_which_point_and_what_is_allowed(points, message):
     with pytest.raises(ValueError, match=message):
         Profile(0.155, 0.93, OgiveNose(5.0), ProfileBody(points))
@@ -88,8 +105,13 @@ def _flare_axial_force(speed: float) -> float:
     def integrand(s: float) -> float:
         slope = float(FLARE.slope_at(s))
         sin2 = slope**2 / (1 + slope**2)
-        return 2 * math.pi * float(FLARE.radius_at(s)) * max(slope, 0.0) * (SOIL.static_stress
-                                                                             + SOIL.dynamic_density * speed**2 * sin2)
+        return (
+            2
+            * math.pi
+            * float(FLARE.radius_at(s))
+            * max(slope, 0.0)
+            * (SOIL.static_stress + SOIL.dynamic_density * speed**2 * sin2)
+        )
 
     flare = integrate.quad(integrand, FLARE.body.start, 0.93, points=FLARE.breakpoints, limit=200, epsrel=1e-12)[0]
     return nose + flare
@@ -122,8 +144,14 @@ def test_a_boat_tail_goes_as_deep_as_its_nose_says():
     scene = load_scene(scene_path("forrestal_luk_test2"), {"projectile.body": body})
     result = run_scene(scene)
     depth = summarise(result).depth
-    reference, _ = axial_depth_1d(scene.projectile.profile(), scene.target.build(), result.prepared.mass.mass,
-                                  scene.impact.speed, scene.numerics.stop_speed, **scene.effects.contact)
+    reference, _ = axial_depth_1d(
+        scene.projectile.profile(),
+        scene.target.build(),
+        result.prepared.mass.mass,
+        scene.impact.speed,
+        scene.numerics.stop_speed,
+        **scene.effects.contact,
+    )
     assert depth == pytest.approx(reference, rel=5e-4)
     cylinder = summarise(run_scene(load_scene(scene_path("forrestal_luk_test2")))).depth
     assert depth == pytest.approx(cylinder, rel=1e-6)

@@ -1,12 +1,20 @@
-"""A nose given as measured points: the interpolant against the ogive it was sampled from, its exact B-spline, bad tables."""
+"""A nose given as measured points: the interpolant against the ogive it was sampled from, its exact
+B-spline, bad tables."""
 
 import math
 
 import numpy as np
 import pytest
 
-from mesh import (Interior, OgiveNose, Profile, ProfileNose, ProjectileGeometry, analytic_mass_properties,
-                  place_counterweight)
+from mesh import (
+    Interior,
+    OgiveNose,
+    Profile,
+    ProfileNose,
+    ProjectileGeometry,
+    analytic_mass_properties,
+    place_counterweight,
+)
 
 DIAMETER, LENGTH = 0.0952, 1.4  # m: the validation projectile (Forrestal-Luk, CRH 3)
 OGIVE = Profile(DIAMETER, LENGTH, OgiveNose(3.0))
@@ -63,7 +71,8 @@ def test_one_dimensional_integrals_match_the_ogive():
     assert p.nose_factor() == pytest.approx(OGIVE.nose_factor(), rel=2e-5)
     interior = Interior(0.01, 0.05)
     assert ProjectileGeometry(p, interior).cavity_start == pytest.approx(
-        ProjectileGeometry(OGIVE, interior).cavity_start, rel=1e-5)
+        ProjectileGeometry(OGIVE, interior).cavity_start, rel=1e-5
+    )
 
 
 def test_counterweight_placement_works_on_a_measured_nose():
@@ -81,8 +90,8 @@ def test_bezier_pieces_are_the_interpolant():
     assert len(poles) == 3 * (len(knots) - 1) + 1 == sum(multiplicities) - 4
     t = np.linspace(0, 1, 7)[:, None]
     for k in range(len(knots) - 1):
-        b = np.array(poles[3 * k: 3 * k + 4])
-        curve = ((1 - t) ** 3 * b[0] + 3 * (1 - t) ** 2 * t * b[1] + 3 * (1 - t) * t**2 * b[2] + t**3 * b[3])
+        b = np.array(poles[3 * k : 3 * k + 4])
+        curve = (1 - t) ** 3 * b[0] + 3 * (1 - t) ** 2 * t * b[1] + 3 * (1 - t) * t**2 * b[2] + t**3 * b[3]
         np.testing.assert_allclose(curve[:, 1] + drop, p.radius_at(curve[:, 0]), atol=1e-15)
 
 

@@ -3,8 +3,17 @@
 import numpy as np
 import pytest
 
-from mesh import (BODY, COUNTERWEIGHT, ConeNose, OgiveNose, Profile, ProjectileGeometry, build_mesh, read_mesh,
-                  write_mesh)
+from mesh import (
+    BODY,
+    COUNTERWEIGHT,
+    ConeNose,
+    OgiveNose,
+    Profile,
+    ProjectileGeometry,
+    build_mesh,
+    read_mesh,
+    write_mesh,
+)
 
 
 def _tet_volumes(mesh):

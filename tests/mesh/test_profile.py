@@ -6,8 +6,15 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from mesh import (ConeNose, Interior, OgiveNose, Profile, ProjectileGeometry, analytic_mass_properties,
-                  place_counterweight)
+from mesh import (
+    ConeNose,
+    Interior,
+    OgiveNose,
+    Profile,
+    ProjectileGeometry,
+    analytic_mass_properties,
+    place_counterweight,
+)
 
 
 def test_ogive_nose_length_and_area_closed_form():
@@ -48,8 +55,10 @@ def test_normals_are_unit_and_face_forward_on_the_nose():
     assert np.all(forward[s < p.nose_length] > 0) and np.all(forward[s > p.nose_length] == 0)
 
 
-@pytest.mark.parametrize("ratio, span", [(0.4448, (0.217, 0.400)), (0.5042, (0.328, 0.501)),
-                                         (0.5636, (0.414, 0.586)), (0.6230, (0.516, 0.688))])
+@pytest.mark.parametrize(
+    "ratio, span",
+    [(0.4448, (0.217, 0.400)), (0.5042, (0.328, 0.501)), (0.5636, (0.414, 0.586)), (0.6230, (0.516, 0.688))],
+)
 def test_placement_gives_mass_and_centre(ratio, span):
     p = Profile(0.155, 0.93, OgiveNose(5.0))
     interior = Interior(0.01, 0.02)

@@ -43,9 +43,16 @@ OUTCOMES: dict[str, collections.Counter] = collections.defaultdict(collections.C
 
 
 def fuzz(examples: int):
-    return settings(max_examples=max(1, round(examples * SCALE)), deadline=None,
-                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much,
-                                           HealthCheck.data_too_large, HealthCheck.large_base_example])
+    return settings(
+        max_examples=max(1, round(examples * SCALE)),
+        deadline=None,
+        suppress_health_check=[
+            HealthCheck.too_slow,
+            HealthCheck.filter_too_much,
+            HealthCheck.data_too_large,
+            HealthCheck.large_base_example,
+        ],
+    )
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -55,8 +62,10 @@ def report_outcomes(request):
     yield
     if request.config.getoption("verbose") <= 0 and "PENETRATE_FUZZ_SCALE" not in os.environ:
         return
-    lines = [f"fuzz {name}: {sum(c.values())} cases: " + ", ".join(f"{k} {v}" for k, v in sorted(c.items()))
-             for name, c in OUTCOMES.items()]
+    lines = [
+        f"fuzz {name}: {sum(c.values())} cases: " + ", ".join(f"{k} {v}" for k, v in sorted(c.items()))
+        for name, c in OUTCOMES.items()
+    ]
     reporter = request.config.pluginmanager.get_plugin("terminalreporter")
     capture = request.config.pluginmanager.get_plugin("capturemanager")
     if reporter is None or capture is None or not lines:
@@ -90,15 +99,21 @@ def _schema_paths(models=(Scene,), prefix=()) -> dict[tuple, object]:
             inner = _models(info.annotation)
             if inner:
                 listed = typing.get_origin(info.annotation) is list or any(
-                    typing.get_origin(a) is list for a in typing.get_args(info.annotation))
+                    typing.get_origin(a) is list for a in typing.get_args(info.annotation)
+                )
                 paths.update(_schema_paths(inner, path + ((0,) if listed else ())))
     return paths
 
 
 SCHEMA = _schema_paths()
-NUMERIC = {p: i for p, i in SCHEMA.items() if any(isinstance(m, (annotated_types.Gt, annotated_types.Ge,
-                                                                   annotated_types.Lt, annotated_types.Le))
-                                                  for m in i.metadata)}
+NUMERIC = {
+    p: i
+    for p, i in SCHEMA.items()
+    if any(
+        isinstance(m, (annotated_types.Gt, annotated_types.Ge, annotated_types.Lt, annotated_types.Le))
+        for m in i.metadata
+    )
+}
 TOP_LEVEL = set(Scene.model_fields)
 BASES = {name: read_toml(scene_path(name)) for name in SHIPPED_SCENES}
 GOOD = str(scene_path("forrestal_luk_test2"))
@@ -126,7 +141,7 @@ def check_scene(scene: Scene) -> None:
             value = getattr(model, name)
             here = f"{where}.{name}" if where else name
             lo, lo_open, hi, hi_open = _bounds(info)
-            for item in (value if isinstance(value, (tuple, list)) else [value]):
+            for item in value if isinstance(value, (tuple, list)) else [value]:
                 if isinstance(item, BaseModel):
                     walk(item, here)
                 elif isinstance(item, tuple):  # a measured nose's [x, r]: finite, in [0, 100] m
@@ -134,8 +149,8 @@ def check_scene(scene: Scene) -> None:
                 elif isinstance(item, (int, float)) and not isinstance(item, bool):
                     assert math.isfinite(item), here
                     if value is not None and not isinstance(value, (tuple, list)):
-                        assert (lo < item if lo_open else lo <= item), (here, item)
-                        assert (item < hi if hi_open else item <= hi), (here, item)
+                        assert lo < item if lo_open else lo <= item, (here, item)
+                        assert item < hi if hi_open else item <= hi, (here, item)
             if isinstance(value, float) or (isinstance(value, tuple) and value and isinstance(value[0], float)):
                 assert not isinstance(value, bool)
 
@@ -146,9 +161,21 @@ def check_scene(scene: Scene) -> None:
 
 _NAME = r"(?:[^\W\d]\w*|\d+|'(?:[^'\\]|\\.)*'|\"(?:[^\"\\]|\\.)*\")"
 FIELD = re.compile(rf"^{_NAME}(?:\.{_NAME})*(?: = |: )")
-SAYS_WHAT_IS_ALLOWED = ("allowed", "must", "should", "missing (required)", "give ", "need", "expected",
-                        "not both", "drop ", "nested too deeply", "not valid TOML", "cannot read the scene file",
-                        "not readable")
+SAYS_WHAT_IS_ALLOWED = (
+    "allowed",
+    "must",
+    "should",
+    "missing (required)",
+    "give ",
+    "need",
+    "expected",
+    "not both",
+    "drop ",
+    "nested too deeply",
+    "not valid TOML",
+    "cannot read the scene file",
+    "not readable",
+)
 
 
 def check_error(message: str, source: str | None = None) -> str:
@@ -159,7 +186,7 @@ def check_error(message: str, source: str | None = None) -> str:
         return "option"
     if source is not None:
         assert message.startswith(f"{source}: "), message
-        message = message[len(source) + 2:]
+        message = message[len(source) + 2 :]
     if message.startswith(("not valid TOML", "cannot read the scene file", "arrays or tables nested")):
         return "file"
     assert FIELD.match(message), message
@@ -183,13 +210,67 @@ def outcome(name: str, load, source: str | Path) -> None:
 # ---------------------------------------------------------------------------
 # strategies
 
-SPECIAL = [0, 0.0, -0.0, -1, 1, -1e-300, 1e-300, 5e-324, 1e308, -1e308, 1.7976931348623157e308,
-           math.nan, math.inf, -math.inf, 2 ** 63, -(2 ** 63), 10 ** 30, 10 ** 400, 90, -90, 90.0000001,
-           -90.0000001, 360, 1e4, 1e-9, 0.5, 2]
-WORDS = ["", " ", "nan", "inf", "-inf", "1e3", "true", "soil", "softer_soil", "clay", "ogive", "cone",
-         "hemisphere", "profile", "rk4", "dopri54", "euler", "exact", "mesh", "coulomb", "capped",
-         "__import__('os').system('touch PWNED')", "../../etc/passwd", "/tmp/x", "a\nb", "\x1b[31mred", "\x00",
-         "é", "💥", "x" * 300]
+SPECIAL = [
+    0,
+    0.0,
+    -0.0,
+    -1,
+    1,
+    -1e-300,
+    1e-300,
+    5e-324,
+    1e308,
+    -1e308,
+    1.7976931348623157e308,
+    math.nan,
+    math.inf,
+    -math.inf,
+    2**63,
+    -(2**63),
+    10**30,
+    10**400,
+    90,
+    -90,
+    90.0000001,
+    -90.0000001,
+    360,
+    1e4,
+    1e-9,
+    0.5,
+    2,
+]
+WORDS = [
+    "",
+    " ",
+    "nan",
+    "inf",
+    "-inf",
+    "1e3",
+    "true",
+    "soil",
+    "softer_soil",
+    "clay",
+    "ogive",
+    "cone",
+    "hemisphere",
+    "profile",
+    "rk4",
+    "dopri54",
+    "euler",
+    "exact",
+    "mesh",
+    "coulomb",
+    "capped",
+    "__import__('os').system('touch PWNED')",
+    "../../etc/passwd",
+    "/tmp/x",
+    "a\nb",
+    "\x1b[31mred",
+    "\x00",
+    "é",
+    "💥",
+    "x" * 300,
+]
 scalars = st.one_of(
     st.sampled_from(SPECIAL),
     st.floats(),
@@ -197,11 +278,15 @@ scalars = st.one_of(
     st.booleans(),
     st.sampled_from(WORDS),
     st.text(max_size=12),
-    st.dates(), st.times(), st.datetimes(),
+    st.dates(),
+    st.times(),
+    st.datetimes(),
 )
-values = st.recursive(scalars, lambda inner: st.one_of(st.lists(inner, max_size=4),
-                                                       st.dictionaries(st.text(max_size=8), inner, max_size=3)),
-                      max_leaves=8)
+values = st.recursive(
+    scalars,
+    lambda inner: st.one_of(st.lists(inner, max_size=4), st.dictionaries(st.text(max_size=8), inner, max_size=3)),
+    max_leaves=8,
+)
 keys = st.one_of(st.sampled_from(sorted({p[-1] for p in SCHEMA if isinstance(p[-1], str)})), st.text(max_size=10))
 
 
@@ -224,7 +309,7 @@ def in_range(draw, path):
 
 
 def _existing_paths(data, prefix=()):
-    for key, value in (data.items() if isinstance(data, dict) else enumerate(data)):
+    for key, value in data.items() if isinstance(data, dict) else enumerate(data):
         yield prefix + (key,)
         if isinstance(value, (dict, list)):
             yield from _existing_paths(value, prefix + (key,))
@@ -291,8 +376,9 @@ def _toml_value(value) -> str:
     if isinstance(value, int):
         return str(value)
     if isinstance(value, float):
-        return "nan" if value != value else ("inf" if value == math.inf else "-inf" if value == -math.inf
-                                             else repr(value))
+        return (
+            "nan" if value != value else ("inf" if value == math.inf else "-inf" if value == -math.inf else repr(value))
+        )
     if isinstance(value, str):
         return json.dumps(value, ensure_ascii=False).replace("\x7f", "\\u007f")
     if isinstance(value, (datetime.date, datetime.time)):
@@ -331,8 +417,9 @@ def _ogive_table(n: int) -> list[list[float]]:
     radius, big_r = 0.0476, 3 * 0.0952
     length = math.sqrt(big_r**2 - (big_r - radius) ** 2)
     xs = [length * k / (n - 1) for k in range(n)]
-    return [[x, radius - big_r + math.sqrt(big_r**2 - (length - x) ** 2) if k < n - 1 else radius]
-            for k, x in enumerate(xs)]
+    return [
+        [x, radius - big_r + math.sqrt(big_r**2 - (length - x) ** 2) if k < n - 1 else radius] for k, x in enumerate(xs)
+    ]
 
 
 @st.composite
@@ -354,8 +441,11 @@ def profile_noses(draw):
             table.insert(i, copy.deepcopy(table[i]))
         elif action == "coordinate" and isinstance(table[i], list) and len(table[i]) == 2:
             j = draw(st.integers(0, 1))
-            near = [table[k][j] for k in (i - 1, i + 1) if 0 <= k < len(table) and isinstance(table[k], list)
-                    and len(table[k]) == 2]
+            near = [
+                table[k][j]
+                for k in (i - 1, i + 1)
+                if 0 <= k < len(table) and isinstance(table[k], list) and len(table[k]) == 2
+            ]
             table[i][j] = draw(st.one_of(st.sampled_from(SPECIAL + near), st.floats(-0.1, 2.0), scalars))
         elif action == "shank" and isinstance(table[-1], list) and len(table[-1]) == 2:
             table[-1][1] = 0.0476 * (1 + draw(st.sampled_from([-1e-3, -2e-6, -5e-7, 5e-7, 2e-6, 1e-3])))
@@ -389,8 +479,7 @@ def measured_bodies(draw):
         elif action == "swap" and i + 1 < len(table):
             table[i], table[i + 1] = table[i + 1], table[i]
         elif action == "coordinate" and isinstance(table[i], list) and len(table[i]) == 2:
-            table[i][draw(st.integers(0, 1))] = draw(st.one_of(st.sampled_from(SPECIAL), st.floats(-0.1, 2.0),
-                                                               scalars))
+            table[i][draw(st.integers(0, 1))] = draw(st.one_of(st.sampled_from(SPECIAL), st.floats(-0.1, 2.0), scalars))
         elif action == "shape":
             table[i] = draw(st.one_of(st.lists(st.floats(0, 0.2), max_size=3), scalars))
     data = json.loads(json.dumps(BASES["forrestal_luk_test2"], default=str))
@@ -415,9 +504,14 @@ def body_files(tmp_path_factory) -> dict[str, str]:
 
     folder = tmp_path_factory.mktemp("bodies")
     (folder / "text.step").write_text("not a STEP file\n")
-    return {"step": str(write_body(folder / "body.step", scale=1e-3)), "msh": str(write_volume_mesh(
-        folder / "body.msh", 0.05, order=1)), "directory": str(folder), "text": str(folder / "text.step"),
-        "missing": str(folder / "missing.brep"), "relative": "body.step"}
+    return {
+        "step": str(write_body(folder / "body.step", scale=1e-3)),
+        "msh": str(write_volume_mesh(folder / "body.msh", 0.05, order=1)),
+        "directory": str(folder),
+        "text": str(folder / "text.step"),
+        "missing": str(folder / "missing.brep"),
+        "relative": "body.step",
+    }
 
 
 @st.composite
@@ -425,22 +519,31 @@ def geometry_projectiles(draw):
     """Test 2 with its projectile from a file: the geometry table's keys (file, unit, axis, cell_field)
     drawn valid or not, with or without the mass, the materials and the analytic keys it excludes."""
     geometry = {}
-    for key, valid in (("file", st.sampled_from([f"@{name}" for name in BODY_FILES])),
-                       ("unit", st.sampled_from(["m", "mm", "cm", "in"])),
-                       ("axis", st.lists(st.sampled_from([0.0, 1.0, -1.0, 0.5]), min_size=3, max_size=3)),
-                       ("cell_field", st.sampled_from(["material", "gmsh:physical"]))):
+    for key, valid in (
+        ("file", st.sampled_from([f"@{name}" for name in BODY_FILES])),
+        ("unit", st.sampled_from(["m", "mm", "cm", "in"])),
+        ("axis", st.lists(st.sampled_from([0.0, 1.0, -1.0, 0.5]), min_size=3, max_size=3)),
+        ("cell_field", st.sampled_from(["material", "gmsh:physical"])),
+    ):
         choice = draw(st.sampled_from(["valid", "valid", "absent", "garbage"]))
         if choice == "valid" or (key == "file" and choice == "absent"):
             geometry[key] = draw(valid)
         elif choice == "garbage":
             geometry[key] = draw(st.one_of(scalars, st.lists(scalars, max_size=4)))
     projectile = {"name": "from a file", "geometry": geometry}
-    for key, values in (("mass", st.one_of(st.floats(1.0, 100.0), scalars)),
-                        ("body_density", st.one_of(st.floats(1000.0, 20000.0), scalars)),
-                        ("materials", st.one_of(st.dictionaries(st.sampled_from(["counterweight", "solid1", "body",
-                                                                                "", "é"]), scalars, max_size=2),
-                                                scalars)),
-                        ("diameter", st.floats(0.01, 0.2)), ("nose", st.just({"shape": "ogive", "crh": 3.0}))):
+    for key, values in (
+        ("mass", st.one_of(st.floats(1.0, 100.0), scalars)),
+        ("body_density", st.one_of(st.floats(1000.0, 20000.0), scalars)),
+        (
+            "materials",
+            st.one_of(
+                st.dictionaries(st.sampled_from(["counterweight", "solid1", "body", "", "é"]), scalars, max_size=2),
+                scalars,
+            ),
+        ),
+        ("diameter", st.floats(0.01, 0.2)),
+        ("nose", st.just({"shape": "ogive", "crh": 3.0})),
+    ):
         if draw(st.integers(0, 3)) == 0:
             projectile[key] = draw(values)
     data = json.loads(json.dumps(BASES["forrestal_luk_test2"], default=str))
@@ -499,8 +602,12 @@ def edited_text(draw):
     for _ in range(draw(st.integers(1, 5))):
         start = draw(st.integers(0, len(text)))
         end = draw(st.integers(start, min(len(text), start + 12)))
-        insert = draw(st.one_of(st.text(max_size=6), st.sampled_from(["[", "]", "=", "\n", "\"", "{", ".",
-                                                                         "nan", "-", "1e999", "\\", "#", "'''"])))
+        insert = draw(
+            st.one_of(
+                st.text(max_size=6),
+                st.sampled_from(["[", "]", "=", "\n", '"', "{", ".", "nan", "-", "1e999", "\\", "#", "'''"]),
+            )
+        )
         text = text[:start] + insert + text[end:]
     return text
 
@@ -513,14 +620,17 @@ def test_edited_scene_files(scratch, text):
     outcome("edited scene files", lambda: load_scene(path), path)
 
 
-@pytest.mark.parametrize("text", [
-    "x = " + "[" * 5000 + "]" * 5000,
-    "x = " + "{a=" * 2000 + "1" + "}" * 2000,
-    "[projectile]\ndiameter = " + "9" * 5000,
-    "x = 1\n" * 10,  # a duplicate key
-    "\ufeffname = 'bom'",
-    "",
-])
+@pytest.mark.parametrize(
+    "text",
+    [
+        "x = " + "[" * 5000 + "]" * 5000,
+        "x = " + "{a=" * 2000 + "1" + "}" * 2000,
+        "[projectile]\ndiameter = " + "9" * 5000,
+        "x = 1\n" * 10,  # a duplicate key
+        "\ufeffname = 'bom'",
+        "",
+    ],
+)
 def test_pathological_files(scratch, text):
     path = scratch / "pathological.toml"
     path.write_text(text, encoding="utf-8")
@@ -554,20 +664,57 @@ set_keys = st.one_of(
     st.sampled_from([".".join(str(p) for p in path) for path in SCHEMA]),
     st.lists(IDENT, min_size=1, max_size=4).map(".".join),
     st.text(max_size=20),
-    st.sampled_from(["", ".", "..", "a..b", ".a", "a.", " impact . speed ", "impact.speed.x", "impact.0",
-                     "x" * 5000, "é.ü", "impact\nspeed", "impact.speed="]),
+    st.sampled_from(
+        [
+            "",
+            ".",
+            "..",
+            "a..b",
+            ".a",
+            "a.",
+            " impact . speed ",
+            "impact.speed.x",
+            "impact.0",
+            "x" * 5000,
+            "é.ü",
+            "impact\nspeed",
+            "impact.speed=",
+        ]
+    ),
 )
 set_values = st.one_of(
     values.map(_toml_value),
     st.text(max_size=20),
-    st.sampled_from(["", "=", "[", "{", "]", "1e999", "nan", "-inf", "\"unterminated", "'x'", "[1,,2]", "{a=}",
-                     "1" * 5000, "[" * 3000, "{a=" * 1000, "softer_soil", "0x10", "1_000", "1979-05-27",
-                     "__import__('os').system('touch PWNED')"]),
+    st.sampled_from(
+        [
+            "",
+            "=",
+            "[",
+            "{",
+            "]",
+            "1e999",
+            "nan",
+            "-inf",
+            '"unterminated',
+            "'x'",
+            "[1,,2]",
+            "{a=}",
+            "1" * 5000,
+            "[" * 3000,
+            "{a=" * 1000,
+            "softer_soil",
+            "0x10",
+            "1_000",
+            "1979-05-27",
+            "__import__('os').system('touch PWNED')",
+        ]
+    ),
 )
 overrides = st.one_of(
     st.text(max_size=40),
     st.sampled_from(sorted(NUMERIC, key=repr)).flatmap(
-        lambda path: in_range(path).map(lambda v: ".".join(map(str, path)) + "=" + _toml_value(v))),
+        lambda path: in_range(path).map(lambda v: ".".join(map(str, path)) + "=" + _toml_value(v))
+    ),
     st.builds(lambda k, sep, v: f"{k}{sep}{v}", set_keys, st.sampled_from(["=", " = ", "==", ""]), set_values),
 )
 
@@ -583,8 +730,9 @@ def test_no_expression_in_a_scene_is_evaluated(scratch, monkeypatch):
     assert not Path("PWNED").exists()
     assert "PWNED" in " ".join(WORDS)  # the fuzzers above feed this expression everywhere
     with pytest.raises(SceneError, match="impact.speed = .*input should be a valid number"):
-        load_scene(scene_path("forrestal_luk_test2"),
-                   [parse_override("impact.speed=__import__('os').system('touch PWNED')")])
+        load_scene(
+            scene_path("forrestal_luk_test2"), [parse_override("impact.speed=__import__('os').system('touch PWNED')")]
+        )
     assert not Path("PWNED").exists()
 
 
@@ -612,15 +760,40 @@ def _bad_scene_files(folder: Path) -> dict[str, Path]:
     return files
 
 
-BAD_SET = ["impact.speed", "=3", "impact..speed=1", "impact.speed=-1", "impact.speed=nan", "impact.speed=true",
-           "impact.attack_angle=91", "numerics.mesh_size=0", "numerics.mesh_size=1e-300", "impact.colour=1",
-           "impact.speed=" + "1" * 5000, "target.law=clay", "projectile.nose.shape=sphere",
-           "projectile.nose={shape=\"profile\", points=[[0, 0], [0.1, 0.03], [0.09, 0.0476]]}",
-           "projectile.name=\"a\\nb\"", "numerics.time_step=1e-300", "x=" + "[" * 3000,
-           "projectile.geometry={file=\"nowhere.step\"}", "projectile.geometry={file=\"body.dxf\"}",
-           "projectile.geometry.unit=yard", "projectile.materials={counterweight=-1}"]
-BAD_GRID = ["impact.speed", "impact.speed=", "impact.speed=3:1:1", "impact.speed=a:b:c", "impact.speed=0:inf:1",
-            "impact.speed=nan:nan:1", "impact.speed=1:1e308:1e-300", "impact.speed=-5,10", "impact.bogus=1,2"]
+BAD_SET = [
+    "impact.speed",
+    "=3",
+    "impact..speed=1",
+    "impact.speed=-1",
+    "impact.speed=nan",
+    "impact.speed=true",
+    "impact.attack_angle=91",
+    "numerics.mesh_size=0",
+    "numerics.mesh_size=1e-300",
+    "impact.colour=1",
+    "impact.speed=" + "1" * 5000,
+    "target.law=clay",
+    "projectile.nose.shape=sphere",
+    'projectile.nose={shape="profile", points=[[0, 0], [0.1, 0.03], [0.09, 0.0476]]}',
+    'projectile.name="a\\nb"',
+    "numerics.time_step=1e-300",
+    "x=" + "[" * 3000,
+    'projectile.geometry={file="nowhere.step"}',
+    'projectile.geometry={file="body.dxf"}',
+    "projectile.geometry.unit=yard",
+    "projectile.materials={counterweight=-1}",
+]
+BAD_GRID = [
+    "impact.speed",
+    "impact.speed=",
+    "impact.speed=3:1:1",
+    "impact.speed=a:b:c",
+    "impact.speed=0:inf:1",
+    "impact.speed=nan:nan:1",
+    "impact.speed=1:1e308:1e-300",
+    "impact.speed=-5,10",
+    "impact.bogus=1,2",
+]
 BAD_NUMBER = ["0", "-1", "nan", "inf", "x", "", "1e999", "-1e-300"]  # for float and int options
 BAD_WHOLE = BAD_NUMBER + ["2.5", "1" * 5000]  # for int options
 
@@ -628,11 +801,16 @@ BAD_WHOLE = BAD_NUMBER + ["2.5", "1" * 5000]  # for int options
 @st.composite
 def bad_command_lines(draw, files):
     """A command line with at least one bad input (the last word wins where options repeat)."""
-    command = draw(st.sampled_from(["run", "sweep", "critical", "convergent", "compare", "accuracy", "render", "fit",
-                                    "ensemble"]))
+    command = draw(
+        st.sampled_from(["run", "sweep", "critical", "convergent", "compare", "accuracy", "render", "fit", "ensemble"])
+    )
     # the studies set some keys themselves: a bad value there would be overridden, not rejected
-    overridden = {"critical": ("impact.speed",), "convergent": ("impact.speed",), "compare": ("target.law",),
-                  "accuracy": ("numerics.",)}.get(command, ())
+    overridden = {
+        "critical": ("impact.speed",),
+        "convergent": ("impact.speed",),
+        "compare": ("target.law",),
+        "accuracy": ("numerics.",),
+    }.get(command, ())
     scene_kind = draw(st.sampled_from([*files, "good", "good"]))
     scene = GOOD if scene_kind == "good" else str(files[scene_kind])
     args = [command, scene]
@@ -659,20 +837,51 @@ def bad_command_lines(draw, files):
         poisons += [("--sizes", v) for v in BAD_NUMBER[:6]]
     if command == "fit":
         args += ["--param", "impact.speed=100:400", "--observe", "depth=5"]
-        poisons += [("--param", v) for v in ["impact.speed", "impact.speed=400:100", "impact.speed=1:nan",
-                                             "impact.speed=1:2", "target.law.B=0.3:3", "impact..speed=1:2",
-                                             "numerics.integrator=0:1", "=1:2"]]
-        poisons += [("--observe", v) for v in ["depth", "dept=5", "depth=x", "depth=5+-0", "depth=5+--1",
-                                               "missing.toml:depth=5", "depth=inf", ":=1"]]
+        poisons += [
+            ("--param", v)
+            for v in [
+                "impact.speed",
+                "impact.speed=400:100",
+                "impact.speed=1:nan",
+                "impact.speed=1:2",
+                "target.law.B=0.3:3",
+                "impact..speed=1:2",
+                "numerics.integrator=0:1",
+                "=1:2",
+            ]
+        ]
+        poisons += [
+            ("--observe", v)
+            for v in [
+                "depth",
+                "dept=5",
+                "depth=x",
+                "depth=5+-0",
+                "depth=5+--1",
+                "missing.toml:depth=5",
+                "depth=inf",
+                ":=1",
+            ]
+        ]
         poisons += [("--step", v) for v in BAD_NUMBER + ["1", "2"]] + [("--resolution", v) for v in BAD_NUMBER]
         poisons += [("--max-evaluations", v) for v in BAD_WHOLE]
     if command == "ensemble":
         args += ["--sample", "impact.speed=uniform:250:300", "-n", "4"]
-        poisons += [("--sample", v) for v in ["impact.speed", "impact.speed=normal:1", "impact.speed=uniform:3:1",
-                                              "impact.speed=gamma:1:2", "impact.bogus=uniform:1:2",
-                                              "impact.speed=normal:280:-1", "impact.speed=choice:"]]
-        poisons += [("-n", v) for v in BAD_WHOLE] + [("--by", v) for v in ["impact.speed", "impact.speed=3:1:1",
-                                                                            "impact.attack_angle=0:1:0.5"]]
+        poisons += [
+            ("--sample", v)
+            for v in [
+                "impact.speed",
+                "impact.speed=normal:1",
+                "impact.speed=uniform:3:1",
+                "impact.speed=gamma:1:2",
+                "impact.bogus=uniform:1:2",
+                "impact.speed=normal:280:-1",
+                "impact.speed=choice:",
+            ]
+        ]
+        poisons += [("-n", v) for v in BAD_WHOLE] + [
+            ("--by", v) for v in ["impact.speed", "impact.speed=3:1:1", "impact.attack_angle=0:1:0.5"]
+        ]
         poisons += [("--design", v) for v in ["grid", ""]] + [("--seed", v) for v in ["x", "-1", "1.5"]]
     if command == "render":
         poisons += [("--size", v) for v in ["0x0", "abc", "64x", "100000x100000", "640x480x2", ""]]
@@ -713,12 +922,17 @@ def _listing(folder: Path) -> set[str]:
 
 
 # where each command would write: nothing may appear there
-EXTRA = {"run": ["--out", "outputs"], "sweep": ["--out", "outputs/table.csv", "--store", "store", "--no-progress"],
-         "critical": ["--store", "store", "--no-progress"], "convergent": ["--store", "store", "--no-progress"],
-         "compare": ["--out", "outputs", "--store", "store", "--no-progress"],
-         "accuracy": ["--out", "outputs", "--store", "store", "--no-progress"], "render": ["--out", "outputs"],
-         "fit": ["--out", "outputs", "--store", "store", "--no-progress"],
-         "ensemble": ["--out", "outputs", "--store", "store", "--no-progress"]}
+EXTRA = {
+    "run": ["--out", "outputs"],
+    "sweep": ["--out", "outputs/table.csv", "--store", "store", "--no-progress"],
+    "critical": ["--store", "store", "--no-progress"],
+    "convergent": ["--store", "store", "--no-progress"],
+    "compare": ["--out", "outputs", "--store", "store", "--no-progress"],
+    "accuracy": ["--out", "outputs", "--store", "store", "--no-progress"],
+    "render": ["--out", "outputs"],
+    "fit": ["--out", "outputs", "--store", "store", "--no-progress"],
+    "ensemble": ["--out", "outputs", "--store", "store", "--no-progress"],
+}
 
 
 @fuzz(250)
@@ -727,8 +941,10 @@ def test_command_line_bad_input(cli_files, tmp_path_factory, data):
     args = data.draw(bad_command_lines(cli_files))
     work = cli_files["folder"].parent
     before = _listing(work)
-    with mock.patch("cases.studies.sweep.run_missing", side_effect=AssertionError("a sweep started")), \
-            mock.patch("cases.run.run_scene", side_effect=AssertionError("a run started")):
+    with (
+        mock.patch("cases.studies.sweep.run_missing", side_effect=AssertionError("a sweep started")),
+        mock.patch("cases.run.run_scene", side_effect=AssertionError("a run started")),
+    ):
         code, stdout, stderr = call(args + EXTRA[args[0]], work)
     assert code != 0, (args, stdout)
     lines = stderr.strip().splitlines()
@@ -770,18 +986,35 @@ TINY = ["--set", "numerics.mesh_size=0.04"]
 
 
 @fuzz(8)
-@given(speed=st.floats(20, 2000), attack=st.floats(-20, 20), oblique=st.floats(-40, 40), yaw=st.floats(-10, 10),
-       spin=st.tuples(st.floats(-50, 50), st.floats(-50, 50), st.floats(-50, 50)),
-       integrator=st.sampled_from(["rk4", "dopri54"]), friction=st.sampled_from(["none", "coulomb"]),
-       every=st.integers(1, 40), history=st.booleans(), limit=st.floats(5e-4, 4e-3))
-def test_valid_runs_write_finite_numbers(tmp_path_factory, speed, attack, oblique, yaw, spin, integrator, friction,
-                                         every, history, limit):
+@given(
+    speed=st.floats(20, 2000),
+    attack=st.floats(-20, 20),
+    oblique=st.floats(-40, 40),
+    yaw=st.floats(-10, 10),
+    spin=st.tuples(st.floats(-50, 50), st.floats(-50, 50), st.floats(-50, 50)),
+    integrator=st.sampled_from(["rk4", "dopri54"]),
+    friction=st.sampled_from(["none", "coulomb"]),
+    every=st.integers(1, 40),
+    history=st.booleans(),
+    limit=st.floats(5e-4, 4e-3),
+)
+def test_valid_runs_write_finite_numbers(
+    tmp_path_factory, speed, attack, oblique, yaw, spin, integrator, friction, every, history, limit
+):
     out = tmp_path_factory.mktemp("run") / "out"
-    sets = [f"impact.speed={speed!r}", f"impact.attack_angle={attack!r}", f"impact.oblique_angle={oblique!r}",
-            f"impact.yaw_angle={yaw!r}", f"impact.angular_velocity=[{spin[0]!r}, {spin[1]!r}, {spin[2]!r}]",
-            f"numerics.integrator={integrator}", "numerics.rtol=1e-4", f"effects.friction.model={friction}",
-            f"outputs.history_every={every}", f"outputs.history={'true' if history else 'false'}",
-            f"numerics.time_limit={limit!r}"]
+    sets = [
+        f"impact.speed={speed!r}",
+        f"impact.attack_angle={attack!r}",
+        f"impact.oblique_angle={oblique!r}",
+        f"impact.yaw_angle={yaw!r}",
+        f"impact.angular_velocity=[{spin[0]!r}, {spin[1]!r}, {spin[2]!r}]",
+        f"numerics.integrator={integrator}",
+        "numerics.rtol=1e-4",
+        f"effects.friction.model={friction}",
+        f"outputs.history_every={every}",
+        f"outputs.history={'true' if history else 'false'}",
+        f"numerics.time_limit={limit!r}",
+    ]
     args = ["run", GOOD, *TINY, "--json", "--out", str(out)]
     for item in sets:
         args += ["--set", item]
@@ -799,23 +1032,27 @@ def test_valid_runs_write_finite_numbers(tmp_path_factory, speed, attack, obliqu
 
 
 def penetrate(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "cases.cli", *args], capture_output=True, text=True, timeout=300,
-                          cwd=cwd)
+    return subprocess.run(
+        [sys.executable, "-m", "cases.cli", *args], capture_output=True, text=True, timeout=300, cwd=cwd
+    )
 
 
-@pytest.mark.parametrize("args, expected", [
-    (["run", "{missing}"], "cannot read the scene file"),
-    (["run", "{folder}"], "cannot read the scene file"),
-    (["run", "{binary}"], "cannot read the scene file"),
-    (["run", "{nested}"], "nested too deeply"),
-    (["run", GOOD, "--set", "impact.speed=" + "1" * 5000], "not readable"),
-    (["run", GOOD, "--set", "impact.speed=true"], "impact.speed = true: input should be a number"),
-    (["run", GOOD, "--bogus"], "unrecognized arguments: --bogus"),
-    (["sweep", GOOD, "--grid", "impact.speed=0:inf:1"], "START:STOP:STEP must be finite numbers"),
-    (["sweep", GOOD, "--workers", "0"], "argument --workers: '0': must be a whole number >= 1"),
-    (["critical", GOOD, "--resolution", "nan"], "argument --resolution: 'nan': must be a finite number > 0"),
-    (["critical", GOOD, "--guess", "100:300"], "--guess 100:300: must lie inside --speeds 200:1600 (m/s)"),
-])
+@pytest.mark.parametrize(
+    "args, expected",
+    [
+        (["run", "{missing}"], "cannot read the scene file"),
+        (["run", "{folder}"], "cannot read the scene file"),
+        (["run", "{binary}"], "cannot read the scene file"),
+        (["run", "{nested}"], "nested too deeply"),
+        (["run", GOOD, "--set", "impact.speed=" + "1" * 5000], "not readable"),
+        (["run", GOOD, "--set", "impact.speed=true"], "impact.speed = true: input should be a number"),
+        (["run", GOOD, "--bogus"], "unrecognized arguments: --bogus"),
+        (["sweep", GOOD, "--grid", "impact.speed=0:inf:1"], "START:STOP:STEP must be finite numbers"),
+        (["sweep", GOOD, "--workers", "0"], "argument --workers: '0': must be a whole number >= 1"),
+        (["critical", GOOD, "--resolution", "nan"], "argument --resolution: 'nan': must be a finite number > 0"),
+        (["critical", GOOD, "--guess", "100:300"], "--guess 100:300: must lie inside --speeds 200:1600 (m/s)"),
+    ],
+)
 def test_real_command_bad_input(cli_files, args, expected):
     args = [a.format(**{k: str(v) for k, v in cli_files.items()}) for a in args]
     work = cli_files["folder"].parent

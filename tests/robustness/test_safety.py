@@ -25,7 +25,8 @@ import pytest
 
 from cases import scene_path
 from cases.run import HISTORY_UNITS, RunStore, atomic_write_text, run_scene, write_outputs
-from cases.scene import InputError, SceneError, load_scene as _load_scene, parse_override
+from cases.scene import InputError, SceneError, parse_override
+from cases.scene import load_scene as _load_scene
 from cases.studies import Pool, Sweep, grid, run_sweep
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -92,8 +93,12 @@ def test_killed_runs_leave_complete_files_or_none(tmp_path):
     whole = time.perf_counter() - start
     assert done.returncode == 0 and check_outputs(tmp_path / "timing") == "complete", done.stderr
     older = _sets(["impact.speed=250"])  # an older run, different in every number
-    subprocess.run([*_cli("run", TEST2, *_sets(TINY), *older, "--out"), str(tmp_path / "older")], check=True,
-                   capture_output=True, timeout=300)
+    subprocess.run(
+        [*_cli("run", TEST2, *_sets(TINY), *older, "--out"), str(tmp_path / "older")],
+        check=True,
+        capture_output=True,
+        timeout=300,
+    )
     rng = random.Random(20240607)
     seen: dict[str, int] = {}
     for i in range(8):
@@ -131,8 +136,9 @@ def test_killed_runs_leave_complete_files_or_none(tmp_path):
 def test_stale_temporaries_of_dead_writers_are_removed(tmp_path):
     """A temporary named for a process that no longer runs is removed by the next write of that file;
     one of a running process (a concurrent writer) and other files are left alone."""
-    finished = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
-                              text=True, check=True)
+    finished = subprocess.run(
+        [sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True, check=True
+    )
     dead = int(finished.stdout)
     stale = tmp_path / f".summary.json.{dead}.abc123.tmp"
     live = tmp_path / f".summary.json.{os.getppid()}.def456.tmp"
@@ -168,6 +174,7 @@ def test_writes_interrupted_at_every_step(tmp_path):
                         if calls == stop:
                             os.kill(os.getpid(), signal.SIGKILL)
                         return real(*a, **k)
+
                     return call
 
                 os.unlink, os.fsync, os.replace = (dying(f, point) for f in (os.unlink, os.fsync, os.replace))
@@ -198,12 +205,12 @@ def test_writes_interrupted_at_every_step(tmp_path):
 
 
 def test_one_or_two_workers_give_identical_bits(tmp_path):
-    sweep = _sweep(TINY + ["numerics.time_limit=0.004", "impact.attack_angle=3"],
-                   grid({"impact.speed": [250, 300, 350]}))
+    sweep = _sweep(
+        TINY + ["numerics.time_limit=0.004", "impact.attack_angle=3"], grid({"impact.speed": [250, 300, 350]})
+    )
     stores = {n: RunStore(tmp_path / f"w{n}") for n in (1, 2)}
     one, two = (run_sweep(sweep, stores[n], Pool(workers=n, progress=False)).table() for n in (1, 2))
-    pd.testing.assert_frame_equal(one.drop(columns=list(VOLATILE)), two.drop(columns=list(VOLATILE)),
-                                  check_exact=True)
+    pd.testing.assert_frame_equal(one.drop(columns=list(VOLATILE)), two.drop(columns=list(VOLATILE)), check_exact=True)
     for key in one["key"]:
         assert stores[1].history_path(key).read_bytes() == stores[2].history_path(key).read_bytes()
         a, b = (store.load(key) for store in stores.values())
@@ -215,8 +222,13 @@ def test_blas_threads_do_not_change_the_bits(tmp_path):
     for threads in ("1", "2"):
         env = dict(os.environ, OMP_NUM_THREADS=threads, OPENBLAS_NUM_THREADS=threads, MKL_NUM_THREADS=threads)
         out = tmp_path / f"threads{threads}"
-        done = subprocess.run(_cli("run", TEST2, *_sets(TINY + ["impact.attack_angle=3", "numerics.time_limit=0.01"]),
-                                   "--out", str(out)), capture_output=True, text=True, timeout=300, env=env)
+        done = subprocess.run(
+            _cli("run", TEST2, *_sets(TINY + ["impact.attack_angle=3", "numerics.time_limit=0.01"]), "--out", str(out)),
+            capture_output=True,
+            text=True,
+            timeout=300,
+            env=env,
+        )
         assert done.returncode == 0, done.stderr
         summary = json.loads((out / "summary.json").read_text())
         outputs.append(((out / "history.csv").read_bytes(), {k: v for k, v in summary.items() if k not in VOLATILE}))
@@ -244,10 +256,17 @@ def test_expressions_in_a_scene_are_text_or_rejected(tmp_path):
             _load_scene(TEST2, {"target.law": PAYLOAD})  # a typed value is used as it is: a name, not code
         # in a label it is just text: the run goes ahead and writes it back verbatim
         labelled = tmp_path / "label.toml"
-        labelled.write_text(text.replace('name = "forrestal_luk_test2"', f'name = "{PAYLOAD}"')
-                            .replace('description = "', 'description = "$(touch PWNED) `touch PWNED` '))
-        done = subprocess.run(_cli("run", str(labelled), *_sets(TINY + ["numerics.time_limit=0.002"]),
-                                   "--out", "out", "--json"), capture_output=True, text=True, timeout=300)
+        labelled.write_text(
+            text.replace('name = "forrestal_luk_test2"', f'name = "{PAYLOAD}"').replace(
+                'description = "', 'description = "$(touch PWNED) `touch PWNED` '
+            )
+        )
+        done = subprocess.run(
+            _cli("run", str(labelled), *_sets(TINY + ["numerics.time_limit=0.002"]), "--out", "out", "--json"),
+            capture_output=True,
+            text=True,
+            timeout=300,
+        )
         assert done.returncode == 0, done.stderr
         assert json.loads((tmp_path / "out" / "summary.json").read_text())["scene"] == PAYLOAD
     finally:
@@ -269,11 +288,17 @@ def test_nothing_evaluates_or_unpickles_data():
                     func = node.func
                     if isinstance(func, ast.Name) and func.id in forbidden_calls:
                         found.append(f"{where} {func.id}()")
-                    if isinstance(func, ast.Attribute) and func.attr in ("system", "popen") and \
-                            isinstance(func.value, ast.Name) and func.value.id == "os":
+                    if (
+                        isinstance(func, ast.Attribute)
+                        and func.attr in ("system", "popen")
+                        and isinstance(func.value, ast.Name)
+                        and func.value.id == "os"
+                    ):
                         found.append(f"{where} os.{func.attr}()")
-                    if any(k.arg == "shell" and not (isinstance(k.value, ast.Constant) and k.value.value is False)
-                           for k in node.keywords):
+                    if any(
+                        k.arg == "shell" and not (isinstance(k.value, ast.Constant) and k.value.value is False)
+                        for k in node.keywords
+                    ):
                         found.append(f"{where} shell=")
                 if isinstance(node, (ast.Import, ast.ImportFrom)):
                     names = [a.name for a in node.names] if isinstance(node, ast.Import) else [node.module or ""]
@@ -290,8 +315,11 @@ def test_names_in_a_scene_never_become_paths(tmp_path):
     for i, name in enumerate(["../../escape", "/tmp/escape", "..", "a/b", "C:\\\\x"]):
         scene = tmp_path / f"s{i}" / "scene.toml"
         scene.parent.mkdir()
-        scene.write_text(text.replace('name = "forrestal_luk_test2"', f'name = "{name}"')
-                         .replace('name = "Forrestal-Luk 95.2 mm, CRH 3.0"', f'name = "{name}"'))
+        scene.write_text(
+            text.replace('name = "forrestal_luk_test2"', f'name = "{name}"').replace(
+                'name = "Forrestal-Luk 95.2 mm, CRH 3.0"', f'name = "{name}"'
+            )
+        )
         out = scene.parent / "out"
         write_outputs(run_scene(load_scene(scene, TINY + ["numerics.time_limit=0.001"])), out)
         assert sorted(p.name for p in scene.parent.rglob("*")) == ["history.csv", "out", "scene.toml", "summary.json"]
@@ -313,8 +341,9 @@ def test_run_store_files_are_named_by_digest_only(tmp_path):
         assert not re.search(r"(?i)\b(nan|inf)\b", text) and ",\n" in text
     for key in ["../x", "/etc/passwd", "a/b", "a\\b", ".hidden", "", "a\x00b", "a\nb"]:  # any key: a digest
         for path in (store.record_path(key), store.history_path(key)):
-            assert path.parent == tmp_path / "store" / "run" and re.fullmatch(r"[0-9a-f]{24}\.(json|csv\.gz)",
-                                                                                path.name)
+            assert path.parent == tmp_path / "store" / "run" and re.fullmatch(
+                r"[0-9a-f]{24}\.(json|csv\.gz)", path.name
+            )
     with pytest.raises(InputError, match="must be a folder"):
         RunStore(files[0])
 

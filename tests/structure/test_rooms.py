@@ -8,8 +8,8 @@ The rules (README, Layout):
   imports ``run`` (and ``scene``); ``studies`` imports ``run`` and ``viz.figures``; ``cli`` imports any
   of them; nothing imports ``cli``; nothing below reaches up;
 * no import circle between modules (imports inside functions count too);
-* no module over 500 lines, no function over 80 lines of code (docstrings, comments and blank lines
-  not counted);
+* no module over 500 lines, no function over 80 logical lines of code (statements and clause headers,
+  however the formatter wraps them; docstrings, comments and blank lines not counted);
 * every package's ``__init__`` says its job and what it may import, in its docstring;
 * no issue numbers in the repository (they mean nothing to a reader of it).
 """
@@ -38,8 +38,7 @@ ALLOWED = {
     "cases.run": {"cases.scene", "mesh", "fem_loads", "dynamics"},
     "cases.viz": {"cases.run", "cases.scene", "mesh", "fem_loads", "dynamics"},
     "cases.studies": {"cases", "cases.run", "cases.scene", "cases.viz", "mesh", "fem_loads", "dynamics"},
-    "cases.cli": {"cases", "cases.run", "cases.scene", "cases.viz", "cases.studies", "mesh", "fem_loads",
-                  "dynamics"},
+    "cases.cli": {"cases", "cases.run", "cases.scene", "cases.viz", "cases.studies", "mesh", "fem_loads", "dynamics"},
     "cases.bodies": set(),  # the script that writes the shipped CAD bodies: gmsh only
 }
 # studies may use viz for its figures only
@@ -78,8 +77,9 @@ def _imports(name: str) -> set[str]:
                 module = ".".join(base + ([node.module] if node.module else []))
             else:
                 module = node.module or ""
-            targets = [f"{module}.{alias.name}" if f"{module}.{alias.name}" in MODULES else module
-                       for alias in node.names]
+            targets = [
+                f"{module}.{alias.name}" if f"{module}.{alias.name}" in MODULES else module for alias in node.names
+            ]
         else:
             continue
         for target in targets:
@@ -127,8 +127,9 @@ def test_imports_flow_one_way():
 
 
 def test_nothing_imports_the_command_line():
-    users = [m for m, targets in GRAPH.items()
-             if room(m) != "cases.cli" and any(room(t) == "cases.cli" for t in targets)]
+    users = [
+        m for m, targets in GRAPH.items() if room(m) != "cases.cli" and any(room(t) == "cases.cli" for t in targets)
+    ]
     assert not users
 
 
@@ -140,7 +141,7 @@ def test_no_import_circle():
         state[module] = 1
         for target in sorted(GRAPH[module]):
             if state.get(target) == 1:
-                circles.append(" -> ".join(path[path.index(target):] + [target]))
+                circles.append(" -> ".join(path[path.index(target) :] + [target]))
             elif target not in state:
                 visit(target, path + [target])
         state[module] = 2
@@ -152,31 +153,42 @@ def test_no_import_circle():
 
 
 def _code_lines(source: str, node: ast.AST) -> int:
-    """Lines of a function that hold code: not blank, not only a comment, not its docstring."""
+    """Logical lines of code in a function: statements and clause headers, however the formatter wraps them
+    (a call split over five lines is one line), not comments, blank lines or its docstring."""
     lines = set(range(node.lineno, node.end_lineno + 1))
     body = node.body
-    if body and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant) and \
-            isinstance(body[0].value.value, str):
+    if (
+        body
+        and isinstance(body[0], ast.Expr)
+        and isinstance(body[0].value, ast.Constant)
+        and isinstance(body[0].value.value, str)
+    ):
         lines -= set(range(body[0].lineno, body[0].end_lineno + 1))
-    text = source.splitlines()
-    comments = {tok.start[0] for tok in tokenize.generate_tokens(io.StringIO(source).readline)
-                if tok.type == tokenize.COMMENT}
-    return sum(1 for n in lines if text[n - 1].strip() and not (n in comments and text[n - 1].strip().startswith("#")))
+    tokens = tokenize.generate_tokens(io.StringIO(source).readline)
+    ends = {tok.end[0] for tok in tokens if tok.type == tokenize.NEWLINE}
+    return len(lines & ends)
 
 
 @pytest.mark.parametrize("module", sorted(MODULES))
 def test_small_modules_and_functions(module):
     source = MODULES[module].read_text()
     assert len(source.splitlines()) <= MAX_MODULE_LINES, f"{module}: {len(source.splitlines())} lines"
-    long = [f"{node.name}: {n} lines" for node in ast.walk(ast.parse(source))
-            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))
-            and (n := _code_lines(source, node)) > MAX_FUNCTION_LINES]
+    long = [
+        f"{node.name}: {n} lines"
+        for node in ast.walk(ast.parse(source))
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))
+        and (n := _code_lines(source, node)) > MAX_FUNCTION_LINES
+    ]
     assert not long, f"{module}: {long}"
 
 
 def test_the_length_rule_counts_code_only():
     source = "def f():\n    '''doc\n    more'''\n    # why\n\n    x = 1\n    return x  # done\n"
     assert _code_lines(source, ast.parse(source).body[0]) == 3
+    wrapped = (
+        "def f():\n    x = g(\n        1,\n        2,\n    )\n    if x:\n        return [\n            x\n        ]\n"
+    )
+    assert _code_lines(wrapped, ast.parse(wrapped).body[0]) == 4  # def, x = g(...), if, return
 
 
 @pytest.mark.parametrize("package", sorted(m for m in MODULES if _is_package(m)))
@@ -194,8 +206,12 @@ def test_no_issue_numbers_in_the_repository():
     found = []
     for path in sorted(ROOT.rglob("*")):
         parts = path.relative_to(ROOT).parts
-        if not path.is_file() or parts[0] in (".git", ".venv", "runs", "build", "dist") or "__pycache__" in parts \
-                or path.suffix not in (".py", ".md", ".toml", ".txt", ".cfg", ""):
+        if (
+            not path.is_file()
+            or parts[0] in (".git", ".venv", "runs", "build", "dist")
+            or "__pycache__" in parts
+            or path.suffix not in (".py", ".md", ".toml", ".txt", ".cfg", "")
+        ):
             continue
         for n, line in enumerate(path.read_text(errors="replace").splitlines(), 1):
             if ISSUE_NUMBER.search(line):

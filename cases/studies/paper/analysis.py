@@ -8,9 +8,9 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from ... import scene_path
 from ...run import CONVERGENCE_THRESHOLD, RunStore, attack_angle_peak, convergence_speed, prepare_projectile
 from ...scene import load_scene
-from ... import scene_path
 from ..pool import Pool
 from ..prediction import TurnBoundary, turn_boundary
 from ..speeds import is_unstable
@@ -39,9 +39,16 @@ class PaperRun:
         """The run as ``results.json`` lists it."""
         if self.error is not None:
             return {"impact.speed": self.speed, "error": self.error}
-        return {"impact.speed": self.speed, "peak": self.peak, "unstable": self.unstable,
-                "convergence_speed": self.convergence_speed, "max_attack_angle": self.max_attack_angle,
-                "axis_angle_change": self.axis_angle_change, "end_reason": self.end_reason, "key": self.key}
+        return {
+            "impact.speed": self.speed,
+            "peak": self.peak,
+            "unstable": self.unstable,
+            "convergence_speed": self.convergence_speed,
+            "max_attack_angle": self.max_attack_angle,
+            "axis_angle_change": self.axis_angle_change,
+            "end_reason": self.end_reason,
+            "key": self.key,
+        }
 
 
 @dataclass
@@ -57,7 +64,7 @@ class Study:
         result = run_sweep(Sweep.combined(pairs), self.store, self.pool)
         out, start = {}, 0
         for group in groups:
-            runs = result.runs[start:start + len(group.speeds)]
+            runs = result.runs[start : start + len(group.speeds)]
             out[(group.kind, group.ratio)] = [self._read(speed, run) for speed, run in zip(group.speeds, runs)]
             start += len(group.speeds)
         return out
@@ -68,10 +75,18 @@ class Study:
         history = self.history(run.key)
         peak = attack_angle_peak(history)
         s = run.summary
-        return PaperRun(speed, run.key, None,
-                        (float(history["total_attack_angle"].iloc[peak]), float(history["speed"].iloc[peak])),
-                        is_unstable(s.axis_angle_change), convergence_speed(history, CONVERGENCE_THRESHOLD),
-                        s.max_attack_angle, s.axis_angle_change, s.end_reason, s.path_length)
+        return PaperRun(
+            speed,
+            run.key,
+            None,
+            (float(history["total_attack_angle"].iloc[peak]), float(history["speed"].iloc[peak])),
+            is_unstable(s.axis_angle_change),
+            convergence_speed(history, CONVERGENCE_THRESHOLD),
+            s.max_attack_angle,
+            s.axis_angle_change,
+            s.end_reason,
+            s.path_length,
+        )
 
     def history(self, key: str) -> pd.DataFrame:
         return self.store.history(key)

@@ -49,8 +49,9 @@ def history_figure(study: Study, runs: Sequence[tuple[str, str]], centre: float,
     axes[2].axhline(centre, color="k", lw=0.8, ls="--", label="centre of mass")
     axes[0].set(xlabel="time (ms)", ylabel="speed (m/s)", title="speed")
     axes[1].set(xlabel="time (ms)", ylabel="|transverse moment| (kN m)", title="moment about the centre of mass")
-    axes[2].set(xlabel="time (ms)", ylabel="resistance centre behind the tip (m)", title="resistance centre",
-                ylim=(0.0, 0.93))
+    axes[2].set(
+        xlabel="time (ms)", ylabel="resistance centre behind the tip (m)", title="resistance centre", ylim=(0.0, 0.93)
+    )
     for ax in axes:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
@@ -59,13 +60,20 @@ def history_figure(study: Study, runs: Sequence[tuple[str, str]], centre: float,
     save_figure(fig, path)
 
 
-def speeds_figure(ratios: Sequence[float], criticals: Sequence[float | None], convergents: Sequence[float | None],
-                  fits: dict, path: Path) -> None:
+def speeds_figure(
+    ratios: Sequence[float],
+    criticals: Sequence[float | None],
+    convergents: Sequence[float | None],
+    fits: dict,
+    path: Path,
+) -> None:
     """Critical and characteristic convergent velocity against Lc/L with their linear fits and the paper's #3."""
     fig, axes = subplots(1, 2, figsize=(11, 4.4))
     x = np.array(ratios) * 100
-    for ax, values, fit, name in ((axes[0], criticals, fits["critical"], "critical impact velocity"),
-                                  (axes[1], convergents, fits["convergent"], "characteristic convergent velocity")):
+    for ax, values, fit, name in (
+        (axes[0], criticals, fits["critical"], "critical impact velocity"),
+        (axes[1], convergents, fits["convergent"], "characteristic convergent velocity"),
+    ):
         ax.plot(x, values, "o", label="this code")
         xs = np.linspace(x.min(), x.max(), 10)
         ax.plot(xs, fit["slope"] * xs / 100 + fit["intercept"], "-", label=f"linear fit, R^2 = {fit['r2']:.3f}")
@@ -83,15 +91,22 @@ def boundary_figure(study: Study, boundary: TurnBoundary, runs: Sequence[PaperRu
     """V_turn(alpha) and V0(alpha) of #3 with the unstable runs' paths in the (alpha, V) plane."""
     fig, ax = subplots(figsize=(7.5, 5))
     a = np.array(boundary.attack_angles, float)
-    for values, name in ((boundary.non_rotating, "non-rotating crossing V0"),
-                         (boundary.steady_turn, "steady-turn boundary V_turn")):
+    for values, name in (
+        (boundary.non_rotating, "non-rotating crossing V0"),
+        (boundary.steady_turn, "steady-turn boundary V_turn"),
+    ):
         ax.plot(a, np.array([np.nan if v is None else v for v in values], float), "o-", label=name)
     for run in runs:
         if run.unstable:
             h = study.history(run.key)
             ax.plot(h["total_attack_angle"], h["speed"], lw=0.8, alpha=0.7, label=f"run at {run.speed:.0f} m/s")
-    ax.set(xlabel="attack angle (deg)", ylabel="speed (m/s)", xlim=(0, 31), ylim=(0, 2000),
-           title="projectile #3: load-only boundaries and unstable runs")
+    ax.set(
+        xlabel="attack angle (deg)",
+        ylabel="speed (m/s)",
+        xlim=(0, 31),
+        ylim=(0, 2000),
+        title="projectile #3: load-only boundaries and unstable runs",
+    )
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
@@ -103,8 +118,11 @@ def variants_figure(ratios: Sequence[float], characteristic_by: dict[str, list[f
     fig, ax = subplots(figsize=(7.5, 5))
     for name, values in characteristic_by.items():
         ax.plot([100 * r for r in ratios], [np.nan if v is None else v for v in values], "o-", label=name)
-    ax.set(xlabel="Lc/L (%)", ylabel="characteristic convergent velocity (m/s)",
-           title="the paper's variants, 1 degree attack")
+    ax.set(
+        xlabel="Lc/L (%)",
+        ylabel="characteristic convergent velocity (m/s)",
+        title="the paper's variants, 1 degree attack",
+    )
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()

@@ -8,9 +8,27 @@ from typing import Any
 from ... import scene_path
 from ..sweep import Sweep, Variation, grid
 
-__all__ = ["STUDY_NUMERICS", "FINE_NUMERICS", "PAPER_RATIOS", "P3", "NUMBERED", "SCAN", "WIDE", "PUBLISHED_TABLE4_P3",
-           "INERTIA_SCALES", "OBLIQUE", "VARIANTS", "VARIANT_SPEEDS", "RunGroup", "label", "study_base",
-           "critical_bases", "speed_groups", "variant_groups", "around"]
+__all__ = [
+    "STUDY_NUMERICS",
+    "FINE_NUMERICS",
+    "PAPER_RATIOS",
+    "P3",
+    "NUMBERED",
+    "SCAN",
+    "WIDE",
+    "PUBLISHED_TABLE4_P3",
+    "INERTIA_SCALES",
+    "OBLIQUE",
+    "VARIANTS",
+    "VARIANT_SPEEDS",
+    "RunGroup",
+    "label",
+    "study_base",
+    "critical_bases",
+    "speed_groups",
+    "variant_groups",
+    "around",
+]
 
 # Dormand-Prince at rtol 1e-8: on #3 at 900 and 1120 m/s as accurate in time as RK4 at 2e-5 s (20 mm) and
 # 1e-5 s (10 mm), the study's fixed steps until November 2026, in depth, path and axis turn, with 3-8 times
@@ -47,8 +65,10 @@ def label(ratio: float) -> str:
 def study_base(ratio: float, overrides: dict[str, Any] | None = None) -> Sweep:
     """Projectile ``paper_p3`` with the centre of mass at ``ratio`` of the length, the study numerics and
     ``overrides``."""
-    return Sweep.from_file(scene_path("paper_p3"), {**STUDY_NUMERICS, "projectile.centre_of_mass_ratio": ratio,
-                                                    "name": "paper", **(overrides or {})})
+    return Sweep.from_file(
+        scene_path("paper_p3"),
+        {**STUDY_NUMERICS, "projectile.centre_of_mass_ratio": ratio, "name": "paper", **(overrides or {})},
+    )
 
 
 @dataclass(frozen=True)
@@ -68,8 +88,9 @@ class RunGroup:
 
     def base(self) -> Sweep:
         if self.fine:
-            return Sweep.from_file(scene_path("paper_p3"), {**FINE_NUMERICS,
-                                                            "projectile.centre_of_mass_ratio": self.ratio})
+            return Sweep.from_file(
+                scene_path("paper_p3"), {**FINE_NUMERICS, "projectile.centre_of_mass_ratio": self.ratio}
+            )
         return study_base(self.ratio, self.overrides)
 
     def variations(self) -> list[Variation]:
@@ -78,8 +99,9 @@ class RunGroup:
 
 def critical_bases() -> list[Sweep]:
     """The critical-speed searches: every projectile at 1 degree, then #3 with scaled transverse inertia."""
-    return ([study_base(r) for r in PAPER_RATIOS]
-            + [study_base(P3, {"projectile.transverse_inertia_scale": k}) for k in INERTIA_SCALES])
+    return [study_base(r) for r in PAPER_RATIOS] + [
+        study_base(P3, {"projectile.transverse_inertia_scale": k}) for k in INERTIA_SCALES
+    ]
 
 
 def around(critical: float | None) -> list[float]:
@@ -102,11 +124,15 @@ def speed_groups(critical: list[float | None]) -> list[RunGroup]:
         groups.append(RunGroup("attack 5", r, tuple(WIDE), {"impact.attack_angle": 5}))
     groups.append(RunGroup("paper speeds", P3, tuple(PUBLISHED_TABLE4_P3)))
     for angle, which in OBLIQUE.items():
-        groups += [RunGroup(f"attack 1, oblique {angle}", r, tuple(WIDE), {"impact.oblique_angle": angle})
-                   for r in which]
+        groups += [
+            RunGroup(f"attack 1, oblique {angle}", r, tuple(WIDE), {"impact.oblique_angle": angle}) for r in which
+        ]
     for angle in (10, 30):
-        groups.append(RunGroup(f"attack 0, oblique {angle}", P3, tuple(WIDE),
-                               {"impact.attack_angle": 0, "impact.oblique_angle": angle}))
+        groups.append(
+            RunGroup(
+                f"attack 0, oblique {angle}", P3, tuple(WIDE), {"impact.attack_angle": 0, "impact.oblique_angle": angle}
+            )
+        )
     p3_speeds = around(critical[PAPER_RATIOS.index(P3)])
     groups.append(RunGroup("fine numerics", P3, (p3_speeds[1], p3_speeds[3]), fine=True))
     return groups
@@ -114,5 +140,8 @@ def speed_groups(critical: list[float | None]) -> list[RunGroup]:
 
 def variant_groups() -> list[RunGroup]:
     """Every variant of :data:`VARIANTS`, every projectile, at 1 degree over :data:`VARIANT_SPEEDS`."""
-    return [RunGroup(name, r, tuple(VARIANT_SPEEDS), overrides) for name, overrides in VARIANTS.items()
-            for r in PAPER_RATIOS]
+    return [
+        RunGroup(name, r, tuple(VARIANT_SPEEDS), overrides)
+        for name, overrides in VARIANTS.items()
+        for r in PAPER_RATIOS
+    ]

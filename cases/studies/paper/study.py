@@ -11,8 +11,7 @@ from ..pool import Pool
 from ..speeds import find_critical_velocities
 from . import figures
 from .analysis import Study, characteristic, linear_fit, load_boundary
-from .plan import (INERTIA_SCALES, P3, PAPER_RATIOS, SCAN, VARIANTS, critical_bases, label, speed_groups,
-                   variant_groups)
+from .plan import INERTIA_SCALES, P3, PAPER_RATIOS, SCAN, VARIANTS, critical_bases, label, speed_groups, variant_groups
 from .report import StudyResults, figure_name, results_markdown, variants_markdown
 
 __all__ = ["reproduce", "reproduce_variants"]
@@ -30,8 +29,8 @@ def reproduce(out: str | Path, store: RunStore, pool: Pool | None = None) -> dic
     ratios = list(PAPER_RATIOS)
     # 1. the critical impact velocity at 1 degree of every projectile, and of #3 with scaled inertia
     searches = find_critical_velocities(critical_bases(), store, SCAN, 5.0, pool)
-    critical = [s.critical_velocity for s in searches[:len(ratios)]]
-    inertia_critical = [s.critical_velocity for s in searches[len(ratios):]]
+    critical = [s.critical_velocity for s in searches[: len(ratios)]]
+    inertia_critical = [s.critical_velocity for s in searches[len(ratios) :]]
     # 2. every other run, now that the critical speeds are known
     runs = study.run(speed_groups(critical))
     # 3. characteristic convergent velocities, fits and the load-only prediction
@@ -41,49 +40,102 @@ def reproduce(out: str | Path, store: RunStore, pool: Pool | None = None) -> dic
     boundaries = [load_boundary(r) for r in ratios]
     _figures(study, out, runs, ratios, critical, convergent, fits, boundaries)
     record = {
-        "ratios": ratios, "critical_velocity": critical,
-        "critical_bracket": [s.bracket for s in searches[:len(ratios)]],
-        "characteristic_convergent_velocity": convergent, "fits": fits,
-        "inertia_scales": list(INERTIA_SCALES), "critical_with_scaled_inertia": inertia_critical,
+        "ratios": ratios,
+        "critical_velocity": critical,
+        "critical_bracket": [s.bracket for s in searches[: len(ratios)]],
+        "characteristic_convergent_velocity": convergent,
+        "fits": fits,
+        "inertia_scales": list(INERTIA_SCALES),
+        "critical_with_scaled_inertia": inertia_critical,
         "fold_speed": [b.fold_speed for b in boundaries],
         "fold_attack_angle": [b.fold_attack_angle for b in boundaries],
         "runs": {f"{kind} @ {ratio}": [run.record() for run in group] for (kind, ratio), group in runs.items()},
         "wall_time": time.perf_counter() - start,
     }
     atomic_write_text(out / "results.json", json.dumps(record, indent=1, default=str) + "\n")
-    atomic_write_text(out / "results.md", results_markdown(StudyResults(
-        ratios, runs, searches, critical, convergent, fits, INERTIA_SCALES, inertia_critical, boundaries,
-        record["wall_time"])))
+    atomic_write_text(
+        out / "results.md",
+        results_markdown(
+            StudyResults(
+                ratios,
+                runs,
+                searches,
+                critical,
+                convergent,
+                fits,
+                INERTIA_SCALES,
+                inertia_critical,
+                boundaries,
+                record["wall_time"],
+            )
+        ),
+    )
     return record
 
 
 def _figures(study: Study, out: Path, runs, ratios, critical, convergent, fits, boundaries) -> None:
     figures.boundary_figure(study, boundaries[ratios.index(P3)], runs[("attack 1", P3)], out / "turn_boundary_p3.png")
     for r in ratios:
-        figures.angle_figure(study, [(f"{run.speed:.0f} m/s", run.key) for run in runs[("attack 1", r)]],
-                             f"Lc/L = {label(r)}, 1 degree attack: six impact speeds around the critical",
-                             out / f"{figure_name(r)}.png")
-    figures.angle_figure(study, [(f"{run.speed:.0f} m/s", run.key) for run in runs[("attack 5", P3)]],
-                         "projectile #3, 5 degrees attack", out / "angles_p3_attack5.png")
-    oblique = [(f"{angle} deg oblique, {run.speed:.0f} m/s", run.key) for angle in (10, 20, 30)
-               for run in runs[(f"attack 1, oblique {angle}", P3)] if run.speed in (800, 1200)]
-    figures.angle_figure(study, oblique, "projectile #3, 1 degree attack with 10, 20 and 30 degrees oblique",
-                         out / "angles_p3_oblique.png")
+        figures.angle_figure(
+            study,
+            [(f"{run.speed:.0f} m/s", run.key) for run in runs[("attack 1", r)]],
+            f"Lc/L = {label(r)}, 1 degree attack: six impact speeds around the critical",
+            out / f"{figure_name(r)}.png",
+        )
+    figures.angle_figure(
+        study,
+        [(f"{run.speed:.0f} m/s", run.key) for run in runs[("attack 5", P3)]],
+        "projectile #3, 5 degrees attack",
+        out / "angles_p3_attack5.png",
+    )
+    oblique = [
+        (f"{angle} deg oblique, {run.speed:.0f} m/s", run.key)
+        for angle in (10, 20, 30)
+        for run in runs[(f"attack 1, oblique {angle}", P3)]
+        if run.speed in (800, 1200)
+    ]
+    figures.angle_figure(
+        study,
+        oblique,
+        "projectile #3, 1 degree attack with 10, 20 and 30 degrees oblique",
+        out / "angles_p3_oblique.png",
+    )
     p3 = runs[("attack 1", P3)]
     stable, unstable = [run for run in p3 if not run.unstable], [run for run in p3 if run.unstable]
     pair = ([max(stable, key=lambda run: run.speed)] if stable else []) + (
-        [min(unstable, key=lambda run: run.speed)] if unstable else [])
+        [min(unstable, key=lambda run: run.speed)] if unstable else []
+    )
     centre = P3 * 0.93
     named = [(f"{run.speed:.0f} m/s", run.key) for run in pair]
-    figures.history_figure(study, named, centre, "projectile #3 just below and above its critical speed (1 degree"
-                           " attack)", out / "histories_p3_critical.png")
+    figures.history_figure(
+        study,
+        named,
+        centre,
+        "projectile #3 just below and above its critical speed (1 degree attack)",
+        out / "histories_p3_critical.png",
+    )
     paper_pair = [(f"{run.speed:.0f} m/s", run.key) for run in runs[("paper speeds", P3)] if run.speed in (1100, 1120)]
-    figures.history_figure(study, paper_pair, centre, "projectile #3 at the paper's 1100 and 1120 m/s (1 degree"
-                           " attack)", out / "histories_p3_paper_speeds.png")
-    figures.history_figure(study, [(f"{run.speed:.0f} m/s", run.key) for run in runs[("attack 5", P3)]], centre,
-                           "projectile #3, 5 degrees attack", out / "histories_p3_attack5.png")
-    figures.history_figure(study, oblique, centre, "projectile #3, 1 degree attack with 10, 20 and 30 degrees"
-                           " oblique", out / "histories_p3_oblique.png")
+    figures.history_figure(
+        study,
+        paper_pair,
+        centre,
+        "projectile #3 at the paper's 1100 and 1120 m/s (1 degree attack)",
+        out / "histories_p3_paper_speeds.png",
+    )
+    figures.history_figure(
+        study,
+        [(f"{run.speed:.0f} m/s", run.key) for run in runs[("attack 5", P3)]],
+        centre,
+        "projectile #3, 5 degrees attack",
+        out / "histories_p3_attack5.png",
+    )
+    figures.history_figure(
+        study,
+        oblique,
+        centre,
+        "projectile #3, 1 degree attack with 10, 20 and 30 degrees oblique",
+        out / "histories_p3_oblique.png",
+    )
     figures.speeds_figure(ratios, critical, convergent["attack 1"], fits, out / "speeds_vs_lc.png")
 
 
@@ -99,16 +151,24 @@ def reproduce_variants(out: str | Path, store: RunStore, pool: Pool | None = Non
     ratios = list(PAPER_RATIOS)
     runs = Study(store, pool or Pool()).run(variant_groups())
     characteristic_by = {name: [characteristic(runs[(name, r)]) for r in ratios] for name in VARIANTS}
-    path_at_400 = {name: [next(run.path_length for run in runs[(name, r)] if run.speed == 400) for r in ratios]
-                   for name in VARIANTS}
+    path_at_400 = {
+        name: [next(run.path_length for run in runs[(name, r)] if run.speed == 400) for r in ratios]
+        for name in VARIANTS
+    }
     fits = {}
     for name, values in characteristic_by.items():
         known = [(r, v) for r, v in zip(ratios, values) if v is not None]
         fits[name] = linear_fit([r for r, _ in known], [v for _, v in known]) if len(known) >= 3 else None
     figures.variants_figure(ratios, characteristic_by, out / "variants.png")
-    record = {"ratios": ratios, "characteristic_convergent_velocity": characteristic_by, "fits": fits,
-              "path_length_at_400": path_at_400, "wall_time": time.perf_counter() - start}
+    record = {
+        "ratios": ratios,
+        "characteristic_convergent_velocity": characteristic_by,
+        "fits": fits,
+        "path_length_at_400": path_at_400,
+        "wall_time": time.perf_counter() - start,
+    }
     atomic_write_text(out / "variants.json", json.dumps(record, indent=1, default=str) + "\n")
-    atomic_write_text(out / "variants.md", variants_markdown(ratios, runs, characteristic_by, fits, path_at_400,
-                                                            record["wall_time"]))
+    atomic_write_text(
+        out / "variants.md", variants_markdown(ratios, runs, characteristic_by, fits, path_at_400, record["wall_time"])
+    )
     return record

@@ -1,0 +1,105 @@
+"""The report of a fit: its table (markdown), its record (JSON) and its figure, observed against fitted."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+
+@dataclass
+class FitResult:
+    """The fitted parameters, their standard errors and correlation, each observation's fit, the runs used."""
+
+    parameters: dict[str, float]
+    standard_errors: dict[str, float | None]
+    correlation: list[list[float]] | None
+    observations: list[dict[str, Any]]
+    runs: int
+    new_runs: int
+    evaluations: int
+    cost: float
+    message: str = ""
+    notes: list[str] = field(default_factory=list)
+
+    def record(self) -> dict:
+        """The JSON record: parameters, standard_errors, observations, runs (and the rest)."""
+        return {
+            "parameters": self.parameters,
+            "standard_errors": self.standard_errors,
+            "correlation": self.correlation,
+            "observations": self.observations,
+            "runs": self.runs,
+            "new_runs": self.new_runs,
+            "evaluations": self.evaluations,
+            "cost": self.cost,
+            "message": self.message,
+            "notes": self.notes,
+        }
+
+
+def write_report(result: FitResult, out: Path, scene: str) -> None:
+    """``fit.json``, ``fit.md`` and ``fit.png`` (observed against fitted) in ``out``, each written atomically."""
+    import json
+
+    from ..run import atomic_write_text
+    from ..run.persistence import json_safe
+    from ..viz.figures import save_figure, subplots
+
+    out = Path(out)
+    atomic_write_text(out / "fit.json", json.dumps(json_safe(result.record()), indent=1, allow_nan=False) + "\n")
+    lines = [f"# Fit of {scene}", "", "| parameter | value | standard error |", "|---|---|---|"]
+    for key, value in result.parameters.items():
+        error = result.standard_errors[key]
+        lines.append(f"| `{key}` | {value:.6g} | {'-' if error is None else f'{error:.3g}'} |")
+    if result.correlation is not None and len(result.parameters) > 1:
+        keys = list(result.parameters)
+        lines += [
+            "",
+            "Correlation of the parameters:",
+            "",
+            "| | " + " | ".join(f"`{k}`" for k in keys) + " |",
+            "|---|" + "---|" * len(keys),
+        ]
+        lines += [
+            f"| `{k}` | " + " | ".join(f"{c:+.3f}" for c in row) + " |" for k, row in zip(keys, result.correlation)
+        ]
+    lines += ["", "| scene | quantity | observed | sigma | fitted | residual |", "|---|---|---|---|---|---|"]
+    for row in result.observations:
+        sigma = "-" if row["sigma"] is None else f"{row['sigma']:.4g}"
+        lines.append(
+            f"| {row['scene']} | {row['quantity']} | {row['observed']:.6g} | {sigma} | {row['fitted']:.6g} |"
+            f" {row['residual']:+.4g} |"
+        )
+    lines += [
+        "",
+        f"Runs: {result.runs} ({result.new_runs} made by this fit, the rest found in the run store); "
+        f"{result.evaluations} points of the model evaluated; least squares: {result.message}",
+    ]
+    if result.notes:
+        lines += ["", *[f"* {note}" for note in result.notes]]
+    lines += ["", "![observed against fitted](fit.png)", ""]
+    atomic_write_text(out / "fit.md", "\n".join(lines))
+    figure, axes = subplots(figsize=(5.5, 4.5))
+    observed = np.array([row["observed"] for row in result.observations])
+    fitted = np.array([row["fitted"] for row in result.observations])
+    sigma = np.array([np.nan if row["sigma"] is None else row["sigma"] for row in result.observations])
+    axes.errorbar(observed, fitted, xerr=np.nan_to_num(sigma), fmt="o", color="tab:blue", capsize=3)
+    low, high = float(min(observed.min(), fitted.min())), float(max(observed.max(), fitted.max()))
+    pad = 0.05 * (high - low or abs(high) or 1.0)
+    axes.plot([low - pad, high + pad], [low - pad, high + pad], color="grey", lw=1, ls="--")
+    for row, x, y in zip(result.observations, observed, fitted):
+        axes.annotate(
+            f"{Path(row['scene']).stem}: {row['quantity']}",
+            (x, y),
+            fontsize=7,
+            xytext=(4, 4),
+            textcoords="offset points",
+        )
+    axes.set_xlabel("observed")
+    axes.set_ylabel("fitted")
+    axes.set_title("observed against fitted (bars: sigma)", fontsize=10)
+    figure.tight_layout()
+    save_figure(figure, out / "fit.png")
