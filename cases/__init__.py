@@ -1,8 +1,8 @@
 """Everything above the physics, in rooms: ``scene``, ``run``, ``studies``, ``viz`` and the command line ``cli``.
 
-Imports flow one way: ``scene`` (the scene file and the physics objects it describes) <- ``run``
-(one run: prepare, integrate, summarise, persist) <- ``viz`` (pictures of runs) <- ``studies``
-(many runs) <- ``cli``; nothing imports the command line.  The shipped scenes are the TOML files
+Imports flow one way, from the command line down to the scene; the rooms, their jobs and what each may
+import are written once, in pyproject.toml's [tool.penetrate.rooms] (docs/architecture.md prints the
+table).  The shipped scenes are the TOML files
 in this folder; :func:`scene_path` finds them.  The names below are the short public API; they are
 imported on first use, so ``import cases`` costs nothing.
 """

@@ -1,6 +1,6 @@
 """Print the core's accuracy figures against independent truth (docs/validation.md).
 
-Run with ``.venv/bin/python docs/core_checks.py [SECTION ...]`` from the repository root;
+Run with ``.venv/bin/python -m docs.core_checks [SECTION ...]`` from the repository root;
 the sections are ``mass``, ``surface``, ``impact`` and ``table3`` (all by default), each
 printed as markdown under no heading, as docs/validation.md embeds them.  The mass table,
 with meshes down to 5 mm, takes most of the time (docs/validation.md gives it).
@@ -117,7 +117,7 @@ if __name__ == "__main__":
     chosen = sys.argv[1:] or list(SECTIONS)
     unknown = [name for name in chosen if name not in SECTIONS]
     if unknown:
-        sys.exit(f"core_checks: unknown section {unknown[0]!r}: choose from {', '.join(SECTIONS)}")
+        sys.exit(f"docs.core_checks: unknown section {unknown[0]!r}: choose from {', '.join(SECTIONS)}")
     for number, name in enumerate(chosen):
         if number:
             print()

@@ -1,6 +1,6 @@
 """Measure what each optional effect costs (docs/effects.md).
 
-Run: ``.venv/bin/python docs/effects_benchmark.py`` (about a minute).  Prints, for the
+Run: ``.venv/bin/python -m docs.effects_benchmark`` (about a minute).  Prints, for the
 shipped test 5 scene (Forrestal-Luk projectile, 20 mm mesh, 14 160 surface points):
 
 * the median time of one load evaluation (15 repeats of 200 calls) at a state
@@ -11,9 +11,7 @@ shipped test 5 scene (Forrestal-Luk projectile, 20 mm mesh, 14 160 surface point
 from __future__ import annotations
 
 import statistics
-import sys
 import timeit
-from pathlib import Path
 
 import numpy as np
 
@@ -21,11 +19,9 @@ from cases import load_scene, prepare_projectile, run_scene, scene_path
 from cases.run import initial_state, summarise
 from cases.run.runner import WithGravity
 from cases.scene import parse_override
+from docs.measure import stamp
 from dynamics.quaternion import rotation_matrix
 from fem_loads import DAFLLoads
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from measure import stamp  # noqa: E402 - docs/measure.py, beside this file
 
 EFFECTS = {
     "all effects off (scene defaults)": [],

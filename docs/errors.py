@@ -2,7 +2,7 @@
 
 Run from the repository root, one quoted command line per argument::
 
-    python docs/errors.py "penetrate run cases/paper_p3.toml --set impact.attack_angle=120"
+    python -m docs.errors "penetrate run cases/paper_p3.toml --set impact.attack_angle=120"
 
 Prints a markdown table: the command, its exit code and its error output (one line each, as
 the command prints it), so a page quotes only messages the code really prints.

@@ -4,11 +4,11 @@ Each subcommand prints one markdown paragraph (or table) ending in a stamp
 line that names the machine and the date; ``docs/regenerate.py`` puts the
 output in the page's generated block.  Run from the repository root::
 
-    python docs/measure.py process cases/forrestal_luk_test2.toml --repeat 5
-    python docs/measure.py load cases/forrestal_luk_test2.toml
-    python docs/measure.py tests
-    python docs/measure.py command -- python docs/core_checks.py
-    python docs/measure.py command -- penetrate critical cases/paper_p3.toml --store EMPTY_DIR
+    python -m docs.measure process cases/forrestal_luk_test2.toml --repeat 5
+    python -m docs.measure load cases/forrestal_luk_test2.toml
+    python -m docs.measure tests
+    python -m docs.measure command -- python -m docs.core_checks
+    python -m docs.measure command -- penetrate critical cases/paper_p3.toml --store EMPTY_DIR
 
 Wall times are medians over the repeats, memory the peak resident set of the
 measured process (``ru_maxrss`` of the child, which counts its whole life).

@@ -1,8 +1,8 @@
 """The shared ending of the docs' study scripts: compute the study (or read its record back), keep the record,
 draw its figures, print its tables.
 
-``python docs/SCRIPT.py`` computes; ``python docs/SCRIPT.py --from-json`` prints the tables again from the
-record beside the script, without running anything.
+``python -m docs.SUB.SCRIPT`` computes; ``python -m docs.SUB.SCRIPT --from-json`` prints the tables again from
+the record beside the script, without running anything.
 """
 
 from __future__ import annotations

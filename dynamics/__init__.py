@@ -1,7 +1,7 @@
 """Rigid-body dynamics: state, quaternion kinematics, Runge-Kutta integrators, step control and events.
 
-This package takes a load function and knows nothing of meshes or resistance laws; it imports
-neither ``mesh`` nor ``fem_loads``.
+This package takes a load function and knows nothing of meshes or resistance laws.
+What it may import is written once, in pyproject.toml's [tool.penetrate.rooms].
 """
 
 from .control import ENERGY_TOLERANCE, EnergyGuard, ErrorControl, FixedStep, StepControl

@@ -24,6 +24,7 @@ on the numpy path, and a study's worker processes, which load it once for many r
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 from numba import njit
@@ -39,6 +40,9 @@ _X, _V, _Q, _W, _S = slice(0, 3), slice(3, 6), slice(6, 10), slice(10, 13), 13
 _ERROR = slice(14, 27)
 _FIRST, _LAST = 27, 39  # each: acceleration (3), angular acceleration (3), force (3), moment (3)
 _OUT = 51
+
+# ``kernel(data, position, velocity, rotation, angular_velocity, out)`` of a CompiledLoad (a numba dispatcher)
+LoadKernel = Callable[[tuple[np.ndarray, ...], np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], None]
 
 
 class CompiledLoad:
@@ -67,7 +71,13 @@ class CompiledLoad:
         A force added to the kernel's (world frame, N): the weight of the body.
     """
 
-    def __init__(self, kernel, data: tuple, step, constant_force: np.ndarray | None = None) -> None:
+    def __init__(
+        self,
+        kernel: LoadKernel,
+        data: tuple[np.ndarray, ...],
+        step: Callable[..., None],
+        constant_force: np.ndarray | None = None,
+    ) -> None:
         self.kernel, self.data, self.step = kernel, data, step
         self.constant_force = np.zeros(3) if constant_force is None else np.asarray(constant_force, dtype=float)
 
@@ -98,16 +108,20 @@ class CompiledRungeKutta(RungeKutta):
         self._b_error = np.zeros_like(self.b) if self.b_error is None else self.b_error
         self.order, self.error_order, self.fsal = method.order, method.error_order, method.fsal
         self._body: RigidBody | None = None
-        self._inertia = self._inverse = None
+        self._inertia: np.ndarray | None = None
+        self._inverse: np.ndarray | None = None
 
     def _matrices(self, body: RigidBody) -> tuple[np.ndarray, np.ndarray]:
         if body is not self._body:
             self._body = body
             self._inertia = np.ascontiguousarray(body.inertia, dtype=float)
             self._inverse = np.ascontiguousarray(np.linalg.inv(self._inertia))
+        assert self._inertia is not None and self._inverse is not None  # set with self._body
         return self._inertia, self._inverse
 
-    def step(
+    # takes only a CompiledLoad (its step runs the kernel), not any LoadFunction: a narrower argument than
+    # RungeKutta.step's, as the class docstring says
+    def step(  # type: ignore[override]
         self, body: RigidBody, loads: CompiledLoad, state: State, h: float, first: Evaluation | None = None
     ) -> StepResult:
         """Advance ``state`` by ``h`` seconds (see :class:`~dynamics.integrators.RungeKutta`)."""
@@ -167,14 +181,14 @@ _path_increment_scalars = njit(inline="always", error_model="numpy")(path_increm
 
 
 @njit(inline="always", error_model="numpy")
-def _compose(q, u, out):
+def _compose(q: np.ndarray, u: np.ndarray, out: np.ndarray) -> None:
     """``out = q * exp(u)`` (:func:`dynamics.quaternion.compose`)."""
     qw, qx, qy, qz = _exp_scalars(u[0], u[1], u[2])
     out[0], out[1], out[2], out[3] = _hamilton_scalars(q[0], q[1], q[2], q[3], qw, qx, qy, qz)
 
 
 @njit(inline="always", error_model="numpy")
-def _rotation(q, out):
+def _rotation(q: np.ndarray, out: np.ndarray) -> None:
     """Body-to-world rotation matrix (:func:`dynamics.quaternion.rotation_matrix`)."""
     r = _rotation_scalars(q[0], q[1], q[2], q[3])
     out[0, 0], out[0, 1], out[0, 2] = r[0], r[1], r[2]
@@ -183,13 +197,28 @@ def _rotation(q, out):
 
 
 @njit(inline="always", error_model="numpy")
-def _rate(u, w, out):
+def _rate(u: np.ndarray, w: np.ndarray, out: np.ndarray) -> None:
     """``du/dt = dexp^-1_u(omega)`` (:func:`dynamics.quaternion.right_jacobian_inverse`)."""
     out[0], out[1], out[2] = _dexp_inverse_scalars(u[0], u[1], u[2], w[0], w[1], w[2])
 
 
 @njit(inline="always", error_model="numpy")
-def _evaluate(load, data, constant_force, mass, inertia, inverse, x, v, q, w, rotation, loads, out, at):
+def _evaluate(
+    load: LoadKernel,
+    data: tuple[np.ndarray, ...],
+    constant_force: np.ndarray,
+    mass: float,
+    inertia: np.ndarray,
+    inverse: np.ndarray,
+    x: np.ndarray,
+    v: np.ndarray,
+    q: np.ndarray,
+    w: np.ndarray,
+    rotation: np.ndarray,
+    loads: np.ndarray,
+    out: np.ndarray,
+    at: int,
+) -> None:
     """One load evaluation and Newton-Euler; ``out[at:at + 12]`` = (a, alpha, F, M)."""
     _rotation(q, rotation)
     load(data, x, v, rotation, w, loads)
@@ -211,8 +240,25 @@ def _evaluate(load, data, constant_force, mass, inertia, inverse, x, v, q, w, ro
 
 @njit(inline="always", error_model="numpy")
 def rk_step(
-    load, data, constant_force, mass, inertia, inverse, A, b, b_error, fsal, x0, v0, q0, w0, h, given, has_given, out
-):
+    load: LoadKernel,
+    data: tuple[np.ndarray, ...],
+    constant_force: np.ndarray,
+    mass: float,
+    inertia: np.ndarray,
+    inverse: np.ndarray,
+    A: np.ndarray,
+    b: np.ndarray,
+    b_error: np.ndarray,
+    fsal: bool,
+    x0: np.ndarray,
+    v0: np.ndarray,
+    q0: np.ndarray,
+    w0: np.ndarray,
+    h: float,
+    given: np.ndarray,
+    has_given: bool,
+    out: np.ndarray,
+) -> None:
     """One explicit Runge-Kutta-Munthe-Kaas step from ``(x0, v0, q0, w0)`` by ``h`` seconds.
 
     Inlined into the step of each load kernel (:class:`CompiledLoad`, ``step``), never called alone.

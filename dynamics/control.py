@@ -174,6 +174,7 @@ class ErrorControl(StepControl):
                 [max(before.path_length, after.path_length)],
             ]
         )
+        assert result.error is not None  # start() takes adaptive methods only: every step estimates its error
         scaled = result.error / (self.atol + self.rtol * magnitude)
         return float(np.sqrt(np.mean(scaled * scaled)))
 

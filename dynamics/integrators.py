@@ -79,8 +79,9 @@ class StepResult:
     error : ndarray or None
         Local error estimate of the increments ``(x, v, u, omega, s)``, for
         methods with an embedded pair.
-    first : Evaluation
-        The evaluation at the start of the step (reusable after a rejection).
+    first : Evaluation or None
+        The evaluation at the start of the step (reusable after a rejection); None when the step left
+        the floats before it had one (the first evaluation raised).
     last : Evaluation or None
         For first-same-as-last methods, the evaluation at the end of the step.
     evaluations : int
@@ -89,7 +90,7 @@ class StepResult:
 
     state: State
     error: np.ndarray | None
-    first: Evaluation
+    first: Evaluation | None
     last: Evaluation | None
     evaluations: int = 0
 

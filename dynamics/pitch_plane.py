@@ -32,6 +32,7 @@ the attack angle has converged (fallen below ``threshold`` after its peak).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 from numba import njit
@@ -68,9 +69,23 @@ OUTCOME_FIELDS = (
 TABLEAU = (np.ascontiguousarray(DormandPrince54.A), np.ascontiguousarray(DormandPrince54.b_error))
 _STATES = 6
 
+# the compiled functions :func:`trajectory` is given (module docstring): ``load(data, height, sin_theta,
+# cos_theta, v_x, v_z, q, out)`` and ``lowest(data, height, sin_theta, cos_theta)``
+PlaneLoad = Callable[[tuple[np.ndarray, ...], float, float, float, float, float, float, np.ndarray], None]
+LowestPoint = Callable[[tuple[np.ndarray, ...], float, float, float], float]
+
 
 @njit(cache=True, inline="always")
-def _derivative(load, data, y, mass, inertia, gravity, out, loads) -> None:
+def _derivative(
+    load: PlaneLoad,
+    data: tuple[np.ndarray, ...],
+    y: np.ndarray,
+    mass: float,
+    inertia: float,
+    gravity: float,
+    out: np.ndarray,
+    loads: np.ndarray,
+) -> None:
     """``dy/dt`` at ``y`` into ``out`` (``loads``: a 3-vector to use for the body-frame load)."""
     sin_t, cos_t = math.cos(y[2]), math.sin(y[2])  # theta = pi/2 - phi
     vx = cos_t * y[3] - sin_t * y[4]  # body frame: R^T v
@@ -85,7 +100,7 @@ def _derivative(load, data, y, mass, inertia, gravity, out, loads) -> None:
 
 
 @njit(cache=True, inline="always")
-def _attack_angle(y) -> float:
+def _attack_angle(y: np.ndarray) -> float:
     """The angle between the body axis and the velocity (rad, >= 0)."""
     sin_t, cos_t = math.cos(y[2]), math.sin(y[2])
     return abs(math.atan2(sin_t * y[3] + cos_t * y[4], cos_t * y[3] - sin_t * y[4]))
@@ -93,26 +108,26 @@ def _attack_angle(y) -> float:
 
 @njit(cache=True, inline="always")
 def trajectory(
-    load,
-    lowest,
-    data,
-    y0,
-    mass,
-    inertia,
-    gravity,
-    rtol,
-    scales,
-    first_step,
-    max_step,
-    stop_speed,
-    time_limit,
-    turn_limit,
-    threshold,
-    peak_floor,
-    stop_when_converged,
-    a_matrix,
-    b_error,
-):
+    load: PlaneLoad,
+    lowest: LowestPoint,
+    data: tuple[np.ndarray, ...],
+    y0: np.ndarray,
+    mass: float,
+    inertia: float,
+    gravity: float,
+    rtol: float,
+    scales: np.ndarray,
+    first_step: float,
+    max_step: float,
+    stop_speed: float,
+    time_limit: float,
+    turn_limit: float,
+    threshold: float,
+    peak_floor: float,
+    stop_when_converged: bool,
+    a_matrix: np.ndarray,
+    b_error: np.ndarray,
+) -> tuple[int, float, float, float, float, float, float, int, int, int]:
     """Integrate from ``y0`` to an end; returns the :data:`OUTCOME_FIELDS` (SI units, angles in rad).
 
     Parameters

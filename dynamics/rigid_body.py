@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Protocol
 
 import numpy as np
@@ -42,6 +42,10 @@ class RigidBody:
 
     mass: float
     inertia: np.ndarray
+    # derived in __post_init__: the inverse, and both matrices' rows as Python floats
+    _inertia_inverse: np.ndarray = field(init=False, repr=False, compare=False)
+    _inertia_rows: tuple[tuple[float, ...], ...] = field(init=False, repr=False, compare=False)
+    _inverse_rows: tuple[tuple[float, ...], ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         inertia = np.asarray(self.inertia, dtype=float)

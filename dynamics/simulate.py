@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any, cast
 
 import numpy as np
 
@@ -74,6 +75,8 @@ class SpeedBelow(Event):
     passes through the threshold in both cases.
     """
 
+    threshold: float  # set in __init__ (not a dataclass field: the class is not a dataclass of its own)
+
     def __init__(self, name: str, threshold: float) -> None:
         super().__init__(name, lambda state: state.speed - threshold, -1)
         object.__setattr__(self, "threshold", threshold)
@@ -124,7 +127,7 @@ class Trajectory:
     force: np.ndarray
     moment: np.ndarray
     end_reason: str
-    statistics: dict = field(default_factory=dict)
+    statistics: dict[str, Any] = field(default_factory=dict)
 
     def state(self, index: int = -1) -> State:
         return State(
@@ -144,7 +147,7 @@ class _Recorder:
     def add(self, state: State, evaluation: Evaluation) -> None:
         self.rows.append((state, evaluation))
 
-    def trajectory(self, end_reason: str, statistics: dict) -> Trajectory:
+    def trajectory(self, end_reason: str, statistics: dict[str, Any]) -> Trajectory:
         states = [s for s, _ in self.rows]
         evals = [e for _, e in self.rows]
         return Trajectory(
@@ -211,6 +214,7 @@ def simulate(
     """
     h = control.start(method)
     state = initial
+    first: Evaluation | None  # the evaluation at the start of the next step, if known (StepResult.first)
     first = evaluate(body, loads, state.position, state.velocity, state.attitude, state.angular_velocity)
     calls = 1  # load evaluations: this one, those of every step taken (RETAKEn ones too) and of the event searches
     recorder = _Recorder()
@@ -230,22 +234,23 @@ def simulate(
         size = min(h, remaining)
         result = method.step(body, loads, state, size, first)
         calls += result.evaluations
+        # a verdict's value: a step size (s) with RETAKE and ACCEPT, an end reason with END
         verdict, value = control.judge(result, state, size)
         if verdict == RETAKE:
             rejected += 1
-            h, first = value, result.first
+            h, first = cast(float, value), result.first
             continue
         if verdict == END:
-            end_reason = value
+            end_reason = cast(str, value)
             break
-        next_step = value
+        next_step = cast(float, value)
         if guard is not None:
             verdict, value = guard.judge(body, state, result.state, size, truncated=size < h)
             if verdict == RETAKE:
-                h, first = value, result.first
+                h, first = cast(float, value), result.first
                 continue
             if verdict == END:
-                end_reason = value
+                end_reason = cast(str, value)
                 break
         h = next_step
         steps += 1
@@ -338,7 +343,7 @@ def _locate(
     loads: LoadFunction,
     method: RungeKutta,
     state: State,
-    first: Evaluation,
+    first: Evaluation | None,
     size: float,
     events: list[Event],
 ) -> tuple[State, str, int]:
@@ -362,7 +367,7 @@ def _locate(
         locator = event.locator(state)
         g_start = locator(state)
 
-        def g(s: float, locator=locator, g_start=g_start) -> float:
+        def g(s: float, locator: Callable[[State], float] = locator, g_start: float = g_start) -> float:
             return g_start if s <= 0.0 else locator(partial_step(s))
 
         g_end = g(size)

@@ -1,7 +1,7 @@
 """Mass properties and surface quadrature (scikit-fem), resistance laws and DAFL loads.
 
-Knows nothing of time integration; imports ``mesh`` (the profile and the mesh it integrates over),
-never ``dynamics`` or ``cases``.
+Knows nothing of time integration; it integrates over the profile and the mesh of ``mesh``.
+What it may import is written once, in pyproject.toml's [tool.penetrate.rooms].
 """
 
 from .dafl import DAFLLoads, SurfaceStress

@@ -29,6 +29,7 @@ from numba import njit
 
 from .dafl import DAFLLoads
 from .images import IMAGE_SIGNS, POINT_SIGNS
+from .resistance import ResistanceLaw
 
 __all__ = ["dafl_kernel", "lowest_height_kernel", "kernel_data", "supports"]
 
@@ -43,7 +44,7 @@ def supports(loads: DAFLLoads) -> bool:
     return loads._plain
 
 
-def kernel_data(loads: DAFLLoads) -> tuple:
+def kernel_data(loads: DAFLLoads) -> tuple[np.ndarray, ...]:
     """The arrays and constants of :func:`dafl_kernel` for ``loads`` (see :func:`supports`).
 
     ``(normal_arm (6, m), points (3, m), static (m,), dynamic (m,), inverse_entry (m,),
@@ -65,6 +66,7 @@ def kernel_data(loads: DAFLLoads) -> tuple:
     weights = loads._weights[index]
     entry_length = loads._entry_length[index]
     law = loads.law
+    assert isinstance(law, ResistanceLaw)  # supports(): one law
     constants = np.zeros(_N_CONSTANTS)
     constants[_MAX_RADIUS] = loads._max_radius
     constants[_HALF_ENTRY] = loads._half_entry
@@ -75,7 +77,7 @@ def kernel_data(loads: DAFLLoads) -> tuple:
     constants[_SMOOTH_ENTRY] = float(loads.entry_smoothing > 0.0)
     inverse_entry = 1.0 / entry_length if loads.entry_smoothing else np.zeros_like(weights)
 
-    def contiguous(array):
+    def contiguous(array: np.ndarray) -> np.ndarray:
         return np.ascontiguousarray(array, dtype=float)
 
     return (
@@ -92,7 +94,7 @@ def kernel_data(loads: DAFLLoads) -> tuple:
 
 
 @njit(cache=True, inline="always")
-def _smooth_step(t):
+def _smooth_step(t: float) -> float:
     """``S(clip(t, 0, 1))``, the quintic of :mod:`fem_loads.ramps`, in its operation order."""
     t = min(max(t, 0.0), 1.0)
     t2 = t * t
@@ -106,7 +108,19 @@ _FAST = {"reassoc", "contract"}
 
 
 @njit(cache=True, error_model="numpy", fastmath=_FAST)
-def _smooth_sums(normal_arm, points, static, dynamic, inverse_entry, g, up, height, inverse_width, embedded, sums):
+def _smooth_sums(
+    normal_arm: np.ndarray,
+    points: np.ndarray,
+    static: np.ndarray,
+    dynamic: np.ndarray,
+    inverse_entry: np.ndarray,
+    g: np.ndarray,
+    up: np.ndarray,
+    height: float,
+    inverse_width: float,
+    embedded: bool,
+    sums: np.ndarray,
+) -> None:
     """Each image's ``sum sigma [n | r x n]`` with both smooth ramps (the default load), into ``sums``."""
     for k in range(sums.shape[0]):
         g0, g1, g2, g3, g4, g5 = g[k, 0], g[k, 1], g[k, 2], g[k, 3], g[k, 4], g[k, 5]
@@ -133,21 +147,21 @@ def _smooth_sums(normal_arm, points, static, dynamic, inverse_entry, g, up, heig
 
 @njit(cache=True, error_model="numpy")
 def _sharp_sums(
-    normal_arm,
-    points,
-    static,
-    dynamic,
-    inverse_entry,
-    g,
-    up,
-    height,
-    inverse_width,
-    guard,
-    smooth_contact,
-    smooth_entry,
-    embedded,
-    sums,
-):
+    normal_arm: np.ndarray,
+    points: np.ndarray,
+    static: np.ndarray,
+    dynamic: np.ndarray,
+    inverse_entry: np.ndarray,
+    g: np.ndarray,
+    up: np.ndarray,
+    height: float,
+    inverse_width: float,
+    guard: float,
+    smooth_contact: bool,
+    smooth_entry: bool,
+    embedded: bool,
+    sums: np.ndarray,
+) -> None:
     """:func:`_smooth_sums` with either switch sharp (for comparisons with the paper's law)."""
     for k in range(sums.shape[0]):
         for j in range(static.shape[0]):
@@ -170,7 +184,14 @@ def _sharp_sums(
 
 
 @njit(cache=True, error_model="numpy")
-def dafl_kernel(data, position, velocity, rotation, angular_velocity, out):
+def dafl_kernel(
+    data: tuple[np.ndarray, ...],
+    position: np.ndarray,
+    velocity: np.ndarray,
+    rotation: np.ndarray,
+    angular_velocity: np.ndarray,
+    out: np.ndarray,
+) -> None:
     """Force (world frame, N) into ``out[:3]`` and moment (body frame, N m) into ``out[3:6]``.
 
     ``data`` from :func:`kernel_data`; the state as for :class:`~fem_loads.dafl.DAFLLoads`.
@@ -236,7 +257,7 @@ def dafl_kernel(data, position, velocity, rotation, angular_velocity, out):
 
 
 @njit(cache=True, error_model="numpy")
-def lowest_height_kernel(data, position, up):
+def lowest_height_kernel(data: tuple[np.ndarray, ...], position: np.ndarray, up: np.ndarray) -> float:
     """``min(Z - l/2)`` over the points (m): :meth:`DAFLLoads.lowest_height` on the kernel's arrays, for
     ``up = R[2]`` (the world's up direction in the body frame, the last row of the rotation matrix).
 

@@ -162,9 +162,10 @@ class DAFLLoads:
         if self.entry_smoothing:
             per_point["inverse_entry"] = 1.0 / self._entry_length
         if self._plain:
+            assert isinstance(self.law, ResistanceLaw)  # a plain law is one law
             per_point["static"] = self.law.static_stress * self._weights
             per_point["dynamic"] = self.law.dynamic_density * self._weights
-        n = len(self._weights)
+        n: int | tuple[int, ...] = len(self._weights)
         if self.quadrature.mirror_quarters is not None:
             self._images = MirrorImages(self.quadrature.mirror_quarters, self._normal_arm_t, self._points_t)
             per_point = {name: self._images.quarter(values) for name, values in per_point.items()}
@@ -178,6 +179,24 @@ class DAFLLoads:
 
     def __len__(self) -> int:
         return len(self._weights)
+
+    @property
+    def max_radius(self) -> float:
+        """``r_max`` (m): the distance of the farthest quadrature point from the centre of mass (the bounding
+        sphere, and the lever of the speed scale ``U = |V| + |omega| r_max`` of the contact width)."""
+        return self._max_radius
+
+    def point_arrays(self) -> dict[str, np.ndarray]:
+        """The per-point arrays the load sums, in point order and read-only, for code that evaluates it outside
+        this class (the C loop of docs/performance/lower_bound.py): ``"normal_arm"``, shape (6, n), the rows of
+        ``[n | r x n]`` (body frame); ``"points"``, shape (3, n), the points (m, body frame, about the centre of
+        mass); ``"entry_length"``, shape (n,), each point's entry length ``l`` (m; zero with sharp entry)."""
+        arrays = {"normal_arm": self._normal_arm_t, "points": self._points_t, "entry_length": self._entry_length}
+        views: dict[str, np.ndarray] = {}
+        for name, values in arrays.items():
+            views[name] = values.view()
+            views[name].flags.writeable = False
+        return views
 
     # -- geometry ---------------------------------------------------------------------------------
 
@@ -244,6 +263,8 @@ class DAFLLoads:
         if self._images is not None:  # the same numbers as the loads, in point order
             normal_velocity = self._images.scatter(normal_velocity)
         heights = self.heights(position, rotation)
+        static: np.ndarray | float
+        dynamic: np.ndarray | float
         if isinstance(self.law, LayeredTarget):
             static, dynamic = self.law.coefficients(-heights, self._entry_length if self.entry_smoothing else None)
         else:
@@ -400,6 +421,7 @@ class DAFLLoads:
         v, w = velocity_body, angular_velocity
         points = self._points
         _, scale, r_dot_w = self._slip(normal_velocity, v, w)
+        assert self.friction is not None  # called only with friction
         c = self.friction.stress(sigma) * self._weights * scale
         c_vn = c * normal_velocity
         sum_c = float(c.sum())

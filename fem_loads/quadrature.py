@@ -19,7 +19,7 @@ built once, so each costs the same per load evaluation):
     the flat front face of a blunt nose) are stretched radially to their
     exact areas.  For a projectile from a CAD file (no profile) each facet
     on a curved CAD surface gets the same rule mapped through the surface's
-    own parametrisation (:meth:`mesh.imported.CadSurface.quadrature`): points
+    own parametrisation (:meth:`mesh.cad.CadSurface.quadrature`): points
     on the surface, its normals, and its area element; facets on planes keep
     their own quadrature, which is exact there.
 
@@ -45,8 +45,10 @@ from mesh.profile import Profile
 
 from .mass import to_skfem
 
-if TYPE_CHECKING:  # scikit-fem is imported where it is used
+if TYPE_CHECKING:  # scikit-fem (and gmsh, by mesh.cad) is imported where it is used
     from skfem import MeshTet1, MeshTet2
+
+    from mesh.cad import CadSurface
 
 __all__ = ["SurfaceQuadrature", "surface_quadrature", "mirror_quarters", "NORMAL_MODELS"]
 
@@ -182,10 +184,10 @@ def mirror_quarters(points: np.ndarray, rtol: float = 1e-9) -> np.ndarray | None
         if distance.max() > rtol * np.abs(points).max():
             return None
         images.append(partner)
-    images = np.array(images)
-    if len(np.unique(images)) != n:
+    table = np.array(images)
+    if len(np.unique(table)) != n:
         return None
-    return images
+    return table
 
 
 def _symmetrise(points: np.ndarray, normals: np.ndarray, weights: np.ndarray, images: np.ndarray) -> None:
@@ -199,15 +201,21 @@ def _symmetrise(points: np.ndarray, normals: np.ndarray, weights: np.ndarray, im
 
 
 def _on_cad_surface(
-    points: np.ndarray, normals: np.ndarray, weights: np.ndarray, mesh: ProjectileMesh, intorder: int, surface
+    points: np.ndarray,
+    normals: np.ndarray,
+    weights: np.ndarray,
+    mesh: ProjectileMesh,
+    intorder: int,
+    surface: CadSurface,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The rule of :meth:`mesh.imported.CadSurface.quadrature` on the facets of curved CAD surfaces; the
+    """The rule of :meth:`mesh.cad.CadSurface.quadrature` on the facets of curved CAD surfaces; the
     facets of planes keep their own (exact) points, normals and weights."""
     from skfem.quadrature import get_quadrature
     from skfem.refdom import RefTri
 
     ref_points, ref_weights = get_quadrature(RefTri, intorder)
     corners = mesh.points[mesh.outer[:, :3]]
+    assert mesh.outer_entity is not None  # checked by surface_quadrature
     cad_points, cad_normals, cad_weights, planar = surface.quadrature(
         corners, mesh.outer_entity, ref_points, ref_weights
     )
@@ -270,7 +278,7 @@ def surface_quadrature(
     normal_model: str = "exact",
     intorder: int = 2,
     skfem_mesh: MeshTet1 | MeshTet2 | None = None,
-    surface=None,
+    surface: CadSurface | None = None,
     facet_rule: str = "basis",
 ) -> SurfaceQuadrature:
     """Quadrature points, outward normals and weights of the outer surface.
@@ -289,7 +297,7 @@ def surface_quadrature(
         Polynomial degree integrated exactly on each facet.
     skfem_mesh : MeshTet1 or MeshTet2, optional
         A scikit-fem mesh already made from ``mesh``.
-    surface : mesh.imported.CadSurface, optional
+    surface : mesh.cad.CadSurface, optional
         The exact surface of a projectile from a CAD file, for ``normal_model="exact"``
         (``mesh.outer_entity`` names each facet's CAD surface).
     facet_rule : {"basis", "shape"}
@@ -310,6 +318,7 @@ def surface_quadrature(
     if normal_model == "exact" and profile is not None:
         points, normals, weights = _to_exact_surface(points, normals, weights, profile)
     elif normal_model == "exact":
+        assert surface is not None  # checked above
         points, normals, weights = _on_cad_surface(points, normals, weights, mesh, intorder, surface)
     points = np.ascontiguousarray(points - centre)
     normals = np.ascontiguousarray(normals)

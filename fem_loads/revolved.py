@@ -127,7 +127,7 @@ def revolved_surface(
         rows.append(
             np.stack([tip_from_centre - s, radius, n_axial, n_radial, radius * np.sqrt(1.0 + slope**2) * ds], axis=1)
         )
-    for x, n_axial, outer in (
+    for x, face_normal, outer in (
         (tip_from_centre - length, -1.0, profile.tail_radius),
         (tip_from_centre, 1.0, profile.tip_radius),
     ):
@@ -139,7 +139,7 @@ def revolved_surface(
                     [
                         np.full(face_rings, x),
                         rho,
-                        np.full(face_rings, n_axial),
+                        np.full(face_rings, face_normal),
                         np.zeros(face_rings),
                         rho * outer / 2.0 * weights,
                     ],
@@ -193,7 +193,7 @@ def _smooth_step(t: float) -> float:
 
 
 @njit(cache=True, inline="always")
-def _add_switch(switches, count: int, value: float) -> int:
+def _add_switch(switches: np.ndarray, count: int, value: float) -> int:
     if -1.0 < value < 1.0:
         switches[count] = value
         count += 1
@@ -201,7 +201,9 @@ def _add_switch(switches, count: int, value: float) -> int:
 
 
 @njit(cache=True, inline="always")
-def _switches(switches, a, b, h0, h1, width, entry, cap_speed) -> int:
+def _switches(
+    switches: np.ndarray, a: float, b: float, h0: float, h1: float, width: float, entry: float, cap_speed: float
+) -> int:
     """The values of ``c = cos phi`` where the law switches around one ring, with -1 and 1, sorted."""
     switches[0] = -1.0
     count = 1
@@ -227,7 +229,7 @@ def _switches(switches, a, b, h0, h1, width, entry, cap_speed) -> int:
 
 
 @njit(cache=True, inline="always")
-def _closed_arc(low, high, a, b, static, dynamic):
+def _closed_arc(low: float, high: float, a: float, b: float, static: float, dynamic: float) -> tuple[float, float]:
     """Integrals of ``sigma`` and ``sigma cos phi`` over the arc ``low < cos phi < high`` at the full law."""
     s_low = math.sqrt(max(1.0 - low * low, 0.0))
     s_high = math.sqrt(max(1.0 - high * high, 0.0))
@@ -242,7 +244,7 @@ def _closed_arc(low, high, a, b, static, dynamic):
 
 
 @njit(cache=True, inline="always")
-def _slip_factor(slip2, width, speed2) -> float:
+def _slip_factor(slip2: float, width: float, speed2: float) -> float:
     """``k`` of :meth:`fem_loads.dafl.DAFLLoads._slip`: the friction stress along the slip is ``tau k s``."""
     if width > 0.0:
         return 1.0 / math.sqrt(slip2 + width * width)
@@ -252,7 +254,23 @@ def _slip_factor(slip2, width, speed2) -> float:
 
 
 @njit(cache=True, inline="always")
-def _gauss_arc(low, high, a, b, h0, h1, x, rho, n_axial, n_radial, vx, vz, q, law, width):
+def _gauss_arc(
+    low: float,
+    high: float,
+    a: float,
+    b: float,
+    h0: float,
+    h1: float,
+    x: float,
+    rho: float,
+    n_axial: float,
+    n_radial: float,
+    vx: float,
+    vz: float,
+    q: float,
+    law: np.ndarray,
+    width: float,
+) -> tuple[float, float, float, float, float]:
     """Integrals over the arc ``low < cos phi < high`` by Gauss-Legendre panels of at most 45 degrees (6 points
     integrate cos^4 over one to 1e-9, where over a half ring they would err by 1e-4): ``sigma``,
     ``sigma cos phi``, and the friction stress's x and z components and its moment arm."""
@@ -292,7 +310,9 @@ def _gauss_arc(low, high, a, b, h0, h1, x, rho, n_axial, n_radial, vx, vz, q, la
 
 
 @njit(cache=True, inline="always")
-def _uniform_ring(a, h0, vx, n_axial, n_radial, law, width):
+def _uniform_ring(
+    a: float, h0: float, vx: float, n_axial: float, n_radial: float, law: np.ndarray, width: float
+) -> tuple[float, float]:
     """A ring loaded the same all round (``b = 0``, ``h1 = 0``: axial motion, the axis vertical): ``sigma`` over
     the half ring, and the friction's axial part (the slip along the meridian); no side load, exactly."""
     static, dynamic, entry, mu, cap = law[0], law[1], law[4], law[5], law[6]
@@ -314,7 +334,17 @@ def _uniform_ring(a, h0, vx, n_axial, n_radial, law, width):
 
 
 @njit(cache=True)
-def pitch_plane_load(rings, law, height, sin_theta, cos_theta, vx, vz, q, out) -> None:
+def pitch_plane_load(
+    rings: np.ndarray,
+    law: np.ndarray,
+    height: float,
+    sin_theta: float,
+    cos_theta: float,
+    vx: float,
+    vz: float,
+    q: float,
+    out: np.ndarray,
+) -> None:
     """Force ``(F_x, F_z)`` (body frame, N) and pitch moment ``M_y`` (N m, about the centre of mass) into ``out``.
 
     ``height`` is the centre of mass's height above the target surface (m; the target is below),
@@ -370,7 +400,7 @@ def pitch_plane_load(rings, law, height, sin_theta, cos_theta, vx, vz, q, out) -
 
 
 @njit(cache=True)
-def lowest_height(outline, height, sin_theta, cos_theta) -> float:
+def lowest_height(outline: np.ndarray, height: float, sin_theta: float, cos_theta: float) -> float:
     """Height (m) of the body's lowest point on its ``outline`` (:attr:`RevolvedSurface.outline`; negative
     once any point is inside)."""
     lowest = math.inf

@@ -28,7 +28,7 @@ Equations (docs/effects.md):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -52,6 +52,10 @@ class LayeredTarget:
 
     thicknesses: tuple[float, ...]
     laws: tuple[ResistanceLaw, ...]
+    # derived in __post_init__: the interfaces' depths (m) and each layer's ``A sigma_0`` and ``B rho_0``
+    _interfaces: np.ndarray = field(init=False, repr=False, compare=False)
+    _static: np.ndarray = field(init=False, repr=False, compare=False)
+    _dynamic: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if len(self.laws) != len(self.thicknesses) + 1:

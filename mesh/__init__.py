@@ -1,5 +1,6 @@
-"""Projectile geometry and meshing (gmsh, meshio). Knows nothing of forces or time; imports no other package of
-this project."""
+"""Projectile geometry and meshing (gmsh, meshio). Knows nothing of forces or time.
+
+What it may import is written once, in pyproject.toml's [tool.penetrate.rooms]."""
 
 from .files import build_file_mesh
 from .geometry import BODY, COUNTERWEIGHT, OUTER, ProjectileMesh, build_mesh

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -124,7 +125,7 @@ def _sew_solid(geometry: FileGeometry, shapes: list[tuple[int, int]]) -> None:
         occ.synchronize()
 
 
-def _plane(occ, normal: np.ndarray, half: float) -> int:
+def _plane(occ: Any, normal: np.ndarray, half: float) -> int:
     """A square of side ``2 half`` centred on the origin, normal to ``normal``."""
     square = occ.addRectangle(-half, -half, 0.0, 2.0 * half, 2.0 * half)
     turn = np.cross([0.0, 0.0, 1.0], normal)
@@ -201,7 +202,7 @@ def _solid_name(label: str, index: int) -> str:
     return name or f"solid{index + 1}"
 
 
-def _extent_of(dim_tags) -> float:
+def _extent_of(dim_tags: list[tuple[int, int]]) -> float:
     import gmsh
 
     boxes = np.array([gmsh.model.occ.getBoundingBox(d, t) for d, t in dim_tags])
@@ -238,7 +239,7 @@ def _outer_shell(volumes: list[int]) -> list[int]:
         c: np.prod(np.max(boxes[shell == c, 3:], axis=0) - np.min(boxes[shell == c, :3], axis=0))
         for c in set(shell.tolist())
     }
-    outer = max(size, key=size.get)
+    outer = max(size, key=size.__getitem__)
     return [s for s, c in zip(boundary, shell) if c == outer]
 
 

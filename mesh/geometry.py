@@ -22,8 +22,9 @@ import math
 import os
 import sys
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -40,6 +41,9 @@ _GMSH_LOCK = threading.Lock()  # gmsh keeps global state: one model at a time pe
 # (and the order used throughout this package) local edge order
 TET_EDGES = ((0, 1), (1, 2), (0, 2), (0, 3), (1, 3), (2, 3))
 TRI_EDGES = ((0, 1), (1, 2), (0, 2))
+
+# reads the elements of some gmsh entities (by tag) as rows of node indices (:func:`elements`)
+ElementReader = Callable[[list[int]], np.ndarray]
 
 
 @dataclass
@@ -86,7 +90,7 @@ def _edge_reorder(element_type: int, edges: tuple[tuple[int, int], ...]) -> np.n
     return np.asarray(order)
 
 
-def _profile_faces(occ, geometry: ProjectileGeometry) -> tuple[list[int], list[int]]:
+def _profile_faces(occ: Any, geometry: ProjectileGeometry) -> tuple[list[int], list[int]]:
     """Draw the half-profile faces; return (body faces, counterweight faces)."""
     p = geometry.profile
     a, ln, length = p.radius, p.nose_length, p.length
@@ -118,6 +122,7 @@ def _profile_faces(occ, geometry: ProjectileGeometry) -> tuple[list[int], list[i
         corner = occ.addPoint(end_x, float(p.radius_at(end)) - drop, 0.0)
         if p.body is None or end <= p.body.start:
             return [occ.addLine(shoulder, corner)], corner
+        assert p.body_curve is not None  # a body has its curve
         poles, knots, multiplicities = p.body_curve.bezier(p.body.start, drop, end)
         start = occ.addPoint(-p.body.start, a - drop, 0.0)
         inner = [occ.addPoint(-s, r, 0.0) for s, r in poles[1:-1]]
@@ -220,7 +225,7 @@ def generate(size: float, order: int) -> None:
     gmsh.model.mesh.generate(3)
 
 
-def elements(order: int):
+def elements(order: int) -> tuple[np.ndarray, ElementReader, ElementReader]:
     """The nodes of the current gmsh mesh and two readers of its elements in our node order.
 
     Returns ``(points, tetrahedra, triangles)``: ``tetrahedra(volume_tags)`` and
@@ -234,7 +239,7 @@ def elements(order: int):
     index[node_tags.astype(np.int64)] = np.arange(len(node_tags))
     points = coords.reshape(-1, 3)
 
-    def reader(name: str, edges: tuple[tuple[int, int], ...]):
+    def reader(name: str, edges: tuple[tuple[int, int], ...]) -> ElementReader:
         etype = gmsh.model.mesh.getElementType(name, order)
         cols = _edge_reorder(etype, edges if order == 2 else ())
 

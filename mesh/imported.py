@@ -24,8 +24,10 @@ from __future__ import annotations
 import hashlib
 import math
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 
@@ -56,7 +58,7 @@ class GeometryError(ValueError):
     """A file that does not describe one closed projectile; the message names the fix."""
 
 
-def file_digest(path: str | os.PathLike) -> str:
+def file_digest(path: str | os.PathLike[str]) -> str:
     """SHA-256 of a file's bytes: what a cached mesh of it depends on."""
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
@@ -124,9 +126,10 @@ def check_size(extent: float, geometry: FileGeometry, declared: str | None = Non
         return
     raw = extent / UNITS[geometry.unit]
     # the unit that makes the body most like a projectile (a few decimetres); the file's own if it fits
+    own = DECLARED.get(declared) if declared is not None else None
     fits = sorted(
         (u for u, f in UNITS.items() if SMALLEST_BODY <= raw * f <= LARGEST_BODY),
-        key=lambda u: (u != DECLARED.get(declared), abs(math.log(raw * UNITS[u] / TYPICAL_BODY))),
+        key=lambda u: (u != own, abs(math.log(raw * UNITS[u] / TYPICAL_BODY))),
     )
     hint = f'; if the file is in {fits[0]}, say unit = "{fits[0]}"' if fits else ""
     told = f" (the file declares {declared})" if declared else ""
@@ -154,7 +157,10 @@ def model_frame(points: np.ndarray, geometry: FileGeometry) -> np.ndarray:
     return np.ascontiguousarray((points * UNITS[geometry.unit]) @ rotation_to_x(geometry.axis).T)
 
 
-def regions(geometry: FileGeometry, names: dict) -> dict:
+Key = TypeVar("Key")  # what names a solid: a volume tag (CAD), a group's name (a volume mesh)
+
+
+def regions(geometry: FileGeometry, names: Mapping[Key, str]) -> dict[Key, int]:
     """Region tag of each solid (or group): its material's, else BODY."""
     found = set(names.values())
     for material in geometry.materials:

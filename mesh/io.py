@@ -23,7 +23,7 @@ MESH_FORMAT = "vtu"
 _CELL_TYPES = {1: ("tetra", "triangle"), 2: ("tetra10", "triangle6")}
 
 
-def write_mesh(mesh: ProjectileMesh, path: str | os.PathLike) -> None:
+def write_mesh(mesh: ProjectileMesh, path: str | os.PathLike[str]) -> None:
     """Write ``mesh`` to ``path`` as a VTK unstructured grid, whatever the file's suffix."""
     import meshio  # imported where used: a run from cached data never needs it
 
@@ -35,7 +35,7 @@ def write_mesh(mesh: ProjectileMesh, path: str | os.PathLike) -> None:
     meshio.write(Path(path), out, file_format=MESH_FORMAT)
 
 
-def read_mesh(path: str | os.PathLike) -> ProjectileMesh:
+def read_mesh(path: str | os.PathLike[str]) -> ProjectileMesh:
     """Read a mesh written by :func:`write_mesh`."""
     import meshio
 

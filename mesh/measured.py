@@ -31,7 +31,9 @@ MIN_POINTS = 3
 SHANK_RTOL = 1e-6  # the last radius may differ from the shank radius by this fraction of it (then set to it)
 
 
-def _finite_pairs(table, key: str, least: int, where: str) -> tuple[tuple[float, float], ...]:
+def _finite_pairs(
+    table: ProfileNose | ProfileBody, key: str, least: int, where: str
+) -> tuple[tuple[float, float], ...]:
     """``table.points`` as float pairs, set back on the (frozen) table: at least ``least``, all finite, else a
     ValueError naming ``KEY.points``."""
     try:
@@ -191,11 +193,11 @@ class NoseCurve:
         """Where the curve ends (m from the tip): the nose's length, or the tail."""
         return float(self.x[-1])
 
-    def radius(self, s: np.ndarray) -> np.ndarray:
+    def radius(self, s: np.ndarray | float) -> np.ndarray:
         """``r(s)`` (m) for ``x[0] <= s <= length`` (clipped to it)."""
         return self._radius(np.clip(s, self.x[0], self.length))
 
-    def slope(self, s: np.ndarray) -> np.ndarray:
+    def slope(self, s: np.ndarray | float) -> np.ndarray:
         """``dr/ds`` for ``x[0] <= s <= length`` (clipped to it)."""
         return self._slope(np.clip(s, self.x[0], self.length))
 

@@ -4,6 +4,7 @@ integrals of its radius: the independent truth the mass properties are checked a
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -48,7 +49,13 @@ class RevolvedMoments:
         return (self.volume, self.first_moment, self.axial_second_moment, self.transverse_second_moment)
 
 
-def revolved_moments(radius, s0: float, s1: float, breakpoints=(), cubic: bool = False) -> RevolvedMoments:
+def revolved_moments(
+    radius: Callable[[np.ndarray | float], np.ndarray],
+    s0: float,
+    s1: float,
+    breakpoints: Sequence[float] = (),
+    cubic: bool = False,
+) -> RevolvedMoments:
     """Moments of the solid of revolution of ``radius(s)`` for ``s0 <= s <= s1``.
 
     Parameters

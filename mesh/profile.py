@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -165,7 +166,10 @@ class Profile:
     @property
     def ogive_radius(self) -> float:
         """Ogive radius ``R = crh * diameter`` (m); only for ogive noses."""
-        return self.nose.crh * self.diameter
+        nose = self.nose
+        if isinstance(nose, (ConeNose, ProfileNose)):  # no ``crh``: the AttributeError reading it would raise
+            raise AttributeError(f"ogive_radius: a {type(nose).__name__} has no ogive radius")
+        return nose.crh * self.diameter
 
     @functools.cached_property
     def curve(self) -> NoseCurve | None:
@@ -180,19 +184,19 @@ class Profile:
     @property
     def tail_radius(self) -> float:
         """Radius (m) of the flat tail disc: the shank's, or a measured body's last."""
-        return float(self.body_curve.r[-1]) if self.body is not None else self.radius
+        return float(self.body_curve.r[-1]) if self.body_curve is not None else self.radius
 
     @property
     def largest_radius(self) -> float:
         """The profile's largest radius (m): the shank's, or a flare's (the cubic never overshoots its points)."""
-        return max(self.radius, float(self.body_curve.r.max())) if self.body is not None else self.radius
+        return max(self.radius, float(self.body_curve.r.max())) if self.body_curve is not None else self.radius
 
     @property
     def breakpoints(self) -> tuple[float, ...]:
         """Distances from the tip (m) where the profile's curvature jumps: the shoulder, a measured nose's points,
         and a measured body's points before the tail."""
         nose = tuple(float(x) for x in self.curve.x[1:]) if self.curve is not None else (self.nose_length,)
-        if self.body is None:
+        if self.body_curve is None:
             return nose
         return nose + tuple(float(x) for x in self.body_curve.x[:-1] if x > self.nose_length)
 
@@ -232,25 +236,32 @@ class Profile:
             return nose.length * self.diameter
         if isinstance(nose, ProfileNose):
             return nose.length
-        return self.arc()[0]  # a tangent ogive meets the shank at the top of its arc
+        arc = self.arc()  # a tangent ogive meets the shank at the top of its arc
+        assert arc is not None  # every nose without an arc returned above
+        return arc[0]
 
     def radius_at(self, s: np.ndarray | float) -> np.ndarray:
         """Outer radius ``r(s)`` (m) at distance ``s`` from the tip (m)."""
         s = np.clip(np.asarray(s, dtype=float), 0.0, self.length)
         a, ln = self.radius, self.nose_length
         arc = self.arc()
+        nose: np.ndarray | float
         if self.curve is not None:
             nose = self.curve.radius(s)
         elif arc is None:
+            assert isinstance(self.nose, ConeNose)  # no arc and no curve: a cone
             nose = s * math.tan(math.radians(self.nose.half_angle))
         else:
             s_c, r_c, big_r = arc
             nose = r_c + np.sqrt(np.maximum(big_r**2 - (s - s_c) ** 2, 0.0))
-        return np.where(s < ln, np.maximum(nose, 0.0), self._body(s, a, self.body_curve.radius if self.body else None))
+        body = self.body_curve.radius if self.body_curve is not None else None
+        return np.where(s < ln, np.maximum(nose, 0.0), self._body(s, a, body))
 
-    def _body(self, s: np.ndarray, shank: float, of_body) -> np.ndarray:
+    def _body(
+        self, s: np.ndarray | float, shank: float, of_body: Callable[[np.ndarray | float], np.ndarray] | None
+    ) -> np.ndarray | float:
         """Behind the nose: ``shank`` on the cylinder, ``of_body(s)`` on a measured body."""
-        if of_body is None:
+        if of_body is None or self.body is None:  # the body's curve (``of_body``) exists with the body only
             return shank
         return np.where(s < self.body.start, shank, of_body(s))
 
@@ -259,15 +270,18 @@ class Profile:
         s = np.clip(np.asarray(s, dtype=float), 0.0, self.length)
         ln = self.nose_length
         arc = self.arc()
+        nose: np.ndarray | float
         if self.curve is not None:
             nose = self.curve.slope(s)
         elif arc is None:
+            assert isinstance(self.nose, ConeNose)  # no arc and no curve: a cone
             nose = np.full_like(s, math.tan(math.radians(self.nose.half_angle)))
         else:
             s_c, _, big_r = arc
             u = s_c - s
             nose = u / np.sqrt(np.maximum(big_r**2 - u**2, 1e-300))
-        return np.where(s < ln, nose, self._body(s, 0.0, self.body_curve.slope if self.body else None))
+        body = self.body_curve.slope if self.body_curve is not None else None
+        return np.where(s < ln, nose, self._body(s, 0.0, body))
 
     def outward_normal(self, s: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
         """Exact outward normal of the lateral surface at ``s``.
@@ -421,6 +435,7 @@ class ProjectileGeometry:
         if arc is not None:
             s_c, r_c, big_r = arc
             return s_c - math.sqrt(big_r**2 - (t - r_c) ** 2)
+        assert isinstance(p.nose, ConeNose)  # no curve and no arc: a cone
         return t / math.tan(math.radians(p.nose.half_angle))
 
     @property

@@ -7,6 +7,8 @@ scene names.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from .geometry import TET_EDGES, TRI_EDGES, ProjectileMesh, _orient_tetra, standard_output_discarded
@@ -21,6 +23,9 @@ from .imported import (
     orient_by_volume,
     regions,
 )
+
+if TYPE_CHECKING:
+    import meshio  # slow to import: at run time only where a file is read
 
 __all__ = ["read_volume_mesh"]
 
@@ -95,7 +100,7 @@ def read_volume_mesh(geometry: FileGeometry) -> ProjectileMesh:
     return ProjectileMesh(points, tetra, region, orient_by_volume(points, faces, tetra), order)
 
 
-def _mesh_region_names(geometry: FileGeometry, m, block_indices: list[int]) -> np.ndarray:
+def _mesh_region_names(geometry: FileGeometry, m: meshio.Mesh, block_indices: list[int]) -> np.ndarray:
     """The material name of each tetrahedron: the scene's cell-data field, else the physical groups."""
     field = geometry.cell_field
     if field is not None:
@@ -114,6 +119,6 @@ def _mesh_region_names(geometry: FileGeometry, m, block_indices: list[int]) -> n
     return np.full(n, "body", dtype=object)
 
 
-def _label(value) -> str:
+def _label(value: float | str) -> str:
     """A cell-data value as a material name: integers without a decimal point."""
     return str(int(value)) if float(value).is_integer() else str(value)

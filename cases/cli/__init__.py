@@ -3,7 +3,8 @@
 Each command's parser and handler sit side by side in its module (:mod:`.run`, :mod:`.sweep`,
 :mod:`.speeds`, :mod:`.studies`, :mod:`.ensemble`, :mod:`.fit`, :mod:`.render`).  Errors are told apart by type: an
 :class:`~cases.scene.InputError` (a scene, an option, a file) is bad input, exit code 2; any
-other failure of a run or study is exit code 1.  Nothing imports this room.
+other failure of a run or study is exit code 1.  Nothing imports this room; what it may import is
+written once, in pyproject.toml's [tool.penetrate.rooms].
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
-from .options import add_pool_options, add_scene_options, out_folder, overrides, pool, positive_int
+from .options import add_pool_options, add_scene_options, out_folder, overrides, positive_int, study
 
 __all__ = ["register"]
 
@@ -16,13 +16,11 @@ def register(commands) -> None:
         "ensemble", help="Monte Carlo: the probability of each outcome under sampled impact conditions (resumable)"
     )
     add_scene_options(parser, "the base scene TOML file")
-    parser.add_argument(
-        "--sample",
-        action="append",
-        default=[],
-        metavar="KEY=DIST",
-        help="sample a numeric scene key: normal:MEAN:SD, truncnormal:MEAN:SD:LO:HI, uniform:LO:HI,"
-        " lognormal:MEDIAN:SIGMA or choice:V1,V2,... (repeatable, one per key)",
+    parser.late_help(
+        parser.add_argument(
+            "--sample", action="append", default=[], metavar="KEY=DIST", help="sample a numeric scene key"
+        ),
+        sample_help,
     )
     parser.add_argument("-n", dest="count", type=positive_int, required=True, metavar="N", help="how many runs")
     parser.add_argument("--seed", type=int, default=0, help="the seed of the samples (default 0)")
@@ -50,22 +48,34 @@ def register(commands) -> None:
     parser.set_defaults(handler=ensemble)
 
 
+def sample_help() -> str:
+    """``--sample``'s help: every distribution the study takes, from its own table."""
+    from ..studies.ensemble import FORMS
+
+    forms = list(FORMS.values())
+    return (
+        f"sample a numeric scene key: {', '.join(forms[:-1])} or {forms[-1]} (repeatable, one per key;"
+        " docs/ensembles.md)"
+    )
+
+
 def ensemble(args: argparse.Namespace) -> int:
     from ..run import RunStore
     from ..studies.ensemble_study import run_ensemble
 
-    record = run_ensemble(
-        args.scene,
-        overrides(args),
-        args.sample,
-        args.count,
-        RunStore(args.store),
-        args.out,
-        seed=args.seed,
-        design=args.design,
-        by=args.by,
-        pool=pool(args),
-    )
+    with study(args) as pool:
+        record = run_ensemble(
+            args.scene,
+            overrides(args),
+            args.sample,
+            args.count,
+            RunStore(args.store),
+            args.out,
+            seed=args.seed,
+            design=args.design,
+            by=args.by,
+            pool=pool,
+        )
     if args.json:
         print(json.dumps(record))
     else:

@@ -6,7 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
-from .options import add_pool_options, add_scene_options, out_folder, overrides, pool, positive_float, positive_int
+from .options import add_pool_options, add_scene_options, out_folder, overrides, positive_float, positive_int, study
 
 __all__ = ["register"]
 
@@ -22,14 +22,15 @@ def register(commands) -> None:
         metavar="KEY=LO:HI",
         help="a numeric scene key to fit within its bounds, e.g. target.law.B=0.3:3 (repeatable)",
     )
-    parser.add_argument(
-        "--observe",
-        action="append",
-        default=[],
-        metavar="[SCENE:]QUANTITY=VALUE[+-SIGMA]",
-        help="an observed quantity of a run (depth, path_length, max_attack_angle, ...) or a"
-        " study (critical_velocity, characteristic_convergent_velocity), of this scene or"
-        " of SCENE (repeatable)",
+    parser.late_help(
+        parser.add_argument(
+            "--observe",
+            action="append",
+            default=[],
+            metavar="[SCENE:]QUANTITY=VALUE[+-SIGMA]",
+            help="an observed quantity of a run or a study, of this scene or of SCENE (repeatable)",
+        ),
+        observe_help,
     )
     parser.add_argument(
         "--resolution",
@@ -59,6 +60,16 @@ def register(commands) -> None:
     parser.set_defaults(handler=run_fit)
 
 
+def observe_help() -> str:
+    """``--observe``'s help: every quantity the fit takes, from its own tables."""
+    from ..studies.fit import RUN_QUANTITIES, STUDY_QUANTITIES
+
+    return (
+        f"an observed quantity of a run ({', '.join(RUN_QUANTITIES)}) or a study ({', '.join(STUDY_QUANTITIES)}),"
+        " of this scene or of SCENE (repeatable); with +-SIGMA its standard deviation"
+    )
+
+
 def run_fit(args: argparse.Namespace) -> int:
     import sys
 
@@ -71,17 +82,18 @@ def run_fit(args: argparse.Namespace) -> int:
 
         raise InputError(f"--step {args.step:g}: must be below 1 (a fraction of each parameter's range)")
     try:
-        result = fit(
-            args.scene,
-            overrides(args),
-            args.param,
-            args.observe,
-            RunStore(args.store),
-            pool(args),
-            resolution=args.resolution,
-            step=args.step,
-            max_evaluations=args.max_evaluations,
-        )
+        with study(args) as pool:
+            result = fit(
+                args.scene,
+                overrides(args),
+                args.param,
+                args.observe,
+                RunStore(args.store),
+                pool,
+                resolution=args.resolution,
+                step=args.step,
+                max_evaluations=args.max_evaluations,
+            )
     except NotIdentifiable as exc:
         print(f"penetrate fit: {one_line(exc)}", file=sys.stderr)
         return 1

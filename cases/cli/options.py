@@ -21,13 +21,31 @@ __all__ = [
     "add_pool_options",
     "overrides",
     "pool",
+    "study",
     "quiet_start",
     "environment_defaults",
 ]
 
 
 class Parser(argparse.ArgumentParser):
-    """Usage errors in one line, like every other error (subcommands inherit this class)."""
+    """Usage errors in one line, like every other error (subcommands inherit this class); help texts drawn
+    from the code's registries (:meth:`late_help`)."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self._late_help: list[tuple[argparse.Action, Callable[[], str]]] = []
+
+    def late_help(self, action: argparse.Action, build: Callable[[], str]) -> argparse.Action:
+        """Give ``action`` the help text ``build()`` makes from a registry (the distributions, the named laws),
+        so that the help lists what the code accepts and cannot drift from it.  It is built when the help is
+        shown: the registries live in modules that import numpy and scipy, which parsing must not."""
+        self._late_help.append((action, build))
+        return action
+
+    def format_help(self) -> str:
+        for action, build in self._late_help:
+            action.help = build()
+        return super().format_help()
 
     def error(self, message: str):
         self.exit(2, f"{self.prog}: error: {one_line(message)} (see {self.prog} --help)\n")
@@ -67,16 +85,25 @@ def out_file(text: str) -> str:
     return text
 
 
-def add_scene_options(parser: argparse.ArgumentParser, what: str = "a scene TOML file") -> None:
+SET_HELP = (
+    "override a scene key by its dotted path, e.g. impact.speed=1120 (repeatable); the"
+    " value replaces what the scene gives, and its alternatives (target.layers replaces"
+    " target.law)"
+)
+
+
+def law_names() -> str:
+    """The named resistance laws a scene's ``target.law`` (and ``penetrate compare --laws``) takes."""
+    from fem_loads.resistance import NAMED_LAWS
+
+    return ", ".join(NAMED_LAWS)
+
+
+def add_scene_options(parser: Parser, what: str = "a scene TOML file") -> None:
     parser.add_argument("scene", help=what)
-    parser.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a scene key by its dotted path, e.g. impact.speed=1120 (repeatable); the"
-        " value replaces what the scene gives, and its alternatives (target.layers replaces"
-        " target.law)",
+    parser.late_help(
+        parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP),
+        lambda: f"{SET_HELP}; a named target.law is one of {law_names()}",
     )
 
 
@@ -94,14 +121,33 @@ def add_pool_options(parser: argparse.ArgumentParser, store: str) -> None:
     )
     parser.add_argument("--workers", type=positive_int, metavar="N", help="local processes (default: every core)")
     parser.add_argument("--scheduler", metavar="ADDRESS", help="run on this Dask distributed scheduler")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    # both default to None (a bar when stderr is a terminal): store_false's own default, True, would force it
+    shown = parser.add_mutually_exclusive_group()
+    shown.add_argument(
+        "--progress",
+        dest="progress",
+        action="store_true",
+        default=None,
+        help="show the progress bar even when stderr is not a terminal (default: only when it is)",
+    )
+    shown.add_argument("--no-progress", dest="progress", action="store_false", default=None, help="no progress bar")
 
 
 def pool(args: argparse.Namespace):
     """The :class:`~cases.studies.Pool` the pool options describe."""
     from ..studies import Pool
 
-    return Pool(args.workers, args.scheduler, not args.no_progress)
+    return Pool(args.workers, args.scheduler, args.progress)
+
+
+@contextlib.contextmanager
+def study(args: argparse.Namespace) -> Iterator:
+    """The pool the options describe, with one progress bar named after the command for every run the block
+    makes; the bar closes when the block ends, before the command prints its result beside it."""
+    from ..studies.pool import study_progress
+
+    with study_progress(args.command):
+        yield pool(args)
 
 
 @contextlib.contextmanager

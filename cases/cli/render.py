@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 
 from ..scene import InputError
 from .options import add_scene_options, overrides, positive_float, positive_int
@@ -46,8 +47,32 @@ def register(commands) -> None:
         help="distance behind the tip of the polar plot's ring (default: one calibre behind the nose)",
     )
     parser.add_argument("--size", default="1280x640", metavar="WxH", help="image size in pixels (default 1280x640)")
+    parser.add_argument(
+        "--colour-range",
+        metavar="LO:HI",
+        help="colour range of sigma_n in MPa (the colour bar's unit), 0 <= LO < HI, e.g. 0:600: fixed, so"
+        " renders compare; values outside take the end colours (default: one range shared by this render's"
+        " pictures, the min..max over every instant they draw: the field images, trajectory.png's bodies, the"
+        " animation's frames)",
+    )
     parser.add_argument("--json", action="store_true", help="print the written files and timings as JSON")
     parser.set_defaults(handler=render)
+
+
+_COLOUR_RANGE = "expected LO:HI in MPa, two finite numbers with 0 <= LO < HI, e.g. 0:600"
+
+
+def _colour_range(text: str | None) -> tuple[float, float] | None:
+    """``--colour-range LO:HI`` (MPa); ``sigma_n`` is a compressive stress, never negative."""
+    if text is None:
+        return None
+    try:
+        lo, hi = (float(v) for v in text.split(":"))
+    except ValueError:
+        lo = hi = math.nan
+    if not (math.isfinite(lo) and math.isfinite(hi) and 0.0 <= lo < hi):
+        raise InputError(f"--colour-range {text!r}: {_COLOUR_RANGE}")
+    return lo, hi
 
 
 def _checked(args: argparse.Namespace) -> tuple[tuple[int, int], int | None, list[str] | None]:
@@ -82,6 +107,7 @@ def render(args: argparse.Namespace) -> int:
     from ..viz import render_all
 
     size, steps, times = _checked(args)
+    colour_range = _colour_range(args.colour_range)
     result = run_scene(load_scene(args.scene, overrides(args)))
     record = render_all(
         result,
@@ -93,12 +119,15 @@ def render(args: argparse.Namespace) -> int:
         steps=steps,
         station=args.station,
         size=size,
+        colour_range=colour_range,
     )
     if args.json:
         print(json.dumps(record))
         return 0
     for item in record["instants"]:
         print(f"instant        {item['label'] or 'chosen'} at t = {item['time'] * 1e3:.3f} ms")
+    for name, (lo, hi) in record["colour_range"].items():
+        print(f"colour range   {name} {lo:.4g} .. {hi:.4g} MPa")
     for path in record["files"]:
         print(f"written        {path}")
     print("seconds        " + ", ".join(f"{k} {v:.2f}" for k, v in record["seconds"].items()))

@@ -7,7 +7,7 @@ import argparse
 import json
 import math
 
-from .options import add_pool_options, add_scene_options, pool, positive_float
+from .options import add_pool_options, add_scene_options, positive_float, study
 
 __all__ = ["register"]
 
@@ -109,7 +109,8 @@ def critical_speed(args: argparse.Namespace) -> int:
             f" {args.speeds[0]:g}:{args.speeds[1]:g} (m/s)"
         )
     sweep, store = _inputs(args)
-    search = find_critical_velocity(sweep, store, args.speeds, args.resolution, pool(args), args.guess)
+    with study(args) as pool:
+        search = find_critical_velocity(sweep, store, args.speeds, args.resolution, pool, args.guess)
     if args.json:
         print(json.dumps(search.as_dict()))
         return 0 if search.critical_velocity is not None else 1
@@ -119,7 +120,8 @@ def critical_speed(args: argparse.Namespace) -> int:
             f"   axis angle change {run.axis_angle_change:9.3f} deg   {run.end_reason}"
         )
     if search.critical_velocity is None:
-        print(f"{search.message} ({len(search.indicator)} runs in {search.rounds} rounds)")
+        # the line ends with what to change: the options that would find the change
+        print(f"{search.message} ({len(search.indicator)} runs in {search.rounds} rounds): {search.fix}")
         return 1
     low, high = search.bracket
     print(
@@ -133,7 +135,8 @@ def convergent_speed(args: argparse.Namespace) -> int:
     from ..studies import measure_convergent_velocity
 
     sweep, store = _inputs(args)
-    result = measure_convergent_velocity(sweep, store, args.threshold, pool=pool(args))
+    with study(args) as pool:
+        result = measure_convergent_velocity(sweep, store, args.threshold, pool=pool)
     if args.json:
         print(json.dumps(result.as_dict()))
         return 0 if result.characteristic_convergent_velocity is not None else 1
@@ -173,11 +176,11 @@ def predict_speeds(args: argparse.Namespace) -> int:
     )
     print(f"characteristic convergent velocity {speed(result.characteristic_convergent_velocity)}")
     print(f"critical impact velocity {speed(result.critical_velocity)}{bracket}")
-    for message in result.messages:
-        print(message)
     print(
         f"{result.model}; {len(result.runs)} reduced runs in {1e3 * result.prediction_time:.1f} ms"
         f" ({result.wall_time:.2f} s with the projectile's preparation)"
     )
     print("assumptions: " + "; ".join(result.assumptions))
+    for message in result.messages:  # last: a speed not found ends the output with the option that finds it
+        print(message)
     return 0 if found else 1

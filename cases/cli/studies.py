@@ -8,7 +8,7 @@ import math
 from pathlib import Path
 
 from ..scene import InputError
-from .options import add_pool_options, add_scene_options, out_folder, overrides, pool, positive_float
+from .options import add_pool_options, add_scene_options, law_names, out_folder, overrides, positive_float, study
 
 __all__ = ["register"]
 
@@ -39,8 +39,9 @@ def register(commands) -> None:
         "run a scene under several resistance laws, side by side",
         "compare.md, compare.csv and compare.png",
     )
-    compare.add_argument(
-        "--laws", required=True, metavar="A,B,...", help="comma-separated law names (see docs/effects.md)"
+    compare.late_help(
+        compare.add_argument("--laws", required=True, metavar="A,B,...", help="comma-separated law names"),
+        lambda: f"comma-separated law names, of {law_names()} (docs/effects.md)",
     )
     compare.set_defaults(handler=compare_laws)
 
@@ -83,11 +84,14 @@ def register(commands) -> None:
         "what the contact incidence changes: a scene down to the sharp law",
         "contact.md and contact.csv",
     )
-    contact.add_argument(
-        "--incidences",
-        default="0.02,0.01,0.005,0.0025,0.00125",
-        metavar="D,D,...",
-        help="contact incidences beside the sharp law's 0 (default 0.02,0.01,0.005,0.0025,0.00125)",
+    contact.late_help(
+        contact.add_argument(
+            "--incidences",
+            default="0.02,0.01,0.005,0.0025,0.00125",
+            metavar="D,D,...",
+            help="contact incidences beside the sharp law's 0",
+        ),
+        incidences_help,
     )
     contact.add_argument(
         "--step", type=positive_float, default=2.5e-6, metavar="S", help="the RK4 step of every run (default 2.5e-6 s)"
@@ -122,6 +126,17 @@ def register(commands) -> None:
     paper.set_defaults(handler=paper_study)
 
 
+def incidences_help() -> str:
+    """``contact --incidences``' help, with every contact option of a scene (from its schema)."""
+    from ..scene.target import Effects
+
+    options = ", ".join(f"effects.{name}" for name in Effects().contact)
+    return (
+        "values of effects.contact_incidence beside the sharp law's 0, every run with effects.contact_width = 0"
+        f" (a scene's contact options: {options}; default %(default)s)"
+    )
+
+
 def compare_laws(args: argparse.Namespace) -> int:
     from fem_loads.resistance import UnknownLawError
 
@@ -132,7 +147,8 @@ def compare_laws(args: argparse.Namespace) -> int:
     if not laws:
         raise InputError("--laws: give one or more law names, e.g. soil,softer_soil")
     try:
-        table = compare(args.scene, overrides(args), laws, RunStore(args.store), args.out, pool(args))
+        with study(args) as pool:
+            table = compare(args.scene, overrides(args), laws, RunStore(args.store), args.out, pool)
     except UnknownLawError as exc:
         raise InputError(f"--laws: {exc}") from None
     if args.json:
@@ -156,22 +172,24 @@ def _numbers(option: str, text: str) -> list[float]:
 
 def accuracy_study(args: argparse.Namespace) -> int:
     from ..run import RunStore
-    from ..studies.accuracy import accuracy_study as study
+    from ..studies.accuracy import accuracy_study as accuracy
 
     orders = _numbers("--quadrature-orders", args.quadrature_orders)
     if not all(q == int(q) and 1 <= q <= 10 for q in orders):
         raise InputError(f"--quadrature-orders {args.quadrature_orders!r}: expected integers from 1 to 10")
-    table, reference = study(
-        args.scene,
-        overrides(args),
-        RunStore(args.store),
-        args.out,
-        _numbers("--sizes", args.sizes),
-        _numbers("--steps", args.steps),
-        _numbers("--rtols", args.rtols),
-        pool(args),
-        [int(q) for q in orders],
-    )
+    sizes, steps, rtols = (_numbers(f"--{name}", getattr(args, name)) for name in ("sizes", "steps", "rtols"))
+    with study(args) as pool:
+        table, reference = accuracy(
+            args.scene,
+            overrides(args),
+            RunStore(args.store),
+            args.out,
+            sizes,
+            steps,
+            rtols,
+            pool,
+            [int(q) for q in orders],
+        )
     if args.json:
         print(
             json.dumps(
@@ -190,15 +208,9 @@ def contact_incidence_study(args: argparse.Namespace) -> int:
     from ..run import RunStore
     from ..studies.contact import contact_study
 
-    table = contact_study(
-        args.scene,
-        overrides(args),
-        RunStore(args.store),
-        args.out,
-        _numbers("--incidences", args.incidences),
-        args.step,
-        pool(args),
-    )
+    incidences = _numbers("--incidences", args.incidences)
+    with study(args) as pool:
+        table = contact_study(args.scene, overrides(args), RunStore(args.store), args.out, incidences, args.step, pool)
     return _show(args, table, "contact.md")
 
 
@@ -209,15 +221,9 @@ def entry_smoothing_study(args: argparse.Namespace) -> int:
     steps = _numbers("--steps", args.steps)
     if len(set(steps)) < 2:
         raise InputError(f"--steps {args.steps!r}: expected two or more different steps")
-    table = entry_study(
-        args.scene,
-        overrides(args),
-        RunStore(args.store),
-        args.out,
-        _numbers("--smoothings", args.smoothings),
-        steps,
-        pool(args),
-    )
+    smoothings = _numbers("--smoothings", args.smoothings)
+    with study(args) as pool:
+        table = entry_study(args.scene, overrides(args), RunStore(args.store), args.out, smoothings, steps, pool)
     return _show(args, table, "entry.md")
 
 
@@ -234,10 +240,10 @@ def paper_study(args: argparse.Namespace) -> int:
     from ..run import RunStore
     from ..studies.paper import reproduce, reproduce_variants
 
+    with study(args) as pool:
+        record = (reproduce_variants if args.variants else reproduce)(args.out, RunStore(args.store), pool)
     if args.variants:
-        record = reproduce_variants(args.out, RunStore(args.store), pool(args))
         print(f"wrote {args.out}/variants.md, variants.json and variants.png in {record['wall_time']:.0f} s")
         return 0
-    record = reproduce(args.out, RunStore(args.store), pool(args))
     print(f"wrote {args.out}/results.md, results.json and the figures in {record['wall_time']:.0f} s")
     return 0

@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import json
+import shlex
+import sys
 
-from .options import add_pool_options, add_scene_options, out_file, overrides, pool
+from .options import add_pool_options, add_scene_options, out_file, overrides, study
 
 __all__ = ["register"]
 
@@ -45,7 +48,8 @@ def sweep(args: argparse.Namespace) -> int:
         variations = [Variation({**g.values, **v.values}) for g in variations for v in listed]
         for v in listed:
             parameters.update(dict.fromkeys(v.values))
-    result = run_sweep(Sweep.from_file(args.scene, overrides(args), variations), RunStore(args.store), pool(args))
+    with study(args) as pool:
+        result = run_sweep(Sweep.from_file(args.scene, overrides(args), variations), RunStore(args.store), pool)
     table = result.table()
     if args.out:
         atomic_write_text(args.out, table.to_csv(index=False))
@@ -53,4 +57,33 @@ def sweep(args: argparse.Namespace) -> int:
         print(table.to_json(orient="records"))
     else:
         print(table[[c for c in (*parameters, *SHOWN) if c in table]].to_string(index=False))
-    return 1 if any(run.failed for run in result.runs) else 0
+    failed = [i for i, run in enumerate(result.runs) if run.failed]
+    if failed:
+        print(
+            _failure_line(args, result.sweep.variations[failed[0]].values, len(failed), len(result.runs)),
+            file=sys.stderr,
+        )
+        return 1
+    return 0
+
+
+def _failure_line(args: argparse.Namespace, values: dict, failed: int, runs: int) -> str:
+    """One line for a sweep with failed runs: how many, and the command that shows the first one's traceback
+    (the store keeps only its error message)."""
+    sets = [*args.set, *(f"{key}={_toml(value, top=True)}" for key, value in values.items())]
+    command = " ".join(["penetrate --debug run", shlex.quote(args.scene), *(f"--set {shlex.quote(s)}" for s in sets)])
+    every = "every run" if failed == runs else f"{failed} of {runs} runs"
+    return f"penetrate sweep: {every} failed (the error column says why): {command} shows the first one's traceback"
+
+
+def _toml(value, top: bool = False) -> str:
+    """A value as ``--set`` reads it back (a TOML value; a bare word at the top, as the command line writes one)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (int, float)):
+        return repr(value)
+    if isinstance(value, str):
+        return value if top and value.isidentifier() and value not in ("true", "false") else json.dumps(value)
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{json.dumps(k)} = {_toml(v)}" for k, v in value.items()) + "}"
+    return "[" + ", ".join(_toml(v) for v in value) + "]"

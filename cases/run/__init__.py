@@ -1,7 +1,6 @@
 """One run of a scene: prepare the projectile, integrate, summarise, and keep it on disk.
 
-A run knows no studies or pictures: this room imports ``cases.scene`` and the physics
-(``mesh``, ``fem_loads``, ``dynamics``), nothing else of ``cases``.
+A run knows no studies or pictures.  What it may import is written once, in pyproject.toml's [tool.penetrate.rooms].
 """
 
 from .history import (

@@ -19,13 +19,31 @@ import hashlib
 import importlib.util
 import os
 import sys
+from collections.abc import Callable
 from pathlib import Path
+from types import ModuleType
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .persistence import cache_dir
 
-__all__ = ["compiled_step", "precompile", "numba_cache_folder", "use_numba_cache", "COMPILED_SOURCES"]
+if TYPE_CHECKING:  # imported where used, after use_numba_cache
+    from dynamics import RigidBody, RungeKutta
+    from dynamics.compiled import CompiledLoad, CompiledRungeKutta
+    from fem_loads import DAFLLoads
+
+__all__ = [
+    "compiled_step",
+    "compiled_modules",
+    "precompile",
+    "numba_cache_folder",
+    "use_numba_cache",
+    "needs_compiling",
+    "announce_compiling",
+    "COMPILED_SOURCES",
+    "ENTRY_POINTS",
+]
 
 COMPILED_SOURCES = (
     "dynamics.compiled",
@@ -45,7 +63,9 @@ def numba_cache_folder() -> Path:
 
     digest = hashlib.sha256(numba.__version__.encode())
     for name in COMPILED_SOURCES:
-        digest.update(Path(importlib.util.find_spec(name).origin).read_bytes())
+        spec = importlib.util.find_spec(name)
+        assert spec is not None and spec.origin is not None  # our own modules, each from its file
+        digest.update(Path(spec.origin).read_bytes())
     root = os.environ.get("NUMBA_CACHE_DIR")
     return (Path(root) if root else cache_dir() / "numba") / digest.hexdigest()[:16]
 
@@ -56,10 +76,38 @@ def use_numba_cache() -> None:
     if not all(name in sys.modules for name in COMPILED_SOURCES):
         from numba import config
 
-        config.CACHE_DIR = str(numba_cache_folder())
+        config.CACHE_DIR = str(numba_cache_folder())  # type: ignore[attr-defined]  # set from the environment at import: numba's stubs omit it
 
 
-def _import_compiled():
+#: what each compiled entry point is, and about how long numba takes to compile it on 2 cores (s; it
+#: depends on the machine and on what else runs: measured 16-30 s for the step, 10-20 s for the model)
+ENTRY_POINTS = {
+    "dafl_step": ("the compiled step (the DAFL load inside the Runge-Kutta step)", "15-30"),
+    "pitch_plane_step": ("the reduced pitch-plane model (penetrate predict)", "10-20"),
+}
+
+
+def needs_compiling(entry: str) -> bool:
+    """Whether numba's cache for this code version lacks the machine code of ``entry`` (a key of
+    :data:`ENTRY_POINTS`): its index file is written when the entry point is first compiled."""
+    return not any(numba_cache_folder().rglob(f"{entry}.*.nbi"))
+
+
+def announce_compiling(entry: str) -> None:
+    """Say on stderr, before numba starts, that ``entry`` is about to be compiled and about how long it
+    takes, when the cache lacks it (a first run after installing, or after the code changed); silent when
+    the machine code is cached, as after ``./dev setup`` (``penetrate warm``)."""
+    if needs_compiling(entry):
+        what, seconds = ENTRY_POINTS[entry]
+        print(
+            f"penetrate: compiling {what} with numba, about {seconds} s, once for this version of the code"
+            f" (kept in {numba_cache_folder()})",
+            file=sys.stderr,
+            flush=True,
+        )
+
+
+def _import_compiled() -> tuple[ModuleType, ModuleType]:
     use_numba_cache()
     from dynamics import compiled as step
     from fem_loads import compiled as load
@@ -67,19 +115,28 @@ def _import_compiled():
     return step, load
 
 
-def _dafl_step():
+def compiled_modules() -> tuple[ModuleType, ModuleType]:
+    """``(dynamics.compiled, fem_loads.compiled)``, imported with numba's cache in :func:`numba_cache_folder`: for
+    code that calls or times the compiled kernels itself (the load benchmark, docs/performance/loads.py)."""
+    return _import_compiled()
+
+
+def _dafl_step() -> Callable[..., None]:
     from .dafl_step import dafl_step
 
     return dafl_step
 
 
-def compiled_step(loads, method, body, weight: np.ndarray | None):
+def compiled_step(
+    loads: DAFLLoads, method: RungeKutta, body: RigidBody, weight: np.ndarray | None
+) -> tuple[CompiledLoad, CompiledRungeKutta, Callable[[np.ndarray, np.ndarray], float]]:
     """The compiled load, Runge-Kutta step and exit height for a scene's loads (a ``DAFLLoads``).
 
     Returns ``(load, method, lowest_height)``: a :class:`~dynamics.compiled.CompiledLoad` (plus
     ``weight``, N, world frame, when given), the :class:`~dynamics.compiled.CompiledRungeKutta` of
     ``method``, and ``lowest_height(position, attitude)`` for the exit event.
     """
+    announce_compiling("dafl_step")
     step, load = _import_compiled()
     data = load.kernel_data(loads)
     compiled_load = step.CompiledLoad(load.dafl_kernel, data, _dafl_step(), weight)
@@ -99,7 +156,13 @@ def _up(attitude: np.ndarray) -> np.ndarray:
     return np.array([2 * (x * z - w * y), 2 * (y * z + w * x), (w * w + z * z) - (x * x + y * y)])
 
 
-def _warm(load, method, body, data, lowest_height) -> None:
+def _warm(
+    load: CompiledLoad,
+    method: CompiledRungeKutta,
+    body: RigidBody,
+    data: tuple[np.ndarray, ...],
+    lowest_height: Callable[[tuple[np.ndarray, ...], np.ndarray, np.ndarray], float],
+) -> None:
     """Call every compiled function once, far above the target (no load), so that numba's loading (or first
     compiling) is done before a run starts its clock: a run's ``integration_time`` is the integration alone."""
     from dynamics import State

@@ -37,7 +37,11 @@ import re
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # imported where used (slow to import)
+    import pandas as pd
+    from matplotlib.figure import Figure
 
 __all__ = [
     "atomic_path",
@@ -124,7 +128,7 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> Path:
     return atomic_write(path, text.encode("utf-8"))
 
 
-def save_figure_bytes(figure, path: str | os.PathLike, dpi: int = 110) -> Path:
+def save_figure_bytes(figure: Figure, path: str | os.PathLike, dpi: int = 110) -> Path:
     """A matplotlib figure saved as PNG through :func:`atomic_write`."""
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=dpi)
@@ -309,7 +313,7 @@ class RunStore:
         record = self.load(key)
         return record is not None and "error" not in record
 
-    def history(self, key: str):
+    def history(self, key: str) -> pd.DataFrame:
         """The stored (thinned) time history of a finished run, as a pandas DataFrame."""
         import pandas as pd
 

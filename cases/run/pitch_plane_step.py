@@ -2,6 +2,9 @@
 :mod:`fem_loads.revolved` (imported through :func:`.compiled.use_numba_cache` first, which names numba's cache
 folder for this code).  The load is a global here, so numba can cache the whole trajectory."""
 
+from __future__ import annotations
+
+import numpy as np
 from numba import njit
 
 from dynamics.pitch_plane import trajectory
@@ -11,37 +14,46 @@ __all__ = ["pitch_plane_trajectory"]
 
 
 @njit(cache=True, inline="always")
-def _load(data, height, sin_theta, cos_theta, vx, vz, q, out):
+def _load(
+    data: tuple[np.ndarray, ...],
+    height: float,
+    sin_theta: float,
+    cos_theta: float,
+    vx: float,
+    vz: float,
+    q: float,
+    out: np.ndarray,
+) -> None:
     pitch_plane_load(data[0], data[1], height, sin_theta, cos_theta, vx, vz, q, out)
 
 
 @njit(cache=True, inline="always")
-def _lowest(data, height, sin_theta, cos_theta):
+def _lowest(data: tuple[np.ndarray, ...], height: float, sin_theta: float, cos_theta: float) -> float:
     return lowest_height(data[2], height, sin_theta, cos_theta)
 
 
 @njit(cache=True, error_model="numpy")
 def pitch_plane_trajectory(
-    rings,
-    law,
-    outline,
-    y0,
-    mass,
-    inertia,
-    gravity,
-    rtol,
-    scales,
-    first_step,
-    max_step,
-    stop_speed,
-    time_limit,
-    turn_limit,
-    threshold,
-    peak_floor,
-    stop_when_converged,
-    a_matrix,
-    b_error,
-):
+    rings: np.ndarray,
+    law: np.ndarray,
+    outline: np.ndarray,
+    y0: np.ndarray,
+    mass: float,
+    inertia: float,
+    gravity: float,
+    rtol: float,
+    scales: np.ndarray,
+    first_step: float,
+    max_step: float,
+    stop_speed: float,
+    time_limit: float,
+    turn_limit: float,
+    threshold: float,
+    peak_floor: float,
+    stop_when_converged: bool,
+    a_matrix: np.ndarray,
+    b_error: np.ndarray,
+) -> tuple[int, float, float, float, float, float, float, int, int, int]:
     """:func:`dynamics.pitch_plane.trajectory` with the load :func:`fem_loads.revolved.pitch_plane_load` on ``rings``
     under ``law`` (and the lowest point on ``outline``); returns its :data:`~dynamics.pitch_plane.OUTCOME_FIELDS`."""
     return trajectory(

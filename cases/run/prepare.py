@@ -15,6 +15,8 @@ import functools
 import io
 import zipfile
 from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -26,6 +28,9 @@ from mesh.imported import BodyOutline, FileGeometry, GeometryError, body_frame, 
 
 from ..scene import InputError, Numerics, Projectile, Scene
 from .persistence import ContentCache, atomic_path, atomic_write, cache_dir
+
+if TYPE_CHECKING:  # scikit-fem is imported where it is used (fem_loads.mass)
+    from skfem import MeshTet1, MeshTet2
 
 __all__ = ["PreparedProjectile", "prepare_projectile", "preparation_key", "cached_mesh", "body_mesh", "prepared_path"]
 
@@ -57,17 +62,17 @@ class PreparedProjectile:
     @property
     def length(self) -> float:
         """Tip to tail (m)."""
-        return self.outline.length if self.outline is not None else self.geometry.profile.length
+        return self.outline.length if self.outline is not None else self.profile.length
 
     @property
     def diameter(self) -> float:
         """Largest diameter (m)."""
-        return self.outline.diameter if self.outline is not None else self.geometry.profile.diameter
+        return self.outline.diameter if self.outline is not None else self.profile.diameter
 
     @property
     def nose_length(self) -> float:
         """Tip to where the body first reaches its largest radius (m)."""
-        return self.outline.nose_length if self.outline is not None else self.geometry.profile.nose_length
+        return self.outline.nose_length if self.outline is not None else self.profile.nose_length
 
     @property
     def tip(self) -> np.ndarray:
@@ -126,7 +131,7 @@ def prepare_projectile(scene: Scene) -> PreparedProjectile:
     return _prepare(*preparation_key(scene))
 
 
-def prepared_path(spec_json: str, numerics_json: str):
+def prepared_path(spec_json: str, numerics_json: str) -> Path:
     """The cache file of the prepared arrays of a :func:`preparation_key`."""
     return ContentCache(cache_dir()).path("prepared", {"projectile": spec_json, "numerics": numerics_json}, ".npz")
 
@@ -143,7 +148,7 @@ def _prepare(spec_json: str, numerics_json: str) -> PreparedProjectile:
     return prepared
 
 
-def _load(path, spec: Projectile) -> PreparedProjectile | None:
+def _load(path: Path, spec: Projectile) -> PreparedProjectile | None:
     try:
         with np.load(path) as data:
             # the counterweight's span as placed when this entry was computed: the same floats, without
@@ -163,7 +168,7 @@ def _load(path, spec: Projectile) -> PreparedProjectile | None:
         return None
 
 
-def _save(path, prepared: PreparedProjectile) -> None:
+def _save(path: Path, prepared: PreparedProjectile) -> None:
     m, q = prepared.mass, prepared.quadrature
     buffer = io.BytesIO()
     span = getattr(prepared.geometry, "counterweight", None)
@@ -184,7 +189,7 @@ def _save(path, prepared: PreparedProjectile) -> None:
     atomic_write(path, buffer.getvalue())
 
 
-def _compute(spec: Projectile, numerics: Numerics, geometry: ProjectileGeometry) -> PreparedProjectile:
+def _compute(spec: Projectile, numerics: Numerics, geometry: ProjectileGeometry | FileGeometry) -> PreparedProjectile:
     """Mesh, scikit-fem mass properties and outer-surface quadrature.
 
     Raises
@@ -220,11 +225,11 @@ def _compute(spec: Projectile, numerics: Numerics, geometry: ProjectileGeometry)
         quadrature = surface_quadrature(
             mesh,
             mass.centre,
-            None if from_file else geometry.profile,
+            None if isinstance(geometry, FileGeometry) else geometry.profile,
             numerics.normals,
             numerics.quadrature_order,
             fem_mesh,
-            surface=CadSurface(geometry, tip) if exact_cad else None,
+            surface=CadSurface(geometry, tip) if exact_cad and isinstance(geometry, FileGeometry) else None,
             facet_rule="shape" if from_file else "basis",
         )
     except Exception as exc:  # scikit-fem: "Newton iteration didn't converge" on distorted curved elements
@@ -237,7 +242,7 @@ def _compute(spec: Projectile, numerics: Numerics, geometry: ProjectileGeometry)
     )
 
 
-def _mass_properties(spec: Projectile, mesh: ProjectileMesh, fem_mesh) -> MassProperties:
+def _mass_properties(spec: Projectile, mesh: ProjectileMesh, fem_mesh: MeshTet1 | MeshTet2) -> MassProperties:
     """Given, or integrated over the mesh (a homogeneous body of a given mass has its density scaled)."""
     if spec.mass_properties is not None:
         given = spec.mass_properties

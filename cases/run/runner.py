@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,6 +26,7 @@ from dynamics import (
     ErrorControl,
     Event,
     FixedStep,
+    LoadFunction,
     RigidBody,
     SpeedBelow,
     State,
@@ -113,11 +115,13 @@ def initial_state(scene: Scene, prepared: PreparedProjectile) -> State:
 class WithGravity:
     """A load function plus the weight ``-m g e_Z`` of the body (world frame)."""
 
-    def __init__(self, loads, mass: float, acceleration: float) -> None:
+    def __init__(self, loads: LoadFunction, mass: float, acceleration: float) -> None:
         self.loads = loads
         self.weight = np.array([0.0, 0.0, -mass * acceleration])
 
-    def __call__(self, position, velocity, rotation, angular_velocity):
+    def __call__(
+        self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         force, moment = self.loads(position, velocity, rotation, angular_velocity)
         return force + self.weight, moment
 
@@ -173,9 +177,12 @@ def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
     body = RigidBody(prepared.mass.mass, prepared.mass.inertia)
     method = METHODS[numerics.integrator]()
 
-    def lowest_height(position, attitude):
+    def numpy_lowest_height(position: np.ndarray, attitude: np.ndarray) -> float:
         return loads.lowest_height(position, rotation_matrix(attitude))
 
+    # the numpy path's, or the compiled step's
+    lowest_height: Callable[[np.ndarray, np.ndarray], float] = numpy_lowest_height
+    driving: LoadFunction
     if numerics.kernel == "compiled":
         from .compiled import compiled_step
 

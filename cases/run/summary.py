@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import numpy as np
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 
-from ..scene import Scene
+from ..scene import Numerics, Scene
 from .history import ATTACK_ANGLE_SPEED_FRACTION, HISTORY_UNITS, attack_angle_peak, history_columns, history_csv
 from .persistence import atomic_write, atomic_write_text, json_safe
 from .runner import RunResult, run_scene
@@ -46,7 +46,7 @@ def _nan_for_null(value: Any) -> Any:
 Real = Annotated[float, BeforeValidator(_nan_for_null)]
 
 
-def _quantity(unit: str, description: str):
+def _quantity(unit: str, description: str) -> Any:
     return Field(description=description, json_schema_extra={"unit": unit})
 
 
@@ -143,7 +143,7 @@ def summarise(result: RunResult, history: pd.DataFrame | Mapping[str, np.ndarray
     )
 
 
-def surface_warnings(numerics) -> list[str]:
+def surface_warnings(numerics: Numerics) -> list[str]:
     """The statement a faceted surface comes with: flat facets with their own normals (first-order
     geometry, mesh normals) tilt every normal by up to half the angle between neighbouring facets,
     and the depth comes out short by several per cent (docs/geometry.md, faceted surfaces)."""

@@ -1,8 +1,8 @@
 """The scene: what a scene file may say, how it is read and overridden, and the physics objects it describes.
 
-A scene knows no runs: this room imports ``mesh`` and ``fem_loads`` (each spec builds its own
-physics object: ``NoseSpec.build()``, ``LawSpec.build()``, ``Projectile.shape()``,
-``Scene.loads()``) and nothing else of ``cases``.
+A scene knows no runs; each spec builds its own physics object (``NoseSpec.build()``,
+``LawSpec.build()``, ``Projectile.shape()``, ``Scene.loads()``).  What it may import is written once, in
+pyproject.toml's [tool.penetrate.rooms].
 
 The errors are imported with the package; the other names below on first use, so that
 ``from cases.scene import InputError`` (every command of the command line, before it knows whether
@@ -11,7 +11,25 @@ it will read a scene) costs nothing, while the schema brings numpy, pydantic and
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
+
 from .errors import InputError, SceneError, one_line
+
+if TYPE_CHECKING:  # the names imported on first use (__getattr__), for the type checker
+    from .load import (
+        Overrides,
+        apply_overrides,
+        dotted_key,
+        load_scene,
+        parse_override,
+        read_scene_data,
+        read_toml,
+        scene_from_dict,
+        scene_key,
+    )
+    from .projectile import Projectile
+    from .schema import Impact, Numerics, Outputs, Scene
+    from .target import Effects, Target, build_law
 
 _EXPORTS = {
     "Scene": "schema",
@@ -57,7 +75,7 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str):
+def __getattr__(name: str) -> Any:
     if name in _EXPORTS:
         # the import statement's machinery (not importlib.import_module), so that -X importtime lists the module
         value = getattr(__import__(f"{__name__}.{_EXPORTS[name]}", fromlist=[name]), name)

@@ -2,28 +2,29 @@
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Any
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
+from pydantic.json_schema import JsonDict
 from pydantic_core import PydanticCustomError
 
 __all__ = ["Strict", "Number", "Whole", "Label", "field", "not_boolean"]
 
 
-def field(default=..., *, unit: str = "", description: str = "", **limits):
+def field(default: Any = ..., *, unit: str = "", description: str = "", **limits: Any) -> Any:
     """A model field with its unit recorded for error messages (``json_schema_extra["unit"]``)."""
-    extra = {"unit": unit} if unit else None
+    extra: JsonDict | None = {"unit": unit} if unit else None
     return Field(default, description=description, json_schema_extra=extra, **limits)
 
 
-def not_boolean(value):
+def not_boolean(value: object) -> object:
     """``true`` is not a number (pydantic would read it as 1)."""
     if isinstance(value, bool):
         raise PydanticCustomError("number_type", "input should be a number, not true or false")
     return value
 
 
-def _one_line(value):
+def _one_line(value: object) -> object:
     """Labels print as one line: no newlines, tabs, escapes or other control characters."""
     if isinstance(value, str) and not value.isprintable():
         raise PydanticCustomError(

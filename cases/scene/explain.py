@@ -13,6 +13,7 @@ from typing import Any
 
 import annotated_types
 from pydantic import BaseModel, ValidationError
+from pydantic_core import ErrorDetails
 
 from fem_loads.resistance import NAMED_LAWS
 
@@ -97,7 +98,7 @@ def _show(value: Any) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
-def _explain_one(error: dict) -> str:
+def _explain_one(error: ErrorDetails) -> str:
     loc = tuple(error["loc"])
     info, _, name = _field_at(loc)
     kind = error["type"]
@@ -108,8 +109,8 @@ def _explain_one(error: dict) -> str:
         key = str(loc[-1])
         # the key as written, even when it spells a union tag such as "name"
         name = ".".join(([] if parent == "scene" else [parent]) + [key if key.isidentifier() else _quoted(key, 40)])
-        allowed = sorted({k for m in parent_models for k in m.model_fields})
-        return f"{name}: unknown key (allowed here: {', '.join(allowed)})"
+        known = sorted({k for m in parent_models for k in m.model_fields})
+        return f"{name}: unknown key (allowed here: {', '.join(known)})"
     if kind == "missing":
         return f"{name}: missing (required)"
     if kind in ("union_tag_not_found", "union_tag_invalid"):

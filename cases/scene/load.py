@@ -17,6 +17,7 @@ from __future__ import annotations
 import copy
 import hashlib
 import json
+import os
 import tomllib
 import typing
 from collections.abc import Iterable, Mapping
@@ -103,7 +104,7 @@ def _quoted(text: str, limit: int = 80) -> str:
     return repr(text) if len(text) <= limit else repr(text[: limit - 3]) + "..."
 
 
-def read_toml(path: str | Path) -> dict[str, Any]:
+def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
     """Read a TOML file, turning every failure into a :class:`SceneError`.
 
     Only data is read: TOML has no expressions, and nothing read is ever evaluated.
@@ -206,9 +207,10 @@ def apply_overrides(data: dict[str, Any], overrides: Overrides | None, source: s
 def _holder(data: dict, path: list[str]) -> dict | None:
     """The dictionary that holds the key ``path`` (None when a table on the way is absent)."""
     for part in path[:-1]:
-        data = data.get(part)
-        if not isinstance(data, dict):
+        child = data.get(part)
+        if not isinstance(child, dict):
             return None
+        data = child
     return data
 
 
@@ -240,7 +242,9 @@ def _drop_replaced(data: dict[str, Any], paths: list[list[str]]) -> None:
         for key in {key for alt in alternatives if alt is not chosen[0] for key in alt}:
             full = base + key.split(".")
             if present(full) and not touched(full):
-                del _holder(data, full)[full[-1]]
+                holder = _holder(data, full)
+                assert holder is not None  # present()
+                del holder[full[-1]]
     for dotted, (tag, keys_of) in TAGGED_TABLES.items():
         base, table = table_at(dotted)
         # a tag that is not a known name (a list, say) is left for validation to name
@@ -271,7 +275,7 @@ def scene_from_dict(data: dict[str, Any], source: str = "scene") -> Scene:
         raise SceneError(f"{source}: arrays or tables nested too deeply") from None
 
 
-def load_scene(path: str | Path, overrides: Overrides | None = None) -> Scene:
+def load_scene(path: str | os.PathLike[str], overrides: Overrides | None = None) -> Scene:
     """Load and validate a TOML scene, with optional overrides (dotted key -> value).
 
     A geometry file named by a relative path in the scene is found beside the scene file
@@ -280,7 +284,7 @@ def load_scene(path: str | Path, overrides: Overrides | None = None) -> Scene:
     return scene_from_dict(apply_overrides(read_scene_data(path), overrides, str(path)), str(path))
 
 
-def read_scene_data(path: str | Path) -> dict[str, Any]:
+def read_scene_data(path: str | os.PathLike[str]) -> dict[str, Any]:
     """A scene file's nested dictionaries, before overrides and validation, with its files anchored."""
     return anchor_files(read_toml(path), Path(path).parent)
 

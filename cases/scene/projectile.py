@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal
+from typing import Annotated, Literal, Self
 
 from pydantic import Field, model_validator
 
@@ -187,7 +187,7 @@ class GeometryFileSpec(Strict):
     )
 
     @model_validator(mode="after")
-    def _readable(self):
+    def _readable(self) -> Self:
         from pathlib import Path
 
         path = Path(self.file)
@@ -247,10 +247,10 @@ class CounterweightSpec(Strict):
     end: Number | None = field(None, unit="m", gt=0.0, le=100.0, description="from the nose tip")
 
     @model_validator(mode="after")
-    def _both_or_neither(self):
+    def _both_or_neither(self) -> Self:
         if (self.start is None) != (self.end is None):
             raise ValueError("give both start and end (m from the tip), or neither")
-        if self.start is not None and not self.start < self.end:
+        if self.start is not None and self.end is not None and not self.start < self.end:
             raise ValueError(f"start = {self.start} must be less than end = {self.end}")
         return self
 
@@ -264,7 +264,7 @@ class MassPropertiesSpec(Strict):
     transverse_inertia: Number = field(unit="kg m^2", gt=0.0, le=1e9)
 
     @model_validator(mode="after")
-    def _rigid_body(self):
+    def _rigid_body(self) -> Self:
         # I_axial = int (y^2 + z^2) dm <= I_y + I_z = 2 I_transverse for every rigid body
         if self.axial_inertia > 2.0 * self.transverse_inertia:
             raise ValueError(
@@ -308,7 +308,7 @@ class Projectile(Strict):
     )
 
     @model_validator(mode="after")
-    def _shape(self):
+    def _shape(self) -> Self:
         if self.geometry is None:
             missing = [k for k in ("diameter", "length", "nose") if getattr(self, k) is None]
             if missing:
@@ -346,7 +346,7 @@ class Projectile(Strict):
         return self
 
     @model_validator(mode="after")
-    def _consistent(self):
+    def _consistent(self) -> Self:
         wants_centre = self.centre_of_mass is not None or self.centre_of_mass_ratio is not None
         if self.centre_of_mass is not None and self.centre_of_mass_ratio is not None:
             raise ValueError("give centre_of_mass or centre_of_mass_ratio, not both")
@@ -378,16 +378,18 @@ class Projectile(Strict):
         return self
 
     @model_validator(mode="after")
-    def _buildable(self):
+    def _buildable(self) -> Self:
         """The mesh room's own checks of the shape (nose shorter than the body, cavity inside the wall, ...),
         made here so that they fail before any meshing, naming the field."""
         if self.geometry is not None:
             return self  # measured when it is meshed (mesh.imported)
         span = None
-        if self.counterweight is not None and self.counterweight.start is not None:
-            span = (self.counterweight.start, self.counterweight.end)
+        weight = self.counterweight
+        if weight is not None and weight.start is not None and weight.end is not None:  # both or neither
+            span = (weight.start, weight.end)
         ProjectileGeometry(self.profile(), self.interior.build() if self.interior else None, span)
         mass = self.mass_properties.mass if self.mass_properties is not None else self.mass
+        assert self.diameter is not None and self.length is not None  # an analytic projectile has both (_shape)
         lightest = MIN_MEAN_DENSITY * 0.25 * math.pi * self.diameter**2 * self.length
         if mass is not None and mass < lightest:
             field_name = "mass_properties.mass" if self.mass_properties is not None else "mass"
@@ -406,11 +408,14 @@ class Projectile(Strict):
     def centre_target(self) -> float | None:
         """Target centre of mass from the tip (m), if any."""
         if self.centre_of_mass_ratio is not None:
+            assert self.length is not None  # the ratio is of an analytic projectile (_shape)
             return self.centre_of_mass_ratio * self.length
         return self.centre_of_mass
 
     def profile(self) -> Profile:
         """The outer profile (mesh room)."""
+        # an analytic projectile's (_shape)
+        assert self.diameter is not None and self.length is not None and self.nose is not None
         return Profile(self.diameter, self.length, self.nose.build(), self.body.build() if self.body else None)
 
     def densities(self) -> dict[int, float]:
@@ -433,7 +438,8 @@ class Projectile(Strict):
         A geometry file gives its :class:`~mesh.imported.FileGeometry`."""
         if self.geometry is not None:
             g = self.geometry
-            return FileGeometry(str(g.file), g.sha256, g.unit, tuple(g.axis), tuple(self.materials or {}), g.cell_field)
+            assert g.sha256 is not None  # filled in when the file is read (GeometryFileSpec._readable)
+            return FileGeometry(str(g.file), g.sha256, g.unit, (*g.axis,), tuple(self.materials or {}), g.cell_field)
         profile = self.profile()
         if self.interior is None:
             return ProjectileGeometry(profile)
@@ -441,11 +447,12 @@ class Projectile(Strict):
         weight = self.counterweight
         if weight is None or (weight.start is None and not self._placed_by_mass):
             return ProjectileGeometry(profile, interior)
-        if weight.start is not None:
+        if weight.start is not None and weight.end is not None:  # both or neither (CounterweightSpec)
             span = (weight.start, weight.end)
         elif placed is not None:
             span = placed
         else:
+            assert self.mass is not None and self.centre_target is not None  # placed by them (_consistent)
             span = place_counterweight(
                 profile,
                 interior,

@@ -9,7 +9,7 @@ own modules; a :class:`Scene` builds its DAFL load function from them.
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal
+from typing import Annotated, Literal, Self
 
 from pydantic import BeforeValidator, model_validator
 
@@ -39,7 +39,7 @@ class Impact(Strict):
     )
 
     @model_validator(mode="after")
-    def _bounded_spin(self):
+    def _bounded_spin(self) -> Self:
         if max(abs(w) for w in self.angular_velocity) > 1e5:
             raise ValueError("angular_velocity: each component must lie in [-1e5, 1e5] rad/s")
         return self
@@ -86,7 +86,7 @@ class Numerics(Strict):
     )
 
     @model_validator(mode="after")
-    def _reachable_time_limit(self):
+    def _reachable_time_limit(self) -> Self:
         # rk4 steps by time_step, and dopri54 shortens no step below it
         if self.time_limit / self.time_step > MAX_STEPS:
             raise ValueError(
@@ -117,7 +117,7 @@ class Scene(Strict):
     outputs: Outputs = Outputs()
 
     @model_validator(mode="after")
-    def _meshable(self):
+    def _meshable(self) -> Self:
         # a guard against typos (1e-5 for 1e-2) that would mesh forever: the studies' finest mesh has ~1e5 cells
         p, size = self.projectile, self.numerics.mesh_size
         if p.geometry is not None:
@@ -128,6 +128,7 @@ class Scene(Strict):
                     " what they cost in accuracy)"
                 )
             return self  # the file's size is known once it is read (mesh.imported checks the mesh size)
+        assert p.diameter is not None and p.length is not None  # an analytic projectile has both (Projectile)
         finest = (0.25 * math.pi * p.diameter**2 * p.length / MAX_MESH_CELLS) ** (1 / 3)
         if size < finest:
             raise ValueError(
@@ -164,7 +165,7 @@ class Scene(Strict):
         return self.model_copy(update={"numerics": self.numerics.model_copy(update={"kernel": kernel})})
 
     @model_validator(mode="after")
-    def _kernel_covers_scene(self):
+    def _kernel_covers_scene(self) -> Self:
         if self.numerics.kernel == "compiled" and not self.compilable:
             raise ValueError(
                 'numerics.kernel = "compiled": the compiled load covers one law with separation and'

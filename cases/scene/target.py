@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, Literal, Self
 
 from pydantic import Discriminator, Tag, field_validator, model_validator
 
@@ -48,7 +48,7 @@ class MaterialLawSpec(Strict):
         return locking_cavity_expansion(self.sigma_0, self.rho_0, self.locking_strain)
 
 
-def _law_kind(value) -> str:
+def _law_kind(value: object) -> str:
     if isinstance(value, str):
         return "name"
     return (
@@ -63,7 +63,7 @@ LawChoice = Annotated[
     Annotated[str, Tag("name")] | Annotated[LawSpec, Tag("coefficients")] | Annotated[MaterialLawSpec, Tag("material")],
     Discriminator(_law_kind),
 ]
-LAW_TAGS = {"coefficients": LawSpec, "material": MaterialLawSpec}  # the table tags of LawChoice
+LAW_TAGS: dict[str, type[Strict]] = {"coefficients": LawSpec, "material": MaterialLawSpec}  # LawChoice's table tags
 
 
 def build_law(law: str | LawSpec | MaterialLawSpec) -> ResistanceLaw:
@@ -71,7 +71,7 @@ def build_law(law: str | LawSpec | MaterialLawSpec) -> ResistanceLaw:
     return resistance_law(law) if isinstance(law, str) else law.build()
 
 
-def _check_law_name(value):
+def _check_law_name(value: object) -> object:
     if isinstance(value, str) and value not in NAMED_LAWS:
         raise ValueError(
             f"unknown law {value!r}: must be one of {', '.join(sorted(NAMED_LAWS))}"
@@ -98,7 +98,7 @@ class Target(Strict):
     _known_name = field_validator("law")(classmethod(lambda cls, value: _check_law_name(value)))
 
     @model_validator(mode="after")
-    def _layers_consistent(self):
+    def _layers_consistent(self) -> Self:
         if self.layers is None:
             return self
         if "law" in self.model_fields_set:
@@ -115,9 +115,9 @@ class Target(Strict):
         """The law of a homogeneous target, or the layers."""
         if self.layers is None:
             return build_law(self.law)
-        return LayeredTarget(
-            tuple(layer.thickness for layer in self.layers[:-1]), tuple(build_law(layer.law) for layer in self.layers)
-        )
+        # every layer but the last has its thickness (_layers_consistent)
+        thicknesses = tuple(layer.thickness for layer in self.layers[:-1] if layer.thickness is not None)
+        return LayeredTarget(thicknesses, tuple(build_law(layer.law) for layer in self.layers))
 
 
 class FrictionSpec(Strict):
@@ -128,7 +128,7 @@ class FrictionSpec(Strict):
     cap: Number | None = field(None, unit="Pa", gt=0.0, le=1e11, description="tau_s of the capped model")
 
     @model_validator(mode="after")
-    def _cap_for_capped(self):
+    def _cap_for_capped(self) -> Self:
         if self.model == "capped" and self.cap is None:
             raise ValueError("the capped model needs cap (tau_s, Pa)")
         if self.model != "capped" and self.cap is not None:

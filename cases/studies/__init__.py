@@ -1,8 +1,8 @@
 """Studies: many runs of a scene and what they show (sweeps, characteristic speeds, their prediction by a reduced
 model, ensembles, accuracy, law comparisons, the paper).
 
-This room imports ``cases.run``, ``cases.scene``, ``cases.viz.figures`` (for its figures) and the
-physics; nothing imports it but the command line.
+Nothing imports it but the command line.  What it may import is written once, in pyproject.toml's
+[tool.penetrate.rooms].
 """
 
 from .pool import Pool

@@ -39,7 +39,7 @@ import pandas as pd
 
 from ..run import RunStore, atomic_write_text, convergence_speed, prepare_projectile
 from ..scene import Overrides
-from ..viz.figures import save_figure, subplots
+from ..viz.figures import legend_outside, save_figure, subplots
 from .pool import Pool
 from .reference import axial_depth_1d, check_nose_alone_presses
 from .speeds import is_unstable
@@ -333,14 +333,16 @@ def _write(table: pd.DataFrame, reference: dict, scene, out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     atomic_write_text(out / "accuracy.csv", table.to_csv(index=False))
     atomic_write_text(out / "accuracy.md", _markdown(table, reference, scene))
-    fig, ax = subplots(figsize=(8, 5.5))
+    fig, ax = subplots(figsize=(9.5, 5.5))
     for (axis, integrator), group in table.groupby(["axis", "numerics.integrator"]):
         ax.loglog(group["integration_time"], group["depth_error"], "o", label=f"{axis} axis, {integrator}")
     front = table[table["pareto"]].sort_values("integration_time")
     ax.loglog(front["integration_time"], front["depth_error"], "k--", lw=1, label="Pareto front")
-    ax.set(xlabel="integration time (s)", ylabel="relative depth error", title=f"{scene.name}: accuracy against time")
+    ax.set(
+        xlabel="integration time (s)", ylabel="relative depth error (-)", title=f"{scene.name}: accuracy against time"
+    )
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
+    legend_outside(ax)
     fig.tight_layout()
     save_figure(fig, out / "accuracy.png")
 

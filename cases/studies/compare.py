@@ -11,7 +11,7 @@ from fem_loads.resistance import resistance_law
 
 from ..run import RunStore, atomic_write_text
 from ..scene import Overrides
-from ..viz.figures import save_figure, subplots
+from ..viz.figures import legend_outside, save_figure, subplots
 from .pool import Pool
 from .sweep import Sweep, SweepResult, Variation, run_sweep
 
@@ -60,7 +60,7 @@ def _markdown(table: pd.DataFrame, name: str, count: int) -> str:
 
 
 def _figure(result: SweepResult, laws: list[str], path: Path) -> None:
-    fig, axes = subplots(1, 2, figsize=(11, 4.4))
+    fig, axes = subplots(1, 2, figsize=(12.5, 4.4))
     for i, (law, run) in enumerate(zip(laws, result.runs)):
         if run.failed:
             continue
@@ -72,6 +72,6 @@ def _figure(result: SweepResult, laws: list[str], path: Path) -> None:
     axes[1].invert_yaxis()
     for ax in axes:
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+    legend_outside(axes[1])  # the same laws in both panels: one legend, right of the panels
     fig.tight_layout()
     save_figure(fig, path)

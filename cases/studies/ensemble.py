@@ -24,8 +24,6 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from scipy import stats
-from scipy.stats import qmc
 
 from ..scene import InputError, Scene, dotted_key
 from .speeds import is_unstable
@@ -85,6 +83,8 @@ class Distribution:
 
     def frozen(self):
         """The :mod:`scipy.stats` distribution (a frozen ``rv_continuous``), or None for ``choice``."""
+        from scipy import stats  # here, not at the top: the command line's help reads FORMS (1 s less)
+
         p = self.parameters
         if self.name == "normal":
             return stats.norm(loc=p[0], scale=p[1])
@@ -240,6 +240,8 @@ def unit_points(design: str, count: int, dimensions: int, seed: int) -> np.ndarr
         raise InputError("-n: need one or more runs and one or more --sample options")
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise InputError(f"--seed {seed!r}: must be a whole number >= 0")
+    from scipy.stats import qmc
+
     if design == "random":
         points = np.array([np.random.default_rng([seed, i]).random(dimensions) for i in range(count)])
     elif design == "sobol":
@@ -279,6 +281,8 @@ def wilson_interval(successes, trials, confidence: float = CONFIDENCE) -> tuple[
     -------
     low, high : ndarray
     """
+    from scipy import stats
+
     k, n = np.broadcast_arrays(np.asarray(successes, dtype=int), np.asarray(trials, dtype=int))
     low, high = np.full(k.shape, np.nan), np.full(k.shape, np.nan)
     for index in np.ndindex(k.shape):

@@ -22,7 +22,7 @@ import pandas as pd
 from ..run import CONVERGENCE_THRESHOLD, RunStore, atomic_write_text, convergence_speed
 from ..run.persistence import json_safe
 from ..scene import InputError, Overrides, one_line
-from ..viz.figures import save_figure, subplots
+from ..viz.figures import axis_label, legend_outside, quantity_unit, save_figure, subplots
 from .ensemble import (
     OUTCOMES,
     Distribution,
@@ -239,7 +239,38 @@ def _markdown(record: dict, table: pd.DataFrame, name: str) -> str:
             lines.append(f"| {b['bin'][0]:g} - {b['bin'][1]:g} | {b['runs']} | " + " | ".join(cells) + " |")
         lines += ["", "![probabilities by bin](ensemble_curve.png)"]
     lines += ["", "![the samples and the outcomes' distributions](ensemble_histograms.png)", ""]
+    # what found nothing, last (the printed report ends with it), with the option that would find something
+    empty = _empty_bins(record, table) if "curve" in record else ""
+    if empty:
+        lines += [empty, ""]
+    if record["finished"] == 0:
+        lines += [
+            "No run finished, so no outcome but `failed` has a probability: the `error` column of ensemble.csv"
+            " says why, and `penetrate --debug run` of the scene with a sample's values (`--set KEY=VALUE`)"
+            " shows its traceback.",
+            "",
+        ]
     return "\n".join(lines)
+
+
+def _empty_bins(record: dict, table: pd.DataFrame) -> str:
+    """A line on the bins no sample fell in, with the option that would fill them: bins over the sampled values
+    (``--by``) where the empty ones lie outside them, else more runs (``-n``)."""
+    curve, key = record["curve"], record["by"]
+    empty = [b["bin"] for b in curve if not b["runs"]]
+    if not empty:
+        return ""
+    values = table[key].astype(float)
+    low, high = float(values.min()), float(values.max())
+    names = ", ".join(f"{lo:g} - {hi:g}" for lo, hi in empty)
+    if all(hi <= low or lo > high for lo, hi in empty):
+        step = curve[0]["bin"][1] - curve[0]["bin"][0]
+        start = math.floor(low / step) * step
+        stop = max(math.ceil(high / step) * step, start + step)
+        fix = f"bin where the samples lie ({low:.4g} to {high:.4g}), e.g. --by {key}={start:g}:{stop:g}:{step:g}"
+    else:
+        fix = f"give more runs (-n {2 * record['runs']}) or widen the distribution of {key} (--sample) over them"
+    return f"No sample fell in {len(empty)} of {len(curve)} bins ({names}): {fix}."
 
 
 def _histograms(table: pd.DataFrame, distributions: list[Distribution], path: Path) -> None:
@@ -252,14 +283,14 @@ def _histograms(table: pd.DataFrame, distributions: list[Distribution], path: Pa
     for ax, column in zip(axes.flat, panels):
         values = table[column].dropna().astype(float)
         ax.hist(values, bins=min(30, max(5, len(values) // 5)), color="tab:blue", alpha=0.8)
-        ax.set(xlabel=f"{column} ({DISTRIBUTED[column]})" if column in DISTRIBUTED else column, ylabel="runs")
+        ax.set(xlabel=axis_label(column, DISTRIBUTED.get(column, quantity_unit(column))), ylabel=axis_label("runs", ""))
         ax.grid(alpha=0.3)
     fig.tight_layout()
     save_figure(fig, path)
 
 
 def _curve_figure(record: dict, path: Path) -> None:
-    fig, ax = subplots(1, 1, figsize=(6.4, 4.2))
+    fig, ax = subplots(1, 1, figsize=(7.6, 4.2))
     middles = [0.5 * (b["bin"][0] + b["bin"][1]) for b in record["curve"]]
     # an outcome that no run had would only lay its band over the others: left out, and said so
     shown = [o for o in OUTCOMES if any(b[o] for b in record["curve"] if b[o] is not None and b[o] == b[o])]
@@ -270,12 +301,12 @@ def _curve_figure(record: dict, path: Path) -> None:
         ax.fill_between(middles, low, high, color=line.get_color(), alpha=0.2)
     absent = [o for o in OUTCOMES if o not in shown]
     ax.set(
-        xlabel=record["by"],
-        ylabel="probability",
+        xlabel=axis_label(record["by"], quantity_unit(record["by"])),
+        ylabel=axis_label("probability", ""),
         ylim=(-0.02, 1.02),
         title=f"outcomes by {record['by']} ({INTERVAL} bands)" + (f"\nnever: {', '.join(absent)}" if absent else ""),
     )
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    legend_outside(ax)  # the bands span the plot: no spot inside is free
     fig.tight_layout()
     save_figure(fig, path)

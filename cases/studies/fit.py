@@ -16,8 +16,8 @@ which a search finds only to its resolution.  The parameters' covariance is
 sigmas; without sigmas it is scaled by the residual variance (it then needs more
 observations than parameters).  A parameter is not identifiable when the observations do
 not move with it (a flat column) or move with a combination of the others (collinear
-columns, or fewer observations than parameters): the fit then stops with a message and no
-number, rather than return a value the data do not determine.
+columns, or fewer observations than parameters, which counting shows before any run): the fit
+then stops with a message and no number, rather than return a value the data do not determine.
 """
 
 from __future__ import annotations
@@ -31,13 +31,13 @@ from typing import Any
 
 import numpy as np
 
-from ..run import RunStore, convergence_speed
+from ..run import CONVERGENCE_THRESHOLD, RunStore, convergence_speed
 from ..scene import InputError, Overrides, apply_overrides, dotted_key, read_scene_data, scene_from_dict
 
 # the report is written by its own module; fit.write_report stays its public name
 from .fit_report import FitResult, write_report
-from .pool import Pool
-from .speeds import find_critical_velocity, measure_convergent_velocity
+from .pool import Pool, study_progress
+from .speeds import disturbance_fix, find_critical_velocity, measure_convergent_velocity, undisturbed
 from .sweep import Sweep, Variation, run_sweep
 
 __all__ = [
@@ -51,6 +51,7 @@ __all__ = [
     "write_report",
     "RUN_QUANTITIES",
     "STUDY_QUANTITIES",
+    "check_counts",
 ]
 
 #: quantities of one run (its summary, and the convergence speed of its history)
@@ -252,14 +253,19 @@ class _Model:
     def _study(self, quantity: str, base: Sweep) -> float:
         if quantity == "critical_velocity":
             speed = base.scenes[0].impact.speed
-            search = find_critical_velocity(
-                base, self.store, (200.0, max(2000.0, 2 * speed)), self.resolution, self.pool
-            )
-            value = search.critical_velocity
+            searched = (200.0, max(2000.0, 2 * speed))
+            search = find_critical_velocity(base, self.store, searched, self.resolution, self.pool)
+            value, why = search.critical_velocity, search.message
+            where = f" between {searched[0]:g} and {searched[1]:g} m/s"  # the search's range, fixed by the fit
             used = {run.key for run in search.indicator}
         else:
             measured = measure_convergent_velocity(base, self.store, pool=self.pool)
-            value = measured.characteristic_convergent_velocity
+            value, where = measured.characteristic_convergent_velocity, ""
+            why = (
+                f"its attack angle never fell below {CONVERGENCE_THRESHOLD} deg"
+                if measured.runs[-1].unstable
+                else f"no unstable run up to {measured.runs[-1].speed:.6g} m/s"
+            )
             start = base.variations[0].values
             used = {
                 Sweep(base.base, [Variation({**start, "impact.speed": run.speed})], base.source).keys()[0]
@@ -267,7 +273,15 @@ class _Model:
             }
         self.keys.update(used)
         if value is None:
-            raise RuntimeError(f"{quantity} of {base.source} not found at {base.variations[0].values or 'the start'}")
+            # the fit's own search range is fixed: what the user can change is the parameters' ranges or the scene
+            scene = base.scenes[0]
+            fixes = [f"keep the --param ranges where the scene has one{where}"] + (
+                [disturbance_fix(scene)] if undisturbed(scene) else []
+            )
+            raise RuntimeError(
+                f"{quantity} of {base.source} not found at {base.variations[0].values or 'the start'}"
+                f" ({why}): {', or '.join(fixes)}"
+            )
         return float(value)
 
 
@@ -275,17 +289,32 @@ def _sigmas(observations: Sequence[Observation]) -> np.ndarray:
     return np.array([1.0 if o.sigma is None else o.sigma for o in observations])
 
 
+def check_counts(parameters: Sequence[Parameter], observations: Sequence[Observation]) -> None:
+    """Refuse, before any run, a fit that counting alone shows the observations cannot determine: fewer
+    observations than parameters (each observation fixes at most one combination of them).
+
+    As many observations as parameters are enough to fit; the standard errors then need every sigma, since
+    the residual variance that stands in for missing sigmas needs more observations than parameters (the fit
+    says so in a note and reports none).
+    """
+    count, given = len(parameters), len(observations)
+    if given >= count:
+        return
+    names = ", ".join(p.key for p in parameters)
+    plural = "s" if given != 1 else ""
+    raise NotIdentifiable(
+        f"not identifiable: {count} parameters ({names}) from {given} observation{plural}; {count} parameters"
+        f" need at least {count} observations (--observe; {count + 1} for standard errors without sigmas),"
+        " or fix a parameter with --set"
+    )
+
+
 def _check_identifiable(
     jacobian: np.ndarray, parameters: Sequence[Parameter], observations: Sequence[Observation], where: str
 ) -> None:
     """Refuse a flat or collinear weighted Jacobian (in unit values) with one line naming the parameters."""
     names = [p.key for p in parameters]
-    if len(observations) < len(parameters):
-        raise NotIdentifiable(
-            f"not identifiable: {len(parameters)} parameters ({', '.join(names)}) from "
-            f"{len(observations)} observation{'s' if len(observations) != 1 else ''}; give at"
-            " least as many observations as parameters, or fix a parameter with --set"
-        )
+    check_counts(parameters, observations)
     norms = np.linalg.norm(jacobian, axis=0)
     for name, norm in zip(names, norms):
         if not norm > FLAT:
@@ -367,6 +396,7 @@ def fit(
     fitted = [parse_parameter(text, bases) for text in parameters]
     if len({p.key for p in fitted}) != len(fitted):
         raise InputError("--param: give each key once")
+    check_counts(fitted, observed)  # after the input's own checks (exit code 2), before any run
     if step is None:
         step = STUDY_STEP if any(o.quantity in STUDY_QUANTITIES for o in observed) else RUN_STEP
     model = _Model(bases, fitted, observed, store, pool, resolution)
@@ -386,22 +416,23 @@ def fit(
     from scipy.optimize import least_squares
 
     start = np.array([(p.start - p.low) / (p.high - p.low) for p in fitted])
-    _check_identifiable(jacobian(start), fitted, observed, "at the start")
-    solution = least_squares(
-        residuals,
-        start,
-        jac=jacobian,
-        bounds=(0.0, 1.0),
-        method="trf",
-        x_scale=1.0,
-        xtol=XTOL,
-        ftol=FTOL,
-        gtol=GTOL,
-        max_nfev=max_evaluations,
-    )
-    final_jacobian = jacobian(solution.x)
-    _check_identifiable(final_jacobian, fitted, observed, "at the solution")
-    fitted_values = model([solution.x])[0]
+    with study_progress("fit"):  # one progress bar for every batch of runs of the fit
+        _check_identifiable(jacobian(start), fitted, observed, "at the start")
+        solution = least_squares(
+            residuals,
+            start,
+            jac=jacobian,
+            bounds=(0.0, 1.0),
+            method="trf",
+            x_scale=1.0,
+            xtol=XTOL,
+            ftol=FTOL,
+            gtol=GTOL,
+            max_nfev=max_evaluations,
+        )
+        final_jacobian = jacobian(solution.x)
+        _check_identifiable(final_jacobian, fitted, observed, "at the solution")
+        fitted_values = model([solution.x])[0]
     values = {p.key: p.value(float(u)) for p, u in zip(fitted, solution.x)}
     widths = np.array([p.high - p.low for p in fitted])
     jac_physical = final_jacobian / widths  # d(residual)/d(parameter)

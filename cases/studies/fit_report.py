@@ -46,7 +46,7 @@ def write_report(result: FitResult, out: Path, scene: str) -> None:
 
     from ..run import atomic_write_text
     from ..run.persistence import json_safe
-    from ..viz.figures import save_figure, subplots
+    from ..viz.figures import axis_label, quantity_unit, save_figure, subplots
 
     out = Path(out)
     atomic_write_text(out / "fit.json", json.dumps(json_safe(result.record()), indent=1, allow_nan=False) + "\n")
@@ -92,14 +92,17 @@ def write_report(result: FitResult, out: Path, scene: str) -> None:
     axes.plot([low - pad, high + pad], [low - pad, high + pad], color="grey", lw=1, ls="--")
     for row, x, y in zip(result.observations, observed, fitted):
         axes.annotate(
-            f"{Path(row['scene']).stem}: {row['quantity']}",
+            f"{Path(row['scene']).stem}: {axis_label(row['quantity'], quantity_unit(row['quantity']))}",
             (x, y),
             fontsize=7,
             xytext=(4, 4),
             textcoords="offset points",
         )
-    axes.set_xlabel("observed")
-    axes.set_ylabel("fitted")
+    # one unit on the axes when the quantities share it; else each point's label carries its own
+    units = {quantity_unit(row["quantity"]) for row in result.observations}
+    shared = units.pop() if len(units) == 1 else "each point's unit"
+    axes.set_xlabel(axis_label("observed", shared))
+    axes.set_ylabel(axis_label("fitted", shared))
     axes.set_title("observed against fitted (bars: sigma)", fontsize=10)
     figure.tight_layout()
     save_figure(figure, out / "fit.png")

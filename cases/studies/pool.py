@@ -14,9 +14,11 @@ from __future__ import annotations
 import atexit
 import contextlib
 import os
-from collections.abc import Sequence
+import sys
+from collections.abc import Collection, Iterable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
+from contextvars import ContextVar
 from dataclasses import dataclass
 from multiprocessing import get_context
 
@@ -25,7 +27,7 @@ from ..run.prepare import preparation_key
 from ..run.summary import simulate_record
 from ..scene import Scene
 
-__all__ = ["Pool", "run_missing", "run_job", "CodeMismatch"]
+__all__ = ["Pool", "Progress", "study_progress", "run_missing", "run_job", "CodeMismatch"]
 
 
 class CodeMismatch(RuntimeError):
@@ -42,13 +44,19 @@ class Pool:
         Local processes (default: every core).
     scheduler : str, optional
         Address of a Dask distributed scheduler to run on instead.
-    progress : bool
-        Show a progress bar (runs done, failed, time left) on stderr.
+    progress : bool, optional
+        Show a progress bar (runs done, failed, time left) on stderr: True, False, or None (the default)
+        when stderr is a terminal, so that a log file or a pipe gets no bar.
     """
 
     workers: int | None = None
     scheduler: str | None = None
-    progress: bool = True
+    progress: bool | None = None
+
+    @property
+    def shows_progress(self) -> bool:
+        """Whether runs on this pool draw a progress bar (``progress``, or whether stderr is a terminal)."""
+        return sys.stderr.isatty() if self.progress is None else bool(self.progress)
 
     @property
     def width(self) -> int:
@@ -77,36 +85,107 @@ def _distinct_projectiles(scenes: Sequence[Scene]) -> list[str]:
     return list(seen.values())
 
 
-def run_missing(todo: dict[str, Scene], store: RunStore, pool: Pool, total: int) -> None:
-    """Run the scenes of ``todo`` (scene key -> scene) on ``pool`` and save each in ``store`` as it finishes."""
-    from tqdm import tqdm
+class Progress:
+    """One progress bar for all the runs of a study: runs done out of the runs known so far.
 
-    jobs = {key: scene.model_dump_json() for key, scene in todo.items()}
-    bar = tqdm(
-        total=total, initial=total - len(jobs), disable=not pool.progress, unit="run", desc="sweep", dynamic_ncols=True
-    )
-    failed = 0
-    own = code_version("run")
+    A study that runs in rounds (a critical-speed search, a fit, the paper) learns its runs round by
+    round: each sweep adds its runs to the total, and those found finished in the run store count as
+    done at once.  A run counts once however many rounds name it; a failed run tried again counts
+    again, as it runs again.  The bar opens at the first sweep that has runs to make, shown or not as
+    that sweep's pool says (:attr:`Pool.shows_progress`), and closes with :meth:`close`.
+    """
 
-    def finish(key: str, record: dict, history: bytes | None, code: str) -> None:
-        nonlocal failed
-        if code != own:
-            raise CodeMismatch(
-                f"a worker ran code version {code}, this process has {own}: install the same"
-                " version of penetrate on every worker of the cluster"
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self.known: set[str] = set()
+        self.total = self.done = self.failed = 0
+        self.shown: bool | None = None
+        self.bar = None
+
+    def add(self, keys: Iterable[str], todo: Collection[str], show: bool) -> None:
+        """A sweep's runs (``keys``), of which ``todo`` are still to make."""
+        found = {key for key in keys if key not in todo and key not in self.known}
+        self.known.update(found)
+        self.known.update(todo)
+        self.total += len(found) + len(todo)
+        self.done += len(found)
+        if self.shown is None and todo:
+            self.shown = show
+        if not self.shown:
+            return
+        if self.bar is None:
+            from tqdm import tqdm
+
+            self.bar = tqdm(
+                total=self.total, initial=self.done, unit="run", desc=self.name, dynamic_ncols=True, file=sys.stderr
             )
-        store.save(key, record, history)
-        failed += "error" in record
-        bar.set_postfix(failed=failed, refresh=False)
-        bar.update(1)
+        else:
+            self.bar.total = self.total  # the study has learnt of more runs: the bar's end moves out
+            if found:
+                self.bar.update(len(found))
+            else:
+                self.bar.refresh()
 
+    def finished(self, failed: bool) -> None:
+        """One run made (and stored)."""
+        self.done += 1
+        self.failed += failed
+        if self.bar is not None:
+            self.bar.set_postfix(failed=self.failed, refresh=False)
+            self.bar.update(1)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
+
+
+_STUDY: ContextVar[Progress | None] = ContextVar("penetrate_study_progress", default=None)
+
+
+@contextlib.contextmanager
+def study_progress(name: str) -> Iterator[Progress]:
+    """Count every run made inside the block on one progress bar named ``name``, closed when the block ends.
+
+    Blocks nest: an inner block (a critical-speed search inside a fit) counts on the outer one's bar, so a
+    study shows one bar whatever it calls.  Outside any block each sweep has a bar of its own.
+    """
+    active = _STUDY.get()
+    if active is not None:
+        yield active
+        return
+    progress = Progress(name)
+    token = _STUDY.set(progress)
     try:
+        yield progress
+    finally:
+        _STUDY.reset(token)
+        progress.close()
+
+
+def run_missing(todo: dict[str, Scene], store: RunStore, pool: Pool, keys: Iterable[str]) -> None:
+    """Run the scenes of ``todo`` (scene key -> scene) on ``pool`` and save each in ``store`` as it finishes;
+    ``keys``: every run of the sweep, those found in the store included (they count as done on the bar)."""
+    with study_progress("sweep") as progress:
+        progress.add(keys, todo, pool.shows_progress)
+        if not todo:
+            return
+        jobs = {key: scene.model_dump_json() for key, scene in todo.items()}
+        own = code_version("run")
+
+        def finish(key: str, record: dict, history: bytes | None, code: str) -> None:
+            if code != own:
+                raise CodeMismatch(
+                    f"a worker ran code version {code}, this process has {own}: install the same"
+                    " version of penetrate on every worker of the cluster"
+                )
+            store.save(key, record, history)
+            progress.finished("error" in record)
+
         if pool.scheduler:
             _on_dask(jobs, pool.scheduler, finish)
         else:
             _on_processes(jobs, list(todo.values()), pool.width, finish)
-    finally:
-        bar.close()
 
 
 def _on_dask(jobs: dict[str, str], scheduler: str, finish) -> None:

@@ -27,9 +27,9 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from ..run import CONVERGENCE_THRESHOLD, PreparedProjectile, initial_state, prepare_projectile
-from ..run.compiled import use_numba_cache
+from ..run.compiled import announce_compiling, use_numba_cache
 from ..scene import InputError, Scene
-from .speeds import UNSTABLE_TURN
+from .speeds import UNSTABLE_TURN, disturbance_fix, range_fix
 
 __all__ = ["ReducedModel", "ReducedRun", "Prediction", "predict", "RTOL", "RINGS"]
 
@@ -77,6 +77,7 @@ class ReducedModel:
         self, scene: Scene, prepared: PreparedProjectile, rtol: float = RTOL, rings: dict[str, int] | None = None
     ) -> None:
         _check_supported(scene)
+        announce_compiling("pitch_plane_step")
         use_numba_cache()
         from dynamics.pitch_plane import TABLEAU
         from fem_loads.revolved import law_data, revolved_surface
@@ -215,7 +216,7 @@ def predict(
     runs: list[ReducedRun] = []
     messages: list[str] = []
     convergent = _convergent(model, scene.impact.speed, runs, messages)
-    critical, bracket = _critical(model, speeds, resolution, runs, messages, convergent)
+    critical, bracket = _critical(model, speeds, resolution, runs, messages, convergent, speeds)
     end = time.perf_counter()
     description = (
         f"reduced pitch-plane model: the scene's DAFL integrated over {len(model.surface.rings)} rings of"
@@ -234,7 +235,10 @@ def _convergent(model: ReducedModel, speed: float, runs: list[ReducedRun], messa
         if run.unstable:
             break
         if speed * RAISE_FACTOR > MAX_SPEED:
-            messages.append(f"no unstable reduced run up to {MAX_SPEED:g} m/s: no characteristic convergent velocity")
+            messages.append(
+                f"no unstable reduced run up to {MAX_SPEED:g} m/s: no characteristic convergent velocity;"
+                f" {disturbance_fix(model.scene)}"
+            )
             return None
         speed *= RAISE_FACTOR
     if speed != model.scene.impact.speed:
@@ -243,8 +247,10 @@ def _convergent(model: ReducedModel, speed: float, runs: list[ReducedRun], messa
             f" that of the run at {speed:.6g} m/s"
         )
     if run.convergence_speed is None:
+        # the reduced model's threshold is fixed; the measured velocity takes another (penetrate convergent)
         messages.append(
-            f"the attack angle of the reduced run at {speed:.6g} m/s never fell below {CONVERGENCE_THRESHOLD} deg"
+            f"the attack angle of the reduced run at {speed:.6g} m/s never fell below {CONVERGENCE_THRESHOLD} deg:"
+            " measure the convergent velocity at a larger threshold with penetrate convergent --threshold"
         )
     return run.convergence_speed
 
@@ -256,6 +262,7 @@ def _critical(
     runs: list[ReducedRun],
     messages: list[str],
     convergent: float | None,
+    searched: tuple[float, float],
 ) -> tuple[float | None, list[float] | None]:
     """Bisection of reduced runs between a stable and an unstable impact speed in ``speeds`` (each run stops
     at the 30-degree turn that makes it unstable, or once its attack angle has converged).
@@ -263,6 +270,7 @@ def _critical(
     The first bracket uses what the convergent velocity's runs showed: an unstable run there is an
     upper end, and no run below the convergent velocity can turn unstable (its attack angle collapses
     at once), so that is a lower end.  An end no run has confirmed is run before the result counts.
+    ``searched``: the range ``--speeds`` gave, which a message that finds nothing suggests widening.
     """
     low, high = float(min(speeds)), float(max(speeds))
     known = {run.speed: run.unstable for run in runs if run.speed >= low}
@@ -283,7 +291,10 @@ def _critical(
         return run.unstable
 
     if not high_checked and not unstable(high):
-        messages.append(f"no unstable reduced run up to {high:g} m/s: no critical impact velocity in the range")
+        messages.append(
+            f"no unstable reduced run up to {high:g} m/s: no critical impact velocity in the range;"
+            f" {range_fix(True, searched, model.scene)}"
+        )
         return None, None
     while high - low > resolution:
         middle = 0.5 * (low + high)
@@ -293,9 +304,10 @@ def _critical(
             low, low_checked = middle, True
     if not low_checked and unstable(low):
         if low > min(speeds):  # the guess from the convergent velocity did not hold: search the whole range
-            return _critical(model, (min(speeds), low), resolution, runs, messages, None)
+            return _critical(model, (min(speeds), low), resolution, runs, messages, None, searched)
         messages.append(
-            f"the reduced run at {low:g} m/s is already unstable: the critical impact velocity lies below the range"
+            f"the reduced run at {low:g} m/s is already unstable: the critical impact velocity lies below the range;"
+            f" {range_fix(False, searched, model.scene)}"
         )
         return None, None
     return 0.5 * (low + high), [low, high]

@@ -34,9 +34,13 @@ import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 
+import numpy as np
+
 from ..run import CONVERGENCE_THRESHOLD, RunStore, convergence_speed
-from ..scene import InputError
-from .pool import Pool
+from ..run.history import attack_angle_peak
+from ..scene import InputError, Scene
+from ..scene.schema import Impact
+from .pool import Pool, study_progress
 from .sweep import Sweep, Variation, run_sweep
 
 __all__ = [
@@ -49,6 +53,9 @@ __all__ = [
     "measure_convergent_velocity",
     "UNSTABLE_TURN",
     "ScanRun",
+    "undisturbed",
+    "disturbance_fix",
+    "range_fix",
 ]
 
 UNSTABLE_TURN = 30.0  # deg of axis turn that marks an unstable run
@@ -64,6 +71,61 @@ def is_unstable(axis_angle_change: float) -> bool:
     return indicator(axis_angle_change) >= UNSTABLE_TURN
 
 
+# What a search that found nothing tells the user to change: the options that would find something.
+
+
+def _bound(name: str, kind: str) -> float:
+    """The schema's bound ``kind`` (``le``, ``ge``) of ``impact.NAME``: a suggested value stays allowed."""
+    return next(getattr(m, kind) for m in Impact.model_fields[name].metadata if hasattr(m, kind))
+
+
+def _typed(value: float, up: bool) -> float:
+    """``value`` rounded to two significant digits, up or down: a number a person would type."""
+    scale = 10.0 ** (math.floor(math.log10(value)) - 1)
+    units = value / scale
+    # a value already on the grid stays (2400, not 2500); rounding of the division is not a step
+    units = math.ceil(units - 1e-9) if up else math.floor(units + 1e-9)
+    return float(f"{units * scale:.12g}")
+
+
+def undisturbed(scene: Scene) -> bool:
+    """Whether the scene starts without a disturbance: straight, square to the surface, not spinning.
+
+    Such a run stays symmetric about its axis, never turns, and no speed makes it unstable.
+    """
+    impact = scene.impact
+    return not (impact.attack_angle or impact.oblique_angle or impact.yaw_angle or any(impact.angular_velocity))
+
+
+def disturbance_fix(scene: Scene) -> str:
+    """The option that would make the scene turn: a disturbance when it has none, else a larger attack angle."""
+    if undisturbed(scene):
+        return "give the scene a disturbance (--set impact.attack_angle=1)"
+    attack, top = scene.impact.attack_angle, _bound("attack_angle", "le")
+    if abs(attack) >= top:
+        return f"no larger attack angle is allowed (impact.attack_angle is {attack:g} deg)"
+    larger = min(_typed(2 * abs(attack), up=True) if attack else 1.0, top)
+    # the same side as the scene's (a mirrored disturbance turns the same)
+    return f"a larger disturbance may turn it (--set impact.attack_angle={math.copysign(larger, attack):g})"
+
+
+def range_fix(stable: bool, limits: Sequence[float], scene: Scene, option: str = "--speeds") -> str:
+    """What to change when every run of the range ``limits`` was ``stable`` (else unstable): a wider range
+    (half as wide again above, half the lowest speed below), and a disturbance where the scene has none or
+    the range cannot grow."""
+    low, high = float(min(limits)), float(max(limits))
+    fixes = []
+    if stable:
+        top = min(_typed(1.5 * high, up=True), _bound("speed", "le"))
+        if top > high:
+            fixes.append(f"widen the range with {option} {low:g}:{top:g}")
+        if undisturbed(scene) or not fixes:
+            fixes.append(disturbance_fix(scene))
+    else:
+        fixes.append(f"lower the range with {option} {_typed(0.5 * low, up=False):g}:{high:g}")
+    return ", or ".join(fixes)
+
+
 @dataclass(frozen=True)
 class ScanRun:
     """One run of a critical-speed search (m/s, deg)."""
@@ -77,13 +139,15 @@ class ScanRun:
 
 @dataclass
 class CriticalSearch:
-    """Result of :func:`find_critical_velocity` (m/s); ``rounds``: the parallel sweeps it took."""
+    """Result of :func:`find_critical_velocity` (m/s); ``rounds``: the parallel sweeps it took; ``fix``: when
+    the range holds no change (``message``), the options of ``penetrate critical`` that would find one."""
 
     critical_velocity: float | None
     bracket: list[float] | None
     indicator: list[ScanRun] = field(default_factory=list)
     message: str = ""
     rounds: int = 0
+    fix: str = ""
 
     def as_dict(self) -> dict:
         return {
@@ -91,6 +155,7 @@ class CriticalSearch:
             "bracket": self.bracket,
             "indicator": [asdict(run) for run in self.indicator],
             "message": self.message,
+            "fix": self.fix,
             "runs": len(self.indicator),
             "rounds": self.rounds,
         }
@@ -161,6 +226,7 @@ class _Bracket:
     low_run: bool = False
     high_run: bool = False
     failure: str = ""
+    stable_throughout: bool = False
 
     def finished(self, resolution: float) -> bool:
         return bool(self.failure) or (self.low_run and self.high_run and self.high - self.low <= resolution * _SLACK)
@@ -185,6 +251,7 @@ class _Bracket:
         high = _end([v for v in unstable if v >= self.low], min, self.high, stable, top)
         if high is None:
             self.failure = f"every run is stable, up to {max(stable):g} m/s"
+            self.stable_throughout = True
             return
         self.high, self.high_run = high
         low = _end([v for v in stable if v < self.high], max, self.low, unstable, bottom)
@@ -268,23 +335,25 @@ def find_critical_velocities(
     width = (pool or Pool()).width
     seen: list[dict[float, ScanRun]] = [{} for _ in bases]
     rounds = [0] * len(bases)
-    while True:
-        open_ = [i for i, b in enumerate(brackets) if not b.finished(resolution)]
-        if not open_:
-            break
-        counts = dict(zip(open_, _shares([brackets[i] for i in open_], width)))
-        wanted = [brackets[i].wanted(counts[i], resolution) if i in counts else [] for i in range(len(bases))]
-        if all(v in seen[i] for i in open_ for v in wanted[i]):  # cannot happen: every round runs something new
-            raise RuntimeError("the critical-speed search stalled: no new speed to run")
-        _scan(bases, store, pool, seen, wanted)
-        for i in open_:
-            rounds[i] += 1
-            brackets[i].update(seen[i])
+    with study_progress("critical"):  # one progress bar for every round
+        while True:
+            open_ = [i for i, b in enumerate(brackets) if not b.finished(resolution)]
+            if not open_:
+                break
+            counts = dict(zip(open_, _shares([brackets[i] for i in open_], width)))
+            wanted = [brackets[i].wanted(counts[i], resolution) if i in counts else [] for i in range(len(bases))]
+            if all(v in seen[i] for i in open_ for v in wanted[i]):  # cannot happen: every round runs something new
+                raise RuntimeError("the critical-speed search stalled: no new speed to run")
+            _scan(bases, store, pool, seen, wanted)
+            for i in open_:
+                rounds[i] += 1
+                brackets[i].update(seen[i])
     results = []
     for i, bracket in enumerate(brackets):
         rows = sorted(seen[i].values(), key=lambda r: r.speed)
         if bracket.failure:
-            results.append(CriticalSearch(None, None, rows, bracket.failure, rounds[i]))
+            fix = range_fix(bracket.stable_throughout, bracket.limits, bases[i].scenes[0])
+            results.append(CriticalSearch(None, None, rows, bracket.failure, rounds[i], fix))
         else:
             results.append(
                 CriticalSearch(0.5 * (bracket.low + bracket.high), [bracket.low, bracket.high], rows, "", rounds[i])
@@ -338,28 +407,32 @@ def measure_convergent_velocity(
     scene = sweep_base.scenes[0]
     speed = scene.impact.speed
     runs: list[ConvergentRun] = []
-    while True:
-        variation = Variation({**base_values, "impact.speed": round(speed, 6)})
-        result = run_sweep(Sweep(sweep_base.base, [variation], sweep_base.source), store, pool)
-        run = result.runs[0]
-        if run.failed:
-            raise RuntimeError(f"the run at {speed:g} m/s failed: {run.error}")
-        s = run.summary
-        runs.append(
-            ConvergentRun(
-                round(speed, 6),
-                s.max_attack_angle,
-                s.axis_angle_change,
-                convergence_speed(result.history(0), threshold),
-                is_unstable(s.axis_angle_change),
-                s.end_reason,
+    with study_progress("convergent"):  # one progress bar for the raised runs
+        while True:
+            variation = Variation({**base_values, "impact.speed": round(speed, 6)})
+            result = run_sweep(Sweep(sweep_base.base, [variation], sweep_base.source), store, pool)
+            run = result.runs[0]
+            if run.failed:
+                raise RuntimeError(f"the run at {speed:g} m/s failed: {run.error}")
+            s = run.summary
+            history = result.history(0)
+            runs.append(
+                ConvergentRun(
+                    round(speed, 6),
+                    s.max_attack_angle,
+                    s.axis_angle_change,
+                    convergence_speed(history, threshold),
+                    is_unstable(s.axis_angle_change),
+                    s.end_reason,
+                )
             )
-        )
-        if runs[-1].unstable:
-            break
-        if speed * raise_factor > max_speed:
-            return ConvergentResult(None, runs, f"no unstable run up to {max_speed:g} m/s")
-        speed *= raise_factor
+            if runs[-1].unstable:
+                break
+            if speed * raise_factor > max_speed:
+                return ConvergentResult(
+                    None, runs, f"no unstable run up to {max_speed:g} m/s: {disturbance_fix(scene)}"
+                )
+            speed *= raise_factor
     value = runs[-1].convergence_speed
     message = ""
     if len(runs) > 1:
@@ -368,5 +441,17 @@ def measure_convergent_velocity(
             f" {speed:.6g} m/s to get an unstable run"
         )
     if value is None:
-        message += ("; " if message else "") + f"the attack angle never fell below {threshold} deg"
+        message += ("; " if message else "") + _threshold_fix(history, threshold)
     return ConvergentResult(value, runs, message)
+
+
+def _threshold_fix(history, threshold: float) -> str:
+    """Why a run has no convergence speed at ``threshold``, and the ``--threshold`` that would give it one:
+    just above the least attack angle after the peak."""
+    angle = np.asarray(history["total_attack_angle"], dtype=float)[attack_angle_peak(history) :]
+    least = float(np.nanmin(angle)) if np.isfinite(angle).any() else math.nan
+    text = f"the attack angle never fell below {threshold} deg"
+    if not least > 0:  # nothing finite after the peak: no threshold would find a crossing
+        return text
+    larger = _typed(1.1 * least, up=True)
+    return f"{text} (its least after the peak: {least:.3g} deg): a larger threshold finds one, --threshold {larger:g}"

@@ -189,6 +189,6 @@ def run_sweep(sweep: Sweep, store: RunStore, pool: Pool | None = None) -> SweepR
     """Run every variation not yet in ``store`` on ``pool`` (default: every local core); all of them, typed."""
     keys = sweep.keys()
     todo = {key: scene for key, scene in zip(keys, sweep.scenes) if not store.finished(key)}
-    if todo:
-        run_missing(todo, store, pool or Pool(), total=len(set(keys)))
+    # called with nothing to run too: a study's progress bar counts the runs its rounds find in the store
+    run_missing(todo, store, pool or Pool(), keys)
     return SweepResult(sweep, [StoredRun.from_record(key, store.load(key)) for key in keys], store)

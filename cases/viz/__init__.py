@@ -1,8 +1,8 @@
 """Pictures of runs: the resistance field on the surface, off-screen pyvista frames and animations,
 ParaView files, matplotlib panels, and the one way figures are made and saved.
 
-This room imports ``cases.run``, ``cases.scene`` and the physics; it takes every stress from the
-run's own load function (``DAFLLoads.surface_stress``) and evaluates no physics of its own.
+It takes every stress from the run's own load function (``DAFLLoads.surface_stress``) and evaluates
+no physics of its own.  What it may import is written once, in pyproject.toml's [tool.penetrate.rooms].
 """
 
 from .field import (

@@ -1,5 +1,5 @@
 """One way of making matplotlib figures: a ``Figure`` on the Agg canvas (no pyplot state, no display),
-saved as PNG atomically."""
+saved as PNG atomically; axis labels that carry their units, and legends that cover no data."""
 
 from __future__ import annotations
 
@@ -8,7 +8,13 @@ from pathlib import Path
 
 from ..run.persistence import save_figure_bytes
 
-__all__ = ["new_figure", "subplots", "save_figure"]
+__all__ = ["new_figure", "subplots", "save_figure", "axis_label", "quantity_unit", "legend_outside", "DIMENSIONLESS"]
+
+#: the unit an axis label gives a dimensionless quantity (a ratio, a probability, a count)
+DIMENSIONLESS = "-"
+
+# the study quantities that are not fields of a run's summary or history
+_STUDY_UNITS = {"convergence_speed": "m/s", "critical_velocity": "m/s", "characteristic_convergent_velocity": "m/s"}
 
 
 def new_figure(figsize: tuple[float, float], dpi: float | None = None):
@@ -30,3 +36,56 @@ def subplots(nrows: int = 1, ncols: int = 1, *, figsize: tuple[float, float], **
 def save_figure(figure, path: str | os.PathLike, dpi: int = 110) -> Path:
     """Save ``figure`` as a PNG file, written atomically (a reader never sees a part of it)."""
     return save_figure_bytes(figure, path, dpi)
+
+
+def axis_label(name: str, unit: str | None) -> str:
+    """``name (unit)``; a dimensionless quantity (unit ``""``, ``"1"`` or ``"-"``) is ``name (-)``.
+
+    ``unit = None`` (a quantity of unknown unit) gives ``name`` alone rather than a made-up unit.
+    """
+    if unit is None:
+        return name
+    return f"{name} ({unit if unit not in ('', '1') else DIMENSIONLESS})"
+
+
+def quantity_unit(name: str) -> str | None:
+    """The unit of a named quantity, as the project records it; ``""`` for a dimensionless one.
+
+    ``name`` is a field of a run's summary (``depth``: ``m``), a column of its history
+    (``speed``: ``m/s``), a study quantity (``critical_velocity``: ``m/s``) or a dotted scene key
+    (``impact.speed``: ``m/s``, ``target.law.B``: dimensionless).  None if it is none of these.
+    """
+    from ..run import HISTORY_UNITS
+    from ..run.summary import RunSummary
+    from ..scene.explain import _field_at  # the schema walk that names fields in error messages
+
+    if name in _STUDY_UNITS:
+        return _STUDY_UNITS[name]
+    if name in RunSummary.model_fields:
+        return (RunSummary.model_fields[name].json_schema_extra or {}).get("unit", "")
+    if name in HISTORY_UNITS:
+        return HISTORY_UNITS[name]
+    info, _, _ = _field_at(tuple(name.split(".")))
+    if info is None:
+        return None
+    return (info.json_schema_extra or {}).get("unit", "")
+
+
+def legend_outside(ax, **kwargs):
+    """A legend right of ``ax``, outside its data area, so it covers no data.
+
+    ``loc="best"`` only picks the least crowded spot inside the axes, and covers data when there
+    is none free (probability bands spanning the plot).  ``figure.tight_layout()`` afterwards
+    leaves room for the legend.  ``kwargs`` go to ``Axes.legend`` (``fontsize`` 8 unless given).
+    """
+    kwargs.setdefault("fontsize", 8)
+    return ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, **kwargs)
+
+
+def legend_below(ax, **kwargs):
+    """A legend under ``ax``'s x label, outside its data area: for axes with a twin on the right or a
+    neighbour beside them, where :func:`legend_outside` would cover them.  ``kwargs`` go to ``Axes.legend``
+    (``fontsize`` 8 and two columns unless given)."""
+    kwargs.setdefault("fontsize", 8)
+    kwargs.setdefault("ncol", 2)
+    return ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), borderaxespad=0.0, **kwargs)

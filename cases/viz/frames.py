@@ -12,7 +12,7 @@ from __future__ import annotations
 import io
 import os
 import time
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
@@ -30,6 +30,7 @@ __all__ = [
     "png_bytes",
     "pyvista_off_screen",
     "colour_range",
+    "field_ranges",
     "space_titles",
     "STRESS_CMAP",
     "N_COLOURS",
@@ -60,6 +61,21 @@ def colour_range(values: np.ndarray) -> tuple[float, float]:
     """Colour range of a field (MPa): its min and max; a constant field gets a range of 1 MPa above it."""
     lo, hi = float(values.min()), float(values.max())
     return (lo, hi) if hi > lo else (lo, lo + 1.0)
+
+
+def field_ranges(evaluator: FieldEvaluator, rows: Iterable[int]) -> dict[str, tuple[float, float]]:
+    """One colour range (MPa) per drawn field over the trajectory ``rows``: ``sigma_n`` (and ``tau`` with
+    friction) from its min to its max over all of them (:func:`colour_range`), so pictures of those
+    instants drawn with it compare."""
+    low: dict[str, float] = {}
+    high: dict[str, float] = {}
+    for row in sorted({int(r) for r in rows}):  # one field at a time: a run's fields need not all fit in memory
+        fld = evaluator.at(row)
+        for name, values in (("sigma_n", fld.sigma_n), ("tau", fld.tau)):
+            if values is not None:
+                low[name] = min(low.get(name, np.inf), float(values.min()))
+                high[name] = max(high.get(name, -np.inf), float(values.max()))
+    return {name: colour_range(np.array([low[name], high[name]]) * 1e-6) for name in low}
 
 
 def png_bytes(image: np.ndarray) -> bytes:
@@ -99,7 +115,8 @@ class FrameRenderer:
         Shade the surface.  Off, every pixel of a facet has exactly its colour-map colour
         (used by the tests to read values back from pixels).
     clim : (float, float), optional
-        Fixed colour range of ``sigma_n`` (MPa); by default each frame spans its own min..max.
+        Fixed colour range of ``sigma_n`` (MPa); by default each frame spans its own min..max.  Values
+        outside it take the end colours, and the frame's caption gives the field's extreme.
     tau_clim : (float, float), optional
         The same for ``tau`` (MPa).
     """
@@ -238,6 +255,9 @@ class FrameRenderer:
             caption = fld.title(label) if row == 0 else "tangential stress tau (friction), against the slip"
             if not values.any():
                 caption += "   (no stress on the surface)"
+            elif values_mpa.min() < clim[0] or values_mpa.max() > clim[1]:
+                # a fixed range narrower than the field: its end colours would understate the extremes
+                caption += f"   (field {values_mpa.min():.4g} .. {values_mpa.max():.4g} MPa, beyond the colour bar)"
             self.texts[name].SetText(2, caption)  # 2: upper edge
             self.plotter.subplot(row, 0)
             self._aim(self.plotter.camera, fld, tip)
@@ -325,11 +345,13 @@ def render_snapshots(
     out_dir: str | os.PathLike,
     instants: Sequence[tuple[str, int]],
     size: tuple[int, int] = (1280, 640),
+    clim: tuple[float, float] | None = None,
+    tau_clim: tuple[float, float] | None = None,
 ) -> list[Path]:
     """PNG images of the field at the given instants: ``field_<label>.png`` (``field_t<ms>ms.png`` unlabelled).
 
     Each image: the projectile in close-up coloured by ``sigma_n`` (and ``tau`` below it with
-    friction), its colour bar in MPa spanning the instant's min..max, the velocity direction
+    friction), its colour bar in MPa (one range shared by all the images, so they compare), the velocity direction
     (black arrow from the tip), the target (a tan backdrop below the surface line ``Z = 0``), the
     path of the centre of mass, a title (time, speed, attack angle, tip depth), and a side panel
     with the path in the target and the speed and attack-angle histories at that instant.
@@ -344,6 +366,9 @@ def render_snapshots(
         Label and trajectory row of each image (:func:`resolve_instants`).
     size : (int, int)
         Width and height in pixels.
+    clim, tau_clim : (float, float), optional
+        Colour range of ``sigma_n`` and ``tau`` (MPa); by default the min..max over all the
+        ``instants`` (:func:`field_ranges`).
 
     Returns
     -------
@@ -352,7 +377,10 @@ def render_snapshots(
     """
     out = Path(out_dir)
     paths = []
-    with FrameRenderer(evaluator, size) as renderer:
+    if clim is None or (tau_clim is None and evaluator.friction):
+        shared = field_ranges(evaluator, [row for _, row in instants])
+        clim, tau_clim = clim or shared["sigma_n"], tau_clim or shared.get("tau")
+    with FrameRenderer(evaluator, size, clim=clim, tau_clim=tau_clim) as renderer:
         for label, row in instants:
             image = renderer.render(row, label)
             path = out / f"field_{_file_label(label, evaluator.result.trajectory.time[row])}.png"
@@ -367,7 +395,8 @@ def render_animation(
     frames: int = 60,
     fps: float = 12.0,
     size: tuple[int, int] = (960, 480),
-    clim: str = "frame",
+    clim: str | tuple[float, float] = "frame",
+    tau_clim: tuple[float, float] | None = None,
 ) -> dict:
     """An animated GIF (Pillow) of the run: the projectile along its path with its field and the histories.
 
@@ -377,9 +406,13 @@ def render_animation(
         Frames, evenly spaced in time.
     fps : float
         Frames per second of the GIF.
-    clim : {"frame", "run"}
+    clim : {"frame", "run"} or (float, float)
         Colour range of ``sigma_n``: each frame's own min..max (the pattern stays readable as the
-        stress falls with speed) or one range for the whole run (the magnitudes compare).
+        stress falls with speed), one range for the whole animation, the min..max over its frames
+        (the magnitudes compare), or a given range in MPa (``penetrate render`` gives the range of
+        its field images).
+    tau_clim : (float, float), optional
+        With a given ``clim``, the range of ``tau`` (MPa); by default the min..max over the frames.
 
     Returns
     -------
@@ -388,16 +421,14 @@ def render_animation(
     """
     from PIL import Image
 
-    if clim not in ("frame", "run"):
-        raise ValueError(f"clim = {clim!r}: must be 'frame' or 'run'")
+    if isinstance(clim, str) and clim not in ("frame", "run"):
+        raise ValueError(f"clim = {clim!r}: must be 'frame', 'run' or a range (lo, hi) in MPa")
     start = time.perf_counter()
     rows = frame_rows(evaluator, frames)
-    fixed = fixed_tau = None
-    if clim == "run":
-        fields = [evaluator.at(int(r)) for r in rows]
-        fixed = colour_range(np.concatenate([f.sigma_n for f in fields]) * 1e-6)
-        if evaluator.friction:
-            fixed_tau = colour_range(np.concatenate([f.tau for f in fields]) * 1e-6)
+    fixed, fixed_tau = (None, None) if isinstance(clim, str) else (tuple(clim), tau_clim)
+    if clim == "run" or (fixed_tau is None and fixed is not None and evaluator.friction):
+        shared = field_ranges(evaluator, rows)
+        fixed, fixed_tau = fixed or shared["sigma_n"], fixed_tau or shared.get("tau")
     images = []
     with FrameRenderer(evaluator, size, clim=fixed, tau_clim=fixed_tau) as renderer:
         for row in rows:

@@ -30,7 +30,7 @@ from fem_loads import DAFLLoads, SurfaceQuadrature
 from ..run import PreparedProjectile
 from ..scene import InputError
 from .field import FieldEvaluator
-from .figures import new_figure, save_figure
+from .figures import legend_outside, new_figure, save_figure
 
 __all__ = ["SidePanel", "ring_stress", "default_station", "plot_histories", "plot_polar", "SOIL"]
 
@@ -200,7 +200,7 @@ def plot_histories(
     axis points back from the tip).  The instants are marked by vertical lines.
     """
     t = history["time"].to_numpy() * 1e3
-    figure = new_figure((8, 8))
+    figure = new_figure((9.5, 8))
     centre_ax, moment_ax, angle_ax = figure.subplots(3, 1, sharex=True)
     centre = history["resistance_centre_from_tip"].to_numpy()
     length = prepared.length
@@ -210,12 +210,12 @@ def plot_histories(
     centre_ax.set_ylim(2 * length, -0.5 * length)
     centre_ax.set_ylabel("behind the tip (m)")
     centre_ax.set_title("resistance centre (R aft of the centre of mass: restoring moment)", fontsize=10)
-    centre_ax.legend(fontsize=8, loc="lower right")
+    legend_outside(centre_ax)
     moment = np.hypot(history["moment_y"].to_numpy(), history["moment_z"].to_numpy())
     moment_ax.plot(t, history["moment_y"].to_numpy() * 1e-3, color="tab:green", lw=1.0, label="pitch M_y (body)")
     moment_ax.plot(t, moment * 1e-3, color="0.5", lw=0.8, ls=":", label="|transverse moment|")
     moment_ax.set_ylabel("moment (kN m)")
-    moment_ax.legend(fontsize=8)
+    legend_outside(moment_ax)
     angle_ax.plot(t, history["attack_angle"], color="tab:red", lw=1.0)
     angle_ax.axhline(0.0, color="0.6", lw=0.6)
     angle_ax.set_ylabel("attack angle (deg)")
@@ -242,6 +242,8 @@ def plot_polar(
 
     ``theta = 0`` is the windward side (see the module docstring).
     """
+    from matplotlib.ticker import FuncFormatter
+
     station = default_station(evaluator.prepared) if station is None else station
     figure = new_figure((6.5, 6.5))
     ax = figure.add_subplot(projection="polar")
@@ -258,6 +260,8 @@ def plot_polar(
             + ("" if sigma.max() > 0 else " (no stress at this station)"),
         )
     ax.set_theta_zero_location("N")
+    # a polar plot has no radial axis label to carry the unit: each radial tick carries it
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g} MPa"))
     ax.set_title(
         f"sigma_n (MPa) around the surface {station:.3f} m behind the tip\n(0 deg: windward side)", fontsize=10
     )

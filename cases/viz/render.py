@@ -8,11 +8,11 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from ..run import RunResult
-from .field import FieldEvaluator, resolve_instants
-from .frames import render_animation, render_snapshots
+from .field import FieldEvaluator, frame_rows, resolve_instants
+from .frames import field_ranges, render_animation, render_snapshots
 from .panels import plot_histories, plot_polar
 from .paraview import write_paraview
-from .trajectory import render_trajectory
+from .trajectory import render_trajectory, trajectory_rows
 
 __all__ = ["render_all"]
 
@@ -28,8 +28,15 @@ def render_all(
     steps: int | None = 100,
     station: float | None = None,
     size: tuple[int, int] = (1280, 640),
+    colour_range: tuple[float, float] | None = None,
 ) -> dict:
     """Everything ``penetrate render`` writes.
+
+    Every picture of the field shares one colour range per field, so they compare: by default
+    the min..max (MPa) over all the instants drawn (the field images, the bodies of
+    ``trajectory.png`` and, with ``animation``, the animation's frames); ``colour_range`` fixes
+    that of ``sigma_n`` (``tau``, with friction, keeps the shared range).  The ParaView files hold
+    the values (Pa) and no colour scale.
 
     Parameters
     ----------
@@ -49,12 +56,15 @@ def render_all(
         Distance behind the tip (m) of the polar plot's ring.
     size : (int, int)
         Size of the field images in pixels.
+    colour_range : (float, float), optional
+        Colour range of ``sigma_n`` (MPa), ``0 <= lo < hi``, for renders that compare with each other.
 
     Returns
     -------
     dict
-        ``instants`` (label, row, time), ``files`` (written paths), ``seconds`` (wall time of each
-        part and ``total``) and, with ``paraview``, ``paraview_steps``.
+        ``instants`` (label, row, time), ``colour_range`` (``{"sigma_n": [lo, hi]}`` and, with
+        friction, ``tau``; MPa), ``files`` (written paths), ``seconds`` (wall time of each part and
+        ``total``) and, with ``paraview``, ``paraview_steps``.
     """
     out = Path(out_dir)
     record: dict = {"files": [], "seconds": {}}
@@ -65,10 +75,20 @@ def render_all(
         {"label": label, "row": row, "time": float(evaluator.result.trajectory.time[row])} for label, row in instants
     ]
     t0 = time.perf_counter()
-    record["files"] += [str(p) for p in render_snapshots(evaluator, out, instants, size)]
+    drawn = [row for _, row in instants] + list(trajectory_rows(evaluator))
+    if animation:
+        drawn += list(frame_rows(evaluator, frames))
+    clims = field_ranges(evaluator, drawn)
+    if colour_range is not None:
+        clims["sigma_n"] = (float(colour_range[0]), float(colour_range[1]))
+    record["colour_range"] = {name: list(clim) for name, clim in clims.items()}
+    record["seconds"]["colour_range"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    snapshots = render_snapshots(evaluator, out, instants, size, clims["sigma_n"], clims.get("tau"))
+    record["files"] += [str(p) for p in snapshots]
     record["seconds"]["snapshots"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    record["files"].append(str(render_trajectory(evaluator, out / "trajectory.png")))
+    record["files"].append(str(render_trajectory(evaluator, out / "trajectory.png", clim=clims["sigma_n"])))
     record["seconds"]["trajectory"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     record["files"].append(
@@ -77,7 +97,9 @@ def render_all(
     record["files"].append(str(plot_polar(evaluator, instants, out / "polar.png", station)))
     record["seconds"]["field_plots"] = time.perf_counter() - t0
     if animation:
-        movie = render_animation(evaluator, out / "animation.gif", frames)
+        movie = render_animation(
+            evaluator, out / "animation.gif", frames, clim=clims["sigma_n"], tau_clim=clims.get("tau")
+        )
         record["files"].append(movie["path"])
         record["seconds"]["animation"] = movie["seconds"]
     if paraview:

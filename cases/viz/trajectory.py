@@ -12,7 +12,7 @@ from .field import FieldEvaluator, SurfaceField
 from .frames import BACKGROUND, N_COLOURS, STRESS_CMAP, colour_range, png_bytes, pyvista_off_screen, space_titles
 from .panels import SOIL
 
-__all__ = ["render_trajectory"]
+__all__ = ["render_trajectory", "trajectory_rows"]
 
 
 def _label_anchor(fld: SurfaceField, positions: np.ndarray, length: float) -> tuple[np.ndarray, str]:
@@ -32,15 +32,26 @@ def _label_anchor(fld: SurfaceField, positions: np.ndarray, length: float) -> tu
     return anchor, ("right" if across[0] < -0.2 else "left" if across[0] > 0.2 else "center")
 
 
+def trajectory_rows(evaluator: FieldEvaluator, count: int = 8) -> np.ndarray:
+    """The trajectory rows of the bodies :func:`render_trajectory` draws: ``count`` instants evenly
+    spaced in path length (fewer if some fall on the same step)."""
+    s = evaluator.history["path_length"].to_numpy()
+    return np.unique([int(np.argmin(np.abs(s - v))) for v in np.linspace(s[0], s[-1], count)])
+
+
 def render_trajectory(
-    evaluator: FieldEvaluator, path: str | os.PathLike, count: int = 8, size: tuple[int, int] = (1400, 700)
+    evaluator: FieldEvaluator,
+    path: str | os.PathLike,
+    count: int = 8,
+    size: tuple[int, int] = (1400, 700),
+    clim: tuple[float, float] | None = None,
 ) -> Path:
     """The whole path in the target, seen from the side, with the projectile at ``count`` instants.
 
-    The instants are evenly spaced in path length.  The bodies are drawn to scale at their true
-    positions and attitudes, coloured by ``sigma_n`` on one colour bar (MPa) spanning all of them;
-    each is labelled with its time and speed.  The target is the tan region below the surface
-    line ``Z = 0``.
+    The instants are evenly spaced in path length (:func:`trajectory_rows`).  The bodies are drawn
+    to scale at their true positions and attitudes, coloured by ``sigma_n`` on one colour bar (MPa)
+    spanning all of them, or ``clim``; each is labelled with its time and speed.  The target is the
+    tan region below the surface line ``Z = 0``.
 
     Parameters
     ----------
@@ -52,6 +63,8 @@ def render_trajectory(
         Bodies drawn.
     size : (int, int)
         Width and height in pixels.
+    clim : (float, float), optional
+        Colour range of ``sigma_n`` (MPa); by default the min..max over the bodies drawn.
 
     Returns
     -------
@@ -60,13 +73,11 @@ def render_trajectory(
     """
     pv = pyvista_off_screen()
     ev = evaluator
-    h = ev.history
-    s = h["path_length"].to_numpy()
-    rows = np.unique([int(np.argmin(np.abs(s - v))) for v in np.linspace(s[0], s[-1], count)])
+    rows = trajectory_rows(ev, count)
     positions = ev.result.trajectory.position
     fields = [ev.at(int(r)) for r in rows]
-    values = np.concatenate([f.sigma_n for f in fields]) * 1e-6
-    clim = colour_range(values)
+    if clim is None:
+        clim = colour_range(np.concatenate([f.sigma_n for f in fields]) * 1e-6)
     length = ev.length
     x_lo, x_hi = positions[:, 0].min() - 1.5 * length, positions[:, 0].max() + 1.5 * length
     z_lo = min(positions[:, 2].min(), 0.0) - 1.5 * length

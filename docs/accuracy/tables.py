@@ -2,9 +2,9 @@
 
 Run from the repository root, after ``penetrate accuracy ... --out docs/accuracy/NAME``::
 
-    python docs/accuracy/tables.py mesh docs/accuracy/test2      # error by mesh, geometry, points
-    python docs/accuracy/tables.py time docs/accuracy/test2      # the time axis on the finest mesh
-    python docs/accuracy/tables.py shipped docs/accuracy/test2 docs/accuracy/test5 ...
+    python -m docs.accuracy.tables mesh docs/accuracy/test2      # error by mesh, geometry, points
+    python -m docs.accuracy.tables time docs/accuracy/test2      # the time axis on the finest mesh
+    python -m docs.accuracy.tables shipped docs/accuracy/test2 docs/accuracy/test5 ...
 
 The figures come from the CSV each study writes beside its report, so the page and the study
 cannot disagree.  Times carry their unit (``s``): they are the machine's, and the docs check
@@ -15,19 +15,13 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "docs"))
-
-from measure import stamp  # noqa: E402
-
-from cases.studies.accuracy import time_convergence  # noqa: E402
+from cases.studies.accuracy import time_convergence
+from docs.measure import stamp
 
 
 def _points_per_facet(degree: float) -> int:

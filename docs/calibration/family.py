@@ -1,8 +1,8 @@
 """The family's unknown interior calibrated on #3 alone, and the other members predicted (docs/calibration.md).
 
-Run from the repository root: ``python docs/calibration/family.py`` (several minutes from an empty
+Run from the repository root: ``python -m docs.calibration.family`` (several minutes from an empty
 store; runs are kept in ``runs/calibration-family-store``); it writes ``family.json`` beside itself, and
-``python docs/calibration/family.py --from-json`` prints the same tables from it (docs/paper.md).  The one
+``python -m docs.calibration.family --from-json`` prints the same tables from it (docs/paper.md).  The one
 parameter is a common factor on the
 transverse moment of inertia, ``projectile.transverse_inertia_scale``, fitted by ``penetrate fit``'s
 own code to #3's two published numbers: its critical impact velocity (stable at 1100, unstable at

@@ -1,6 +1,6 @@
 """The soil fitted to Forrestal and Luk's five measured shots (docs/calibration.md).
 
-Run from the repository root: ``python docs/calibration/soil.py`` (about a minute from an empty store; runs are kept in
+Run from the repository root: ``python -m docs.calibration.soil`` (about a minute from an empty store; runs are kept in
 ``runs/calibration-soil-store`` and found again).  Every fit is ``penetrate fit``'s own
 (:func:`cases.studies.fit.fit`), at the shipped numerics of the five scenes; the observations are
 the measured distances travelled (path length of the centre of mass), without a stated

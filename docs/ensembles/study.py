@@ -1,6 +1,6 @@
 """The probability that #3 turns unstable, against its impact speed, under scattered disturbances (docs/ensembles.md).
 
-Run from the repository root: ``python docs/ensembles/study.py`` (a few minutes on 2 cores from an
+Run from the repository root: ``python -m docs.ensembles.study`` (a few minutes on 2 cores from an
 empty store; runs are kept in ``runs/ensembles-store`` and found again).  Three ensembles of
 ``penetrate ensemble``'s own code (:func:`cases.studies.ensemble_study.run_ensemble`), one per scale
 of the initial attack angle (half-normal, 0.5, 1 and 2 degrees), each with the impact speed uniform
@@ -13,7 +13,6 @@ speeds, the curves, and how the band narrows with the runs per bin.
 from __future__ import annotations
 
 import math
-import sys
 import time
 from pathlib import Path
 
@@ -25,11 +24,10 @@ from cases.studies import Pool, Sweep, find_critical_velocity
 from cases.studies.ensemble import wilson_interval
 from cases.studies.ensemble_study import run_ensemble
 from cases.studies.paper.plan import STUDY_NUMERICS
-from cases.viz.figures import save_figure, subplots
+from cases.viz.figures import legend_outside, save_figure, subplots
+from docs.measure import stamp
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent))
-from measure import stamp  # noqa: E402 - docs/measure.py
 
 SCENE = "cases/paper_p3.toml"
 SOIL = {"A": 1.718, "sigma_0": 10e6, "B": 1.227, "rho_0": 1860.0}
@@ -159,12 +157,12 @@ def curve_figure(tables: dict) -> None:
     axes.axhline(0.5, color="grey", lw=0.8, ls=":")
     axes.set(
         xlabel="impact speed (m/s)",
-        ylabel="P(unstable)",
+        ylabel="P(unstable) (-)",
         ylim=(-0.02, 1.02),
         title=f"#3: probability of instability ({RUNS} runs each; B +-10 %; 95 % Wilson bands)",
     )
     axes.grid(alpha=0.3)
-    axes.legend(fontsize=8, loc="lower right")
+    legend_outside(axes, fontsize=8)
     figure.tight_layout()
     save_figure(figure, HERE / "curves.png")
 

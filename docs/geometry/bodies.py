@@ -1,6 +1,6 @@
 """The shipped non-axisymmetric bodies run as shipped (docs/geometry.md).
 
-Run from the repository root: ``python docs/geometry/bodies.py`` (a few seconds once the meshes are
+Run from the repository root: ``python -m docs.geometry.bodies`` (a few seconds once the meshes are
 cached).  Prints a markdown table: for ``cases/eroded_test2.toml`` and ``cases/finned_test2.toml``
 beside the axisymmetric ``cases/forrestal_luk_test2.toml``, the mesh's volume and transverse
 inertia against OpenCASCADE's integrals over the CAD solid, and the run: tip depth, path length,
@@ -9,12 +9,12 @@ the largest attack angle, the axis turn and the lateral drift of the centre of m
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 
 import numpy as np
 
 from cases import load_scene, run_scene, summarise
+from docs.geometry.cad_bodies import occ_mass_properties
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENES = {
@@ -22,14 +22,6 @@ SCENES = {
     "eroded_test2": "cases/bodies/eroded_test2.step",
     "finned_test2": "cases/bodies/finned_test2.step",
 }
-
-
-def occ_mass_properties(path: str):
-    """OpenCASCADE's volume, centre and inertia tensor (per unit density) of a STEP file in mm, SI units."""
-    spec = importlib.util.spec_from_file_location("bodies", ROOT / "tests" / "bodies.py")
-    bodies = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bodies)
-    return bodies.occ_mass_properties(ROOT / path, scale=1e-3)
 
 
 def main() -> None:
@@ -45,7 +37,7 @@ def main() -> None:
         if step is None:
             volume_error = inertia_error = "- (analytic)"
         else:
-            volume, _, inertia = occ_mass_properties(step)
+            volume, _, inertia = occ_mass_properties(ROOT / step, scale=1e-3)  # a STEP file in mm
             volume_error = f"{mass.volume / volume - 1:+.1e}"
             inertia_error = f"{(mass.inertia[1, 1] / mass.mass) / (inertia[1, 1] / volume) - 1:+.1e}"
         drift = float(np.hypot(*result.trajectory.position[-1, :2])) * 1e3

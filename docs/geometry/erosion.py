@@ -1,7 +1,7 @@
 """The eroded-nose study the published one left out (docs/geometry.md): #3 at normal incidence and zero attack, its
 nose cut on one side by a plane of growing obliquity.
 
-Run from the repository root: ``python docs/geometry/erosion.py`` (a few minutes from an empty store; runs are
+Run from the repository root: ``python -m docs.geometry.erosion`` (a few minutes from an empty store; runs are
 kept in ``runs/erosion-store``).  It
 
 1. writes the bodies with ``cases/bodies/make_bodies.py`` (gmsh OpenCASCADE; BREP, metres) into
@@ -19,9 +19,7 @@ exact normals of the CAD surfaces.
 
 from __future__ import annotations
 
-import importlib.util
 import math
-import sys
 from pathlib import Path
 
 import matplotlib
@@ -29,12 +27,12 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from cases.bodies.make_bodies import write_eroded_p3  # noqa: E402
 from cases.run import RunStore, atomic_write_text, prepare_projectile  # noqa: E402
 from cases.studies import Pool, Sweep, Variation, find_critical_velocities, run_sweep  # noqa: E402
 from cases.studies.paper.plan import STUDY_NUMERICS  # noqa: E402
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from record import study_main  # noqa: E402
+from cases.viz.figures import legend_below, legend_outside  # noqa: E402
+from docs.record import study_main  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -48,20 +46,12 @@ CRITICAL_RANGE = (200.0, 2400.0)
 SCENE = "cases/eroded_p3.toml"
 
 
-def _make_bodies():
-    spec = importlib.util.spec_from_file_location("make_bodies", ROOT / "cases" / "bodies" / "make_bodies.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 def bodies() -> list[tuple[str, Path]]:
     """Write the bodies (label, path): whole, then each angle of cut; and ``bodies.toml`` for ``penetrate sweep``."""
-    make = _make_bodies()
     BODIES.mkdir(parents=True, exist_ok=True)
-    written = [("whole", make.write_eroded_p3(BODIES / "whole.brep", 0.0, 0.0))]
+    written = [("whole", write_eroded_p3(BODIES / "whole.brep", 0.0, 0.0))]
     for angle in ANGLES:
-        written.append((f"{angle:g} deg", make.write_eroded_p3(BODIES / f"cut_{angle:g}deg.brep", angle, DEPTH)))
+        written.append((f"{angle:g} deg", write_eroded_p3(BODIES / f"cut_{angle:g}deg.brep", angle, DEPTH)))
     listing = "".join(f'[[run]]\n"projectile.geometry.file" = "{path}"\n\n' for _, path in written)
     atomic_write_text(BODIES / "bodies.toml", listing)
     return written
@@ -163,7 +153,7 @@ def figures(record: dict) -> None:
         ylim=(0.0, 400.0),
         title="#3, normal impact, nose cut 40 mm behind the tip",
     )
-    axes.legend(fontsize=7, title="cut's angle")
+    legend_outside(axes, fontsize=7, title="cut's angle")
     _save(fig, "erosion_turn.png")
     cut = [b for b in record["bodies"] if b["body"] != "whole"]
     angles = [float(b["body"].split()[0]) for b in cut]
@@ -184,7 +174,10 @@ def figures(record: dict) -> None:
         label="axis turn at 1200 m/s",
     )
     right.set(ylabel="|axis turn| at 1200 m/s (deg)")
-    fig.legend(loc="center right", fontsize=8, bbox_to_anchor=(0.85, 0.45))
+    handles, labels = (
+        sum(pair, []) for pair in zip(left.get_legend_handles_labels(), right.get_legend_handles_labels())
+    )
+    legend_below(left, handles=handles, labels=labels)
     _save(fig, "erosion_critical.png")
 
 

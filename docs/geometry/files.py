@@ -1,8 +1,8 @@
 """Projectiles from files against the analytic scenes (docs/geometry.md): what each kind of file costs in accuracy.
 
-Run from the repository root: ``python docs/geometry/files.py facets`` (about two minutes: the 5 mm meshes) or
-``python docs/geometry/files.py files`` (about a minute).  The bodies are written by gmsh's own OpenCASCADE
-primitives (``tests/bodies.py``, independent of ``mesh/``) into a temporary folder and read back through
+Run from the repository root: ``python -m docs.geometry.files facets`` (about two minutes: the 5 mm meshes) or
+``python -m docs.geometry.files files`` (about a minute).  The bodies are written by gmsh's own OpenCASCADE
+primitives (``docs/geometry/cad_bodies.py``, independent of ``mesh/``) into a temporary folder and read back through
 ``projectile.geometry``; every run is test 2's shot (or its cone-nosed twin) at the shipped numerics unless
 the table says otherwise.  Prints a markdown table.
 
@@ -21,13 +21,9 @@ import sys
 import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
-sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
-
-from bodies import write_body, write_volume_mesh  # noqa: E402
-
-from cases import load_scene, run_scene, scene_path, summarise  # noqa: E402
-from cases.studies.reference import axial_depth_1d  # noqa: E402
+from cases import load_scene, run_scene, scene_path, summarise
+from cases.studies.reference import axial_depth_1d
+from docs.geometry.cad_bodies import write_body, write_volume_mesh
 
 TEST2 = scene_path("forrestal_luk_test2")
 CONE = {"projectile.nose": {"shape": "cone", "half_angle": 12.0}}
@@ -130,7 +126,7 @@ def _bodies(folder: Path) -> list:
 def main() -> None:
     table = sys.argv[1] if len(sys.argv) > 1 else ""
     if table not in ("facets", "files"):
-        raise SystemExit("usage: python docs/geometry/files.py facets|files")
+        raise SystemExit("usage: python -m docs.geometry.files facets|files")
     with tempfile.TemporaryDirectory() as folder:
         (facets if table == "facets" else files)(Path(folder))
 

@@ -1,6 +1,6 @@
 """The tables of docs/paper.md, from the study's own results (results.json, variants.json).
 
-Run from the repository root: ``python docs/paper/tables.py p3|family|variants``.  The
+Run from the repository root: ``python -m docs.paper.tables p3|family|variants``.  The
 figures come from the JSON files ``penetrate paper`` and ``penetrate paper --variants`` write
 beside this script, so the page and the study cannot disagree; the paper's published numbers
 are its Table 4 and its critical speed of #3 (docs/validation.md).
@@ -129,5 +129,5 @@ def variants() -> None:
 if __name__ == "__main__":
     tables = {"p3": p3, "family": family, "variants": variants}
     if len(sys.argv) != 2 or sys.argv[1] not in tables:
-        sys.exit(f"usage: python docs/paper/tables.py {'|'.join(tables)}")
+        sys.exit(f"usage: python -m docs.paper.tables {'|'.join(tables)}")
     tables[sys.argv[1]]()

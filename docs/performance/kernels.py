@@ -2,7 +2,7 @@
 
 Usage (from the repository root; about a minute once the meshes are cached)::
 
-    .venv/bin/python docs/performance/kernels.py [--repeats 3]
+    .venv/bin/python -m docs.performance.kernels [--repeats 3]
 
 For each scene of ``cases/*.toml`` at its shipped numerics: the integration time of one run in
 process with ``numerics.kernel = "numpy"`` and ``"compiled"`` (the minimum of ``--repeats``, after
@@ -17,14 +17,9 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
-
-from cases import SHIPPED_SCENES, load_scene, run_scene, scene_path  # noqa: E402
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from measure import stamp  # noqa: E402
+from cases import SHIPPED_SCENES, load_scene, run_scene, scene_path
+from docs.measure import stamp
 
 
 def _below(difference: float) -> str:

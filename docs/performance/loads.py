@@ -2,81 +2,43 @@
 
 Usage (from the repository root; about a minute once the meshes are cached, three from an empty cache)::
 
-    .venv/bin/python docs/performance/loads.py
+    .venv/bin/python -m docs.performance.loads
 
 The state and the three measurements are the benchmark's (``./dev bench -k load_evaluation``,
-tests/benchmarks/test_performance.py): #3 at 800 m/s with a 1-degree attack angle and a pitch rate,
-wholly embedded or with the nose entering; the numpy load as a run calls it; the compiled kernel
-called 100 times from compiled code (as inside a compiled step); and the lower bound, a plain C loop
-over every point with the same smooth steps, built with ``cc -O3 -march=native`` and the licence the
-compiled kernel has (reassociation, fused multiply-adds).  Medians of 15 samples, microseconds per
-evaluation.  Prints a markdown table and the stamp line.
+tests/benchmarks/test_performance.py), from docs/performance/lower_bound.py, which both share: #3 at
+800 m/s with a 1-degree attack angle and a pitch rate, wholly embedded or with the nose entering; the
+numpy load as a run calls it; the compiled kernel called 100 times from compiled code (as inside a
+compiled step); and the lower bound, a plain C loop over every point with the same smooth steps, built
+with ``cc -O3 -march=native`` and the licence the compiled kernel has (reassociation, fused
+multiply-adds).  Medians of 15 samples, microseconds per evaluation.  Prints a markdown table and the
+stamp line.
 """
 
 from __future__ import annotations
 
 import statistics
-import sys
 import tempfile
 import timeit
 from pathlib import Path
 
-import numpy as np
-
-ROOT = Path(__file__).resolve().parents[2]
-sys.path[:0] = [str(ROOT), str(ROOT / "tests" / "benchmarks"), str(ROOT / "docs")]
-
-from measure import stamp  # noqa: E402
-from test_performance import _c_kernel, _median_per_call, _repeated_kernel, _state  # noqa: E402
-
-from cases import load_scene, prepare_projectile, scene_path  # noqa: E402
+from cases import load_scene, prepare_projectile, scene_path
+from docs.measure import stamp
+from docs.performance.lower_bound import benchmark_state, c_loop_call, compiled_call, median_per_call
 
 MESHES = (0.04, 0.02, 0.01, 0.005)
 
 
 def measure(mesh_size: float, depth: float, folder: Path) -> tuple[int, float, float, float]:
     """Points, and numpy, compiled and C-loop microseconds per evaluation at ``depth`` (m)."""
-    from cases.run.compiled import _import_compiled
-
     scene = load_scene(scene_path("paper_p3"), {"numerics.mesh_size": mesh_size})
     loads = scene.loads(prepare_projectile(scene).quadrature)
-    position, velocity, rotation, spin = _state(depth)
+    position, velocity, rotation, spin = benchmark_state(depth)
     numpy = (
         statistics.median(timeit.repeat(lambda: loads(position, velocity, rotation, spin), number=100, repeat=15)) / 100
     )
-    data, out, repeated = _import_compiled()[1].kernel_data(loads), np.zeros(6), _repeated_kernel()
-    compiled = _median_per_call(lambda repeat: repeated(data, position, velocity, rotation, spin, out, repeat))
-    lib, pointer = _c_kernel(folder)
-    n = len(loads)
-    width = loads.contact_width + loads.contact_incidence * (
-        np.linalg.norm(velocity) + np.linalg.norm(spin) * loads._max_radius
-    )
-    weights = loads.quadrature.weights
-    arrays = [
-        np.ascontiguousarray(a)
-        for a in (
-            loads._normal_arm_t,
-            loads._points_t,
-            loads.law.static_stress * weights,
-            loads.law.dynamic_density * weights,
-            1.0 / loads._entry_length,
-            np.concatenate([velocity @ rotation, spin]),
-            rotation[2],
-        )
-    ]
-    result = np.zeros(6)
-    c_loop = _median_per_call(
-        lambda repeat: lib.dafl(
-            n,
-            *(a.ctypes.data_as(pointer) for a in arrays),
-            position[2],
-            1.0 / width,
-            int(loads.fully_embedded(position)),
-            result.ctypes.data_as(pointer),
-            repeat,
-        )
-    )
-    return n, numpy * 1e6, compiled * 1e6, c_loop * 1e6
+    compiled = median_per_call(compiled_call(loads, position, velocity, rotation, spin))
+    c_loop = median_per_call(c_loop_call(loads, position, velocity, rotation, spin, folder))
+    return len(loads), numpy * 1e6, compiled * 1e6, c_loop * 1e6
 
 
 def main() -> None:

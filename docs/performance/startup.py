@@ -2,7 +2,7 @@
 
 Usage (from the repository root; a few seconds)::
 
-    .venv/bin/python docs/performance/startup.py [--repeats 7]
+    .venv/bin/python -m docs.performance.startup [--repeats 7]
 
 Runs ``penetrate run cases/forrestal_luk_test2.toml`` (its projectile cached) ``--repeats`` times
 under ``-X importtime`` and sums each module's own import time by group; prints the medians as a
@@ -19,10 +19,9 @@ import sys
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "docs"))
+from docs.measure import stamp
 
-from measure import stamp  # noqa: E402
+ROOT = Path(__file__).resolve().parents[2]
 
 GROUPS = (  # (label, module prefixes); the first that matches takes the module
     ("numpy (all its modules)", ("numpy",)),

@@ -1,6 +1,6 @@
 """Measure what rendering costs (docs/rendering.md).
 
-Run: ``.venv/bin/python docs/rendering/benchmark.py`` (about a minute and a half on 2 cores).
+Run: ``.venv/bin/python -m docs.rendering.benchmark`` (about a minute and a half on 2 cores).
 Projectile #3 at 1120 m/s with the shipped numerics (10 mm mesh, RK4 at 10 us).  Prints:
 
 * the run and the set-up of the field evaluator (mesh from the cache, loads);
@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import gc
 import statistics
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -28,9 +27,7 @@ from cases.viz.field import FieldEvaluator, resolve_instants
 from cases.viz.frames import FrameRenderer, render_animation, render_snapshots
 from cases.viz.paraview import write_paraview
 from cases.viz.trajectory import render_trajectory
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from measure import stamp  # noqa: E402 - docs/measure.py
+from docs.measure import stamp
 
 
 def rss_bytes() -> int:

@@ -1,6 +1,6 @@
 """The figures of docs/rendering.md's example: projectile #3 at 1120 m/s with the shipped numerics.
 
-Run: ``.venv/bin/python docs/rendering/example.py`` (about 15 s).  Prints the run's summary
+Run: ``.venv/bin/python -m docs.rendering.example`` (about 15 s).  Prints the run's summary
 line, the table of the default instants (time, speed, attack angle, the largest facet
 ``sigma_n`` and the windward / leeward means) and the tip check at the embedded instant: the
 hottest facet's mean against the closed form ``A sigma_0 + B rho_0 (V sin theta_tip)^2`` at the
@@ -24,8 +24,10 @@ NAMES = {"embedded": "nose embedded", "peak": "peak attack angle", "converged": 
 
 def facet_normals(evaluator: FieldEvaluator) -> np.ndarray:
     """Body-frame outward normal of each facet: the area-weighted mean of its points' normals."""
-    normals = evaluator.prepared.quadrature.normals.reshape(*evaluator._weights.shape, 3)
-    mean = (normals * evaluator._weights[..., None]).sum(axis=1)
+    per_facet = evaluator.surface.points_per_facet  # the quadrature's points lie facet by facet (cases.viz.field)
+    weights = evaluator.prepared.quadrature.weights.reshape(-1, per_facet)
+    normals = evaluator.prepared.quadrature.normals.reshape(*weights.shape, 3)
+    mean = (normals * weights[..., None]).sum(axis=1)
     return mean / np.linalg.norm(mean, axis=1, keepdims=True)
 
 

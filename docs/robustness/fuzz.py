@@ -1,6 +1,6 @@
 """The fuzzing's properties and how many examples each draws (docs/robustness.md), read off the test module.
 
-Run from the repository root: ``python docs/robustness/fuzz.py``.  Prints a markdown table: what each
+Run from the repository root: ``python -m docs.robustness.fuzz``.  Prints a markdown table: what each
 property of ``tests/robustness/test_fuzz.py`` generates (said here) and its examples in the default run
 (its ``@fuzz(N)`` decorator) and at ``PENETRATE_FUZZ_SCALE=10``; a test of the module this script does not
 describe fails the script, so the table cannot miss one.
@@ -63,7 +63,7 @@ def main() -> None:
     found = re.findall(r"^@fuzz\((\d+)\)\n(?:@[^\n]+\n)*def (test_\w+)", source, flags=re.MULTILINE)
     unknown = [name for _, name in found if name not in PROPERTIES]
     if unknown:
-        sys.exit(f"docs/robustness/fuzz.py: describe {', '.join(unknown)}")
+        sys.exit(f"docs.robustness.fuzz: describe {', '.join(unknown)}")
     print("| property | what is generated | examples, default run | at `PENETRATE_FUZZ_SCALE=10` |")
     print("|---|---|---|---|")
     for examples, name in found:

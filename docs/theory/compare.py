@@ -1,6 +1,6 @@
 """The reduced pitch-plane model's predictions against the simulator's measured characteristic speeds (docs/theory.md).
 
-Run from the repository root: ``python docs/theory/compare.py`` (about two minutes from an empty store;
+Run from the repository root: ``python -m docs.theory.compare`` (about two minutes from an empty store;
 runs are kept in ``runs/theory-store``).  Every scene is the paper study's (``paper_p3`` with its
 centre of mass at each ``Lc/L``, the study's numerics, 1 degree of attack at 1200 m/s), and each of
 its variants (docs/paper.md).  Measured, at those numerics:
@@ -33,21 +33,17 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 from cases import load_scene, run_scene, scene_path  # noqa: E402
 from cases.run import RunStore, prepare_projectile  # noqa: E402
-from cases.studies import (
+from cases.studies import (  # noqa: E402
     Pool,
     Sweep,
     find_critical_velocities,
-    measure_convergent_velocity,  # noqa: E402
+    measure_convergent_velocity,
     run_sweep,
 )
 from cases.studies.paper.plan import PAPER_RATIOS, STUDY_NUMERICS, VARIANTS, study_base  # noqa: E402
-from cases.studies.predict import (
-    RINGS,  # noqa: E402
-    predict,  # noqa: E402
-)
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from record import study_main  # noqa: E402
+from cases.studies.predict import RINGS, predict  # noqa: E402
+from cases.viz.figures import legend_below  # noqa: E402
+from docs.record import study_main  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 STORE = RunStore("runs/theory-store")
@@ -294,8 +290,8 @@ def figure(record: dict) -> None:
             label=f"+-{100 * bound:.0f} %",
         )
         axes.set(xlabel="measured (m/s)", ylabel="predicted (m/s)", title=title)
-    left.legend(fontsize=7)
-    right.legend(fontsize=7)
+    legend_below(left, fontsize=7)
+    legend_below(right, fontsize=7)
     fig.tight_layout()
     target = HERE / "predicted_vs_measured.png"
     fig.savefig(target.with_suffix(".tmp.png"), dpi=110)

@@ -5,9 +5,10 @@ the default ``pytest`` run skips them (``--benchmark-skip`` in pyproject.toml).
 docs/performance.md quotes their medians and spreads.
 
 * the DAFL load evaluation per surface point, numpy and the compiled kernel (numba), against a
-  compiled lower bound: a plain C loop over the same arrays (built here with the system C
-  compiler, called once per 100 evaluations so that the ctypes call does not count; the numba
-  kernel likewise 100 times from compiled code);
+  compiled lower bound: a plain C loop over the same arrays (docs/performance/lower_bound.py, which
+  docs/performance/loads.py shares: built with the system C compiler, called once per 100
+  evaluations so that the ctypes call does not count; the numba kernel likewise 100 times from
+  compiled code);
 * integrator steps per second (RK4-MK with a free load, and with the DAFL load);
 * one full run of ``cases/forrestal_luk_test2.toml`` at its shipped settings
   (in process, and as a ``penetrate run`` process);
@@ -16,13 +17,8 @@ docs/performance.md quotes their medians and spreads.
 
 from __future__ import annotations
 
-import ctypes
-import functools
-import shutil
-import statistics
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -32,168 +28,33 @@ from cases import load_scene, prepare_projectile, run_scene, scene_path
 from cases.run import RunStore
 from cases.studies import Pool, Sweep, Variation, grid, read_variations, run_sweep
 from cases.studies.paper import STUDY_NUMERICS
+from docs.performance.lower_bound import benchmark_state, c_compiler, c_loop_call, compiled_call, median_per_call
 from dynamics import RK4, FixedStep, RigidBody, State, simulate
-from dynamics.quaternion import from_rotation_matrix, rotation_matrix
+from dynamics.quaternion import from_rotation_matrix
 
 ROOT = Path(__file__).resolve().parents[2]
 FAMILY_RATIOS = "0.4448,0.5042,0.5636,0.6230"  # the paper's projectiles #1-#4 (Lc/L)
 FAMILY_SPEEDS = "700:1200:100"  # m/s
-
-C_LOOP = r"""
-/* The DAFL load of one law with separation and both smooth ramps (the scenes' default load), over
-   every point: the same arrays as fem_loads.DAFLLoads, no mirror images. */
-static inline double smooth_step(double t) {
-    t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
-    return t * t * t * (10.0 + t * (6.0 * t - 15.0));
-}
-
-void dafl(long n, const double *normal_arm /* 6 x n */, const double *points /* 3 x n */,
-          const double *static_w, const double *dynamic_w, const double *inverse_entry,
-          const double *g /* R^T V, omega */, const double *rz /* third row of R */, double z,
-          double inverse_width, int embedded, double *out, long repeat) {
-    for (long r = 0; r < repeat; ++r) {
-        double acc[6] = {0, 0, 0, 0, 0, 0};
-        for (long i = 0; i < n; ++i) {
-            double vn = 0.0;
-            for (int k = 0; k < 6; ++k) vn += normal_arm[k * n + i] * g[k];
-            double s = (static_w[i] + dynamic_w[i] * vn * vn) * smooth_step(vn * inverse_width);
-            if (!embedded) {
-                double height = z + rz[0] * points[i] + rz[1] * points[n + i] + rz[2] * points[2 * n + i];
-                s *= smooth_step(0.5 - height * inverse_entry[i]);
-            }
-            for (int k = 0; k < 6; ++k) acc[k] -= s * normal_arm[k * n + i];
-        }
-        for (int k = 0; k < 6; ++k) out[k] = acc[k];
-    }
-}
-"""
-# the licence numba's kernel has (reassociation, fused multiply-adds; fem_loads/compiled.py), and no more
-C_FLAGS = [
-    "-O3",
-    "-march=native",
-    "-fno-math-errno",
-    "-fno-trapping-math",
-    "-fno-signed-zeros",
-    "-fassociative-math",
-    "-ffp-contract=fast",
-]
-
-
-def _c_kernel(tmp_path: Path):
-    compiler = shutil.which("cc") or shutil.which("gcc")
-    if compiler is None:
-        pytest.skip("no C compiler for the compiled lower bound")
-    source, library = tmp_path / "dafl.c", tmp_path / "libdafl.so"
-    source.write_text(C_LOOP)
-    subprocess.run([compiler, *C_FLAGS, "-shared", "-fPIC", "-o", str(library), str(source)], check=True)
-    lib = ctypes.CDLL(str(library))
-    pointer = ctypes.POINTER(ctypes.c_double)
-    lib.dafl.argtypes = [
-        ctypes.c_long,
-        pointer,
-        pointer,
-        pointer,
-        pointer,
-        pointer,
-        pointer,
-        pointer,
-        ctypes.c_double,
-        ctypes.c_double,
-        ctypes.c_int,
-        pointer,
-        ctypes.c_long,
-    ]
-    return lib, pointer
-
-
-@functools.cache
-def _repeated_kernel():
-    """The compiled kernel called ``repeat`` times from compiled code (as inside a compiled step)."""
-    from numba import njit
-
-    from cases.run.compiled import _import_compiled
-
-    kernel = _import_compiled()[1].dafl_kernel
-
-    @njit
-    def repeated(data, position, velocity, rotation, spin, out, repeat):
-        for _ in range(repeat):
-            kernel(data, position, velocity, rotation, spin, out)
-
-    return repeated
-
-
-def _median_per_call(call, repeats: int = 100, samples: int = 15) -> float:
-    times = []
-    for _ in range(samples):
-        start = time.perf_counter()
-        call(repeats)
-        times.append((time.perf_counter() - start) / repeats)
-    return statistics.median(times)
-
-
-def _state(depth: float):
-    """An embedded state of projectile #3 at 800 m/s with a 1-degree attack angle and a pitch rate."""
-    rotation = rotation_matrix(np.array([np.cos(np.radians(0.5)), 0.0, np.sin(np.radians(0.5)), 0.0]))
-    velocity = rotation @ np.array([800.0, 10.0, 0.0])
-    return np.array([0.0, 0.0, depth]), velocity, rotation, np.array([0.0, 0.5, 2.0])
 
 
 @pytest.mark.parametrize("depth", [-3.0, -0.3], ids=["embedded", "entering"])
 @pytest.mark.parametrize("mesh_size", [0.04, 0.02, 0.01, 0.005])
 def test_load_evaluation(benchmark, tmp_path, mesh_size, depth):
     """The numpy load (benchmarked), the compiled kernel and the C loop (extra_info), all on the same state."""
+    if c_compiler() is None:
+        pytest.skip("no C compiler for the compiled lower bound")
     scene = load_scene(scene_path("paper_p3"), {"numerics.mesh_size": mesh_size})
     loads = scene.loads(prepare_projectile(scene).quadrature)
-    position, velocity, rotation, spin = _state(depth)
-    lib, pointer = _c_kernel(tmp_path)
+    position, velocity, rotation, spin = benchmark_state(depth)
     n = len(loads)
-    g = np.concatenate([velocity @ rotation, spin])
-    width = loads.contact_width + loads.contact_incidence * (
-        np.linalg.norm(velocity) + np.linalg.norm(spin) * loads._max_radius
-    )
-    out = np.zeros(6)
-    weights = loads.quadrature.weights  # the C loop runs over every point (no mirror images)
-    arrays = [
-        np.ascontiguousarray(a)
-        for a in (
-            loads._normal_arm_t,
-            loads._points_t,
-            loads.law.static_stress * weights,
-            loads.law.dynamic_density * weights,
-            1.0 / loads._entry_length,
-            g,
-            rotation[2],
-        )
-    ]
-
-    def c_loop(repeat: int) -> np.ndarray:
-        lib.dafl(
-            n,
-            *(a.ctypes.data_as(pointer) for a in arrays),
-            position[2],
-            1.0 / width,
-            int(loads.fully_embedded(position)),
-            out.ctypes.data_as(pointer),
-            repeat,
-        )
-        return out
-
-    from cases.run.compiled import _import_compiled
-
-    data = _import_compiled()[1].kernel_data(loads)
-    kernel_out = np.zeros(6)
-    repeated = _repeated_kernel()
-
-    def kernel(repeat: int) -> np.ndarray:
-        repeated(data, position, velocity, rotation, spin, kernel_out, repeat)
-        return kernel_out
+    c_loop = c_loop_call(loads, position, velocity, rotation, spin, tmp_path)
+    kernel = compiled_call(loads, position, velocity, rotation, spin)
 
     force, moment = loads(position, velocity, rotation, spin)
     reference = np.concatenate([rotation.T @ force, moment])
     np.testing.assert_allclose(c_loop(1), reference, rtol=0, atol=1e-9 * np.abs(reference).max())
     np.testing.assert_allclose(kernel(1), np.concatenate([force, moment]), rtol=0, atol=1e-12 * np.abs(reference).max())
-    lower_bound, compiled = _median_per_call(c_loop), _median_per_call(kernel)
+    lower_bound, compiled = median_per_call(c_loop), median_per_call(kernel)
     benchmark(loads, position, velocity, rotation, spin)
     median = benchmark.stats.stats.median
     benchmark.extra_info.update(

@@ -166,7 +166,7 @@ LADDER_SLOW = [(0.02, 1e-5), (0.01, 2e-5), (0.01, 1e-5)]
 
 
 def _critical_run(speed: float, size: float, step: float) -> dict:
-    # on the compiled step (the same method and load as numpy's, tests/cases/test_kernels.py): five times faster
+    # on the compiled step (the same method and load as numpy's, tests/cases/run/test_kernels.py): five times faster
     _, history, record = _run(
         P3,
         f"numerics.mesh_size={size}",

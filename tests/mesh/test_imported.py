@@ -1,5 +1,5 @@
 """Projectiles from CAD and mesh files (mesh.imported, mesh.cad, mesh.volume_mesh), against bodies written by
-gmsh's own primitives (tests/bodies.py): analytic mass properties, OpenCASCADE's mass properties, the exact
+gmsh's own primitives (docs/geometry/cad_bodies.py): analytic mass properties, OpenCASCADE's mass properties, the exact
 surface's integrals, units both ways, and one clear error for each kind of bad file."""
 
 from __future__ import annotations
@@ -19,8 +19,9 @@ from mesh.files import build_file_mesh, tangled
 from mesh.imported import MATERIAL_BASE, FileGeometry, GeometryError, body_frame, file_digest, outline
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from bodies import VALIDATION, occ_mass_properties, write_body, write_volume_mesh  # noqa: E402
 from support import slow_except  # noqa: E402
+
+from docs.geometry.cad_bodies import VALIDATION, occ_mass_properties, write_body, write_volume_mesh  # noqa: E402
 
 STEEL = 7850.0
 OGIVE = ProjectileGeometry(Profile(VALIDATION["diameter"], VALIDATION["length"], OgiveNose(VALIDATION["crh"])))

@@ -500,7 +500,7 @@ BODY_FILES = ("step", "msh", "directory", "text", "missing", "relative")
 def body_files(tmp_path_factory) -> dict[str, str]:
     """A real STEP body, a real mesh, a directory and a text file with a CAD suffix, made once."""
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-    from bodies import write_body, write_volume_mesh
+    from docs.geometry.cad_bodies import write_body, write_volume_mesh
 
     folder = tmp_path_factory.mktemp("bodies")
     (folder / "text.step").write_text("not a STEP file\n")
@@ -957,6 +957,121 @@ def test_command_line_bad_input(cli_files, tmp_path_factory, data):
     if code == 2 and not message.startswith(("argument ", "unrecognized", "the following", "invalid choice")):
         sources = sorted((a for a in args if message.startswith(f"{a}: ")), key=len)  # the scene or a --list
         check_error(message, sources[-1] if sources else None)
+
+
+# ---------------------------------------------------------------------------
+# studies that find nothing: refused up front, or ended with the option that would find something
+
+# numeric keys of test 2 with a range that holds the scene's value, as --param takes them
+FIT_PARAMETERS = [
+    "impact.speed=100:400",
+    "impact.oblique_angle=-10:10",
+    "numerics.time_limit=0.5:2",
+    "numerics.stop_speed=0.1:1",
+    "numerics.entry_smoothing=1:8",
+    "effects.contact_incidence=0.001:0.01",
+]
+
+
+@fuzz(60)
+@given(
+    parameters=st.lists(st.sampled_from(FIT_PARAMETERS), min_size=1, max_size=len(FIT_PARAMETERS), unique=True),
+    observations=st.lists(
+        st.tuples(
+            st.sampled_from(["depth", "path_length", "final_time", "max_attack_angle", "critical_velocity"]),
+            st.floats(0.01, 2000),
+            st.one_of(st.none(), st.floats(0.001, 10)),
+        ),
+        min_size=1,
+        max_size=7,
+    ),
+)
+def test_fit_is_refused_before_any_run_exactly_when_counting_says_so(tmp_path_factory, parameters, observations):
+    """Fewer observations than parameters: one line saying how many it needs, exit code 1, no run, nothing
+    written; otherwise the fit goes on to its runs (stopped here at the first)."""
+    work = tmp_path_factory.mktemp("fit-count")
+    args = ["fit", GOOD, "--store", "store", "--out", "out"]
+    for text in parameters:
+        args += ["--param", text]
+    for quantity, value, sigma in observations:
+        args += ["--observe", f"{quantity}={value!r}" + ("" if sigma is None else f"+-{sigma!r}")]
+    with mock.patch("cases.studies.sweep.run_missing", side_effect=AssertionError("a run started")) as runs:
+        code, stdout, stderr = call(args, work)
+    refused = len(observations) < len(parameters)
+    OUTCOMES["fit counts"]["refused" if refused else "fitted"] += 1
+    assert code == 1 and stdout == "" and len(stderr.strip().splitlines()) == 1, stderr
+    if refused:
+        count = len(parameters)
+        assert not runs.called and _listing(work) == set()
+        assert stderr.startswith(f"penetrate fit: not identifiable: {count} parameters"), stderr
+        assert f"{count} parameters need at least {count} observations (--observe;" in stderr
+    else:
+        assert runs.called and "a run started" in stderr
+
+
+class StableOrUnstable:
+    """Stands in for the critical search's ``run_sweep``: every run stable (a turn of 2 degrees) or unstable."""
+
+    def __init__(self, unstable: bool):
+        self.unstable = unstable
+
+    def __call__(self, sweep, store, pool=None):
+        from types import SimpleNamespace
+
+        turn = 90.0 if self.unstable else 2.0
+        summary = SimpleNamespace(max_attack_angle=1.0, end_reason="stopped", axis_angle_change=turn)
+        runs = [
+            SimpleNamespace(failed=False, error=None, summary=summary, key=str(i)) for i in range(len(sweep.scenes))
+        ]
+        return SimpleNamespace(runs=runs)
+
+
+@fuzz(60)
+@given(
+    unstable=st.booleans(),
+    low=st.floats(1, 9000),
+    width=st.floats(1, 9999),
+    attack=st.one_of(st.just(0.0), st.floats(-90, 90)),
+    oblique=st.one_of(st.just(0.0), st.floats(-60, 60)),
+)
+def test_a_critical_search_that_finds_nothing_names_the_option_that_would(
+    tmp_path_factory, unstable, low, width, attack, oblique
+):
+    """Every run stable (or unstable) over any range of any scene: the output ends with a --speeds range that
+    holds the searched one and reaches further the right way, inside what a scene allows, and names the
+    attack angle when the scene has no disturbance (then a wider range alone finds nothing)."""
+    from cases.cli.speeds import speed_range
+    from cases.studies import speeds as speeds_module
+
+    high = min(low + width, 1e4)
+    low, high = float(f"{low:.6g}"), float(f"{high:.6g}")
+    if not low < high:
+        return
+    args = ["critical", GOOD, "--speeds", f"{low!r}:{high!r}", "--resolution", "50", "--store", "store"]
+    args += ["--set", f"impact.attack_angle={attack!r}", "--set", f"impact.oblique_angle={oblique!r}"]
+    with mock.patch.object(speeds_module, "run_sweep", StableOrUnstable(unstable)):
+        code, stdout, stderr = call(args, tmp_path_factory.mktemp("critical"))
+    last = stdout.strip().splitlines()[-1]
+    OUTCOMES["critical finds nothing"]["unstable" if unstable else "stable"] += 1
+    assert code == 1 and stderr == "", stderr
+    expected = "every run is unstable, down to" if unstable else "every run is stable, up to"
+    assert last.startswith(expected) and "rounds): " in last, last
+    fix = last.split("rounds): ", 1)[1]
+    undisturbed = attack == 0 and oblique == 0
+    at_most = abs(attack) == 90  # the largest attack angle allowed: there is no larger one to suggest
+    assert ("--set impact.attack_angle=" in fix) == (not unstable and (undisturbed or (high == 1e4 and not at_most)))
+    if "--speeds " in fix:
+        new_low, new_high = speed_range(fix.split("--speeds ", 1)[1].split(",")[0].split(" ")[0])
+        assert new_low > 0 and new_high <= 1e4
+        if unstable:
+            assert new_low < low and new_high == high
+        else:
+            assert new_low == low and new_high > high
+    else:
+        assert not unstable and high == 1e4  # a range at the schema's top cannot widen
+    if "--set impact.attack_angle=" in fix:
+        angle = float(fix.split("--set impact.attack_angle=", 1)[1].rstrip(")"))
+        assert 0 < abs(angle) <= 90 and (undisturbed or (abs(angle) > abs(attack) and angle * attack >= 0))
 
 
 # ---------------------------------------------------------------------------

@@ -1,16 +1,16 @@
 """The shape of the code: imports flow one way, no circles, small modules and functions, rooms that say their job.
 
-The rules (README, Layout):
+The rules:
 
-* ``mesh`` imports no other package of the project; ``fem_loads`` imports ``mesh``; ``dynamics`` imports
-  neither (it takes a load function);
-* inside ``cases``: ``scene`` imports only the physics below it; ``run`` imports ``scene``; ``viz``
-  imports ``run`` (and ``scene``); ``studies`` imports ``run`` and ``viz.figures``; ``cli`` imports any
-  of them; nothing imports ``cli``; nothing below reaches up;
+* every import between rooms is one the table of the rooms allows: ``[tool.penetrate.rooms]`` in
+  pyproject.toml, the one place the rooms, their jobs and what each may import are written
+  (docs/architecture.md and the README print it); every room is in the table and every room in the
+  table exists; nothing imports the command line;
 * no import circle between modules (imports inside functions count too);
 * no module over 500 lines, no function over 80 logical lines of code (statements and clause headers,
   however the formatter wraps them; docstrings, comments and blank lines not counted);
-* every package's ``__init__`` says its job and what it may import, in its docstring;
+* every package's ``__init__`` says its job in its docstring, and a room's points to the table for what
+  it may import rather than repeating it;
 * no issue numbers in the repository (they mean nothing to a reader of it).
 """
 
@@ -20,6 +20,7 @@ import ast
 import io
 import re
 import tokenize
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -28,21 +29,26 @@ ROOT = Path(__file__).resolve().parents[2]
 PACKAGES = ("mesh", "fem_loads", "dynamics", "cases")
 MAX_MODULE_LINES, MAX_FUNCTION_LINES = 500, 80
 
-# room -> the rooms it may import (its own always allowed); "cases" is the package root (scene_path)
-ALLOWED = {
-    "mesh": set(),
-    "fem_loads": {"mesh"},
-    "dynamics": set(),
-    "cases": {"cases.scene", "cases.run"},  # lazily, for the short public API
-    "cases.scene": {"mesh", "fem_loads"},
-    "cases.run": {"cases.scene", "mesh", "fem_loads", "dynamics"},
-    "cases.viz": {"cases.run", "cases.scene", "mesh", "fem_loads", "dynamics"},
-    "cases.studies": {"cases", "cases.run", "cases.scene", "cases.viz", "mesh", "fem_loads", "dynamics"},
-    "cases.cli": {"cases", "cases.run", "cases.scene", "cases.viz", "cases.studies", "mesh", "fem_loads", "dynamics"},
-    "cases.bodies": set(),  # the script that writes the shipped CAD bodies: gmsh only
-}
-# studies may use viz for its figures only
-NARROW = {("cases.studies", "cases.viz"): {"cases.viz.figures"}}
+# room -> the rooms it may import (its own always allowed), read from the one table of the rooms in
+# pyproject.toml; an entry that is a module of a room, not a room (``cases.viz.figures``), allows that
+# module of the room only
+ROOMS = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["penetrate"]["rooms"]
+
+
+def _allowed() -> tuple[dict[str, set[str]], dict[tuple[str, str], set[str]]]:
+    allowed: dict[str, set[str]] = {name: set() for name in ROOMS}
+    narrow: dict[tuple[str, str], set[str]] = {}
+    for name, spec in ROOMS.items():
+        for entry in spec["imports"]:
+            other = entry if entry in ROOMS else entry.rpartition(".")[0]
+            assert other in ROOMS, f"pyproject.toml: room {name} may import {entry}, which is no room nor its module"
+            allowed[name].add(other)
+            if other != entry:
+                narrow.setdefault((name, other), set()).add(entry)
+    return allowed, narrow
+
+
+ALLOWED, NARROW = _allowed()
 
 
 def _modules() -> dict[str, Path]:
@@ -192,11 +198,11 @@ def test_the_length_rule_counts_code_only():
 
 
 @pytest.mark.parametrize("package", sorted(m for m in MODULES if _is_package(m)))
-def test_every_room_says_its_job_and_what_it_may_import(package):
+def test_every_room_says_its_job_and_points_to_the_table(package):
     doc = ast.get_docstring(ast.parse(MODULES[package].read_text())) or ""
     assert len(doc) > 40, f"{package}: no docstring saying its job"
-    if package.count(".") <= 1 and package not in ("cases",):  # the rooms themselves
-        assert "import" in doc, f"{package}: the docstring does not say what it may import"
+    if package in ROOMS:
+        assert "[tool.penetrate.rooms]" in doc, f"{package}: the docstring does not point to the table of the rooms"
 
 
 ISSUE_NUMBER = re.compile(r"(?i)\bissues?\s*#?\d+")
@@ -220,6 +226,17 @@ def test_no_issue_numbers_in_the_repository():
 
 
 def test_every_room_is_declared():
-    """A new sub-package of ``cases`` must be given its import rule above."""
+    """A new sub-package of ``cases`` must be given its row in the table of the rooms (pyproject.toml)."""
     rooms = {room(module) for module in MODULES}
     assert rooms == set(ALLOWED), rooms ^ set(ALLOWED)
+
+
+def test_the_tests_of_cases_are_split_by_room():
+    """``tests/cases`` holds one folder per room of ``cases`` (and no test module of its own), so a room's
+    tests are found where the room is."""
+    folder = ROOT / "tests" / "cases"
+    assert not list(folder.glob("test_*.py")), "a test module directly in tests/cases: move it to its room's folder"
+    rooms = {name.split(".", 1)[1] for name in ROOMS if name.startswith("cases.") and name != "cases.bodies"}
+    present = {p.name for p in folder.iterdir() if p.is_dir() and p.name != "__pycache__"}
+    assert present <= rooms, present - rooms
+    assert rooms <= present, f"rooms with no tests: {rooms - present}"

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...viz.figures import save_figure, subplots
+from ...viz.figures import legend_outside, save_figure, subplots
 from ..prediction import TurnBoundary
 from .analysis import PaperRun, Study
 
@@ -16,7 +16,7 @@ __all__ = ["angle_figure", "history_figure", "speeds_figure", "boundary_figure",
 
 def angle_figure(study: Study, runs: Sequence[tuple[str, str]], title: str, path: Path) -> None:
     """Trajectory, axis angle and attack angle against speed for several runs (label, key)."""
-    fig, axes = subplots(1, 3, figsize=(15, 4.6))
+    fig, axes = subplots(1, 3, figsize=(16.5, 4.6))
     for name, key in runs:
         h = study.history(key)
         axes[0].plot(h["position_x"], -h["position_z"], label=name)
@@ -31,7 +31,7 @@ def angle_figure(study: Study, runs: Sequence[tuple[str, str]], title: str, path
         ax.invert_xaxis()
     for ax in axes:
         ax.grid(alpha=0.3)
-    axes[2].legend(fontsize=8)
+    legend_outside(axes[2])  # the same runs in every panel: one legend, right of the panels
     fig.suptitle(title)
     fig.tight_layout()
     save_figure(fig, path)
@@ -39,7 +39,7 @@ def angle_figure(study: Study, runs: Sequence[tuple[str, str]], title: str, path
 
 def history_figure(study: Study, runs: Sequence[tuple[str, str]], centre: float, title: str, path: Path) -> None:
     """Speed, transverse moment and resistance centre against time for several runs (label, key)."""
-    fig, axes = subplots(1, 3, figsize=(15, 4.6))
+    fig, axes = subplots(1, 3, figsize=(16.5, 4.6))
     for name, key in runs:
         h = study.history(key)
         pitch = np.hypot(h["moment_y"], h["moment_z"]) / 1e3
@@ -54,7 +54,7 @@ def history_figure(study: Study, runs: Sequence[tuple[str, str]], centre: float,
     )
     for ax in axes:
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+    legend_outside(axes[2])  # the runs of every panel and the centre of mass: one legend
     fig.suptitle(title)
     fig.tight_layout()
     save_figure(fig, path)
@@ -68,7 +68,7 @@ def speeds_figure(
     path: Path,
 ) -> None:
     """Critical and characteristic convergent velocity against Lc/L with their linear fits and the paper's #3."""
-    fig, axes = subplots(1, 2, figsize=(11, 4.4))
+    fig, axes = subplots(1, 2, figsize=(14, 4.4))
     x = np.array(ratios) * 100
     for ax, values, fit, name in (
         (axes[0], criticals, fits["critical"], "critical impact velocity"),
@@ -82,14 +82,14 @@ def speeds_figure(
     axes[0].plot([56.36], [1110], "s", color="C3", label="paper, #3 (1100-1120)")
     axes[1].plot([56.36], [322], "s", color="C3", label="paper, #3")
     for ax in axes:
-        ax.legend(fontsize=8)
+        legend_outside(ax)
     fig.tight_layout()
     save_figure(fig, path)
 
 
 def boundary_figure(study: Study, boundary: TurnBoundary, runs: Sequence[PaperRun], path: Path) -> None:
     """V_turn(alpha) and V0(alpha) of #3 with the unstable runs' paths in the (alpha, V) plane."""
-    fig, ax = subplots(figsize=(7.5, 5))
+    fig, ax = subplots(figsize=(9.5, 5))
     a = np.array(boundary.attack_angles, float)
     for values, name in (
         (boundary.non_rotating, "non-rotating crossing V0"),
@@ -108,14 +108,14 @@ def boundary_figure(study: Study, boundary: TurnBoundary, runs: Sequence[PaperRu
         title="projectile #3: load-only boundaries and unstable runs",
     )
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    legend_outside(ax)
     fig.tight_layout()
     save_figure(fig, path)
 
 
 def variants_figure(ratios: Sequence[float], characteristic_by: dict[str, list[float | None]], path: Path) -> None:
     """The characteristic convergent velocity of every variant against Lc/L."""
-    fig, ax = subplots(figsize=(7.5, 5))
+    fig, ax = subplots(figsize=(9.5, 5))
     for name, values in characteristic_by.items():
         ax.plot([100 * r for r in ratios], [np.nan if v is None else v for v in values], "o-", label=name)
     ax.set(
@@ -124,6 +124,6 @@ def variants_figure(ratios: Sequence[float], characteristic_by: dict[str, list[f
         title="the paper's variants, 1 degree attack",
     )
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    legend_outside(ax)
     fig.tight_layout()
     save_figure(fig, path)

@@ -1,8 +1,9 @@
 """Projectile bodies written as CAD and mesh files by gmsh's own primitives, independently of ``mesh/``.
 
-The tests read them back through ``mesh.imported`` and compare with the analytic projectiles and
-with gmsh's (OpenCASCADE's) own mass properties.  Each writer makes the body along +x from the
-tail at x = 0 to the tip at x = length, in the file's unit (``scale`` metres per unit).
+docs/geometry/files.py and docs/geometry/bodies.py, like the tests of ``mesh.imported``, read them back through
+``projectile.geometry`` and compare with the analytic projectiles and with gmsh's (OpenCASCADE's) own mass
+properties.  Each writer makes the body along +x from the tail at x = 0 to the tip at x = length, in the
+file's unit (``scale`` metres per unit).
 """
 
 from __future__ import annotations

@@ -9,12 +9,12 @@ import math
 
 import numpy as np
 import pytest
-from bodies import occ_mass_properties
 from support import slow_except
 
 from cases import load_scene, run_scene, summarise
 from cases.run import initial_state, prepare_projectile
 from cases.scene.target import build_law
+from docs.geometry.cad_bodies import occ_mass_properties
 from dynamics.quaternion import rotation_matrix
 from fem_loads.ramps import smooth_step
 

@@ -147,6 +147,31 @@ def test_a_failed_run_is_recorded_and_does_not_stop_the_others(tmp_path):
     assert not store.finished(table["key"].iloc[1]) and store.finished(table["key"].iloc[0])
 
 
+@pytest.mark.parametrize("ratios, every", [("0.2,0.19", True), ("0.5636,0.2", False)])
+def test_a_sweep_with_failed_runs_ends_with_the_command_that_shows_why(tmp_path, capsys, ratios, every):
+    """Exit 1 and one line on stderr: how many failed, and a command that reproduces the first failure with
+    its traceback (tried here: it fails the same way)."""
+    import shlex
+
+    from cases.cli import main
+
+    store = tmp_path / "store"
+    sets = [o for item in QUICK_SET for o in ("--set", item)]
+    grid_option = ["--grid", f"projectile.centre_of_mass_ratio={ratios}"]
+    assert (
+        main(["sweep", str(scene_path("paper_p3")), *sets, *grid_option, "--workers", "1", "--store", str(store)]) == 1
+    )
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(
+        "penetrate sweep: every run failed" if every else "penetrate sweep: 1 of 2 runs failed"
+    )
+    command = err[0].split("(the error column says why): ", 1)[1].removesuffix(" shows the first one's traceback")
+    words = shlex.split(command)
+    assert words[:3] == ["penetrate", "--debug", "run"] and "projectile.centre_of_mass_ratio=0.2" in words
+    with pytest.raises(Exception, match="centre_of_mass"):  # --debug: the failure itself, not one line
+        main(words[1:])
+
+
 def _cli_sweep(store, out, *extra):
     args = [
         sys.executable,

@@ -3,6 +3,7 @@ and rounds it takes, and what it does when a guess or the range does not hold th
 
 import json
 import math
+import sys
 from types import SimpleNamespace
 
 import pytest
@@ -235,3 +236,139 @@ def test_the_command_passes_range_and_guess_and_says_runs_and_rounds(monkeypatch
         "critical impact velocity 907.5 m/s (between 905 and 910 m/s; 7 runs in 4 rounds)"
     )
     assert min(fake.rounds[-4]) > 800 and max(fake.rounds[-4]) < 1000
+
+
+@pytest.mark.parametrize(
+    "critical, attack, fix",
+    [
+        # #3 at 1 degree: the range is too narrow; the scene has its disturbance
+        (1700.0, 1.0, "widen the range with --speeds 200:2400"),
+        # a straight impact never turns: a wider range alone would not help
+        (
+            1700.0,
+            0.0,
+            "widen the range with --speeds 200:2400, or give the scene a disturbance (--set impact.attack_angle=1)",
+        ),
+        (150.0, 1.0, "lower the range with --speeds 100:1600"),
+        (150.0, 0.0, "lower the range with --speeds 100:1600"),
+    ],
+)
+def test_no_change_in_the_range_names_the_option_that_finds_one(monkeypatch, critical, attack, fix):
+    base = Sweep.from_file(scene_path("paper_p3"), {"impact.attack_angle": attack})
+    result, _ = search(monkeypatch, base, critical)
+    assert result.critical_velocity is None and result.fix == fix
+    assert result.as_dict()["fix"] == fix
+
+
+def test_a_range_at_the_schemas_top_suggests_a_larger_disturbance(monkeypatch, base):
+    """Nothing above 10 000 m/s is a scene: the search cannot widen, so the disturbance is what can change."""
+    result, _ = search(monkeypatch, base, 20000.0, speeds=(9000, 10000))
+    assert result.fix == "a larger disturbance may turn it (--set impact.attack_angle=2)"
+
+
+def test_the_command_ends_a_stable_range_with_the_options_to_change(monkeypatch, capsys, tmp_path):
+    """The acceptance case: #3 without its disturbance (every run stable) ends with the options to change."""
+    from cases.cli import main
+
+    monkeypatch.setattr(
+        speeds_module, "run_sweep", FakeRuns(lambda scene: math.inf if not scene.impact.attack_angle else 907.3)
+    )
+    args = ["critical", str(scene_path("paper_p3")), "--set", "impact.attack_angle=0", "--store", str(tmp_path)]
+    assert main([*args, "--workers", "2"]) == 1
+    last = capsys.readouterr().out.splitlines()[-1]
+    assert last.startswith("every run is stable, up to 1600 m/s (")
+    assert last.endswith(
+        "rounds): widen the range with --speeds 200:2400, or give the scene a disturbance (--set impact.attack_angle=1)"
+    )
+
+
+# -- one progress bar per search, on fake runs made through the real pool and run store
+
+
+def fake_job(critical: float):
+    """A worker's job (cases.studies.pool.run_job) whose run turns like :func:`turn` at its impact speed."""
+    from cases.run import RunSummary, code_version
+
+    fields = dict.fromkeys(RunSummary.model_fields, 0.0)
+    fields.update(scene="fake", end_reason="stopped", final_position=[0.0, 0.0, 0.0], warnings=[])
+    fields.update(surface_points=1, tetrahedra=1, steps=1, rejected_steps=0, forced_steps=0)
+    fields.update(energy_rejections=0, energy_projections=0, load_evaluations=1)
+
+    def job(scene_json: str):
+        speed = json.loads(scene_json)["impact"]["speed"]
+        return {**fields, "axis_angle_change": -turn(speed, critical)}, None, code_version("run")
+
+    return job
+
+
+class Bars(list):
+    """Every tqdm bar made, with what it counted when it closed."""
+
+    def install(self, monkeypatch):
+        import tqdm
+
+        bars = self
+
+        class Recorded(tqdm.tqdm):
+            def __init__(self, *args, **kwargs):
+                super().__init__(*args, **kwargs)
+                bars.append(self)
+
+        monkeypatch.setattr(tqdm, "tqdm", Recorded)
+        return self
+
+
+def critical_command(tmp_path, *options):
+    from cases.cli import main
+
+    store = tmp_path / "store"
+    code = main(["critical", str(scene_path("paper_p3")), "--store", str(store), "--workers", "1", "--json", *options])
+    return code, store
+
+
+def test_a_search_of_several_rounds_shows_one_bar_counting_every_run(monkeypatch, capsys, tmp_path):
+    from cases.run import RunStore
+    from cases.studies import pool as pool_module
+
+    monkeypatch.setattr(pool_module, "run_job", fake_job(907.3))
+    bars = Bars().install(monkeypatch)
+    code, store = critical_command(tmp_path, "--progress")
+    assert code == 0
+    record = json.loads(capsys.readouterr().out)
+    made = len(RunStore(store).records())
+    assert record["rounds"] >= 5 and record["runs"] == made  # one worker: a bisection, a run a round
+    assert len(bars) == 1, "one bar for the whole search, not one a round"
+    assert bars[0].n == bars[0].total == made and bars[0].desc == "critical"
+
+
+def test_progress_shows_on_a_terminal_or_when_asked(monkeypatch, capsys, tmp_path):
+    from cases.studies import pool as pool_module
+
+    monkeypatch.setattr(pool_module, "run_job", fake_job(907.3))
+    bars = Bars().install(monkeypatch)
+    # stderr is a pipe here (pytest's capture): no bar unless asked
+    assert critical_command(tmp_path / "quiet")[0] == 0
+    assert bars == [] and capsys.readouterr().err == ""
+    assert critical_command(tmp_path / "asked", "--progress")[0] == 0
+    assert len(bars) == 1 and "critical" in capsys.readouterr().err
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True, raising=False)  # a terminal: a bar by default
+    assert critical_command(tmp_path / "terminal")[0] == 0
+    assert len(bars) == 2
+    assert critical_command(tmp_path / "refused", "--no-progress")[0] == 0
+    assert len(bars) == 2
+
+
+def test_a_search_found_in_the_store_counts_its_runs_as_done(monkeypatch, capsys, tmp_path):
+    """Run again with a finer resolution: the first search's runs count as done at once, the new ones as made."""
+    from cases.run import RunStore
+    from cases.studies import pool as pool_module
+
+    monkeypatch.setattr(pool_module, "run_job", fake_job(907.3))
+    assert critical_command(tmp_path, "--no-progress")[0] == 0
+    before = len(RunStore(tmp_path / "store").records())
+    bars = Bars().install(monkeypatch)
+    assert critical_command(tmp_path, "--progress", "--resolution", "1")[0] == 0
+    record = json.loads(capsys.readouterr().out.splitlines()[-1])
+    after = len(RunStore(tmp_path / "store").records())
+    assert after > before and len(bars) == 1
+    assert bars[0].n == bars[0].total == record["runs"]  # every run of this search: found or made

@@ -165,8 +165,9 @@ def test_a_run_imports_only_what_it_needs(tmp_path):
 
 
 def test_the_command_line_imports_nothing_before_a_command():
-    """Importing the command line (and parsing, ``--help``) loads neither numpy nor pydantic: each command
-    imports what it uses, and ``run`` does so with the garbage collector at rest (cases.cli.options.quiet_start)."""
+    """Importing the command line (and parsing it, below) loads neither numpy nor pydantic: each command
+    imports what it uses, and ``run`` does so with the garbage collector at rest (cases.cli.options.quiet_start);
+    a command's ``--help`` loads the registries it lists (cases.cli.options.Parser.late_help)."""
     code = (
         "import sys; import cases.cli; "
         "print(sorted(m for m in ('numpy', 'pydantic', 'cases.scene.load', 'cases.run') if m in sys.modules))"
@@ -191,3 +192,84 @@ def test_a_run_in_process_leaves_the_process_as_it_was(monkeypatch):
     with contextlib.redirect_stdout(io.StringIO()):
         assert main(["run", str(scene_path("forrestal_luk_test2")), *FAST, "--json"]) == 0
     assert os.environ["PYDANTIC_DISABLE_PLUGINS"] == "some_plugin"
+
+
+# every study command: one progress bar, shown on a terminal, forced on or off by --progress / --no-progress
+STUDY_COMMANDS = {
+    "sweep": [],
+    "critical": [],
+    "convergent": [],
+    "compare": ["--laws", "soil"],
+    "accuracy": [],
+    "contact": [],
+    "entry": [],
+    "fit": ["--param", "impact.speed=100:400", "--observe", "depth=5"],
+    "ensemble": ["--sample", "impact.speed=uniform:250:300", "-n", "2"],
+    "paper": [],
+}
+
+
+@pytest.mark.parametrize("command", sorted(STUDY_COMMANDS))
+def test_progress_shows_on_a_terminal_unless_told(command, monkeypatch):
+    """``penetrate fit --json`` drew its bar into a log file: now no study does unless ``--progress`` asks."""
+    from cases.cli import build_parser
+    from cases.cli.options import pool
+
+    base = [command, *([] if command == "paper" else [str(scene_path("forrestal_luk_test2"))])]
+    base += STUDY_COMMANDS[command]
+    json_flag = [] if command == "paper" else ["--json"]
+    for flags, terminal, shown in [
+        ([], False, False),
+        (json_flag, False, False),
+        ([], True, True),
+        (["--progress", *json_flag], False, True),
+        (["--no-progress"], True, False),
+    ]:
+        monkeypatch.setattr(sys.stderr, "isatty", lambda terminal=terminal: terminal, raising=False)
+        args = build_parser().parse_args([*base, *flags])
+        assert pool(args).shows_progress is shown, (flags, terminal)
+    with pytest.raises(SystemExit) as both, contextlib.redirect_stderr(io.StringIO()) as err:
+        build_parser().parse_args([*base, "--progress", "--no-progress"])
+    assert both.value.code == 2 and "not allowed with argument --progress" in err.getvalue()
+
+
+def help_text(*command: str) -> str:
+    """A command's ``--help``, its words joined by single spaces (the formatter wraps lines anywhere)."""
+    with contextlib.redirect_stdout(io.StringIO()) as out, pytest.raises(SystemExit):
+        main([*command, "--help"])
+    return " ".join(out.getvalue().split())
+
+
+def test_help_lists_every_value_the_code_takes(monkeypatch):
+    """Distributions, designs, named laws, contact options, fit quantities: each help is built from the
+    registry the code checks input against, so a name added there shows in the help (tried here)."""
+    from cases.scene.target import Effects
+    from cases.studies.ensemble import DESIGNS, FORMS
+    from cases.studies.fit import RUN_QUANTITIES, STUDY_QUANTITIES
+    from fem_loads.resistance import NAMED_LAWS, ResistanceLaw
+
+    monkeypatch.setitem(NAMED_LAWS, "test_clay", ResistanceLaw(1e6, 1500.0, "test_clay"))
+    monkeypatch.setitem(FORMS, "test_triangular", "test_triangular:LO:MODE:HI")
+    ensemble = help_text("ensemble")
+    assert all(form in ensemble for form in FORMS.values()) and "halfnormal:SCALE" in ensemble
+    assert "{" + ",".join(DESIGNS) + "}" in ensemble
+    assert all(name in help_text("compare").split("--laws", 2)[2] for name in NAMED_LAWS)
+    for command in ("run", "sweep", "critical", "convergent", "predict", "fit", "ensemble", "render", "contact"):
+        shown = help_text(command).split("--set KEY=VALUE", 2)[2]
+        assert all(name in shown for name in NAMED_LAWS), command
+    contact = help_text("contact").split("--incidences", 2)[2]
+    assert all(f"effects.{name}" in contact for name in Effects().contact)
+    fit = help_text("fit").split("--observe", 2)[2]
+    assert all(quantity in fit for quantity in RUN_QUANTITIES + STUDY_QUANTITIES)
+
+
+def test_a_commands_help_does_not_slow_the_parsing_of_another():
+    """The registries load when a help is shown, not when a command line is parsed."""
+    code = (
+        "import sys; from cases.cli import build_parser; build_parser().parse_args(sys.argv[1:]); "
+        "print(sorted(m for m in ('numpy', 'pydantic', 'scipy', 'fem_loads') if m in sys.modules))"
+    )
+    args = ["ensemble", "x.toml", "--sample", "impact.speed=uniform:1:2", "-n", "2"]
+    done = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]"

@@ -250,10 +250,35 @@ def test_ensemble_command_on_test_2(tmp_path, capsys):
         assert quantiles["0.05"] <= quantiles["0.25"] <= quantiles["0.5"] <= quantiles["0.75"] <= quantiles["0.95"]
     assert record["distributions"]["convergence_speed"]["runs"] == first["convergence_speed"].notna().sum() == 0
     assert "| depth (m) | 5 |" in (out / "ensemble.md").read_text()
+    # bins beside the samples hold no run: the report says which, and the --by that bins the samples
+    samples = ", ".join(f"{v:.4g}" for v in (first["impact.speed"].min(), first["impact.speed"].max()))
+    assert _ensemble(tmp_path, 5, "--by", "impact.speed=400:500:50") == 0
+    last = capsys.readouterr().out.strip().splitlines()[-1]
+    assert last.startswith(
+        "No sample fell in 2 of 2 bins (400 - 450, 450 - 500): bin where the samples lie"
+        f" ({samples.replace(', ', ' to ')}), e.g. --by impact.speed="
+    )
+    start, stop, step = map(float, last.rsplit("=", 1)[1].rstrip(".").split(":"))
+    assert step == 50 and start <= first["impact.speed"].min() and first["impact.speed"].max() <= stop
     assert _ensemble(tmp_path, 7) == 0
     assert len(list((tmp_path / "store" / "run").glob("*.json"))) == 7  # two new runs, five found again
     second = pd.read_csv(out / "ensemble.csv")
     assert second["key"][:5].tolist() == first["key"].tolist()
+
+
+def test_empty_bins_inside_the_samples_ask_for_more_runs():
+    """Bins between the samples (too few runs to fill them) call for more runs, not other bins."""
+    from cases.studies.ensemble_study import _empty_bins
+
+    speeds = np.array([251.0, 252.0, 309.0])
+    table = pd.DataFrame({"impact.speed": speeds, "unstable": False, "exited": False, "stopped": True, "failed": False})
+    record = {"runs": 3, "by": "impact.speed", "curve": curve(speeds, table, np.array([250.0, 270.0, 290.0, 310.0]))}
+    assert _empty_bins(record, table) == (
+        "No sample fell in 1 of 3 bins (270 - 290): give more runs (-n 6) or widen the distribution of"
+        " impact.speed (--sample) over them."
+    )
+    record["curve"] = curve(speeds, table, np.array([250.0, 280.0, 310.0]))
+    assert _empty_bins(record, table) == ""
 
 
 def test_ensemble_command_bad_input(tmp_path, capsys):

@@ -159,6 +159,59 @@ def test_two_parameters_from_one_observation_are_not_identifiable(store):
         )
 
 
+@pytest.mark.parametrize(
+    "params, observations",
+    [
+        (["target.law.B=0.3:3", "target.law.A=0.5:3"], ["depth=5.0"]),
+        (["target.law.B=0.3:3", "target.law.A=0.5:3", "impact.speed=200:400"], ["depth=5.0+-0.1", "final_time=0.04"]),
+    ],
+)
+def test_too_few_observations_are_refused_before_any_run(params, observations, tmp_path, capsys, monkeypatch):
+    """Counting alone shows it: the command says how many observations the parameters need, and makes no run."""
+    from cases.studies import sweep as sweep_module
+
+    def no_runs(*args, **kwargs):
+        raise AssertionError("a run was started")
+
+    monkeypatch.setattr(sweep_module, "run_missing", no_runs)
+    options = [o for p in params for o in ("--param", p)] + [o for v in observations for o in ("--observe", v)]
+    law = "target.law={A = 1.4, sigma_0 = 10e6, B = 1.5, rho_0 = 1860}"
+    store, out = tmp_path / "s", tmp_path / "o"
+    assert main(["fit", TEST2, "--set", law, *options, "--store", str(store), "--out", str(out)]) == 1
+    err = capsys.readouterr().err
+    count = len(params)
+    assert err.count("\n") == 1 and err.startswith("penetrate fit: not identifiable:"), err
+    assert f"{count} parameters need at least {count} observations (--observe; {count + 1} for standard" in err
+    assert not store.exists() and not out.exists()  # the run store stays empty: no run was made
+
+
+def test_a_characteristic_speed_not_found_says_what_to_change(tmp_path, monkeypatch):
+    """#3 without a disturbance never turns: the fit stops at its first search, naming what would find one."""
+    from types import SimpleNamespace
+
+    from cases.studies import speeds as speeds_module
+
+    def stable(sweep, store, pool=None):
+        summary = SimpleNamespace(max_attack_angle=0.0, end_reason="stopped", axis_angle_change=0.0)
+        runs = [SimpleNamespace(failed=False, summary=summary, key=str(s.impact.speed)) for s in sweep.scenes]
+        return SimpleNamespace(runs=runs)
+
+    monkeypatch.setattr(speeds_module, "run_sweep", stable)
+    with pytest.raises(RuntimeError) as caught:
+        fit(
+            "cases/paper_p3.toml",
+            [("impact.attack_angle", 0.0)],
+            ["projectile.transverse_inertia_scale=1:3"],
+            ["critical_velocity=1000+-10"],
+            RunStore(tmp_path),
+            Pool(progress=False),
+        )
+    assert str(caught.value).endswith(
+        "(every run is stable, up to 2400 m/s): keep the --param ranges where the scene has one between 200 and"
+        " 2400 m/s, or give the scene a disturbance (--set impact.attack_angle=1)"
+    )
+
+
 def test_a_flat_parameter_is_not_identifiable(store):
     """Test 2 stops at 0.04 s: the time limit (default 1 s) changes nothing."""
     with pytest.raises(NotIdentifiable, match="no observation changes with numerics.time_limit"):

@@ -1,5 +1,5 @@
 """Scenes whose projectile is a CAD or mesh file (issue: any projectile): the same shots as the analytic
-scenes, from files written by gmsh's own primitives (tests/bodies.py), through the scene, the run and the
+scenes, from files written by gmsh's own primitives (docs/geometry/cad_bodies.py), through the scene, the run and the
 command line."""
 
 from __future__ import annotations
@@ -12,11 +12,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from bodies import VALIDATION, write_body, write_volume_mesh
 
 from cases import load_scene, run_scene, scene_path, summarise
 from cases.run import prepare_projectile
 from cases.scene import InputError
+from docs.geometry.cad_bodies import VALIDATION, write_body, write_volume_mesh
 
 TEST2 = scene_path("forrestal_luk_test2")
 

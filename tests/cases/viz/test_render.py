@@ -21,13 +21,16 @@ from PIL import Image
 from scipy.spatial import cKDTree
 from support import rss_bytes
 
+import cases.viz.render as render_module
 from cases import load_scene, run_scene, scene_path
+from cases.cli import main
 from cases.scene import InputError
-from cases.viz.field import FieldEvaluator, key_instants, resolve_instants
-from cases.viz.frames import FrameRenderer, render_animation, render_snapshots
-from cases.viz.panels import default_station, ring_stress
+from cases.viz.field import FieldEvaluator, frame_rows, key_instants, resolve_instants
+from cases.viz.frames import FrameRenderer, field_ranges, render_animation, render_snapshots
+from cases.viz.panels import default_station, plot_polar, ring_stress
 from cases.viz.paraview import write_paraview
-from cases.viz.trajectory import render_trajectory
+from cases.viz.render import render_all
+from cases.viz.trajectory import render_trajectory, trajectory_rows
 
 COARSE = {"numerics.mesh_size": 0.04, "numerics.integrator": "rk4", "numerics.time_step": 4e-5}
 COARSE_SET = ["numerics.mesh_size=0.04", "numerics.integrator=rk4", "numerics.time_step=4e-5"]
@@ -225,6 +228,84 @@ def test_snapshots_are_images_of_the_field(unstable, tmp_path):
     assert image.shape == (350, 700, 3) and image.std() > 20
 
 
+@pytest.fixture
+def shown(monkeypatch):
+    """Every frame a FrameRenderer draws while the test runs: (row, sigma_n colour bar range (MPa), caption)."""
+    frames = []
+    real = FrameRenderer.render
+
+    def render(self, index, label=""):
+        image = real(self, index, label)
+        frames.append((index, self.scalar_bar_range("sigma_n"), self.texts["sigma_n"].GetText(2)))
+        return image
+
+    monkeypatch.setattr(FrameRenderer, "render", render)
+    return frames
+
+
+def test_the_field_images_of_one_render_share_one_colour_range(unstable, tmp_path, shown):
+    """One colour bar for all the images: the min..max over the instants (145.9, 122.9, 93.4 MPa each before)."""
+    ev = unstable
+    instants = resolve_instants(ev, None)
+    render_snapshots(ev, tmp_path, instants, size=(480, 240))
+    assert [row for row, _, _ in shown] == [row for _, row in instants]
+    ranges = {bar for _, bar, _ in shown}
+    assert len(ranges) == 1
+    fields = [ev.at(row).sigma_n * 1e-6 for _, row in instants]
+    lo, hi = ranges.pop()
+    assert (lo, hi) == pytest.approx((min(f.min() for f in fields), max(f.max() for f in fields)), rel=1e-12)
+    assert (lo, hi) == pytest.approx(field_ranges(ev, [row for _, row in instants])["sigma_n"], rel=1e-12)
+    # the converged instant carries far less than the embedded one, and its image now shows it
+    assert fields[2].max() < 0.3 * hi and fields[0].max() == pytest.approx(hi, rel=1e-12)
+    assert all("beyond the colour bar" not in caption for _, _, caption in shown)
+
+
+def test_render_all_draws_every_picture_on_one_range_or_the_given_one(unstable, tmp_path, shown, monkeypatch):
+    """Field images, trajectory bodies and animation frames: one range over all they draw; ``colour_range``
+    fixes it, and a frame whose field goes beyond it says so."""
+    ev = unstable
+    bodies = []
+    real = render_module.render_trajectory
+
+    def trajectory(evaluator, path, *args, **kwargs):
+        bodies.append(kwargs["clim"])
+        return real(evaluator, path, *args, size=(350, 175), **kwargs)
+
+    monkeypatch.setattr(render_module, "render_trajectory", trajectory)
+    record = render_all(ev.result, tmp_path / "a", ["embedded", "converged"], animation=True, frames=3, size=(320, 160))
+    rows = [key_instants(ev)["embedded"], key_instants(ev)["converged"]]
+    drawn = rows + list(trajectory_rows(ev)) + list(frame_rows(ev, 3))
+    expected = field_ranges(ev, drawn)["sigma_n"]
+    assert record["colour_range"] == {"sigma_n": pytest.approx(list(expected), rel=1e-12)}
+    assert len(shown) == 2 + 3 and all(bar == pytest.approx(expected, rel=1e-12) for _, bar, _ in shown)
+    assert bodies == [pytest.approx(expected, rel=1e-12)]
+    assert (tmp_path / "a" / "animation.gif").exists() and (tmp_path / "a" / "trajectory.png").exists()
+    shown.clear()
+    bodies.clear()
+    record = render_all(ev.result, tmp_path / "b", ["embedded", "converged"], size=(320, 160), colour_range=(0, 100))
+    assert record["colour_range"] == {"sigma_n": [0.0, 100.0]} and bodies == [(0.0, 100.0)]
+    assert [bar for _, bar, _ in shown] == [(0.0, 100.0)] * 2
+    embedded = ev.at(rows[0]).sigma_n.max() * 1e-6
+    assert f"{embedded:.4g} MPa, beyond the colour bar" in shown[0][2] and "beyond" not in shown[1][2]
+
+
+@pytest.mark.parametrize("bad", ["600", "0:600:1", "a:b", "600:100", "100:100", "=-5:100", "nan:100", "0:inf", ""])
+def test_a_bad_colour_range_is_refused_before_the_run(bad, tmp_path, capsys):
+    out = tmp_path / "render"
+    option = ["--colour-range" + bad] if bad.startswith("=") else ["--colour-range", bad]
+    assert main(["render", str(scene_path("paper_p3")), *option, "--out", str(out)]) == 2
+    error = capsys.readouterr().err.strip()
+    assert "\n" not in error and "--colour-range" in error and "LO:HI in MPa" in error and "0 <= LO < HI" in error
+    assert not out.exists()
+
+
+def test_a_negative_colour_range_reads_as_an_option_and_is_refused(tmp_path, capsys):
+    with pytest.raises(SystemExit) as stop:
+        main(["render", str(scene_path("paper_p3")), "--colour-range", "-5:100", "--out", str(tmp_path / "r")])
+    assert stop.value.code == 2 and "--colour-range" in capsys.readouterr().err
+    assert not (tmp_path / "r").exists()
+
+
 def test_friction_adds_the_tangential_stress_panel(tmp_path):
     scene = load_scene(
         scene_path("paper_p3"),
@@ -258,6 +339,10 @@ def test_friction_adds_the_tangential_stress_panel(tmp_path):
     with FrameRenderer(ev, (480, 480), side_panel=False) as renderer:
         image = renderer.render(len(ev) - 1)
         assert renderer.scalar_bar_range("tau") == pytest.approx((fld.tau.min() * 1e-6, fld.tau.max() * 1e-6))
+    # shared ranges: tau over the instants as sigma_n
+    ranges = field_ranges(ev, [len(ev) // 2, len(ev) - 1])
+    taus = [ev.at(r).tau * 1e-6 for r in (len(ev) // 2, len(ev) - 1)]
+    assert ranges["tau"] == pytest.approx((min(t.min() for t in taus), max(t.max() for t in taus)), rel=1e-12)
     upper, lower = image[:240], image[240:]
     assert upper.std() > 20 and lower.std() > 20
 
@@ -370,6 +455,20 @@ def test_ring_stress_on_the_nose_is_the_closed_form_and_the_shank_windward(axial
         ring_stress(ev, 0, 2.0)
 
 
+def test_the_polar_plot_says_its_unit_and_its_legend_lies_below(unstable, tmp_path, monkeypatch):
+    kept = []
+    monkeypatch.setattr("cases.viz.panels.save_figure", lambda figure, path, dpi: kept.append(figure) or path)
+    plot_polar(unstable, resolve_instants(unstable, ["peak", "converged"]), tmp_path / "polar.png")
+    (figure,) = kept
+    figure.canvas.draw()
+    (ax,) = figure.axes
+    radial = [label.get_text() for label in ax.yaxis.get_ticklabels() if label.get_text()]
+    assert len(radial) >= 3 and all(text.endswith(" MPa") for text in radial)
+    renderer = figure.canvas.get_renderer()
+    legend, disc = ax.get_legend().get_window_extent(renderer), ax.get_window_extent(renderer)
+    assert legend.y1 < disc.y0 and legend.y0 >= 0  # under the plot, inside the figure
+
+
 @pytest.mark.slow  # 5 s: the whole command; the snapshots are tested in the default run
 def test_render_command(tmp_path):
     out = tmp_path / "render"
@@ -396,6 +495,8 @@ def test_render_command(tmp_path):
         "3",
         "--size",
         "640x320",
+        "--colour-range",
+        "0:400",
         "--json",
     ]
     done = subprocess.run(args, capture_output=True, text=True, timeout=300)
@@ -412,6 +513,7 @@ def test_render_command(tmp_path):
         "trajectory.png",
     }
     assert record["paraview_steps"] == 3 and (out / "paraview" / "run.pvd").exists()
+    assert record["colour_range"] == {"sigma_n": [0.0, 400.0]}
     bad = subprocess.run(
         args[:5] + ["--times", "soon", "--out", str(tmp_path / "bad")], capture_output=True, text=True, timeout=300
     )

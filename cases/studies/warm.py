@@ -1,0 +1,77 @@
+"""Warm the caches a first study would otherwise fill: numba's machine code and the shipped scenes' meshes.
+
+``./dev`` runs ``python -m cases.studies.warm`` after installing, so that the first run or study on a
+fresh machine compiles nothing and meshes nothing (the README's promise).  Each shipped scene (or each
+scene given) is prepared (gmsh mesh, mass properties and quadrature, into the disk cache of
+:func:`cases.run.cache_dir`); a scene a study would run compiled builds its compiled step (numba compiles
+each argument type once: a scene with gravity is another signature), and a scene the reduced model takes
+runs one reduced trajectory.  On a warm cache this only loads (a few seconds); what it has to compile or
+mesh it announces on stderr first.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from .. import SCENE_DIR
+from ..run import prepare_projectile
+from ..run.compiled import compiled_step
+from ..run.prepare import preparation_key, prepared_path
+from ..scene import InputError, load_scene
+
+__all__ = ["warm_caches", "main"]
+
+
+def _compiled(scene, prepared) -> None:
+    from dynamics import METHODS, RigidBody
+
+    body = RigidBody(prepared.mass.mass, prepared.mass.inertia)
+    effects = scene.effects
+    weight = np.array([0.0, 0.0, -body.mass * effects.gravity_acceleration]) if effects.gravity else None
+    compiled_step(scene.loads(prepared.quadrature), METHODS[scene.numerics.integrator](), body, weight)
+
+
+def _reduced(scene, prepared) -> None:
+    from .predict import ReducedModel
+
+    try:
+        model = ReducedModel(scene, prepared)
+    except InputError:  # a body or target the reduced model does not take: nothing of it to compile
+        return
+    model.run(scene.impact.speed)
+
+
+def warm_caches(scenes: Sequence[Path], say=lambda line: print(line, file=sys.stderr, flush=True)) -> float:
+    """Prepare each scene and compile what its studies run; return the wall time (s)."""
+    start = time.perf_counter()
+    for path in scenes:
+        scene = load_scene(path).with_kernel(many_runs=True)
+        if not prepared_path(*preparation_key(scene)).exists():
+            say(f"penetrate: meshing {path.name} (gmsh; a few seconds, once)")
+        prepared = prepare_projectile(scene)
+        if scene.numerics.kernel == "compiled":
+            _compiled(scene, prepared)
+        _reduced(scene, prepared)
+    return time.perf_counter() - start
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="python -m cases.studies.warm", description=(__doc__ or "").split("\n\n", maxsplit=1)[0]
+    )
+    parser.add_argument("scenes", nargs="*", type=Path, help="scene files (default: every shipped scene)")
+    options = parser.parse_args(argv)
+    scenes = options.scenes or sorted(SCENE_DIR.glob("*.toml"))
+    seconds = warm_caches(scenes)
+    print(f"penetrate: caches warm for {len(scenes)} scenes ({seconds:.1f} s)", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

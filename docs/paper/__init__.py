@@ -1,0 +1,1 @@
+"""The tables of docs/paper.md, printed from the paper study's own results."""

@@ -1,0 +1,1 @@
+"""The rendering example and the rendering benchmark of docs/rendering.md."""

@@ -1,0 +1,1 @@
+"""The fuzzing table of docs/robustness.md, read off the test module."""
