@@ -377,6 +377,21 @@ def check(
     return 1 if failures else 0
 
 
+def show_shares() -> int:
+    """Print the rotation's shares as a markdown table: the blocks of each, their recorded cost and pages
+    (the blocks that run pytest are left out: a check does not re-run them)."""
+    found = [b for page in pages() for b in blocks(page) if "pytest" not in b.command]
+    costs = _costs()
+    dealt = shares(found, costs)
+    print("| share (re-run on days with `date.toordinal() % shares` =) | blocks | recorded cost | pages |")
+    print("|---|---|---|---|")
+    for index, share in enumerate(dealt):
+        minutes = sum(costs.get(b.key, UNMEASURED_SECONDS) for b in share) / 60
+        names = ", ".join(sorted({_shown(b.page).removeprefix("docs/") for b in share}))
+        print(f"| {index} | {len(share)} | {minutes:.1f} min | {names} |")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="./dev docs", description=(__doc__ or "").split("\n\n")[0])
     parser.add_argument("pages", nargs="*", help="only these pages (default: README.md and docs/**/*.md)")
@@ -397,6 +412,7 @@ def main(argv: list[str] | None = None) -> int:
         default=BUDGET_SECONDS,
         help="with --rerun: the cheapest blocks within this many seconds of recorded cost (default %(default)s)",
     )
+    parser.add_argument("--shares", action="store_true", help="print the rotation's shares and their recorded costs")
     parser.add_argument(
         "--command", metavar="TEXT", help="regenerate only the blocks whose command contains TEXT (not with --check)"
     )
@@ -405,6 +421,8 @@ def main(argv: list[str] | None = None) -> int:
     if rerun and not options.check:
         parser.error("--rerun, --all and --rotation go with --check")
     try:
+        if options.shares:
+            return show_shares()
         if options.check:
             return check(options.pages, rerun, options.all, options.budget, options.rotation)
         return regenerate(options.pages, options.command)

@@ -7,12 +7,12 @@ import argparse
 import json
 import math
 
-from .options import add_pool_options, add_scene_options, positive_float, study
+from .options import Parser, add_pool_options, add_scene_options, positive_float, study
 
 __all__ = ["register"]
 
 
-def _study_options(parser: argparse.ArgumentParser) -> None:
+def _study_options(parser: Parser) -> None:
     add_scene_options(parser)
     add_pool_options(parser, "runs/store")
     parser.add_argument("--json", action="store_true", help="print the result as one JSON object")
@@ -123,6 +123,7 @@ def critical_speed(args: argparse.Namespace) -> int:
         # the line ends with what to change: the options that would find the change
         print(f"{search.message} ({len(search.indicator)} runs in {search.rounds} rounds): {search.fix}")
         return 1
+    assert search.bracket is not None  # a critical velocity is found with its bracket
     low, high = search.bracket
     print(
         f"critical impact velocity {search.critical_velocity:.1f} m/s (between {low:g} and {high:g} m/s;"

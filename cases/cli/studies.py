@@ -8,14 +8,23 @@ import math
 from pathlib import Path
 
 from ..scene import InputError
-from .options import add_pool_options, add_scene_options, law_names, out_folder, overrides, positive_float, study
+from .options import (
+    Parser,
+    add_pool_options,
+    add_scene_options,
+    law_names,
+    out_folder,
+    overrides,
+    positive_float,
+    study,
+)
 
 __all__ = ["register"]
 
 
 def _study_parser(
     commands, name: str, help: str, writes: str, json_help: str = "print the table as JSON records"
-) -> argparse.ArgumentParser:
+) -> Parser:
     """A study's command with what every study takes: the scene and its overrides, where the runs go,
     ``--json`` and ``--out`` (default ``runs/NAME``; ``writes`` names what is written there)."""
     parser = commands.add_parser(name, help=help)

@@ -42,12 +42,13 @@ def sweep(args: argparse.Namespace) -> int:
 
     parameters = dict(parse_grid(text) for text in args.grid)
     variations = grid(parameters) if parameters else [Variation({})]
+    columns = dict.fromkeys(parameters)  # the keys varied, shown first, in order
     if args.list:
         # a list and a grid combine as their product
         listed = read_variations(args.list)
         variations = [Variation({**g.values, **v.values}) for g in variations for v in listed]
         for v in listed:
-            parameters.update(dict.fromkeys(v.values))
+            columns.update(dict.fromkeys(v.values))
     with study(args) as pool:
         result = run_sweep(Sweep.from_file(args.scene, overrides(args), variations), RunStore(args.store), pool)
     table = result.table()
@@ -56,7 +57,7 @@ def sweep(args: argparse.Namespace) -> int:
     if args.json:
         print(table.to_json(orient="records"))
     else:
-        print(table[[c for c in (*parameters, *SHOWN) if c in table]].to_string(index=False))
+        print(table[[c for c in (*columns, *SHOWN) if c in table]].to_string(index=False))
     failed = [i for i, run in enumerate(result.runs) if run.failed]
     if failed:
         print(

@@ -37,6 +37,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from fem_loads import ResistanceLaw
+
 from ..run import RunStore, atomic_write_text, convergence_speed, prepare_projectile
 from ..scene import Overrides
 from ..viz.figures import legend_outside, save_figure, subplots
@@ -101,7 +103,7 @@ def _settings(
     finest_step, finest_size = min(steps), min(sizes)
     default = {"numerics.geometry_order": 2, "numerics.normals": "exact", "numerics.quadrature_order": 2}
     rk4 = {"numerics.integrator": "rk4"}
-    candidates = []
+    candidates: list[tuple[str, dict[str, object]]] = []
     for size in sizes:
         for order in (1, 2):
             for normals in ("mesh", "exact"):
@@ -275,9 +277,11 @@ def _reference(sweep: Sweep, finest: pd.DataFrame) -> dict:
     base = sweep.scenes[0]
     if is_plain_normal_impact(base):
         prepared = prepare_projectile(base)
+        law = base.target.build()
+        assert isinstance(law, ResistanceLaw)  # a plain normal impact's target has no layers
         depth, _ = axial_depth_1d(
             prepared.profile,
-            base.target.build(),
+            law,
             prepared.mass.mass,
             base.impact.speed,
             base.numerics.stop_speed,

@@ -29,6 +29,8 @@ from pathlib import Path
 
 import pandas as pd
 
+from fem_loads import ResistanceLaw
+
 from ..run import RunStore, atomic_write_text, convergence_speed, prepare_projectile
 from ..scene import Overrides
 from .accuracy import is_plain_normal_impact
@@ -82,6 +84,7 @@ def contact_study(
         if run.failed:
             raise RuntimeError(f"the run at contact incidence {w:g} failed: {run.error}")
         s = run.summary
+        assert s is not None  # not failed
         rows.append(
             {
                 "contact_incidence": w,
@@ -103,10 +106,12 @@ def contact_study(
     base = sweep.scenes[0]
     if is_plain_normal_impact(base):
         prepared = prepare_projectile(base)
+        law = base.target.build()
+        assert isinstance(law, ResistanceLaw)  # a plain normal impact's target has no layers
         table["depth_1d"] = [
             axial_depth_1d(
                 prepared.profile,
-                base.target.build(),
+                law,
                 prepared.mass.mass,
                 base.impact.speed,
                 base.numerics.stop_speed,
@@ -179,6 +184,7 @@ def entry_study(
         if run.failed:
             raise RuntimeError(f"the run at entry smoothing {e:g}, step {h:g} s failed: {run.error}")
         s = run.summary
+        assert s is not None  # not failed
         rows.append(
             {
                 "entry_smoothing": e,

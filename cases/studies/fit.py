@@ -230,7 +230,7 @@ class _Model:
             for index, run in enumerate(result.runs):
                 if run.failed:
                     raise RuntimeError(f"a run of the fit failed ({parts[index][1].values}): {run.error}")
-                point, scene = divmod(index, len(scenes))
+                point_index, scene = divmod(index, len(scenes))
                 for i, o in run_observations:
                     if o.scene != scenes[scene]:
                         continue
@@ -239,7 +239,7 @@ class _Model:
                         if o.quantity == "convergence_speed"
                         else getattr(run.summary, o.quantity)
                     )
-                    results[point, i] = np.nan if value is None else value
+                    results[point_index, i] = np.nan if value is None else value
         for i, o in enumerate(self.observations):
             if o.quantity not in STUDY_QUANTITIES:
                 continue

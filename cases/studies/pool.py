@@ -21,11 +21,15 @@ from concurrent.futures.process import BrokenProcessPool
 from contextvars import ContextVar
 from dataclasses import dataclass
 from multiprocessing import get_context
+from typing import TYPE_CHECKING, Never
 
 from ..run import RunStore, code_version, prepare_projectile
 from ..run.prepare import preparation_key
 from ..run.summary import simulate_record
 from ..scene import Scene
+
+if TYPE_CHECKING:
+    from tqdm import tqdm
 
 __all__ = ["Pool", "Progress", "study_progress", "run_missing", "run_job", "CodeMismatch"]
 
@@ -100,7 +104,7 @@ class Progress:
         self.known: set[str] = set()
         self.total = self.done = self.failed = 0
         self.shown: bool | None = None
-        self.bar = None
+        self.bar: tqdm[Never] | None = None
 
     def add(self, keys: Iterable[str], todo: Collection[str], show: bool) -> None:
         """A sweep's runs (``keys``), of which ``todo`` are still to make."""

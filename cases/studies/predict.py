@@ -80,6 +80,7 @@ class ReducedModel:
         announce_compiling("pitch_plane_step")
         use_numba_cache()
         from dynamics.pitch_plane import TABLEAU
+        from fem_loads import ResistanceLaw
         from fem_loads.revolved import law_data, revolved_surface
 
         from ..run.pitch_plane_step import pitch_plane_trajectory
@@ -89,6 +90,7 @@ class ReducedModel:
         self.rtol = rtol
         self.surface = revolved_surface(prepared.profile, float(prepared.tip[0]), **(rings or RINGS))
         law, effects, numerics = scene.target.build(), scene.effects, scene.numerics
+        assert isinstance(law, ResistanceLaw)  # _check_supported refused layers
         friction = effects.friction.build()
         # the mesh's entry ramp: each point enters over entry_smoothing times the square root of its weight
         entry = numerics.entry_smoothing * math.sqrt(float(np.median(prepared.quadrature.weights)))

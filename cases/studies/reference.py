@@ -51,6 +51,7 @@ def check_nose_alone_presses(profile: Profile) -> None:
     if profile.body is None:
         return
     curve = profile.body_curve
+    assert curve is not None  # a measured body has its curve
     s = np.linspace(profile.body.start, profile.length, 2001)
     if float(curve.slope(s).max()) > 0.0 or float(curve.r.max()) > profile.radius:
         raise ValueError(
@@ -198,14 +199,14 @@ def _integrate(rate, start: list[float], stop_speed: float, rtol: float, embedde
     def stopped(t: float, y: np.ndarray) -> float:
         return y[1] - stop_speed
 
-    stopped.terminal = True
+    stopped.terminal = True  # type: ignore[attr-defined]  # solve_ivp reads this attribute of an event function
     events, horizon = [stopped], 1e3
     if embedded_at is not None:
 
         def embedded(t: float, y: np.ndarray) -> float:
             return y[0] - embedded_at
 
-        embedded.terminal = True
+        embedded.terminal = True  # type: ignore[attr-defined]  # as stopped's
         events, horizon = [embedded, stopped], 10 * embedded_at / start[1] + 1.0
     return integrate.solve_ivp(rate, (0.0, horizon), start, method="DOP853", rtol=rtol, atol=1e-14, events=events)
 

@@ -209,6 +209,7 @@ def _scan(
         if run.failed:
             raise RuntimeError(f"the run at {v:g} m/s failed: {run.error}")
         s = run.summary
+        assert s is not None  # not failed
         seen[i][v] = ScanRun(v, s.max_attack_angle, s.axis_angle_change, s.end_reason, run.key)
 
 
@@ -415,6 +416,7 @@ def measure_convergent_velocity(
             if run.failed:
                 raise RuntimeError(f"the run at {speed:g} m/s failed: {run.error}")
             s = run.summary
+            assert s is not None  # not failed
             history = result.history(0)
             runs.append(
                 ConvergentRun(

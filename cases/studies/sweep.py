@@ -18,7 +18,7 @@ import itertools
 import json
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -51,7 +51,7 @@ class Variation:
     values: dict[str, Any]
 
 
-def grid(parameters: dict[str, Sequence[Any]]) -> list[Variation]:
+def grid(parameters: Mapping[str, Sequence[Any]]) -> list[Variation]:
     """The cartesian product of value lists, the last key varying fastest."""
     keys = list(parameters)
     return [Variation(dict(zip(keys, combo))) for combo in itertools.product(*parameters.values())]

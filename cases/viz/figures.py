@@ -5,8 +5,12 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..run.persistence import save_figure_bytes
+
+if TYPE_CHECKING:
+    from pydantic.fields import FieldInfo
 
 __all__ = ["new_figure", "subplots", "save_figure", "axis_label", "quantity_unit", "legend_outside", "DIMENSIONLESS"]
 
@@ -62,13 +66,22 @@ def quantity_unit(name: str) -> str | None:
     if name in _STUDY_UNITS:
         return _STUDY_UNITS[name]
     if name in RunSummary.model_fields:
-        return (RunSummary.model_fields[name].json_schema_extra or {}).get("unit", "")
+        return _recorded_unit(RunSummary.model_fields[name])
     if name in HISTORY_UNITS:
         return HISTORY_UNITS[name]
     info, _, _ = _field_at(tuple(name.split(".")))
     if info is None:
         return None
-    return (info.json_schema_extra or {}).get("unit", "")
+    return _recorded_unit(info)
+
+
+def _recorded_unit(info: FieldInfo) -> str:
+    """The unit a model field records (``json_schema_extra["unit"]``), ``""`` when it records none."""
+    extra = info.json_schema_extra or {}
+    assert isinstance(extra, dict)  # the project's fields record a dict, never a callable
+    unit = extra.get("unit", "")
+    assert isinstance(unit, str)
+    return unit
 
 
 def legend_outside(ax, **kwargs):
@@ -78,6 +91,8 @@ def legend_outside(ax, **kwargs):
     is none free (probability bands spanning the plot).  ``figure.tight_layout()`` afterwards
     leaves room for the legend.  ``kwargs`` go to ``Axes.legend`` (``fontsize`` 8 unless given).
     """
+    if "handles" not in kwargs and not ax.get_legend_handles_labels()[0]:
+        return None  # nothing labelled (e.g. an ensemble whose bins are all empty): no empty legend box
     kwargs.setdefault("fontsize", 8)
     return ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, **kwargs)
 
@@ -86,6 +101,8 @@ def legend_below(ax, **kwargs):
     """A legend under ``ax``'s x label, outside its data area: for axes with a twin on the right or a
     neighbour beside them, where :func:`legend_outside` would cover them.  ``kwargs`` go to ``Axes.legend``
     (``fontsize`` 8 and two columns unless given)."""
+    if "handles" not in kwargs and not ax.get_legend_handles_labels()[0]:
+        return None
     kwargs.setdefault("fontsize", 8)
     kwargs.setdefault("ncol", 2)
     return ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), borderaxespad=0.0, **kwargs)

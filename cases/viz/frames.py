@@ -14,6 +14,7 @@ import os
 import time
 from collections.abc import Iterable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 
@@ -22,6 +23,9 @@ import numpy as np  # noqa: E402
 from ..run import atomic_write  # noqa: E402
 from .field import FieldEvaluator, SurfaceField, frame_rows  # noqa: E402
 from .panels import SidePanel  # noqa: E402
+
+if TYPE_CHECKING:
+    from pyvista import Plotter
 
 __all__ = [
     "FrameRenderer",
@@ -138,7 +142,7 @@ class FrameRenderer:
         self.view_size = (width - self.panel_width, height)
         self.fields = ["sigma_n", "tau"] if evaluator.friction else ["sigma_n"]
         self.fixed_clim = {"sigma_n": clim, "tau": tau_clim}
-        self.plotter = None
+        self.plotter: Plotter | None = None
         self.panel = None
         self.last_field: SurfaceField | None = None
         self.last_clim: dict[str, tuple[float, float]] = {}
@@ -235,6 +239,7 @@ class FrameRenderer:
         self.scalar_bars = {name: self.actors[name].mapper.lookup_table for name in self.fields}
 
     def _update(self, index: int, label: str) -> dict[str, tuple[float, float]]:
+        assert self.plotter is not None  # built in __init__, None only after close()
         ev = self.evaluator
         fld = ev.at(index)
         points = ev.surface.points @ fld.rotation.T + fld.position
@@ -245,6 +250,7 @@ class FrameRenderer:
         clims = {}
         for row, name in enumerate(self.fields):
             values = fld.sigma_n if name == "sigma_n" else fld.tau
+            assert values is not None  # tau is drawn only with friction, which gives it
             values_mpa = ev.cell_values(values) * 1e-6
             mesh = self.meshes[name]
             mesh.points = points
@@ -293,10 +299,11 @@ class FrameRenderer:
 
     def render(self, index: int, label: str = "") -> np.ndarray:
         """The RGB frame (height x width x 3, uint8) of trajectory row ``index``, titled with ``label``."""
+        assert self.plotter is not None  # built in __init__, None only after close()
         self.last_clim = self._update(index, label)
         self.plotter.render()
-        view = self.plotter.screenshot(None, return_img=True)
-        view = np.asarray(view)[:, :, :3]
+        screenshot = self.plotter.screenshot(None, return_img=True)
+        view = np.asarray(screenshot)[:, :, :3]
         if self.panel is None:
             return view
         panel = self.panel.draw(index)
@@ -304,6 +311,7 @@ class FrameRenderer:
 
     def to_pixels(self, points: np.ndarray, row: int = 0) -> np.ndarray:
         """Pixel (column, row from the top) of world points in the last frame, in panel ``row``'s view."""
+        assert self.plotter is not None  # built in __init__, None only after close()
         renderer = self.plotter.renderers[row]
         out = []
         height = self.view_size[1]
@@ -316,7 +324,8 @@ class FrameRenderer:
 
     def scalar_bar_range(self, name: str = "sigma_n") -> tuple[float, float]:
         """The range (MPa) the colour bar of ``name`` shows in the last frame."""
-        return tuple(float(v) for v in self.scalar_bars[name].GetRange())
+        low, high = self.scalar_bars[name].GetRange()
+        return float(low), float(high)
 
     def close(self) -> None:
         """Release the OpenGL context and the figure."""
@@ -425,7 +434,7 @@ def render_animation(
         raise ValueError(f"clim = {clim!r}: must be 'frame', 'run' or a range (lo, hi) in MPa")
     start = time.perf_counter()
     rows = frame_rows(evaluator, frames)
-    fixed, fixed_tau = (None, None) if isinstance(clim, str) else (tuple(clim), tau_clim)
+    fixed, fixed_tau = (None, None) if isinstance(clim, str) else ((clim[0], clim[1]), tau_clim)
     if clim == "run" or (fixed_tau is None and fixed is not None and evaluator.friction):
         shared = field_ranges(evaluator, rows)
         fixed, fixed_tau = fixed or shared["sigma_n"], fixed_tau or shared.get("tau")

@@ -98,12 +98,13 @@ def characteristic(runs: list[PaperRun]) -> float | None:
     return float(np.median(values)) if values else None
 
 
-def linear_fit(x: Sequence[float], y: Sequence[float]) -> dict:
-    """Least-squares line ``y = slope x + intercept`` and its R^2."""
-    x, y = np.asarray(x, float), np.asarray(y, float)
-    slope, intercept = np.polyfit(x, y, 1)
-    residual = y - (slope * x + intercept)
-    r2 = 1 - residual @ residual / ((y - y.mean()) @ (y - y.mean()))
+def linear_fit(x: Sequence[float], y: Sequence[float | None]) -> dict:
+    """Least-squares line ``y = slope x + intercept`` and its R^2; a None in ``y`` (a speed not found) is NaN, and
+    makes every number NaN."""
+    xs, ys = np.asarray(x, float), np.asarray(y, float)
+    slope, intercept = np.polyfit(xs, ys, 1)
+    residual = ys - (slope * xs + intercept)
+    r2 = 1 - residual @ residual / ((ys - ys.mean()) @ (ys - ys.mean()))
     return {"slope": float(slope), "intercept": float(intercept), "r2": float(r2)}
 
 

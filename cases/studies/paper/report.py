@@ -158,7 +158,8 @@ def _load_only(r: StudyResults) -> list[str]:
         "|---|---|---|---|---|",
     ]
     for ratio, b in zip(r.ratios, r.boundaries):
-        peaks = [run.peak for run in r.runs[("attack 1", ratio)] if run.unstable]
+        # an unstable run has its peak (a failed run, without one, is never unstable)
+        peaks = [run.peak for run in r.runs[("attack 1", ratio)] if run.unstable and run.peak is not None]
         if not peaks:
             continue
         angle, speed = float(np.median([p[0] for p in peaks])), float(np.median([p[1] for p in peaks]))

@@ -39,6 +39,7 @@ def reproduce(out: str | Path, store: RunStore, pool: Pool | None = None) -> dic
     fits = {"critical": linear_fit(ratios, critical), "convergent": linear_fit(ratios, convergent["attack 1"])}
     boundaries = [load_boundary(r) for r in ratios]
     _figures(study, out, runs, ratios, critical, convergent, fits, boundaries)
+    wall_time = time.perf_counter() - start
     record = {
         "ratios": ratios,
         "critical_velocity": critical,
@@ -50,7 +51,7 @@ def reproduce(out: str | Path, store: RunStore, pool: Pool | None = None) -> dic
         "fold_speed": [b.fold_speed for b in boundaries],
         "fold_attack_angle": [b.fold_attack_angle for b in boundaries],
         "runs": {f"{kind} @ {ratio}": [run.record() for run in group] for (kind, ratio), group in runs.items()},
-        "wall_time": time.perf_counter() - start,
+        "wall_time": wall_time,
     }
     atomic_write_text(out / "results.json", json.dumps(record, indent=1, default=str) + "\n")
     atomic_write_text(
@@ -66,7 +67,7 @@ def reproduce(out: str | Path, store: RunStore, pool: Pool | None = None) -> dic
                 INERTIA_SCALES,
                 inertia_critical,
                 boundaries,
-                record["wall_time"],
+                wall_time,
             )
         ),
     )
@@ -160,15 +161,16 @@ def reproduce_variants(out: str | Path, store: RunStore, pool: Pool | None = Non
         known = [(r, v) for r, v in zip(ratios, values) if v is not None]
         fits[name] = linear_fit([r for r, _ in known], [v for _, v in known]) if len(known) >= 3 else None
     figures.variants_figure(ratios, characteristic_by, out / "variants.png")
+    wall_time = time.perf_counter() - start
     record = {
         "ratios": ratios,
         "characteristic_convergent_velocity": characteristic_by,
         "fits": fits,
         "path_length_at_400": path_at_400,
-        "wall_time": time.perf_counter() - start,
+        "wall_time": wall_time,
     }
     atomic_write_text(out / "variants.json", json.dumps(record, indent=1, default=str) + "\n")
     atomic_write_text(
-        out / "variants.md", variants_markdown(ratios, runs, characteristic_by, fits, path_at_400, record["wall_time"])
+        out / "variants.md", variants_markdown(ratios, runs, characteristic_by, fits, path_at_400, wall_time)
     )
     return record
