@@ -21,6 +21,7 @@ import datetime
 import os
 import platform
 import re
+import shlex
 import statistics
 import subprocess
 import sys
@@ -155,7 +156,8 @@ def command(arguments: list[str]) -> None:
     """Wall time and peak memory of any command (run once)."""
     with tempfile.TemporaryDirectory(prefix="measure-") as empty:
         wall, peak, _ = timed_process([empty if a == EMPTY_DIR else a for a in arguments])
-    shown = " ".join("$(mktemp -d)" if a == EMPTY_DIR else a for a in arguments)
+    # quoted as a shell would need it, so the shown command can be pasted (``-k 'not slow'``)
+    shown = " ".join("$(mktemp -d)" if a == EMPTY_DIR else shlex.quote(a) for a in arguments)
     print(f"`{shown}` takes {wall:.0f} s wall and peaks at {peak:.0f} MB resident.")
     print()
     print(stamp())

@@ -230,3 +230,19 @@ def test_no_check_writes_the_repository(capsys):
     regenerate.check()
     assert {p: p.stat().st_mtime_ns for p in watched} == before
     assert os.access(regenerate.COSTS, os.R_OK)
+
+
+def test_a_block_made_on_another_processor_is_reported_not_counted(tmp_path, capsys, costs, monkeypatch):
+    """Round-off near a threshold can move a digit between processors: a stamped block re-run on another
+    processor is reported; on its own processor, or without a stamp, a difference fails."""
+    monkeypatch.setattr(regenerate, "processor", lambda: "Processor A")
+    text = "steps 343\n\n_measured 2026-11-27 on 2 cores (Processor B), Python 3.11.7_\n"
+    command = "printf 'steps 224\\n'"
+    page = _page(tmp_path, _block(command, text))
+    assert regenerate.check([str(page)], rerun=True, everything=True) == 0
+    captured = capsys.readouterr()
+    assert "from the Processor B it was made on, not counted" in captured.err and "343" in captured.err
+    page.write_text(_block(command, text.replace("Processor B", "Processor A")))
+    assert regenerate.check([str(page)], rerun=True, everything=True) == 1
+    page.write_text(_block(command, "steps 343\n"))
+    assert regenerate.check([str(page)], rerun=True, everything=True) == 1
