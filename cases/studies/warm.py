@@ -21,7 +21,7 @@ import numpy as np
 
 from .. import SCENE_DIR
 from ..run import prepare_projectile
-from ..run.compiled import compiled_step
+from ..run.compiled import ENTRY_POINTS, compiled_step, needs_compiling
 from ..run.prepare import preparation_key, prepared_path
 from ..scene import InputError, load_scene
 
@@ -47,18 +47,23 @@ def _reduced(scene, prepared) -> None:
     model.run(scene.impact.speed)
 
 
-def warm_caches(scenes: Sequence[Path], say=lambda line: print(line, file=sys.stderr, flush=True)) -> float:
-    """Prepare each scene and compile what its studies run; return the wall time (s)."""
+def warm_caches(
+    scenes: Sequence[Path], say=lambda line: print(line, file=sys.stderr, flush=True)
+) -> tuple[float, bool]:
+    """Prepare each scene and compile what its studies run; return the wall time (s) and whether
+    anything had to be meshed or compiled (else everything was cached already)."""
     start = time.perf_counter()
+    filled = any(needs_compiling(entry) for entry in ENTRY_POINTS)
     for path in scenes:
         scene = load_scene(path).with_kernel(many_runs=True)
         if not prepared_path(*preparation_key(scene)).exists():
+            filled = True
             say(f"penetrate: meshing {path.name} (gmsh; a few seconds, once)")
         prepared = prepare_projectile(scene)
         if scene.numerics.kernel == "compiled":
             _compiled(scene, prepared)
         _reduced(scene, prepared)
-    return time.perf_counter() - start
+    return time.perf_counter() - start, filled
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -68,8 +73,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("scenes", nargs="*", type=Path, help="scene files (default: every shipped scene)")
     options = parser.parse_args(argv)
     scenes = options.scenes or sorted(SCENE_DIR.glob("*.toml"))
-    seconds = warm_caches(scenes)
-    print(f"penetrate: caches warm for {len(scenes)} scenes ({seconds:.1f} s)", file=sys.stderr)
+    seconds, filled = warm_caches(scenes)
+    if filled:  # silent when everything was cached: ./dev runs this before every command
+        print(f"penetrate: caches warm for {len(scenes)} scenes ({seconds:.1f} s)", file=sys.stderr)
     return 0
 
 
