@@ -189,7 +189,18 @@ def run_missing(todo: dict[str, Scene], store: RunStore, pool: Pool, keys: Itera
         if pool.scheduler:
             _on_dask(jobs, pool.scheduler, finish)
         else:
+            _compile_once(todo.values(), pool.width)
             _on_processes(jobs, list(todo.values()), pool.width, finish)
+
+
+def _compile_once(scenes: Iterable[Scene], width: int) -> None:
+    """Compile the compiled step here, once (announced), before local workers start, when the cache lacks it
+    and a run will take it: else every worker compiles it side by side, each saying so."""
+    from ..run.compiled import needs_compiling, precompile
+
+    compiled = any(scene.with_kernel(many_runs=True).numerics.kernel == "compiled" for scene in scenes)
+    if width > 1 and compiled and needs_compiling("dafl_step"):
+        precompile()
 
 
 def _on_dask(jobs: dict[str, str], scheduler: str, finish) -> None:

@@ -293,3 +293,25 @@ def test_bad_list_file(tmp_path):
     bad.write_text("speed = 3\n")
     with pytest.raises(InputError, match=r"\[\[run\]\]"):
         read_variations(bad)
+
+
+def test_the_compiled_step_is_compiled_once_before_local_workers_start(monkeypatch):
+    """With numba's cache empty, a sweep on local workers compiles (and announces) the step once, in this
+    process, instead of in every worker side by side; a sweep that runs nothing compiled compiles nothing."""
+    from cases import load_scene, scene_path
+    from cases.run import compiled
+    from cases.studies import pool
+
+    calls = []
+    monkeypatch.setattr(compiled, "needs_compiling", lambda entry: True)
+    monkeypatch.setattr(compiled, "precompile", lambda: calls.append("compiled"))
+    scene = load_scene(scene_path("paper_p3"))
+    pool._compile_once([scene], width=2)
+    assert calls == ["compiled"]
+    pool._compile_once([scene], width=1)  # one worker compiles it once anyway
+    numpy_only = load_scene(scene_path("paper_p3"), {"numerics.kernel": "numpy"})
+    pool._compile_once([numpy_only], width=2)
+    assert calls == ["compiled"]
+    monkeypatch.setattr(compiled, "needs_compiling", lambda entry: False)
+    pool._compile_once([scene], width=2)
+    assert calls == ["compiled"]
