@@ -6,12 +6,12 @@ import argparse
 import json
 from pathlib import Path
 
-from .options import add_pool_options, add_scene_options, out_folder, overrides, positive_int, study
+from .options import Parser, add_pool_options, add_scene_options, out_folder, overrides, positive_int, study
 
 __all__ = ["register"]
 
 
-def register(commands) -> None:
+def register(commands: argparse._SubParsersAction[Parser]) -> None:
     parser = commands.add_parser(
         "ensemble", help="Monte Carlo: the probability of each outcome under sampled impact conditions (resumable)"
     )

@@ -8,8 +8,12 @@ import gc
 import os
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, NoReturn
 
 from ..scene import one_line
+
+if TYPE_CHECKING:
+    from ..studies import Pool
 
 __all__ = [
     "Parser",
@@ -31,7 +35,7 @@ class Parser(argparse.ArgumentParser):
     """Usage errors in one line, like every other error (subcommands inherit this class); help texts drawn
     from the code's registries (:meth:`late_help`)."""
 
-    def __init__(self, *args, **kwargs) -> None:
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         self._late_help: list[tuple[argparse.Action, Callable[[], str]]] = []
 
@@ -47,7 +51,7 @@ class Parser(argparse.ArgumentParser):
             action.help = build()
         return super().format_help()
 
-    def error(self, message: str):
+    def error(self, message: str) -> NoReturn:
         self.exit(2, f"{self.prog}: error: {one_line(message)} (see {self.prog} --help)\n")
 
 
@@ -133,7 +137,7 @@ def add_pool_options(parser: argparse.ArgumentParser, store: str) -> None:
     shown.add_argument("--no-progress", dest="progress", action="store_false", default=None, help="no progress bar")
 
 
-def pool(args: argparse.Namespace):
+def pool(args: argparse.Namespace) -> Pool:
     """The :class:`~cases.studies.Pool` the pool options describe."""
     from ..studies import Pool
 
@@ -141,7 +145,7 @@ def pool(args: argparse.Namespace):
 
 
 @contextlib.contextmanager
-def study(args: argparse.Namespace) -> Iterator:
+def study(args: argparse.Namespace) -> Iterator[Pool]:
     """The pool the options describe, with one progress bar named after the command for every run the block
     makes; the bar closes when the block ends, before the command prints its result beside it."""
     from ..studies.pool import study_progress

@@ -7,12 +7,12 @@ import json
 import math
 
 from ..scene import InputError
-from .options import add_scene_options, overrides, positive_float, positive_int
+from .options import Parser, add_scene_options, overrides, positive_float, positive_int
 
 __all__ = ["register"]
 
 
-def register(commands) -> None:
+def register(commands: argparse._SubParsersAction[Parser]) -> None:
     parser = commands.add_parser(
         "render", help="off-screen images, an animation and ParaView files of the resistance field"
     )

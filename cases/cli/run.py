@@ -5,13 +5,18 @@ from __future__ import annotations
 import argparse
 import json
 import os
+from typing import TYPE_CHECKING
 
-from .options import add_scene_options, environment_defaults, out_folder, overrides, quiet_start
+from .options import Parser, add_scene_options, environment_defaults, out_folder, overrides, quiet_start
+
+if TYPE_CHECKING:
+    from ..run import RunSummary
+    from ..scene import Scene
 
 __all__ = ["register", "human_summary"]
 
 
-def register(commands) -> None:
+def register(commands: argparse._SubParsersAction[Parser]) -> None:
     parser = commands.add_parser("run", help="run one scene")
     add_scene_options(parser)
     parser.add_argument("--out", type=out_folder, metavar="DIR", help="write summary.json and history.csv here")
@@ -46,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def human_summary(s, scene) -> str:
+def human_summary(s: RunSummary, scene: Scene) -> str:
     """The summary of a run for a person: a line each for the projectile, the end, depth, path, angles, time."""
     lines = [
         f"scene          {scene.name or '(unnamed)'}" + (f": {scene.description}" if scene.description else ""),

@@ -6,8 +6,13 @@ from __future__ import annotations
 import argparse
 import json
 import math
+from typing import TYPE_CHECKING
 
 from .options import Parser, add_pool_options, add_scene_options, positive_float, study
+
+if TYPE_CHECKING:
+    from ..run import RunStore
+    from ..studies import Sweep
 
 __all__ = ["register"]
 
@@ -18,7 +23,7 @@ def _study_options(parser: Parser) -> None:
     parser.add_argument("--json", action="store_true", help="print the result as one JSON object")
 
 
-def register(commands) -> None:
+def register(commands: argparse._SubParsersAction[Parser]) -> None:
     critical = commands.add_parser("critical", help="find the critical impact velocity of a scene's disturbance")
     _study_options(critical)
     critical.add_argument(
@@ -91,7 +96,7 @@ def speed_range(text: str) -> tuple[float, float]:
     return low, high
 
 
-def _inputs(args: argparse.Namespace):
+def _inputs(args: argparse.Namespace) -> tuple[Sweep, RunStore]:
     from ..run import RunStore
     from ..studies import Sweep
     from .options import overrides

@@ -6,6 +6,7 @@ import argparse
 import json
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..scene import InputError
 from .options import (
@@ -19,11 +20,18 @@ from .options import (
     study,
 )
 
+if TYPE_CHECKING:
+    import pandas as pd
+
 __all__ = ["register"]
 
 
 def _study_parser(
-    commands, name: str, help: str, writes: str, json_help: str = "print the table as JSON records"
+    commands: argparse._SubParsersAction[Parser],
+    name: str,
+    help: str,
+    writes: str,
+    json_help: str = "print the table as JSON records",
 ) -> Parser:
     """A study's command with what every study takes: the scene and its overrides, where the runs go,
     ``--json`` and ``--out`` (default ``runs/NAME``; ``writes`` names what is written there)."""
@@ -41,7 +49,7 @@ def _study_parser(
     return parser
 
 
-def register(commands) -> None:
+def register(commands: argparse._SubParsersAction[Parser]) -> None:
     compare = _study_parser(
         commands,
         "compare",
@@ -236,7 +244,7 @@ def entry_smoothing_study(args: argparse.Namespace) -> int:
     return _show(args, table, "entry.md")
 
 
-def _show(args: argparse.Namespace, table, report: str) -> int:
+def _show(args: argparse.Namespace, table: pd.DataFrame, report: str) -> int:
     """A study's table as JSON records with ``--json``, else its markdown report from ``--out``."""
     if args.json:
         print(table.to_json(orient="records"))

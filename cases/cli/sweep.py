@@ -6,15 +6,16 @@ import argparse
 import json
 import shlex
 import sys
+from typing import Any
 
-from .options import add_pool_options, add_scene_options, out_file, overrides, study
+from .options import Parser, add_pool_options, add_scene_options, out_file, overrides, study
 
 __all__ = ["register"]
 
 SHOWN = ("end_reason", "depth", "path_length", "max_attack_angle", "axis_angle_change", "final_speed", "error")
 
 
-def register(commands) -> None:
+def register(commands: argparse._SubParsersAction[Parser]) -> None:
     parser = commands.add_parser("sweep", help="run variations of a scene in parallel (resumable)")
     add_scene_options(parser, "the base scene TOML file")
     parser.add_argument(
@@ -77,7 +78,7 @@ def _failure_line(args: argparse.Namespace, values: dict, failed: int, runs: int
     return f"penetrate sweep: {every} failed (the error column says why): {command} shows the first one's traceback"
 
 
-def _toml(value, top: bool = False) -> str:
+def _toml(value: bool | float | str | dict[str, Any] | list[Any] | tuple[Any, ...], top: bool = False) -> str:
     """A value as ``--set`` reads it back (a TOML value; a bare word at the top, as the command line writes one)."""
     if isinstance(value, bool):
         return "true" if value else "false"

@@ -40,7 +40,7 @@ import pandas as pd
 from fem_loads import ResistanceLaw
 
 from ..run import RunStore, atomic_write_text, convergence_speed, prepare_projectile
-from ..scene import Overrides
+from ..scene import Overrides, Scene
 from ..viz.figures import legend_outside, save_figure, subplots
 from .pool import Pool
 from .reference import axial_depth_1d, check_nose_alone_presses
@@ -62,7 +62,7 @@ DEFAULT_RTOLS = (1e-3, 1e-4, 1e-5, 1e-6)
 DEFAULT_QUADRATURE_ORDERS = (4, 6)
 
 
-def is_plain_normal_impact(scene) -> bool:
+def is_plain_normal_impact(scene: Scene) -> bool:
     """A normal impact with no disturbance, one law and no effect, of a body of revolution whose nose alone
     presses (no flare): the 1-D integration is its exact reference."""
     impact, effects = scene.impact, scene.effects
@@ -333,7 +333,7 @@ def _label(row: pd.Series) -> str:
     return f"{geometry}, rk4 {row['numerics.time_step']:g} s"
 
 
-def _write(table: pd.DataFrame, reference: dict, scene, out: Path) -> None:
+def _write(table: pd.DataFrame, reference: dict, scene: Scene, out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     atomic_write_text(out / "accuracy.csv", table.to_csv(index=False))
     atomic_write_text(out / "accuracy.md", _markdown(table, reference, scene))
@@ -351,7 +351,7 @@ def _write(table: pd.DataFrame, reference: dict, scene, out: Path) -> None:
     save_figure(fig, out / "accuracy.png")
 
 
-def _markdown(table: pd.DataFrame, reference: dict, scene) -> str:
+def _markdown(table: pd.DataFrame, reference: dict, scene: Scene) -> str:
     lines = [
         f"# Accuracy against time: {scene.name or 'scene'}",
         "",

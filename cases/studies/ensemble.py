@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -28,6 +28,9 @@ import pandas as pd
 from ..scene import InputError, Scene, dotted_key
 from .speeds import is_unstable
 from .sweep import MAX_GRID_VALUES, SweepResult, Variation
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = [
     "Distribution",
@@ -81,7 +84,7 @@ class Distribution:
     name: str
     parameters: tuple[float, ...]
 
-    def frozen(self):
+    def frozen(self) -> Any:  # a frozen scipy.stats distribution (scipy has no types here), or None
         """The :mod:`scipy.stats` distribution (a frozen ``rv_continuous``), or None for ``choice``."""
         from scipy import stats  # here, not at the top: the command line's help reads FORMS (1 s less)
 
@@ -260,13 +263,15 @@ def draw(distributions: Sequence[Distribution], count: int, seed: int = 0, desig
 def variations(distributions: Sequence[Distribution], samples: np.ndarray) -> list[Variation]:
     """One typed :class:`~cases.studies.sweep.Variation` per sample (Python floats, or ints for whole-number keys)."""
 
-    def typed(d: Distribution, value) -> Any:
+    def typed(d: Distribution, value: float) -> Any:
         return int(value) if d.name == "choice" and all(isinstance(v, int) for v in d.parameters) else float(value)
 
     return [Variation({d.key: typed(d, v) for d, v in zip(distributions, row)}) for row in samples]
 
 
-def wilson_interval(successes, trials, confidence: float = CONFIDENCE) -> tuple[np.ndarray, np.ndarray]:
+def wilson_interval(
+    successes: npt.ArrayLike, trials: npt.ArrayLike, confidence: float = CONFIDENCE
+) -> tuple[np.ndarray, np.ndarray]:
     """The Wilson score interval (no continuity correction) of a binomial proportion, from
     ``scipy.stats.binomtest(...).proportion_ci(method="wilson")``; NaN for no trials.
 

@@ -36,7 +36,7 @@ from .ensemble import (
     variations,
 )
 from .pool import Pool
-from .sweep import Sweep, SweepResult, run_sweep
+from .sweep import Sweep, SweepResult, Variation, run_sweep
 
 __all__ = ["run_ensemble", "INTERVAL"]
 
@@ -69,7 +69,7 @@ def _sweep(base: Sweep, distributions: list[Distribution], values: np.ndarray, s
         ) from None
 
 
-def _invalid(base: Sweep, variation) -> bool:
+def _invalid(base: Sweep, variation: Variation) -> bool:
     try:
         Sweep(base.base, [variation], base.source)
     except InputError:
@@ -187,7 +187,7 @@ def _quantiles(table: pd.DataFrame) -> dict:
     return record
 
 
-def _cell(value) -> str:
+def _cell(value: float | None) -> str:
     return "-" if value is None or (isinstance(value, float) and math.isnan(value)) else f"{value:.3g}"
 
 

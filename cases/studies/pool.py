@@ -15,7 +15,7 @@ import atexit
 import contextlib
 import os
 import sys
-from collections.abc import Collection, Iterable, Iterator, Sequence
+from collections.abc import Callable, Collection, Iterable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 from contextvars import ContextVar
@@ -203,7 +203,11 @@ def _compile_once(scenes: Iterable[Scene], width: int) -> None:
         precompile()
 
 
-def _on_dask(jobs: dict[str, str], scheduler: str, finish) -> None:
+# what a finished run is handed to: its key, record, gzipped history and code version (run_job's result)
+_Finish = Callable[[str, dict, bytes | None, str], None]
+
+
+def _on_dask(jobs: dict[str, str], scheduler: str, finish: _Finish) -> None:
     from distributed import Client
     from distributed import as_completed as dask_completed
 
@@ -232,7 +236,7 @@ def _shut_down_warm_executors() -> None:
     _WARM.clear()
 
 
-def _on_processes(jobs: dict[str, str], scenes: list[Scene], count: int, finish) -> None:
+def _on_processes(jobs: dict[str, str], scenes: list[Scene], count: int, finish: _Finish) -> None:
     if count == 1:
         for key, text in jobs.items():
             finish(key, *run_job(text))

@@ -26,6 +26,7 @@ angle ``alpha``:
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -85,7 +86,12 @@ class TurnBoundary:
     fold_attack_angle: float | None
 
 
-def turn_boundary(loads: DAFLLoads, mass: float, attack_angles=tuple(range(1, 21)), speeds=None) -> TurnBoundary:
+def turn_boundary(
+    loads: DAFLLoads,
+    mass: float,
+    attack_angles: Sequence[float] = tuple(range(1, 21)),
+    speeds: Sequence[float] | np.ndarray | None = None,
+) -> TurnBoundary:
     """``V0(alpha)``, ``V_turn(alpha)`` and the minimum of ``V_turn`` over ``alpha``."""
     speeds = SPEEDS if speeds is None else np.asarray(speeds, dtype=float)
     non_rotating = [_crossing(loads, mass, math.radians(a), False, speeds) for a in attack_angles]

@@ -26,6 +26,8 @@ and these references refuse it (:func:`check_nose_alone_presses`).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from scipy import integrate
@@ -191,7 +193,13 @@ def axial_depth_1d(
     return ln + rest, v1
 
 
-def _integrate(rate, start: list[float], stop_speed: float, rtol: float, embedded_at: float | None = None):
+def _integrate(
+    rate: Callable[[float, np.ndarray], list[float]],
+    start: list[float],
+    stop_speed: float,
+    rtol: float,
+    embedded_at: float | None = None,
+) -> Any:  # scipy's OdeResult (scipy has no types here)
     """``solve_ivp`` of ``(P, V)`` from ``start`` until the speed falls to ``stop_speed`` or, with
     ``embedded_at`` (the nose length), the nose is embedded (events ``[embedded, stopped]``, else
     ``[stopped]``)."""

@@ -31,8 +31,9 @@ Definitions (docs/studies.md):
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -42,6 +43,9 @@ from ..scene import InputError, Scene
 from ..scene.schema import Impact
 from .pool import Pool, study_progress
 from .sweep import Sweep, Variation, run_sweep
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = [
     "CriticalSearch",
@@ -262,7 +266,9 @@ class _Bracket:
         self.low, self.low_run = low
 
 
-def _end(side: list[float], nearest, assumed: float, wrong_side: set[float], limit: float) -> tuple[float, bool] | None:
+def _end(
+    side: list[float], nearest: Callable[[list[float]], float], assumed: float, wrong_side: set[float], limit: float
+) -> tuple[float, bool] | None:
     """One end of a bracket and whether a run confirms it: the ``nearest`` run on its side; else the assumed
     end, unless its run lay on the wrong side: then the range's ``limit`` (None if that too was run and did)."""
     if side:
@@ -447,7 +453,7 @@ def measure_convergent_velocity(
     return ConvergentResult(value, runs, message)
 
 
-def _threshold_fix(history, threshold: float) -> str:
+def _threshold_fix(history: pd.DataFrame, threshold: float) -> str:
     """Why a run has no convergence speed at ``threshold``, and the ``--threshold`` that would give it one:
     just above the least attack angle after the peak."""
     angle = np.asarray(history["total_attack_angle"], dtype=float)[attack_angle_peak(history) :]

@@ -14,21 +14,21 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
 
 from .. import SCENE_DIR
-from ..run import prepare_projectile
+from ..run import PreparedProjectile, prepare_projectile
 from ..run.compiled import ENTRY_POINTS, compiled_step, needs_compiling
 from ..run.prepare import preparation_key, prepared_path
-from ..scene import InputError, load_scene
+from ..scene import InputError, Scene, load_scene
 
 __all__ = ["warm_caches", "main"]
 
 
-def _compiled(scene, prepared) -> None:
+def _compiled(scene: Scene, prepared: PreparedProjectile) -> None:
     from dynamics import METHODS, RigidBody
 
     body = RigidBody(prepared.mass.mass, prepared.mass.inertia)
@@ -37,7 +37,7 @@ def _compiled(scene, prepared) -> None:
     compiled_step(scene.loads(prepared.quadrature), METHODS[scene.numerics.integrator](), body, weight)
 
 
-def _reduced(scene, prepared) -> None:
+def _reduced(scene: Scene, prepared: PreparedProjectile) -> None:
     from .predict import ReducedModel
 
     try:
@@ -48,7 +48,7 @@ def _reduced(scene, prepared) -> None:
 
 
 def warm_caches(
-    scenes: Sequence[Path], say=lambda line: print(line, file=sys.stderr, flush=True)
+    scenes: Sequence[Path], say: Callable[[str], None] = lambda line: print(line, file=sys.stderr, flush=True)
 ) -> tuple[float, bool]:
     """Prepare each scene and compile what its studies run; return the wall time (s) and whether
     anything had to be meshed or compiled (else everything was cached already)."""

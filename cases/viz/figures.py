@@ -5,11 +5,14 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ..run.persistence import save_figure_bytes
 
 if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+    from matplotlib.legend import Legend
     from pydantic.fields import FieldInfo
 
 __all__ = ["new_figure", "subplots", "save_figure", "axis_label", "quantity_unit", "legend_outside", "DIMENSIONLESS"]
@@ -21,7 +24,7 @@ DIMENSIONLESS = "-"
 _STUDY_UNITS = {"convergence_speed": "m/s", "critical_velocity": "m/s", "characteristic_convergent_velocity": "m/s"}
 
 
-def new_figure(figsize: tuple[float, float], dpi: float | None = None):
+def new_figure(figsize: tuple[float, float], dpi: float | None = None) -> Figure:
     """A matplotlib ``Figure`` drawn by the Agg canvas (off-screen), outside pyplot's figure manager."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
@@ -31,13 +34,14 @@ def new_figure(figsize: tuple[float, float], dpi: float | None = None):
     return figure
 
 
-def subplots(nrows: int = 1, ncols: int = 1, *, figsize: tuple[float, float], **kwargs):
+def subplots(nrows: int = 1, ncols: int = 1, *, figsize: tuple[float, float], **kwargs: Any) -> tuple[Figure, Any]:
     """``(figure, axes)`` as ``pyplot.subplots`` gives them, on a :func:`new_figure`."""
+    # axes: one Axes or an array of them, by nrows, ncols and squeeze (matplotlib types it Any too)
     figure = new_figure(figsize)
     return figure, figure.subplots(nrows, ncols, **kwargs)
 
 
-def save_figure(figure, path: str | os.PathLike, dpi: int = 110) -> Path:
+def save_figure(figure: Figure, path: str | os.PathLike, dpi: int = 110) -> Path:
     """Save ``figure`` as a PNG file, written atomically (a reader never sees a part of it)."""
     return save_figure_bytes(figure, path, dpi)
 
@@ -84,7 +88,7 @@ def _recorded_unit(info: FieldInfo) -> str:
     return unit
 
 
-def legend_outside(ax, **kwargs):
+def legend_outside(ax: Axes, **kwargs: Any) -> Legend | None:
     """A legend right of ``ax``, outside its data area, so it covers no data.
 
     ``loc="best"`` only picks the least crowded spot inside the axes, and covers data when there
@@ -97,7 +101,7 @@ def legend_outside(ax, **kwargs):
     return ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, **kwargs)
 
 
-def legend_below(ax, **kwargs):
+def legend_below(ax: Axes, **kwargs: Any) -> Legend | None:
     """A legend under ``ax``'s x label, outside its data area: for axes with a twin on the right or a
     neighbour beside them, where :func:`legend_outside` would cover them.  ``kwargs`` go to ``Axes.legend``
     (``fontsize`` 8 and two columns unless given)."""

@@ -14,6 +14,7 @@ import os
 import time
 from collections.abc import Iterable, Sequence
 from pathlib import Path
+from types import ModuleType
 from typing import TYPE_CHECKING
 
 os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
@@ -25,7 +26,7 @@ from .field import FieldEvaluator, SurfaceField, frame_rows  # noqa: E402
 from .panels import SidePanel  # noqa: E402
 
 if TYPE_CHECKING:
-    from pyvista import Plotter
+    from pyvista import Camera, Plotter
 
 __all__ = [
     "FrameRenderer",
@@ -47,13 +48,13 @@ SOIL_LIGHT = (0.93, 0.88, 0.78)
 BACKGROUND = "white"
 
 
-def space_titles(plotter) -> None:
+def space_titles(plotter: Plotter) -> None:
     """Lift the colour bars' titles clear of their top labels."""
     for bar in plotter.scalar_bars.values():
         bar.SetVerticalTitleSeparation(12)
 
 
-def pyvista_off_screen():
+def pyvista_off_screen() -> ModuleType:
     """pyvista, set to draw off-screen (imported on first use: the ParaView writer needs no OpenGL)."""
     import pyvista as pv
 
@@ -154,7 +155,7 @@ class FrameRenderer:
             self.close()
             raise
 
-    def _build(self, pv, lighting: bool) -> None:
+    def _build(self, pv: ModuleType, lighting: bool) -> None:
         ev = self.evaluator
         rows = len(self.fields)
         self.plotter = plotter = pv.Plotter(
@@ -270,7 +271,7 @@ class FrameRenderer:
         self.last_field = fld
         return clims
 
-    def _aim(self, camera, fld: SurfaceField, tip: np.ndarray) -> None:
+    def _aim(self, camera: Camera, fld: SurfaceField, tip: np.ndarray) -> None:
         """Side view from -Y (the paper's vertical plane), parallel projection, framing the body and the arrow.
 
         The body and the velocity arrow fill the left 84 % of the view (the colour bar takes the rest).
@@ -340,7 +341,7 @@ class FrameRenderer:
     def __enter__(self) -> FrameRenderer:
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.close()
 
 

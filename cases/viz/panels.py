@@ -21,6 +21,7 @@ import os
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 import pandas as pd
@@ -31,6 +32,10 @@ from ..run import PreparedProjectile
 from ..scene import InputError
 from .field import FieldEvaluator
 from .figures import legend_outside, new_figure, save_figure
+
+if TYPE_CHECKING:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.projections.polar import PolarAxes
 
 __all__ = ["SidePanel", "ring_stress", "default_station", "plot_histories", "plot_polar", "SOIL"]
 
@@ -45,7 +50,8 @@ class SidePanel:
         t = h["time"].to_numpy() * 1e3
         dpi = 100
         self.figure = new_figure((width / dpi, height / dpi), dpi)
-        self.canvas = self.figure.canvas
+        # new_figure draws on the Agg canvas, whose blitting and pixel buffer the frames use
+        self.canvas = cast("FigureCanvasAgg", self.figure.canvas)
         path_ax, speed_ax, angle_ax = self.figure.subplots(3, 1, gridspec_kw={"height_ratios": [1.4, 1, 1]})
         x, z = h["position_x"].to_numpy(), h["position_z"].to_numpy()
         span = max(np.ptp(x), np.ptp(z), evaluator.length)
@@ -246,7 +252,7 @@ def plot_polar(
 
     station = default_station(evaluator.prepared) if station is None else station
     figure = new_figure((6.5, 6.5))
-    ax = figure.add_subplot(projection="polar")
+    ax = cast("PolarAxes", figure.add_subplot(projection="polar"))
     times = evaluator.result.trajectory.time
     for label, row in instants:
         theta, sigma = ring_stress(evaluator, row, station)

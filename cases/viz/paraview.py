@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import xml.etree.ElementTree as ET
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -12,12 +13,15 @@ from ..run import atomic_write_text
 from ..run.persistence import atomic_path
 from .field import FieldEvaluator, frame_rows
 
+if TYPE_CHECKING:
+    import meshio
+
 __all__ = ["write_paraview", "PARAVIEW_INDEX", "TRAJECTORY_FIELDS"]
 
 PARAVIEW_INDEX = "run.pvd"
 
 
-def _write_vtu(path: Path, mesh) -> None:
+def _write_vtu(path: Path, mesh: meshio.Mesh) -> None:
     """A meshio mesh written as VTU, atomically."""
     import meshio
 

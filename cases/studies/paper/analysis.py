@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 
 from ... import scene_path
-from ...run import CONVERGENCE_THRESHOLD, RunStore, attack_angle_peak, convergence_speed, prepare_projectile
+from ...run import CONVERGENCE_THRESHOLD, RunStore, StoredRun, attack_angle_peak, convergence_speed, prepare_projectile
 from ...scene import load_scene
 from ..pool import Pool
 from ..prediction import TurnBoundary, turn_boundary
@@ -69,12 +69,13 @@ class Study:
             start += len(group.speeds)
         return out
 
-    def _read(self, speed: float, run) -> PaperRun:
+    def _read(self, speed: float, run: StoredRun) -> PaperRun:
         if run.failed:
             return PaperRun(speed, run.key, error=run.error)
         history = self.history(run.key)
         peak = attack_angle_peak(history)
         s = run.summary
+        assert s is not None  # not failed
         return PaperRun(
             speed,
             run.key,

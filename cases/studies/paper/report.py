@@ -21,7 +21,7 @@ Runs = dict[tuple[str, float], list[PaperRun]]
 _EXPONENT = re.compile(r"e([-+])0(\d)")  # 2e-05 -> 2e-5
 
 
-def fmt(value, digits: int = 0) -> str:
+def fmt(value: float | None, digits: int = 0) -> str:
     """A number with ``digits`` decimals; ``-`` for None or a non-finite number."""
     if value is None or (isinstance(value, float) and not math.isfinite(value)):
         return "-"

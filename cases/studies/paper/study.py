@@ -8,11 +8,12 @@ from pathlib import Path
 
 from ...run import RunStore, atomic_write_text
 from ..pool import Pool
+from ..prediction import TurnBoundary
 from ..speeds import find_critical_velocities
 from . import figures
 from .analysis import Study, characteristic, linear_fit, load_boundary
 from .plan import INERTIA_SCALES, P3, PAPER_RATIOS, SCAN, VARIANTS, critical_bases, label, speed_groups, variant_groups
-from .report import StudyResults, figure_name, results_markdown, variants_markdown
+from .report import Runs, StudyResults, figure_name, results_markdown, variants_markdown
 
 __all__ = ["reproduce", "reproduce_variants"]
 
@@ -74,7 +75,16 @@ def reproduce(out: str | Path, store: RunStore, pool: Pool | None = None) -> dic
     return record
 
 
-def _figures(study: Study, out: Path, runs, ratios, critical, convergent, fits, boundaries) -> None:
+def _figures(
+    study: Study,
+    out: Path,
+    runs: Runs,
+    ratios: list[float],
+    critical: list[float | None],
+    convergent: dict[str, list[float | None]],
+    fits: dict[str, dict],
+    boundaries: list[TurnBoundary],
+) -> None:
     figures.boundary_figure(study, boundaries[ratios.index(P3)], runs[("attack 1", P3)], out / "turn_boundary_p3.png")
     for r in ratios:
         figures.angle_figure(
