@@ -15,6 +15,7 @@ compiles afresh.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import importlib.util
 import os
@@ -57,8 +58,10 @@ COMPILED_SOURCES = (
 )
 
 
-def numba_cache_folder() -> Path:
-    """``$PENETRATE_CACHE_DIR/numba/<digest of the compiled sources and numba's version>``."""
+@functools.cache
+def _sources_digest() -> str:
+    """The digest of the compiled sources and numba's version, read once per process (the sources a
+    process has imported do not change under it)."""
     import numba
 
     digest = hashlib.sha256(numba.__version__.encode())
@@ -66,8 +69,13 @@ def numba_cache_folder() -> Path:
         spec = importlib.util.find_spec(name)
         assert spec is not None and spec.origin is not None  # our own modules, each from its file
         digest.update(Path(spec.origin).read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def numba_cache_folder() -> Path:
+    """``$PENETRATE_CACHE_DIR/numba/<digest of the compiled sources and numba's version>``."""
     root = os.environ.get("NUMBA_CACHE_DIR")
-    return (Path(root) if root else cache_dir() / "numba") / digest.hexdigest()[:16]
+    return (Path(root) if root else cache_dir() / "numba") / _sources_digest()
 
 
 def use_numba_cache() -> None:
@@ -93,10 +101,19 @@ def needs_compiling(entry: str) -> bool:
     return not any(numba_cache_folder().rglob(f"{entry}.*.nbi"))
 
 
+#: the entry points this process has looked for in the cache: the first call compiles or loads the machine
+#: code, so a study's worker looks once, not once per run
+_LOOKED_FOR: set[str] = set()
+
+
 def announce_compiling(entry: str) -> None:
     """Say on stderr, before numba starts, that ``entry`` is about to be compiled and about how long it
     takes, when the cache lacks it (a first run after installing, or after the code changed); silent when
-    the machine code is cached, as after ``./dev setup`` (``penetrate warm``)."""
+    the machine code is cached, as after ``./dev setup`` (``python -m cases.studies.warm``).  Looks once per
+    process and entry point."""
+    if entry in _LOOKED_FOR:
+        return
+    _LOOKED_FOR.add(entry)
     if needs_compiling(entry):
         what, seconds = ENTRY_POINTS[entry]
         print(

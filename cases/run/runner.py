@@ -16,6 +16,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -39,9 +40,15 @@ from dynamics.quaternion import multiply, rotation_matrix
 from ..scene import Scene
 from .prepare import PreparedProjectile, prepare_projectile
 
+if TYPE_CHECKING:
+    from dynamics import RungeKutta
+    from dynamics.compiled import CompiledLoad, CompiledRungeKutta
+    from fem_loads import DAFLLoads
+
 __all__ = [
     "RunResult",
     "run_scene",
+    "compiled_driving",
     "initial_state",
     "initial_attitude",
     "step_control",
@@ -159,6 +166,19 @@ def step_control(scene: Scene, length: float) -> StepControl:
     )
 
 
+def compiled_driving(
+    scene: Scene, loads: DAFLLoads, body: RigidBody, method: RungeKutta
+) -> tuple[CompiledLoad, CompiledRungeKutta, Callable[[np.ndarray, np.ndarray], float]]:
+    """The compiled load (with the body's weight when the scene has gravity), step and exit height of a
+    scene's ``loads`` (:func:`cases.run.compiled.compiled_step`): what a compiled run drives its
+    integration with, and what warming the caches compiles."""
+    from .compiled import compiled_step
+
+    effects = scene.effects
+    weight = np.array([0.0, 0.0, -body.mass * effects.gravity_acceleration]) if effects.gravity else None
+    return compiled_step(loads, method, body, weight)
+
+
 def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
     """Run one scene end to end.
 
@@ -184,10 +204,7 @@ def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
     lowest_height: Callable[[np.ndarray, np.ndarray], float] = numpy_lowest_height
     driving: LoadFunction
     if numerics.kernel == "compiled":
-        from .compiled import compiled_step
-
-        weight = np.array([0.0, 0.0, -body.mass * effects.gravity_acceleration]) if effects.gravity else None
-        driving, method, lowest_height = compiled_step(loads, method, body, weight)
+        driving, method, lowest_height = compiled_driving(scene, loads, body, method)
     else:
         driving = WithGravity(loads, body.mass, effects.gravity_acceleration) if effects.gravity else loads
     control = step_control(scene, prepared.length)

@@ -17,12 +17,11 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-import numpy as np
-
 from .. import SCENE_DIR
 from ..run import PreparedProjectile, prepare_projectile
-from ..run.compiled import ENTRY_POINTS, compiled_step, needs_compiling
+from ..run.compiled import ENTRY_POINTS, needs_compiling
 from ..run.prepare import preparation_key, prepared_path
+from ..run.runner import compiled_driving
 from ..scene import InputError, Scene, load_scene
 
 __all__ = ["warm_caches", "main"]
@@ -32,9 +31,7 @@ def _compiled(scene: Scene, prepared: PreparedProjectile) -> None:
     from dynamics import METHODS, RigidBody
 
     body = RigidBody(prepared.mass.mass, prepared.mass.inertia)
-    effects = scene.effects
-    weight = np.array([0.0, 0.0, -body.mass * effects.gravity_acceleration]) if effects.gravity else None
-    compiled_step(scene.loads(prepared.quadrature), METHODS[scene.numerics.integrator](), body, weight)
+    compiled_driving(scene, scene.loads(prepared.quadrature), body, METHODS[scene.numerics.integrator]())
 
 
 def _reduced(scene: Scene, prepared: PreparedProjectile) -> None:

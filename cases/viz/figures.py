@@ -88,6 +88,12 @@ def _recorded_unit(info: FieldInfo) -> str:
     return unit
 
 
+def _nothing_labelled(ax: Axes, kwargs: dict[str, Any]) -> bool:
+    """No handles given and no labelled artist on ``ax`` (e.g. an ensemble whose bins are all empty): the
+    legend helpers then draw no empty legend box."""
+    return "handles" not in kwargs and not ax.get_legend_handles_labels()[0]
+
+
 def legend_outside(ax: Axes, **kwargs: Any) -> Legend | None:
     """A legend right of ``ax``, outside its data area, so it covers no data.
 
@@ -95,8 +101,8 @@ def legend_outside(ax: Axes, **kwargs: Any) -> Legend | None:
     is none free (probability bands spanning the plot).  ``figure.tight_layout()`` afterwards
     leaves room for the legend.  ``kwargs`` go to ``Axes.legend`` (``fontsize`` 8 unless given).
     """
-    if "handles" not in kwargs and not ax.get_legend_handles_labels()[0]:
-        return None  # nothing labelled (e.g. an ensemble whose bins are all empty): no empty legend box
+    if _nothing_labelled(ax, kwargs):
+        return None
     kwargs.setdefault("fontsize", 8)
     return ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, **kwargs)
 
@@ -105,7 +111,7 @@ def legend_below(ax: Axes, **kwargs: Any) -> Legend | None:
     """A legend under ``ax``'s x label, outside its data area: for axes with a twin on the right or a
     neighbour beside them, where :func:`legend_outside` would cover them.  ``kwargs`` go to ``Axes.legend``
     (``fontsize`` 8 and two columns unless given)."""
-    if "handles" not in kwargs and not ax.get_legend_handles_labels()[0]:
+    if _nothing_labelled(ax, kwargs):
         return None
     kwargs.setdefault("fontsize", 8)
     kwargs.setdefault("ncol", 2)

@@ -144,7 +144,7 @@ def test_the_shares_deal_every_block_once_and_balance_their_costs(tmp_path):
     assert dealt == regenerate.shares(list(reversed(found)), costs, share_seconds=1200.0)  # order does not matter
 
 
-def test_the_rotation_reruns_every_block_within_as_many_days_as_shares(tmp_path, monkeypatch):
+def test_the_rotation_reruns_every_block_within_as_many_days_as_shares(tmp_path):
     found = _fake_blocks(tmp_path, 7)
     costs = {b.key: 500.0 for b in found}
     count = len(regenerate.shares(found, costs))

@@ -170,3 +170,20 @@ def test_predict_names_the_option_that_finds_each_missing_speed():
     p3 = load_scene(scene_path("paper_p3"), coarse)  # critical near 910 m/s
     assert predict(p3, (200, 600)).messages[-1].endswith("; widen the range with --speeds 200:900")
     assert predict(p3, (1000, 1600)).messages[-1].endswith("; lower the range with --speeds 500:1600")
+
+
+def test_warming_meshes_and_compiles_what_is_missing_and_then_nothing(tmp_path, monkeypatch):
+    """The set-up's warm-up: a scene missing from the mesh cache is meshed and said so; run again, it finds
+    everything cached, says nothing and reports nothing filled."""
+    from cases import scene_path
+    from cases.run import prepare
+    from cases.studies.warm import warm_caches
+
+    monkeypatch.setenv("PENETRATE_CACHE_DIR", str(tmp_path))  # an empty mesh cache (numba's stays put)
+    prepare._prepare.cache_clear()  # as in the fresh process ./dev starts: nothing prepared in memory either
+    said: list[str] = []
+    _, filled = warm_caches([scene_path("forrestal_luk_test2")], say=said.append)
+    assert filled and said == ["penetrate: meshing forrestal_luk_test2.toml (gmsh; a few seconds, once)"]
+    said.clear()
+    _, filled = warm_caches([scene_path("forrestal_luk_test2")], say=said.append)
+    assert not filled and said == []
