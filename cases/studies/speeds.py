@@ -85,11 +85,12 @@ def _bound(name: str, kind: str) -> float:
 
 def _typed(value: float, up: bool) -> float:
     """``value`` rounded to two significant digits, up or down: a number a person would type."""
-    scale = 10.0 ** (math.floor(math.log10(value)) - 1)
-    units = value / scale
+    # the decimal exponent from the printed value: 10 ** exponent underflows for the smallest floats
+    exponent = int(f"{value:.12e}".split("e")[1]) - 1
+    units = float(f"{value:.12e}".split("e")[0]) * 10
     # a value already on the grid stays (2400, not 2500); rounding of the division is not a step
     units = math.ceil(units - 1e-9) if up else math.floor(units + 1e-9)
-    return float(f"{units * scale:.12g}")
+    return float(f"{units}e{exponent}")
 
 
 def undisturbed(scene: Scene) -> bool:
@@ -108,7 +109,8 @@ def disturbance_fix(scene: Scene) -> str:
     attack, top = scene.impact.attack_angle, _bound("attack_angle", "le")
     if abs(attack) >= top:
         return f"no larger attack angle is allowed (impact.attack_angle is {attack:g} deg)"
-    larger = min(_typed(2 * abs(attack), up=True) if attack else 1.0, top)
+    # at least a degree: twice a vanishing angle (1e-300 deg) is still no disturbance
+    larger = min(max(_typed(2 * abs(attack), up=True), 1.0), top)
     # the same side as the scene's (a mirrored disturbance turns the same)
     return f"a larger disturbance may turn it (--set impact.attack_angle={math.copysign(larger, attack):g})"
 

@@ -126,6 +126,9 @@ class FakeConvergentRuns:
         ("forrestal_luk_test2", 0.0, "give the scene a disturbance (--set impact.attack_angle=1)"),
         ("paper_p3", 1.0, "a larger disturbance may turn it (--set impact.attack_angle=2)"),
         ("paper_p3", 3.0, "a larger disturbance may turn it (--set impact.attack_angle=6)"),
+        # the smallest float: twice it is still no disturbance, and 10 ** its exponent underflows
+        ("paper_p3", -5e-324, "a larger disturbance may turn it (--set impact.attack_angle=-1)"),
+        ("paper_p3", 0.2, "a larger disturbance may turn it (--set impact.attack_angle=1)"),
     ],
 )
 def test_convergent_without_an_unstable_run_names_the_option_to_change(monkeypatch, scene, attack, fix):
