@@ -90,7 +90,7 @@ def normal_impact() -> None:
         result.prepared.mass.mass,
         280.0,
         scene.numerics.stop_speed,
-        **scene.effects.contact,
+        **scene.effects.contact_ramp,
     )
     print(
         f"3-D depth {record.depth:.5f} m; 1-D with exact nose entry and the same contact width {reference:.5f} m;"

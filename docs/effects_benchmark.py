@@ -49,7 +49,7 @@ def main() -> None:
     bare = DAFLLoads(
         prepared.quadrature,
         scene.target.build(),
-        **scene.effects.contact,
+        **scene.effects.contact_ramp,
         entry_smoothing=scene.numerics.entry_smoothing,
     )
     bare_us = load_timing(bare, args)

@@ -1,104 +1,177 @@
 """The DAFL load in compiled code (numba): one loop over the surface points per evaluation.
 
 :func:`dafl_kernel` evaluates the same resultant as :meth:`DAFLLoads.__call__
-<fem_loads.dafl.DAFLLoads.__call__>` for a single resistance law with separation (no
-layers, free surface or friction: those stay on the numpy path, :func:`supports`):
+<fem_loads.dafl.DAFLLoads.__call__>`, every effect included:
 
 * ``Vn = n . (R^T V) + (r x n) . omega`` at every point (its own signs per mirror image);
-* ``sigma = (A sigma_0 w + B rho_0 w Vn^2) c(Vn / W) e(Z)`` with the same smooth steps (or the
-  sharp switches) and the same bounding-sphere shortcuts;
-* ``F = -R sum sigma n``, ``M = -sum sigma r x n``.
+* ``sigma = f(Vn, z) c(Vn) e(Z) g(z)``: the law ``f`` (the built-in :func:`~fem_loads.resistance.normal_stress_scalars`
+  compiled, a user's function through its numba ``cfunc``, or the layers' laws blended across their
+  interfaces), the contact factor ``c`` (one-sided or centred ramp, or the sharp switch), the entry
+  factor ``e`` and the free surface's ``g``, with the same smooth step (:mod:`fem_loads.ramps`);
+* ``F = -R sum sigma n w``, ``M = -sum sigma r x n w``, and the friction's ``-sum tau k s w`` and its moment.
 
 Mirror symmetry is kept exactly as on the numpy path (:mod:`fem_loads.images`): each point of the
 quarter ``y > 0, z > 0`` is evaluated as its four images, every image's ``Vn`` and height summed
 in the same order with its own signs, each image's resultant summed separately over the points,
 and the four folded in mirrored pairs.  A state symmetric about a body plane then gives mirrored
-images bitwise-equal stresses and sums, and an exactly symmetric load.  A quadrature without
-mirror quarters is one "image" of every point.
+images bitwise-equal stresses and sums, and an exactly symmetric normal load.  A quadrature without
+mirror quarters is one "image" of every point.  The friction load is summed in body coordinates
+(as on the numpy path, not exactly symmetric).
 
-The kernel takes its arrays as one tuple (:func:`kernel_data`), so the compiled Runge-Kutta step
-(:mod:`dynamics.compiled`) can call it without knowing what it computes.
+The kernel takes its arrays as one tuple (:func:`kernel_data`, :data:`KERNEL_ARRAYS`), so the compiled
+Runge-Kutta step (:mod:`dynamics.compiled`) calls it without knowing what it computes.  A user's law
+enters as the address of its numba ``cfunc`` of a fixed signature (:data:`USER_LAW_SIGNATURE`), called
+through a pointer: the kernel and the step are compiled and cached once for every law.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
-from numba import njit
+from llvmlite import ir
+from numba import njit, types
+from numba.extending import intrinsic, register_jitable
 
-from .dafl import DAFLLoads
-from .images import IMAGE_SIGNS, POINT_SIGNS
-from .resistance import ResistanceLaw
-
-__all__ = ["dafl_kernel", "lowest_height_kernel", "kernel_data", "supports"]
-
-# the constants of kernel_data's last array
-(_MAX_RADIUS, _HALF_ENTRY, _CONTACT_WIDTH, _CONTACT_INCIDENCE, _GUARD, _SMOOTH_CONTACT, _SMOOTH_ENTRY, _N_CONSTANTS) = (
-    range(8)
+from .kernel_layout import (
+    CONSTANT_CONTACT_INCIDENCE,
+    CONSTANT_CONTACT_OFFSET,
+    CONSTANT_CONTACT_WIDTH,
+    CONSTANT_FRICTION,
+    CONSTANT_FRICTION_CAP,
+    CONSTANT_GUARD,
+    CONSTANT_HALF_ENTRY,
+    CONSTANT_MAX_RADIUS,
+    CONSTANT_NEEDS_DEPTH,
+    CONSTANT_PLAIN,
+    CONSTANT_SEPARATION,
+    CONSTANT_SMOOTH_CONTACT,
+    CONSTANT_SMOOTH_ENTRY,
+    CONSTANT_SURFACE_DEPTH,
+    CONSTANT_SURFACE_FRACTION,
+    CONSTANT_USER_LAW,
+    DATA_CONSTANTS,
+    DATA_HALF_ENTRY_LENGTH,
+    DATA_IMAGE_SIGNS,
+    DATA_INTERFACES,
+    DATA_INVERSE_ENTRY,
+    DATA_LAWS,
+    DATA_NORMAL_ARM,
+    DATA_POINT_SIGNS,
+    DATA_POINTS,
+    DATA_TABLE_ROWS,
+    DATA_TABLES,
+    DATA_USER_LAW_ADDRESS,
+    DATA_WEIGHTS,
+    KERNEL_ARRAYS,
+    kernel_data,
+    supports,
 )
+from .ramps import smooth_step_scalars
+from .resistance import normal_stress_scalars, polynomial_stress_scalars
+from .target import slip_factor_scalars
+from .user_law import MAX_PARAMETERS, user_law_signature
+
+__all__ = ["dafl_kernel", "lowest_height_kernel", "kernel_data", "supports", "KERNEL_ARRAYS", "USER_LAW_SIGNATURE"]
+
+#: how the kernel calls a user's law (:func:`~fem_loads.user_law.user_law_signature`)
+USER_LAW_SIGNATURE = user_law_signature()
 
 
-def supports(loads: DAFLLoads) -> bool:
-    """Whether :func:`dafl_kernel` computes ``loads``: one law with separation, no free surface, no friction."""
-    return loads._plain
+@intrinsic
+def _call_user_law_intrinsic(
+    typingctx: Any,
+    address: Any,
+    normal_velocity: Any,
+    depth: Any,
+    p0: Any,
+    p1: Any,
+    p2: Any,
+    p3: Any,
+    p4: Any,
+    p5: Any,
+    p6: Any,
+    p7: Any,
+) -> Any:
+    """Call the cfunc at ``address`` (an int64) with ``(Vn, z, p0 .. p7)``: a C call through a pointer, so the
+    kernel and the step are compiled once for every user law and take the law as data."""
+    signature = types.float64(types.int64, *([types.float64] * (2 + MAX_PARAMETERS)))
+
+    def codegen(context: Any, builder: Any, signature: Any, arguments: Any) -> Any:
+        function_type = ir.FunctionType(ir.DoubleType(), [ir.DoubleType()] * (2 + MAX_PARAMETERS))
+        pointer = builder.inttoptr(arguments[0], function_type.as_pointer())
+        return builder.call(pointer, arguments[1:])
+
+    return signature, codegen
 
 
-def kernel_data(loads: DAFLLoads) -> tuple[np.ndarray, ...]:
-    """The arrays and constants of :func:`dafl_kernel` for ``loads`` (see :func:`supports`).
-
-    ``(normal_arm (6, m), points (3, m), static (m,), dynamic (m,), inverse_entry (m,),
-    half_entry_length (m,), image_signs (k, 6), point_signs (k, 3), constants)``: the quarter's
-    (or, without mirror quarters, every point's: ``k = 1``) ``[n | r x n]``, points, ``A sigma_0 w``,
-    ``B rho_0 w``, ``1 / l`` and ``l / 2``, the images' signs and the scalars.
-    """
-    if not supports(loads):
-        raise ValueError(
-            "the compiled load covers one resistance law with separation, without free surface or friction"
-        )
-    quadrature = loads.quadrature
-    if quadrature.mirror_quarters is not None:
-        index = quadrature.mirror_quarters[0]
-        image_signs, point_signs = IMAGE_SIGNS, POINT_SIGNS
-    else:
-        index = np.arange(len(loads))
-        image_signs, point_signs = np.ones((1, 6)), np.ones((1, 3))
-    weights = loads._weights[index]
-    entry_length = loads._entry_length[index]
-    law = loads.law
-    assert isinstance(law, ResistanceLaw)  # supports(): one law
-    constants = np.zeros(_N_CONSTANTS)
-    constants[_MAX_RADIUS] = loads._max_radius
-    constants[_HALF_ENTRY] = loads._half_entry
-    constants[_CONTACT_WIDTH] = loads.contact_width
-    constants[_CONTACT_INCIDENCE] = loads.contact_incidence
-    constants[_GUARD] = loads.normal_velocity_guard
-    constants[_SMOOTH_CONTACT] = float(loads._smooth_contact)
-    constants[_SMOOTH_ENTRY] = float(loads.entry_smoothing > 0.0)
-    inverse_entry = 1.0 / entry_length if loads.entry_smoothing else np.zeros_like(weights)
-
-    def contiguous(array: np.ndarray) -> np.ndarray:
-        return np.ascontiguousarray(array, dtype=float)
-
-    return (
-        contiguous(loads._normal_arm_t[:, index]),
-        contiguous(loads._points_t[:, index]),
-        contiguous(law.static_stress * weights),
-        contiguous(law.dynamic_density * weights),
-        contiguous(inverse_entry),
-        contiguous(0.5 * entry_length),
-        contiguous(image_signs),
-        contiguous(point_signs),
-        constants,
-    )
+# the intrinsic as the kernels call it, (address, Vn, z, p0 .. p7) -> sigma (numba passes the typing context)
+_call_user_law: Callable[..., float] = _call_user_law_intrinsic
 
 
-@njit(cache=True, inline="always")
-def _smooth_step(t: float) -> float:
-    """``S(clip(t, 0, 1))``, the quintic of :mod:`fem_loads.ramps`, in its operation order."""
-    t = min(max(t, 0.0), 1.0)
-    t2 = t * t
-    return ((((6.0 * t) - 15.0) * t + 10.0) * t2) * t
+_smooth_step = njit(inline="always", error_model="numpy")(smooth_step_scalars)
+# the polynomial part as numba sees it where normal_stress_scalars calls it (the plain function stays plain)
+register_jitable(inline="always", error_model="numpy")(polynomial_stress_scalars)
+_builtin_stress = njit(inline="always", error_model="numpy")(normal_stress_scalars)
+_polynomial_stress = njit(inline="always", error_model="numpy")(polynomial_stress_scalars)
+_slip_factor = njit(inline="always", error_model="numpy")(slip_factor_scalars)
+
+
+_NO_TABLE = np.zeros(0)
+
+
+@njit(cache=True, error_model="numpy")
+def _layered_stress(data: tuple[np.ndarray, ...], normal_velocity: float, depth: float, entry_length: float) -> float:
+    """The layers' laws blended over ``entry_length`` (m) across each interface
+    (:class:`~fem_loads.target.LayeredTarget`), at ``Vn`` (m/s) and depth (m)."""
+    interfaces, p, rows, tables = data[DATA_INTERFACES], data[DATA_LAWS], data[DATA_TABLE_ROWS], data[DATA_TABLES]
+    user = data[DATA_CONSTANTS][CONSTANT_USER_LAW] != 0.0
+    stress = 0.0
+    above = 1.0  # the share of this layer and those below it: S((z - d)/l + 1/2) of its top interface d
+    for layer in range(interfaces.shape[0] + 1):
+        below = 0.0
+        if layer < interfaces.shape[0]:
+            if entry_length > 0.0:
+                below = _smooth_step((depth - interfaces[layer]) / entry_length + 0.5)
+            elif depth >= interfaces[layer]:
+                below = 1.0
+        share = above - below
+        if share != 0.0:
+            if user:
+                law = _call_user_law(
+                    data[DATA_USER_LAW_ADDRESS][0],
+                    normal_velocity,
+                    depth,
+                    p[layer, 0],
+                    p[layer, 1],
+                    p[layer, 2],
+                    p[layer, 3],
+                    p[layer, 4],
+                    p[layer, 5],
+                    p[layer, 6],
+                    p[layer, 7],
+                )
+            else:
+                first, count = rows[layer, 0], rows[layer, 1]
+                law = _builtin_stress(
+                    normal_velocity,
+                    depth,
+                    p[layer, 0],
+                    p[layer, 1],
+                    p[layer, 2],
+                    p[layer, 3],
+                    p[layer, 4],
+                    p[layer, 5],
+                    tables[0, first : first + count],
+                    tables[1, first : first + count],
+                )
+            stress += share * law
+        above = below
+        if above == 0.0:
+            break
+    return stress
 
 
 # fastmath: reassociation (and fused multiply-adds) let the per-image sums over the points run in SIMD
@@ -109,11 +182,7 @@ _FAST = {"reassoc", "contract"}
 
 @njit(cache=True, error_model="numpy", fastmath=_FAST)
 def _smooth_sums(
-    normal_arm: np.ndarray,
-    points: np.ndarray,
-    static: np.ndarray,
-    dynamic: np.ndarray,
-    inverse_entry: np.ndarray,
+    data: tuple[np.ndarray, ...],
     g: np.ndarray,
     up: np.ndarray,
     height: float,
@@ -121,20 +190,33 @@ def _smooth_sums(
     embedded: bool,
     sums: np.ndarray,
 ) -> None:
-    """Each image's ``sum sigma [n | r x n]`` with both smooth ramps (the default load), into ``sums``."""
+    """:func:`_sums` for the shipped scenes' load: one built-in law without a power term or a table (its
+    :func:`~fem_loads.resistance.polynomial_stress_scalars` is the whole law), both smooth ramps, with separation
+    and nothing else: no calls and no branches per point, so the loop runs in SIMD lanes."""
+    normal_arm, points, weights, inverse_entry = (
+        data[DATA_NORMAL_ARM],
+        data[DATA_POINTS],
+        data[DATA_WEIGHTS],
+        data[DATA_INVERSE_ENTRY],
+    )
+    offset = data[DATA_CONSTANTS][CONSTANT_CONTACT_OFFSET]
+    needs_depth = data[DATA_CONSTANTS][CONSTANT_NEEDS_DEPTH] != 0.0
+    c = data[DATA_LAWS][0]
+    c0, c1, c2, c3 = c[0], c[1], c[2], c[3]
     for k in range(sums.shape[0]):
         g0, g1, g2, g3, g4, g5 = g[k, 0], g[k, 1], g[k, 2], g[k, 3], g[k, 4], g[k, 5]
         up0, up1, up2 = up[k, 0], up[k, 1], up[k, 2]
         a0 = a1 = a2 = a3 = a4 = a5 = 0.0
-        for j in range(static.shape[0]):
+        for j in range(weights.shape[0]):
             n0, n1, n2 = normal_arm[0, j], normal_arm[1, j], normal_arm[2, j]
             n3, n4, n5 = normal_arm[3, j], normal_arm[4, j], normal_arm[5, j]
             normal_velocity = g0 * n0 + g1 * n1 + g2 * n2 + g3 * n3 + g4 * n4 + g5 * n5
-            stress = (normal_velocity * normal_velocity * dynamic[j] + static[j]) * _smooth_step(
-                normal_velocity * inverse_width
-            )
-            if not embedded:
+            z = 0.0
+            if needs_depth or not embedded:
                 z = height + (up0 * points[0, j] + up1 * points[1, j] + up2 * points[2, j])
+            stress = _polynomial_stress(max(normal_velocity, 0.0), -z, c0, c1, c2, c3)
+            stress *= _smooth_step(normal_velocity * inverse_width + offset) * weights[j]
+            if not embedded:
                 stress *= _smooth_step(0.5 - z * inverse_entry[j])
             a0 += stress * n0
             a1 += stress * n1
@@ -145,42 +227,111 @@ def _smooth_sums(
         sums[k, 0], sums[k, 1], sums[k, 2], sums[k, 3], sums[k, 4], sums[k, 5] = a0, a1, a2, a3, a4, a5
 
 
-@njit(cache=True, error_model="numpy")
-def _sharp_sums(
-    normal_arm: np.ndarray,
-    points: np.ndarray,
-    static: np.ndarray,
-    dynamic: np.ndarray,
-    inverse_entry: np.ndarray,
+@njit(cache=True, error_model="numpy", fastmath=_FAST)
+def _sums(
+    data: tuple[np.ndarray, ...],
     g: np.ndarray,
     up: np.ndarray,
+    v: np.ndarray,
+    w: np.ndarray,
     height: float,
-    inverse_width: float,
+    width: float,
     guard: float,
-    smooth_contact: bool,
-    smooth_entry: bool,
     embedded: bool,
     sums: np.ndarray,
+    friction: np.ndarray,
 ) -> None:
-    """:func:`_smooth_sums` with either switch sharp (for comparisons with the paper's law)."""
+    """Each image's ``sum sigma w [n | r x n]`` into ``sums``; the friction's force and moment (body frame) into
+    ``friction``.
+
+    Everything the points share is read from ``data`` before the loop: inside it, only array elements and
+    floats (an array view made per point costs its reference counting, more than the law itself).
+    """
+    normal_arm, points, weights, inverse_entry = (
+        data[DATA_NORMAL_ARM],
+        data[DATA_POINTS],
+        data[DATA_WEIGHTS],
+        data[DATA_INVERSE_ENTRY],
+    )
+    half_entry_length, point_signs, constants = (
+        data[DATA_HALF_ENTRY_LENGTH],
+        data[DATA_POINT_SIGNS],
+        data[DATA_CONSTANTS],
+    )
+    address = data[DATA_USER_LAW_ADDRESS][0]
+    layered = data[DATA_INTERFACES].shape[0] > 0
+    user = constants[CONSTANT_USER_LAW] != 0.0
+    separation = constants[CONSTANT_SEPARATION] != 0.0
+    smooth_contact, smooth_entry = constants[CONSTANT_SMOOTH_CONTACT] != 0.0, constants[CONSTANT_SMOOTH_ENTRY] != 0.0
+    offset = constants[CONSTANT_CONTACT_OFFSET]
+    surface_depth, surface_fraction = constants[CONSTANT_SURFACE_DEPTH], constants[CONSTANT_SURFACE_FRACTION]
+    needs_depth = constants[CONSTANT_NEEDS_DEPTH] != 0.0 or surface_depth > 0.0
+    mu, cap = constants[CONSTANT_FRICTION], constants[CONSTANT_FRICTION_CAP]
+    inverse_width = 1.0 / width if width > 0.0 else 0.0
+    speed2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
+    c = data[DATA_LAWS][0]
+    c0, c1, c2, c3, c4, c5, c6, c7 = c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]
+    count = data[DATA_TABLE_ROWS][0, 1]
+    depths, stresses = data[DATA_TABLES][0, :count].copy(), data[DATA_TABLES][1, :count].copy()
     for k in range(sums.shape[0]):
-        for j in range(static.shape[0]):
-            normal_velocity = 0.0
-            for c in range(6):
-                normal_velocity += g[k, c] * normal_arm[c, j]
-            stress = normal_velocity * normal_velocity * dynamic[j] + static[j]
-            if smooth_contact:
-                stress *= _smooth_step(normal_velocity * inverse_width)
-            elif normal_velocity <= guard:
-                continue
-            if not embedded:
+        a0 = a1 = a2 = a3 = a4 = a5 = 0.0
+        for j in range(weights.shape[0]):
+            n0, n1, n2 = normal_arm[0, j], normal_arm[1, j], normal_arm[2, j]
+            n3, n4, n5 = normal_arm[3, j], normal_arm[4, j], normal_arm[5, j]
+            normal_velocity = g[k, 0] * n0 + g[k, 1] * n1 + g[k, 2] * n2 + g[k, 3] * n3 + g[k, 4] * n4 + g[k, 5] * n5
+            # branch-free where the points differ (the factors are selects, not jumps): the loop then runs in
+            # SIMD lanes, and the points on either side of a switch cost the same
+            if separation:
+                if smooth_contact:
+                    contact = _smooth_step(normal_velocity * inverse_width + offset)
+                else:
+                    contact = 1.0 if normal_velocity > guard else 0.0
+                law_velocity = max(normal_velocity, 0.0)
+            else:
+                contact = 1.0
+                law_velocity = normal_velocity
+            z = 0.0  # the height; the depth below the surface is -z
+            if needs_depth or not embedded:
                 z = height + (up[k, 0] * points[0, j] + up[k, 1] * points[1, j] + up[k, 2] * points[2, j])
+            if layered:
+                stress = _layered_stress(data, law_velocity, -z, 2.0 * half_entry_length[j])
+            elif user:
+                stress = _call_user_law(address, law_velocity, -z, c0, c1, c2, c3, c4, c5, c6, c7)
+            else:
+                stress = _builtin_stress(law_velocity, -z, c0, c1, c2, c3, c4, c5, depths, stresses)
+            stress = stress * contact if separation else max(stress, 0.0)
+            if surface_depth > 0.0:
+                stress *= surface_fraction + (1.0 - surface_fraction) * _smooth_step(-z / surface_depth)
+            if not embedded:
                 if smooth_entry:
                     stress *= _smooth_step(0.5 - z * inverse_entry[j])
-                elif z >= 0.0:
-                    continue
-            for c in range(6):
-                sums[k, c] += stress * normal_arm[c, j]
+                else:
+                    stress = stress if z < 0.0 else 0.0
+            stress *= weights[j]
+            a0 += stress * n0
+            a1 += stress * n1
+            a2 += stress * n2
+            a3 += stress * n3
+            a4 += stress * n4
+            a5 += stress * n5
+            if mu > 0.0 and stress != 0.0:
+                # the image's point and normal in the body frame, its velocity u = v + w x r and slip u - Vn n
+                r0, r1, r2 = points[0, j], point_signs[k, 1] * points[1, j], point_signs[k, 2] * points[2, j]
+                m0, m1, m2 = n0, point_signs[k, 1] * n1, point_signs[k, 2] * n2
+                s0 = v[0] + w[1] * r2 - w[2] * r1 - normal_velocity * m0
+                s1 = v[1] + w[2] * r0 - w[0] * r2 - normal_velocity * m1
+                s2 = v[2] + w[0] * r1 - w[1] * r0 - normal_velocity * m2
+                tau = mu * stress
+                if cap > 0.0:
+                    tau = min(tau, cap * weights[j])
+                f = tau * _slip_factor(s0 * s0 + s1 * s1 + s2 * s2, width, speed2)
+                friction[0] -= f * s0
+                friction[1] -= f * s1
+                friction[2] -= f * s2
+                friction[3] -= f * (r1 * s2 - r2 * s1)
+                friction[4] -= f * (r2 * s0 - r0 * s2)
+                friction[5] -= f * (r0 * s1 - r1 * s0)
+        sums[k, 0], sums[k, 1], sums[k, 2], sums[k, 3], sums[k, 4], sums[k, 5] = a0, a1, a2, a3, a4, a5
 
 
 @njit(cache=True, error_model="numpy")
@@ -196,8 +347,8 @@ def dafl_kernel(
 
     ``data`` from :func:`kernel_data`; the state as for :class:`~fem_loads.dafl.DAFLLoads`.
     """
-    normal_arm, points, static, dynamic, inverse_entry, _, image_signs, point_signs, constants = data
-    max_radius, half_entry = constants[_MAX_RADIUS], constants[_HALF_ENTRY]
+    image_signs, point_signs, constants = data[DATA_IMAGE_SIGNS], data[DATA_POINT_SIGNS], data[DATA_CONSTANTS]
+    max_radius, half_entry = constants[CONSTANT_MAX_RADIUS], constants[CONSTANT_HALF_ENTRY]
     for c in range(6):
         out[c] = 0.0
     height = position[2]
@@ -209,48 +360,35 @@ def dafl_kernel(
     # so an image's Vn and height are the quarter's sums with those signs, in the same order
     g = np.empty((images, 6))
     up = np.empty((images, 3))
+    v = np.empty(3)
+    for c in range(3):
+        v[c] = rotation[0, c] * velocity[0] + rotation[1, c] * velocity[1] + rotation[2, c] * velocity[2]
     for k in range(images):
         for c in range(3):
-            g[k, c] = (
-                rotation[0, c] * velocity[0] + rotation[1, c] * velocity[1] + rotation[2, c] * velocity[2]
-            ) * image_signs[k, c]
+            g[k, c] = v[c] * image_signs[k, c]
             g[k, 3 + c] = angular_velocity[c] * image_signs[k, 3 + c]
             up[k, c] = rotation[2, c] * point_signs[k, c]
     speed = math.sqrt(velocity[0] * velocity[0] + velocity[1] * velocity[1] + velocity[2] * velocity[2])
     spin = math.sqrt(angular_velocity[0] ** 2 + angular_velocity[1] ** 2 + angular_velocity[2] ** 2)
     speed_scale = speed + spin * max_radius
-    width = constants[_CONTACT_WIDTH] + constants[_CONTACT_INCIDENCE] * speed_scale
-    inverse_width = 1.0 / width if width > 0.0 else 0.0
-    smooth_contact = constants[_SMOOTH_CONTACT] != 0.0
-    smooth_entry = constants[_SMOOTH_ENTRY] != 0.0
+    width = constants[CONSTANT_CONTACT_WIDTH] + constants[CONSTANT_CONTACT_INCIDENCE] * speed_scale
+    if constants[CONSTANT_SMOOTH_CONTACT] == 0.0:
+        width = 0.0
     sums = np.zeros((images, 6))
-    if smooth_contact and smooth_entry:
-        _smooth_sums(normal_arm, points, static, dynamic, inverse_entry, g, up, height, inverse_width, embedded, sums)
+    friction = np.zeros(6)
+    if constants[CONSTANT_PLAIN] != 0.0:
+        _smooth_sums(data, g, up, height, 1.0 / width if width > 0.0 else 0.0, embedded, sums)
     else:
-        _sharp_sums(
-            normal_arm,
-            points,
-            static,
-            dynamic,
-            inverse_entry,
-            g,
-            up,
-            height,
-            inverse_width,
-            constants[_GUARD] * speed_scale,
-            smooth_contact,
-            smooth_entry,
-            embedded,
-            sums,
-        )
+        guard = constants[CONSTANT_GUARD] * speed_scale
+        _sums(data, g, up, v, angular_velocity, height, width, guard, embedded, sums, friction)
     body = np.empty(6)
     for c in range(6):
         if images == 4:
             # (P0 + Y P1) + Z (P2 + Y P3): mirrored images cancel or add exactly
             y, zs = image_signs[1, c], image_signs[2, c]
-            body[c] = -((sums[0, c] + y * sums[1, c]) + zs * (sums[2, c] + y * sums[3, c]))
+            body[c] = -((sums[0, c] + y * sums[1, c]) + zs * (sums[2, c] + y * sums[3, c])) + friction[c]
         else:
-            body[c] = -sums[0, c]
+            body[c] = -sums[0, c] + friction[c]
     for i in range(3):
         out[i] = rotation[i, 0] * body[0] + rotation[i, 1] * body[1] + rotation[i, 2] * body[2]
         out[3 + i] = body[3 + i]
@@ -265,8 +403,8 @@ def lowest_height_kernel(data: tuple[np.ndarray, ...], position: np.ndarray, up:
     ``Z_c + r_max``, a negative upper bound: the exit event needs only the sign there, and the heights
     of every point at every step cost as much as a load evaluation.
     """
-    points, half_entry_length, point_signs, constants = data[1], data[5], data[7], data[8]
-    top = position[2] + constants[_MAX_RADIUS]
+    points, half_entry_length, point_signs = data[DATA_POINTS], data[DATA_HALF_ENTRY_LENGTH], data[DATA_POINT_SIGNS]
+    top = position[2] + data[DATA_CONSTANTS][CONSTANT_MAX_RADIUS]
     if top < 0.0:
         return top
     up0, up1, up2 = up[0], up[1], up[2]

@@ -53,11 +53,12 @@ import numpy as np
 
 from .images import MirrorImages
 from .quadrature import SurfaceQuadrature
-from .ramps import smooth_step
+from .ramps import smooth_step_scalars
 from .resistance import ResistanceLaw
-from .target import FreeSurface, Friction, LayeredTarget
+from .target import FreeSurface, Friction, LayeredTarget, slip_factor_scalars
+from .user_law import UserLaw
 
-__all__ = ["DAFLLoads", "SurfaceStress"]
+__all__ = ["DAFLLoads", "SurfaceStress", "CONTACT_MODELS"]
 
 
 class SurfaceStress(NamedTuple):
@@ -78,6 +79,9 @@ class SurfaceStress(NamedTuple):
     normal_velocity: np.ndarray
 
 
+CONTACT_MODELS = ("one_sided", "centred")
+
+
 class DAFLLoads:
     """Resultant force and moment of the DAFL for a rigid-body velocity state.
 
@@ -85,8 +89,8 @@ class DAFLLoads:
     ----------
     quadrature : SurfaceQuadrature
         Outer-surface quadrature in the body frame about the centre of mass.
-    law : ResistanceLaw or LayeredTarget
-        Normal stress as a function of the normal velocity (and, for layers, of depth).
+    law : ResistanceLaw, UserLaw or LayeredTarget
+        Normal stress as a function of the normal velocity and the depth (for layers, each layer's law).
     normal_velocity_guard : float
         Sharp contact only (``contact_width = contact_incidence = 0``): a point carries stress only when
         ``Vn > guard * (|V| + |omega| r_max)``.  The sharp stress jumps from 0 to
@@ -96,20 +100,25 @@ class DAFLLoads:
     friction : Friction, optional
         Tangential stress; none by default.
     separation : bool
-        True (default): no stress where ``Vn <= 0``.  False keeps every embedded point
-        in contact, ``max(0, A sigma_0 + B rho_0 Vn |Vn|)``, for comparison; the loads
-        can then do positive work.
+        True (default): no stress where ``Vn <= 0`` (below the contact ramp).  False keeps every embedded
+        point in contact, ``max(0, f(Vn, z))`` with the law's odd extension to ``Vn < 0``, for
+        comparison; the loads can then do positive work.
     free_surface : FreeSurface, optional
         Reduction of the normal stress near the surface; none by default.
     contact_width : float
         ``w`` (m/s): the fixed part of the contact width ``W = w + delta U``, the normal
-        velocity over which a point's stress rises from 0 (at ``Vn = 0``) to the full law;
+        velocity over which a point's stress rises from 0 to the full law;
         with friction, ``W`` is also the slip speed below which the friction stress fades
         (its direction is undefined at zero slip).
     contact_incidence : float
         ``delta``: the part of ``W`` proportional to the body's speed scale
         ``U = |V| + |omega| r_max``, the sine of the incidence angle over which the stress
         rises.  ``w = delta = 0``: sharp.
+    contact : {"one_sided", "centred"}
+        Where the ramp lies: ``c = S(Vn / W)``, from 0 at ``Vn = 0`` to 1 at ``Vn = W`` (one-sided: an
+        element sliding along the target, ``Vn = 0``, is unloaded), or ``c = S(1/2 + Vn / W)``, centred on
+        ``Vn = 0`` (half loaded there).  Two models with two different limits as ``W -> 0``
+        (docs/model.md); the law is evaluated at ``max(Vn, 0)`` in both.
     entry_smoothing : float
         ``l / sqrt(weight)``: the length over which a point enters the target (and
         crosses a layer interface), in units of the square root of its quadrature weight
@@ -119,7 +128,7 @@ class DAFLLoads:
     def __init__(
         self,
         quadrature: SurfaceQuadrature,
-        law: ResistanceLaw | LayeredTarget,
+        law: ResistanceLaw | UserLaw | LayeredTarget,
         normal_velocity_guard: float = 1e-9,
         *,
         friction: Friction | None = None,
@@ -127,16 +136,20 @@ class DAFLLoads:
         free_surface: FreeSurface | None = None,
         contact_width: float = 0.0,
         contact_incidence: float = 0.0,
+        contact: str = "one_sided",
         entry_smoothing: float = 0.0,
     ) -> None:
         if not (contact_width >= 0.0 and contact_incidence >= 0.0 and entry_smoothing >= 0.0):
             raise ValueError("contact_width, contact_incidence and entry_smoothing must be >= 0")
+        if contact not in CONTACT_MODELS:
+            raise ValueError(f"contact = {contact!r}: must be one of {', '.join(CONTACT_MODELS)}")
         self.quadrature, self.law = quadrature, law
         self.normal_velocity_guard = float(normal_velocity_guard)
         self.friction, self.separation, self.free_surface = friction, separation, free_surface
         self.contact_width, self.entry_smoothing = float(contact_width), float(entry_smoothing)
-        self.contact_incidence = float(contact_incidence)
+        self.contact_incidence, self.contact = float(contact_incidence), contact
         self._smooth_contact = self.contact_width > 0.0 or self.contact_incidence > 0.0
+        self._contact_offset = 0.5 if contact == "centred" else 0.0
         q = quadrature
         # [n | r x n]: one product gives Vn = n.V + (r x n).omega, and the weighted stresses times
         # it give force and moment together; stored transposed, (6, n), for row-combining products
@@ -151,31 +164,12 @@ class DAFLLoads:
         # each point's entry length l: it carries load from l/2 above the surface to its full value l/2 below
         self._entry_length = self.entry_smoothing * np.sqrt(self._weights)
         self._half_entry = 0.5 * float(self._entry_length.max()) if len(self._weights) else 0.0
-        self._plain = isinstance(law, ResistanceLaw) and separation and free_surface is None and friction is None
-        self._setup_buffers()
-
-    def _setup_buffers(self) -> None:
-        """The hot path's arrays (per image, when the quadrature is mirror symmetric) and work buffers."""
-        self._generalised = np.empty(6)
         self._images = None
-        per_point = {"weights": self._weights}
-        if self.entry_smoothing:
-            per_point["inverse_entry"] = 1.0 / self._entry_length
-        if self._plain:
-            assert isinstance(self.law, ResistanceLaw)  # a plain law is one law
-            per_point["static"] = self.law.static_stress * self._weights
-            per_point["dynamic"] = self.law.dynamic_density * self._weights
-        n: int | tuple[int, ...] = len(self._weights)
+        self._hot_weights, self._hot_entry = self._weights, self._entry_length
         if self.quadrature.mirror_quarters is not None:
             self._images = MirrorImages(self.quadrature.mirror_quarters, self._normal_arm_t, self._points_t)
-            per_point = {name: self._images.quarter(values) for name, values in per_point.items()}
-            n = self._images.shape
-        self._hot = per_point
-        self._normal_velocity_buffer = np.empty(n)
-        self._stress_buffer = np.empty(n)
-        self._height_buffer = np.empty(n)
-        self._factor_buffer = np.empty(n)
-        self._unloaded = np.empty(n, dtype=bool)
+            self._hot_weights = self._images.quarter(self._weights)
+            self._hot_entry = self._images.quarter(self._entry_length)
 
     def __len__(self) -> int:
         return len(self._weights)
@@ -186,12 +180,24 @@ class DAFLLoads:
         sphere, and the lever of the speed scale ``U = |V| + |omega| r_max`` of the contact width)."""
         return self._max_radius
 
+    @property
+    def depth_dependent(self) -> bool:
+        """Whether the target's stress depends on the depth (a law with depth-dependent strength, a user's law,
+        layers): then every point's depth is needed, even with the body wholly in the target."""
+        return isinstance(self.law, LayeredTarget) or bool(self.law.depth_dependent)
+
     def point_arrays(self) -> dict[str, np.ndarray]:
         """The per-point arrays the load sums, in point order and read-only, for code that evaluates it outside
-        this class (the C loop of docs/performance/lower_bound.py): ``"normal_arm"``, shape (6, n), the rows of
-        ``[n | r x n]`` (body frame); ``"points"``, shape (3, n), the points (m, body frame, about the centre of
-        mass); ``"entry_length"``, shape (n,), each point's entry length ``l`` (m; zero with sharp entry)."""
-        arrays = {"normal_arm": self._normal_arm_t, "points": self._points_t, "entry_length": self._entry_length}
+        this class (:mod:`fem_loads.compiled`, the C loop of docs/performance/lower_bound.py): ``"normal_arm"``,
+        shape (6, n), the rows of ``[n | r x n]`` (body frame); ``"points"``, shape (3, n), the points (m, body
+        frame, about the centre of mass); ``"weights"``, shape (n,), the quadrature weights (m^2);
+        ``"entry_length"``, shape (n,), each point's entry length ``l`` (m; zero with sharp entry)."""
+        arrays = {
+            "normal_arm": self._normal_arm_t,
+            "points": self._points_t,
+            "weights": self._weights,
+            "entry_length": self._entry_length,
+        }
         views: dict[str, np.ndarray] = {}
         for name, values in arrays.items():
             views[name] = values.view()
@@ -202,9 +208,16 @@ class DAFLLoads:
 
     def heights(self, position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
         """World height ``Z`` (m) of every quadrature point; negative inside the target."""
+        return self._scatter(self._heights(position, rotation))
+
+    def _heights(self, position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
+        """The heights in the layout of the sums (the images' rows, or point order)."""
         if self._images is None:
             return position[2] + rotation[2] @ self._points_t
-        return self._images.scatter(self._images.heights(position[2], rotation[2], np.empty(self._images.shape)))
+        return self._images.heights(position[2], rotation[2], np.empty(self._images.shape))
+
+    def _scatter(self, values: np.ndarray) -> np.ndarray:
+        return values if self._images is None else self._images.scatter(values)
 
     def fully_embedded(self, position: np.ndarray) -> bool:
         """Whether every point carries its full load as far as depth goes (bounding sphere alone)."""
@@ -229,19 +242,56 @@ class DAFLLoads:
         width = self.contact_width + self.contact_incidence * speed_scale
         return 1.0 / width if width > 0.0 else 0.0
 
-    def _contact(self, normal_velocity: np.ndarray, speed_scale: float) -> np.ndarray:
+    def _contact_factor(self, normal_velocity: np.ndarray, speed_scale: float) -> np.ndarray:
         """The contact factor ``c(Vn)`` at every point (any layout)."""
         if self._smooth_contact:
-            return smooth_step(normal_velocity * self._inverse_width(speed_scale))
+            factor = normal_velocity * self._inverse_width(speed_scale)
+            if self._contact_offset:
+                factor += self._contact_offset
+            return np.asarray(smooth_step_scalars(factor))
         return (normal_velocity > self.normal_velocity_guard * speed_scale).astype(float)
 
     def _entry(self, heights: np.ndarray) -> np.ndarray:
-        """The entry factor ``e(Z)`` at every point, in point order."""
+        """The entry factor ``e(Z)`` at every point (the layout of the sums)."""
         if self.entry_smoothing:
-            return smooth_step(0.5 - heights / self._entry_length)
+            factor = heights / self._hot_entry
+            np.subtract(0.5, factor, out=factor)
+            return np.asarray(smooth_step_scalars(factor))
         return (heights < 0.0).astype(float)
 
+    def _target_stress(self, normal_velocity: np.ndarray, depth: np.ndarray | float) -> np.ndarray:
+        """The target's law at every point (a new array): one law, or the layers blended across their interfaces."""
+        if isinstance(self.law, LayeredTarget):
+            lengths = self._hot_entry if self.entry_smoothing else None
+            return self.law.normal_stress(normal_velocity, np.broadcast_to(depth, normal_velocity.shape), lengths)
+        return self.law.normal_stress(normal_velocity, depth)
+
     # -- per point ---------------------------------------------------------------------------------
+
+    def _stress(
+        self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, float]:
+        """``sigma_n`` (Pa), ``Vn`` (m/s) in the layout of the sums, and the speed scale ``U`` (m/s)."""
+        normal_velocity, speed_scale = self._normal_velocity(velocity, rotation, angular_velocity, np.empty(6))
+        needs_depth = self.depth_dependent or self.free_surface is not None
+        heights = None
+        if needs_depth or not self.fully_embedded(position):
+            heights = self._heights(position, rotation)
+        depth: np.ndarray | float = -heights if needs_depth and heights is not None else 0.0
+        if self.separation:
+            # the law at max(Vn, 0); a built-in law is finite everywhere, and below the one-sided ramp its
+            # value is multiplied by zero, so there it is evaluated at Vn itself
+            exact = isinstance(self.law, ResistanceLaw) and not self._contact_offset
+            stress = self._target_stress(normal_velocity if exact else np.maximum(normal_velocity, 0.0), depth)
+            stress *= self._contact_factor(normal_velocity, speed_scale)
+        else:
+            # contact everywhere: receding surfaces feel the strength less the dynamic terms
+            stress = np.maximum(self._target_stress(normal_velocity, depth), 0.0)
+        if self.free_surface is not None:
+            stress *= self.free_surface.factor(np.asarray(depth))
+        if heights is not None:
+            stress *= self._entry(heights)
+        return stress, normal_velocity, speed_scale
 
     def stress(
         self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray
@@ -259,24 +309,8 @@ class DAFLLoads:
         angular_velocity : ndarray, shape (3,)
             Angular velocity in the body frame (rad/s).
         """
-        normal_velocity, speed_scale = self._normal_velocity(velocity, rotation, angular_velocity, np.empty(6))
-        if self._images is not None:  # the same numbers as the loads, in point order
-            normal_velocity = self._images.scatter(normal_velocity)
-        heights = self.heights(position, rotation)
-        static: np.ndarray | float
-        dynamic: np.ndarray | float
-        if isinstance(self.law, LayeredTarget):
-            static, dynamic = self.law.coefficients(-heights, self._entry_length if self.entry_smoothing else None)
-        else:
-            static, dynamic = self.law.static_stress, self.law.dynamic_density
-        if self.separation:
-            stress = (static + dynamic * np.square(normal_velocity)) * self._contact(normal_velocity, speed_scale)
-        else:
-            # contact everywhere: receding surfaces feel the static pressure less the dynamic term
-            stress = np.maximum(static + dynamic * normal_velocity * np.abs(normal_velocity), 0.0)
-        if self.free_surface is not None:
-            stress = stress * self.free_surface.factor(-heights)
-        return stress * self._entry(heights), normal_velocity
+        stress, normal_velocity, _ = self._stress(position, velocity, rotation, angular_velocity)
+        return self._scatter(stress), self._scatter(normal_velocity)
 
     def surface_stress(
         self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray
@@ -289,7 +323,7 @@ class DAFLLoads:
         sigma, normal_velocity = self.stress(position, velocity, rotation, angular_velocity)
         tau = None
         if self.friction is not None:
-            slip, scale, _ = self._slip(normal_velocity, velocity @ rotation, angular_velocity)
+            slip, scale, _ = self.slip(normal_velocity, velocity @ rotation, angular_velocity)
             tau = self.friction.stress(sigma) * scale * slip
         return SurfaceStress(sigma, tau, normal_velocity)
 
@@ -308,7 +342,7 @@ class DAFLLoads:
         speed_scale = speed + spin * self._max_radius
         if self._images is None:
             return generalised @ self._normal_arm_t, speed_scale
-        return self._images.normal_velocity(generalised, self._normal_velocity_buffer), speed_scale
+        return self._images.normal_velocity(generalised, np.empty(self._images.shape)), speed_scale
 
     # -- resultants ----------------------------------------------------------------------------------
 
@@ -324,62 +358,19 @@ class DAFLLoads:
         moment : ndarray, shape (3,)
             Moment about the centre of mass in the body frame (N m).
         """
-        if self._plain:
-            load = self._plain_load(position, velocity, rotation, angular_velocity)
-            return rotation @ load[:3], load[3:]
-        sigma, normal_velocity = self.stress(position, velocity, rotation, angular_velocity)
+        if self.fully_outside(position):
+            return np.zeros(3), np.zeros(3)
+        sigma, normal_velocity, _ = self._stress(position, velocity, rotation, angular_velocity)
         if self._images is None:
             load = -(self._normal_arm_t @ (sigma * self._weights))
         else:
-            load = self._images.negative_resultant(self._images.gather(sigma) * self._hot["weights"])
+            load = self._images.negative_resultant(sigma * self._hot_weights)
         if self.friction is not None:
+            sigma, normal_velocity = self._scatter(sigma), self._scatter(normal_velocity)
             load += self._friction_load(sigma, normal_velocity, velocity @ rotation, angular_velocity)
         return rotation @ load[:3], load[3:]
 
-    def _plain_load(
-        self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray
-    ) -> np.ndarray:
-        """Force and moment (body frame) of one law with separation: the hot path.
-
-        The same sums as :meth:`stress` then ``-sum sigma w [n | r x n]``, with ``A sigma_0 w`` and
-        ``B rho_0 w`` cached, in-place passes into reused buffers, and the heights skipped while
-        the bounding sphere is wholly in (or out of) the target.
-        """
-        if self.fully_outside(position):
-            return np.zeros(6)
-        hot = self._hot
-        normal_velocity, speed_scale = self._normal_velocity(velocity, rotation, angular_velocity, self._generalised)
-        stress = self._stress_buffer
-        np.multiply(normal_velocity, normal_velocity, out=stress)
-        stress *= hot["dynamic"]
-        stress += hot["static"]
-        factor = self._factor_buffer
-        if self._smooth_contact:
-            np.multiply(normal_velocity, self._inverse_width(speed_scale), out=factor)
-            stress *= smooth_step(factor, out=factor)
-        else:
-            np.copyto(
-                stress,
-                0.0,
-                where=np.less_equal(normal_velocity, self.normal_velocity_guard * speed_scale, out=self._unloaded),
-            )
-        if not self.fully_embedded(position):
-            heights = (
-                self._images.heights(position[2], rotation[2], self._height_buffer)
-                if self._images is not None
-                else np.add(position[2], rotation[2] @ self._points_t, out=self._height_buffer)
-            )
-            if self.entry_smoothing:
-                np.multiply(heights, hot["inverse_entry"], out=factor)
-                np.subtract(0.5, factor, out=factor)
-                stress *= smooth_step(factor, out=factor)
-            else:
-                np.copyto(stress, 0.0, where=np.greater_equal(heights, 0.0, out=self._unloaded))
-        if self._images is not None:
-            return self._images.negative_resultant(stress)
-        return -(self._normal_arm_t @ stress)
-
-    def _slip(
+    def slip(
         self, normal_velocity: np.ndarray, velocity_body: np.ndarray, angular_velocity: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The slip speed ``|s_i|`` at every point, the factor ``k_i`` that gives the friction stress's
@@ -400,13 +391,13 @@ class DAFLLoads:
             - r_dot_w**2
             - normal_velocity**2
         )
-        slip = np.sqrt(np.maximum(speed2, 0.0))
+        slip2 = np.maximum(speed2, 0.0)
+        width = 0.0
         if self._smooth_contact:
+            # a body at rest with w = 0 has no width (and no slip)
             inverse = self._inverse_width(math.sqrt(float(v @ v)) + math.sqrt(float(w @ w)) * self._max_radius)
-            # k = 1 / sqrt(s^2 + W^2) = (1/W) / sqrt((s/W)^2 + 1); a body at rest (W = 0) has no slip
-            return slip, inverse / np.sqrt(np.square(slip * inverse) + 1.0), r_dot_w
-        moving = slip > 1e-12 * (math.sqrt(float(v @ v)) + 1e-300)
-        return slip, np.where(moving, 1.0 / np.where(moving, slip, 1.0), 0.0), r_dot_w
+            width = 1.0 / inverse if inverse > 0.0 else 0.0
+        return np.sqrt(slip2), slip_factor_scalars(slip2, width, float(v @ v)), r_dot_w
 
     def _friction_load(
         self, sigma: np.ndarray, normal_velocity: np.ndarray, velocity_body: np.ndarray, angular_velocity: np.ndarray
@@ -420,7 +411,7 @@ class DAFLLoads:
         """
         v, w = velocity_body, angular_velocity
         points = self._points
-        _, scale, r_dot_w = self._slip(normal_velocity, v, w)
+        _, scale, r_dot_w = self.slip(normal_velocity, v, w)
         assert self.friction is not None  # called only with friction
         c = self.friction.stress(sigma) * self._weights * scale
         c_vn = c * normal_velocity

@@ -16,25 +16,34 @@ switch goes to zero the load converges to the sharp one.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
-__all__ = ["smooth_step", "MAX_SLOPE"]
+__all__ = ["smooth_step", "smooth_step_scalars", "MAX_SLOPE"]
 
 MAX_SLOPE = 15.0 / 8.0  # the largest dS/dt, at t = 1/2
 
 
+def smooth_step_scalars(t: Any) -> Any:
+    """``S(clip(t, 0, 1))`` on a float or an array: the one definition, which the numpy path evaluates on
+    arrays and the compiled kernels (:mod:`fem_loads.compiled`, :mod:`fem_loads.revolved`) compile."""
+    t = np.minimum(np.maximum(t, 0.0), 1.0)
+    # t^3 (10 + t (6 t - 15)); on an array the augmented operations work in place (no temporaries)
+    step = 6.0 * t
+    step -= 15.0
+    step *= t
+    step += 10.0
+    step *= t
+    step *= t
+    step *= t
+    return step
+
+
 def smooth_step(t: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
-    """``S(clip(t, 0, 1))`` elementwise; written into ``out`` when given (it may be ``t`` itself)."""
+    """:func:`smooth_step_scalars` elementwise on an array; written into ``out`` when given."""
+    values = smooth_step_scalars(np.asarray(t, dtype=float))
     if out is None:
-        t = np.asarray(t, dtype=float)
-        out = np.empty_like(t)
-    np.clip(t, 0.0, 1.0, out=out)
-    t2 = out * out
-    # t^3 (10 - 15 t + 6 t^2) = t^3 (10 + t (6 t - 15)), evaluated in place where possible
-    poly = 6.0 * out
-    poly -= 15.0
-    poly *= out
-    poly += 10.0
-    poly *= t2
-    np.multiply(poly, out, out=out)
+        return np.asarray(values)
+    np.copyto(out, values)
     return out

@@ -1,58 +1,180 @@
-"""Cavity-expansion resistance laws ``sigma_n = A sigma_0 + B rho_0 Vn^2``."""
+"""Resistance functions: the normal stress of the target on a surface element, defined once.
+
+Every built-in law is one scalar function of the element's normal velocity ``Vn`` (m/s, positive
+into the target) and its depth ``z`` (m below the target surface), :func:`normal_stress_scalars`:
+
+    sigma_n = s(z) + c1 Vn + c2 Vn^2 + c Vn^n,    s(z) = c0 + k max(z, 0) + table(z)
+
+with ``c0`` (Pa) the strength at the surface, ``k`` (Pa/m) its growth with depth (overburden), an
+optional table of extra strength against depth (linear between its rows, constant beyond them),
+``c1`` (Pa s/m), ``c2`` (kg/m^3) and ``c`` (Pa (s/m)^n) with ``n > 0``.  The families a scene names
+are choices of these coefficients (docs/laws.md gives each one's source):
+
+* cavity expansion, ``A sigma_0 + B rho_0 Vn^2``: ``c0 = A sigma_0``, ``c2 = B rho_0``;
+* polynomial, ``c0 + c1 Vn + c2 Vn^2``;
+* power, ``c0 + c Vn^n``;
+* any of them with depth-dependent strength (``k``, or a table).
+
+The function is written on floats and numpy arrays alike (numpy's functions, no Python branches on
+``Vn`` or ``z``), so the numpy path evaluates it on all points at once and the compiled kernel
+(:mod:`fem_loads.compiled`) compiles the very same expression per point.  A law of a user's own
+(:mod:`fem_loads.user_law`) is a function with the same first two arguments.
+
+For ``Vn < 0`` the velocity terms are extended as odd functions (``c2 Vn |Vn|``, ``c sign(Vn) |Vn|^n``):
+only a load without separation evaluates there (receding surfaces feel the strength less the
+dynamic terms, clipped at zero by the load).
+"""
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 __all__ = [
     "ResistanceLaw",
     "NAMED_LAWS",
+    "LAW_FAMILIES",
     "resistance_law",
     "register_law",
     "locking_cavity_expansion",
+    "normal_stress_scalars",
+    "polynomial_stress_scalars",
     "UnknownLawError",
 ]
+
+#: the built-in families a scene can name (``law = {model = ...}``), each with the coefficients it takes
+LAW_FAMILIES = {
+    "cavity_expansion": ("A", "sigma_0", "B", "rho_0"),
+    "polynomial": ("c0", "c1", "c2"),
+    "power": ("c0", "c", "n"),
+}
 
 
 class UnknownLawError(ValueError):
     """A law name that :data:`NAMED_LAWS` does not hold; the message lists the names it does."""
 
 
+def polynomial_stress_scalars(
+    normal_velocity: Any, depth: Any, static_stress: float, depth_gradient: float, linear: float, dynamic_density: float
+) -> Any:
+    """``c0 + k max(z, 0) + c1 Vn + c2 Vn |Vn|`` (Pa): :func:`normal_stress_scalars` without the power term and
+    the table, and the whole law when it has neither.  No calls: a compiled loop over points that uses it alone
+    runs in SIMD lanes."""
+    # on arrays the augmented operations work in place (one temporary)
+    stress = np.abs(normal_velocity)
+    stress *= dynamic_density
+    stress += linear
+    stress *= normal_velocity
+    stress += static_stress
+    if depth_gradient != 0.0:
+        stress += depth_gradient * np.maximum(depth, 0.0)
+    return stress
+
+
+def normal_stress_scalars(
+    normal_velocity: Any,
+    depth: Any,
+    static_stress: float,
+    depth_gradient: float,
+    linear: float,
+    dynamic_density: float,
+    power: float,
+    exponent: float,
+    table_depths: np.ndarray,
+    table_stresses: np.ndarray,
+) -> Any:
+    """``sigma_n`` (Pa) of the built-in law at normal velocity ``Vn`` (m/s) and depth ``z`` (m below the surface).
+
+    ``Vn`` and ``z`` are floats (the compiled kernel) or arrays of one shape (the numpy path); the
+    coefficients are floats: ``c0`` (``static_stress``, Pa), ``k`` (``depth_gradient``, Pa/m), ``c1``
+    (``linear``), ``c2`` (``dynamic_density``), ``c`` (``power``) and ``n`` (``exponent``).
+    ``table_depths`` (m, increasing) and ``table_stresses`` (Pa) add the table's strength, linear between
+    rows; both empty: no table.
+    """
+    stress = polynomial_stress_scalars(normal_velocity, depth, static_stress, depth_gradient, linear, dynamic_density)
+    if power != 0.0:
+        stress += power * np.sign(normal_velocity) * np.abs(normal_velocity) ** exponent
+    if table_depths.shape[0] > 0:
+        stress += np.interp(depth, table_depths, table_stresses)
+    return stress
+
+
+_NO_TABLE = np.zeros(0)
+
+
 @dataclass(frozen=True)
 class ResistanceLaw:
-    """Normal stress of the target on a surface element moving into it.
+    """A built-in resistance law: the coefficients of :func:`normal_stress_scalars`.
 
     Parameters
     ----------
     static_stress : float
-        ``A sigma_0`` (Pa): the stress at vanishing normal velocity.
+        ``c0`` (``A sigma_0`` of cavity expansion, Pa): the stress at vanishing normal velocity at the surface.
     dynamic_density : float
-        ``B rho_0`` (kg/m^3): the coefficient of ``Vn^2``.
+        ``c2`` (``B rho_0``, kg/m^3): the coefficient of ``Vn^2``.
     name : str
         A label for reports.
+    linear : float
+        ``c1`` (Pa s/m): the coefficient of ``Vn``.
+    power, exponent : float
+        ``c`` (Pa (s/m)^n) and ``n > 0`` of the term ``c Vn^n``.
+    depth_gradient : float
+        ``k`` (Pa/m): the strength's growth with depth below the surface.
+    strength_table : tuple of (depth, stress) pairs, optional
+        Extra strength (Pa) against depth (m, increasing), linear between rows and constant beyond.
     """
 
     static_stress: float
     dynamic_density: float
     name: str = "custom"
+    linear: float = 0.0
+    power: float = 0.0
+    exponent: float = 1.0
+    depth_gradient: float = 0.0
+    strength_table: tuple[tuple[float, float], ...] = ()
+    _table: tuple[np.ndarray, np.ndarray] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        for field_name in ("static_stress", "dynamic_density"):
+        for field_name in ("static_stress", "dynamic_density", "linear", "power", "depth_gradient"):
             value = getattr(self, field_name)
             if not (math.isfinite(value) and value >= 0.0):
                 raise ValueError(f"{field_name} = {value}: must be a finite number >= 0")
+        if not (math.isfinite(self.exponent) and 0.0 < self.exponent <= 10.0):
+            raise ValueError(f"exponent = {self.exponent}: must lie in (0, 10]")
+        table = np.array(self.strength_table, dtype=float).reshape(-1, 2)
+        if not (np.all(np.isfinite(table)) and np.all(table[:, 1] >= 0.0) and np.all(np.diff(table[:, 0]) > 0.0)):
+            raise ValueError("strength_table: (depth, stress) rows with increasing depths and stresses >= 0")
+        depths, stresses = (np.ascontiguousarray(table[:, 0]), np.ascontiguousarray(table[:, 1]))
+        object.__setattr__(self, "_table", (depths, stresses) if len(table) else (_NO_TABLE, _NO_TABLE))
 
     @classmethod
     def from_coefficients(cls, A: float, sigma_0: float, B: float, rho_0: float, name: str = "custom") -> ResistanceLaw:
         """The law from its dimensionless coefficients and the target's ``sigma_0`` (Pa), ``rho_0`` (kg/m^3)."""
         return cls(A * sigma_0, B * rho_0, name)
 
-    def normal_stress(self, normal_velocity: np.ndarray) -> np.ndarray:
-        """``A sigma_0 + B rho_0 Vn^2`` (Pa) for ``Vn > 0`` (m/s); the caller applies separation."""
-        return self.static_stress + self.dynamic_density * np.square(normal_velocity)
+    @property
+    def depth_dependent(self) -> bool:
+        """Whether the stress depends on depth (``k > 0`` or a table)."""
+        return self.depth_gradient != 0.0 or len(self.strength_table) > 0
+
+    @property
+    def coefficients(self) -> tuple[float, float, float, float, float, float]:
+        """``(c0, k, c1, c2, c, n)`` in the order :func:`normal_stress_scalars` takes them."""
+        return (self.static_stress, self.depth_gradient, self.linear, self.dynamic_density, self.power, self.exponent)
+
+    @property
+    def table(self) -> tuple[np.ndarray, np.ndarray]:
+        """The strength table's depths (m) and stresses (Pa), both empty without one."""
+        return self._table
+
+    def normal_stress(self, normal_velocity: np.ndarray, depth: np.ndarray | float = 0.0) -> np.ndarray:
+        """``sigma_n`` (Pa) at ``Vn`` (m/s) and depth (m below the surface); the caller applies separation."""
+        return np.asarray(
+            normal_stress_scalars(np.asarray(normal_velocity, dtype=float), depth, *self.coefficients, *self.table)
+        )
 
 
 def locking_cavity_expansion(

@@ -6,8 +6,8 @@ cheap path when an effect is absent, so a scene pays only for what it asks.
 Equations (docs/effects.md):
 
 * **Layers**: interfaces at depths ``d_1 < d_2 < ...`` below the surface;
-  a point at depth ``d`` uses the law of the layer containing it, blended
-  smoothly across each interface over the point's own extent ``l``
+  a point at depth ``d`` uses the law of the layer containing it, its stress blended
+  smoothly with the next layer's across each interface over the point's own extent ``l``
   (``S((d - d_k)/l + 1/2)``, :mod:`fem_loads.ramps`); ``l = 0`` is the sharp switch.
 * **Free-surface reduction**: the normal stress of a point at depth ``d`` is
   multiplied by ``f(d) = f0 + (1 - f0) S(d / D)``, ``S`` the smooth step of
@@ -28,14 +28,16 @@ Equations (docs/effects.md):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from .ramps import smooth_step
 from .resistance import ResistanceLaw
+from .user_law import UserLaw
 
-__all__ = ["LayeredTarget", "FreeSurface", "Friction"]
+__all__ = ["LayeredTarget", "FreeSurface", "Friction", "slip_factor_scalars"]
 
 
 @dataclass(frozen=True)
@@ -46,43 +48,52 @@ class LayeredTarget:
     ----------
     thicknesses : sequence of float
         Thickness (m) of every layer but the last, which extends to infinity.
-    laws : sequence of ResistanceLaw
+    laws : sequence of ResistanceLaw or UserLaw
         One law per layer (``len(thicknesses) + 1`` of them).
     """
 
     thicknesses: tuple[float, ...]
-    laws: tuple[ResistanceLaw, ...]
-    # derived in __post_init__: the interfaces' depths (m) and each layer's ``A sigma_0`` and ``B rho_0``
-    _interfaces: np.ndarray = field(init=False, repr=False, compare=False)
-    _static: np.ndarray = field(init=False, repr=False, compare=False)
-    _dynamic: np.ndarray = field(init=False, repr=False, compare=False)
+    laws: tuple[ResistanceLaw | UserLaw, ...]
+    #: every layered target depends on depth
+    depth_dependent = True
 
     def __post_init__(self) -> None:
         if len(self.laws) != len(self.thicknesses) + 1:
             raise ValueError("layers: every layer but the last needs a thickness")
         if not all(t > 0 and math.isfinite(t) for t in self.thicknesses):
             raise ValueError("layers: thicknesses must be finite numbers > 0")
-        object.__setattr__(self, "_interfaces", np.cumsum(self.thicknesses))
-        object.__setattr__(self, "_static", np.array([law.static_stress for law in self.laws]))
-        object.__setattr__(self, "_dynamic", np.array([law.dynamic_density for law in self.laws]))
 
-    def coefficients(self, depth: np.ndarray, lengths: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """``A sigma_0`` and ``B rho_0`` at each depth (m below the surface).
+    @property
+    def interfaces(self) -> np.ndarray:
+        """The interfaces' depths (m below the surface), from the top down."""
+        return np.cumsum(self.thicknesses)
 
-        ``lengths`` (m, one per point, or None): the width over which each point's
-        coefficients blend from one layer to the next, centred on the interface; zero or
-        None is the sharp switch.
+    def normal_stress(
+        self, normal_velocity: np.ndarray, depth: np.ndarray, lengths: np.ndarray | None = None
+    ) -> np.ndarray:
+        """The stress (Pa) at each point: its layer's law, blended with the next layer's across each interface.
+
+        ``lengths`` (m, one per point, or None): the width over which each point's stress blends from one
+        layer to the next, centred on the interface (``S((z - d_k)/l + 1/2)``); zero or None is the sharp
+        switch.  Each layer's law is evaluated only where it has a share.
         """
-        if lengths is None or not np.any(lengths):
-            layer = np.searchsorted(self._interfaces, depth, side="right")
-            return self._static[layer], self._dynamic[layer]
-        static = np.full(np.shape(depth), self._static[0])
-        dynamic = np.full(np.shape(depth), self._dynamic[0])
-        for k, interface in enumerate(self._interfaces):
-            blend = smooth_step((depth - interface) / lengths + 0.5)
-            static += (self._static[k + 1] - self._static[k]) * blend
-            dynamic += (self._dynamic[k + 1] - self._dynamic[k]) * blend
-        return static, dynamic
+        stress = np.zeros(np.shape(normal_velocity))
+        above = np.ones(np.shape(normal_velocity))
+        for layer, law in enumerate(self.laws):
+            if layer < len(self.thicknesses):
+                interface = self.interfaces[layer]
+                if lengths is None or not np.any(lengths):
+                    below = (depth >= interface).astype(float)
+                else:
+                    below = smooth_step((depth - interface) / lengths + 0.5)
+            else:
+                below = np.zeros(np.shape(normal_velocity))
+            share = above - below
+            where = share != 0.0
+            if where.any():
+                stress[where] += share[where] * law.normal_stress(normal_velocity[where], depth[where])
+            above = below
+        return stress
 
 
 @dataclass(frozen=True)
@@ -113,5 +124,17 @@ class Friction:
     cap: float | None = None
 
     def stress(self, sigma: np.ndarray) -> np.ndarray:
+        """``mu sigma_n``, capped at ``cap`` (Pa)."""
         tau = self.coefficient * sigma
         return tau if self.cap is None else np.minimum(tau, self.cap)
+
+
+def slip_factor_scalars(slip2: Any, width: float, speed2: float) -> Any:
+    """``k``, with which the friction stress along the slip ``s`` is ``tau k s``: ``1 / sqrt(|s|^2 + W^2)``
+    with a contact width ``W > 0`` (the direction fades below ``W`` of slip, so the stress is continuous
+    through zero slip); sharp, ``1/|s|`` where ``|s|^2 > 1e-24 |V|^2`` and 0 elsewhere (the direction is
+    undefined at zero slip).  ``slip2 = |s|^2`` (m^2/s^2) is a float (compiled) or an array (numpy)."""
+    if width > 0.0:
+        return 1.0 / np.sqrt(slip2 + width * width)
+    moving = slip2 > 1e-24 * speed2
+    return moving / np.sqrt(np.maximum(slip2, 1e-300))

@@ -147,7 +147,7 @@ def incidences_help() -> str:
     """``contact --incidences``' help, with every contact option of a scene (from its schema)."""
     from ..scene.target import Effects
 
-    options = ", ".join(f"effects.{name}" for name in Effects().contact)
+    options = ", ".join(f"effects.{name}" for name in Effects().contact_ramp)
     return (
         "values of effects.contact_incidence beside the sharp law's 0, every run with effects.contact_width = 0"
         f" (a scene's contact options: {options}; default %(default)s)"

@@ -67,7 +67,7 @@ def _field_at(loc: tuple) -> tuple[Any, list[type[BaseModel]], str]:
             models = tagged
         elif part in LAW_TAGS and LAW_TAGS[part] in models:
             models = [LAW_TAGS[part]]
-        elif part not in ("name", "coefficients", "material"):
+        elif part != "name" and part not in LAW_TAGS:
             path.append(part if part.isidentifier() else _quoted(part, 40))  # an unknown key, as written
     return info, models, ".".join(path) or "scene"
 
@@ -122,7 +122,8 @@ def _explain_one(error: ErrorDetails) -> str:
         if loc and loc[-1] in LAW_TAGS:
             return (
                 f"{name} = {_show(given)}: must be a law (allowed: a name, {', '.join(sorted(NAMED_LAWS))};"
-                " a table of A, sigma_0, B, rho_0; or a table of model, sigma_0, rho_0, locking_strain)"
+                " a table of A, sigma_0, B, rho_0; model = polynomial (c0, c1, c2), power (c0, c, n) or"
+                " locking_cavity_expansion (sigma_0, rho_0, locking_strain); or function = 'file.py:name')"
             )
         models = _field_at(loc)[1]
         keys = ", ".join(sorted({k for m in models for k in m.model_fields}))

@@ -278,8 +278,8 @@ def scene_from_dict(data: dict[str, Any], source: str = "scene") -> Scene:
 def load_scene(path: str | os.PathLike[str], overrides: Overrides | None = None) -> Scene:
     """Load and validate a TOML scene, with optional overrides (dotted key -> value).
 
-    A geometry file named by a relative path in the scene is found beside the scene file
-    (one named by an override, relative to the working directory).
+    A geometry file or a user law's file named by a relative path in the scene is found beside the scene
+    file (one named by an override, relative to the working directory).
     """
     return scene_from_dict(apply_overrides(read_scene_data(path), overrides, str(path)), str(path))
 
@@ -290,13 +290,28 @@ def read_scene_data(path: str | os.PathLike[str]) -> dict[str, Any]:
 
 
 def anchor_files(data: dict[str, Any], folder: Path) -> dict[str, Any]:
-    """``data`` with a relative ``projectile.geometry.file`` made absolute against ``folder``."""
+    """``data`` with the files it names by relative paths made absolute against ``folder``: the projectile's
+    ``geometry.file`` and the ``function`` file of each user law (the target's and its layers').  Changes
+    ``data`` in place (a scene file's freshly read tables) and returns it."""
+
+    def anchored(path: str) -> str:
+        file = Path(path).expanduser()
+        return path if file.is_absolute() else str((folder / file).resolve())
+
     geometry = data.get("projectile", {}).get("geometry") if isinstance(data.get("projectile"), dict) else None
     if isinstance(geometry, dict) and isinstance(geometry.get("file"), str) and geometry["file"]:
-        file = Path(geometry["file"]).expanduser()
-        if not file.is_absolute():
-            data = copy.deepcopy(data)
-            data["projectile"]["geometry"]["file"] = str((folder / file).resolve())
+        geometry["file"] = anchored(geometry["file"])
+    target = data.get("target")
+    laws = []
+    if isinstance(target, dict):
+        laws.append(target.get("law"))
+        if isinstance(target.get("layers"), list):
+            laws += [layer.get("law") for layer in target["layers"] if isinstance(layer, dict)]
+    for law in laws:
+        if isinstance(law, dict) and isinstance(law.get("function"), str) and ":" in law["function"]:
+            file, name = law["function"].rsplit(":", 1)
+            if file:
+                law["function"] = f"{anchored(file)}:{name}"
     return data
 
 

@@ -17,7 +17,7 @@ from fem_loads import DAFLLoads, SurfaceQuadrature
 
 from .base import Label, Number, Strict, Whole, field, not_boolean
 from .projectile import Projectile
-from .target import Effects, Target
+from .target import Effects, Target, UserLawSpec
 
 __all__ = ["Scene", "Impact", "Numerics", "Outputs", "MAX_STEPS", "MAX_MESH_CELLS"]
 
@@ -145,15 +145,13 @@ class Scene(Strict):
 
     @property
     def compilable(self) -> bool:
-        """Whether the compiled kernel computes this scene's load: one law with separation, no free surface,
-        no friction (layers and those effects run on the numpy path)."""
-        effects = self.effects
-        return (
-            self.target.layers is None
-            and effects.separation
-            and effects.free_surface is None
-            and effects.friction.model == "none"
-        )
+        """Whether the compiled kernel computes this scene's load: every law and effect, except layers whose
+        laws are not all built in or all one user function (the kernel calls one)."""
+        if self.target.layers is None:
+            return True
+        laws = [layer.law for layer in self.target.layers]
+        functions = {law.function for law in laws if isinstance(law, UserLawSpec)}
+        return not functions or (len(functions) == 1 and all(isinstance(law, UserLawSpec) for law in laws))
 
     def with_kernel(self, many_runs: bool) -> Scene:
         """This scene with ``numerics.kernel`` resolved: ``auto`` is ``compiled`` in a process that runs
@@ -165,11 +163,22 @@ class Scene(Strict):
         return self.model_copy(update={"numerics": self.numerics.model_copy(update={"kernel": kernel})})
 
     @model_validator(mode="after")
+    def _user_laws_see_pressing_elements(self) -> Self:
+        laws = [self.target.law] + [layer.law for layer in self.target.layers or []]
+        if not self.effects.separation and any(isinstance(law, UserLawSpec) for law in laws):
+            raise ValueError(
+                "effects.separation = false: a user law is evaluated at Vn >= 0 only (allowed with a user law:"
+                " effects.separation = true; without separation use a built-in law, extended to Vn < 0 as an odd"
+                " function)"
+            )
+        return self
+
+    @model_validator(mode="after")
     def _kernel_covers_scene(self) -> Self:
         if self.numerics.kernel == "compiled" and not self.compilable:
             raise ValueError(
-                'numerics.kernel = "compiled": the compiled load covers one law with separation and'
-                ' no free surface or friction (allowed for this scene: "numpy" or "auto")'
+                'numerics.kernel = "compiled": the compiled load calls one user function, and these layers'
+                ' mix laws (allowed for this scene: "numpy" or "auto")'
             )
         return self
 
@@ -184,6 +193,6 @@ class Scene(Strict):
             friction=effects.friction.build(),
             separation=effects.separation,
             free_surface=free_surface,
-            **effects.contact,
+            **effects.contact_ramp,
             entry_smoothing=self.numerics.entry_smoothing,
         )

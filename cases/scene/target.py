@@ -2,18 +2,24 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Literal, Self
+import functools
+from typing import Annotated, Any, Literal, Self
 
 from pydantic import Discriminator, Tag, field_validator, model_validator
 
-from fem_loads.resistance import NAMED_LAWS, ResistanceLaw, locking_cavity_expansion, resistance_law
+from fem_loads.resistance import LAW_FAMILIES, NAMED_LAWS, ResistanceLaw, locking_cavity_expansion, resistance_law
 from fem_loads.target import FreeSurface, Friction, LayeredTarget
+from fem_loads.user_law import LawError, UserLaw, user_law
 
-from .base import Number, Strict, field
+from .base import Label, Number, Strict, field
 
 __all__ = [
     "LawSpec",
+    "PolynomialLawSpec",
+    "PowerLawSpec",
     "MaterialLawSpec",
+    "UserLawSpec",
+    "LAW_TAGS",
     "LawChoice",
     "LayerSpec",
     "Target",
@@ -24,16 +30,69 @@ __all__ = [
 ]
 
 
-class LawSpec(Strict):
-    """A resistance law ``sigma_n = A sigma_0 + B rho_0 Vn^2`` by its coefficients."""
+class DepthStrength(Strict):
+    """Strength that grows with depth below the surface, on top of any built-in law's own."""
 
+    depth_gradient: Number = field(
+        0.0, unit="Pa/m", ge=0.0, le=1e10, description="k: the strength grows by k per metre below the surface"
+    )
+    strength_table: list[tuple[Number, Number]] | None = field(
+        None,
+        description="[depth (m), extra strength (Pa)] rows with increasing depths, linear between them",
+        min_length=1,
+        max_length=100,
+    )
+
+    @field_validator("strength_table")
+    @classmethod
+    def _increasing(cls, rows: list[tuple[float, float]] | None) -> list[tuple[float, float]] | None:
+        if rows is None:
+            return rows
+        if any(not (0.0 <= depth <= 1e4 and 0.0 <= stress <= 1e11) for depth, stress in rows):
+            raise ValueError("rows must be [depth, stress] with 0 <= depth <= 1e4 m and 0 <= stress <= 1e11 Pa")
+        if any(b[0] <= a[0] for a, b in zip(rows, rows[1:])):
+            raise ValueError("the depths must increase from row to row")
+        return rows
+
+    def _depth(self) -> dict[str, Any]:
+        return {"depth_gradient": self.depth_gradient, "strength_table": tuple(map(tuple, self.strength_table or ()))}
+
+
+class LawSpec(DepthStrength):
+    """A cavity-expansion law ``sigma_n = A sigma_0 + B rho_0 Vn^2`` by its coefficients."""
+
+    model: Literal["cavity_expansion"] = "cavity_expansion"
     A: Number = field(ge=0.0, le=1e3, description="static coefficient")
     sigma_0: Number = field(unit="Pa", gt=0.0, le=1e11, description="target strength")
     B: Number = field(ge=0.0, le=1e3, description="dynamic coefficient")
     rho_0: Number = field(unit="kg/m^3", gt=0.0, le=1e5, description="target density")
 
     def build(self) -> ResistanceLaw:
-        return ResistanceLaw.from_coefficients(self.A, self.sigma_0, self.B, self.rho_0)
+        return ResistanceLaw(self.A * self.sigma_0, self.B * self.rho_0, "cavity expansion", **self._depth())
+
+
+class PolynomialLawSpec(DepthStrength):
+    """A polynomial law ``sigma_n = c0 + c1 Vn + c2 Vn^2``."""
+
+    model: Literal["polynomial"]
+    c0: Number = field(unit="Pa", ge=0.0, le=1e11, description="strength at the surface")
+    c1: Number = field(0.0, unit="Pa s/m", ge=0.0, le=1e10, description="coefficient of Vn")
+    c2: Number = field(0.0, unit="kg/m^3", ge=0.0, le=1e6, description="coefficient of Vn^2")
+
+    def build(self) -> ResistanceLaw:
+        return ResistanceLaw(self.c0, self.c2, "polynomial", linear=self.c1, **self._depth())
+
+
+class PowerLawSpec(DepthStrength):
+    """A power law ``sigma_n = c0 + c Vn^n``."""
+
+    model: Literal["power"]
+    c0: Number = field(unit="Pa", ge=0.0, le=1e11, description="strength at the surface")
+    c: Number = field(unit="Pa (s/m)^n", ge=0.0, le=1e11, description="coefficient of Vn^n")
+    n: Number = field(gt=0.0, le=10.0, description="exponent")
+
+    def build(self) -> ResistanceLaw:
+        return ResistanceLaw(self.c0, 0.0, "power", power=self.c, exponent=self.n, **self._depth())
 
 
 class MaterialLawSpec(Strict):
@@ -48,34 +107,89 @@ class MaterialLawSpec(Strict):
         return locking_cavity_expansion(self.sigma_0, self.rho_0, self.locking_strain)
 
 
+class UserLawSpec(Strict):
+    """A law of the user's own: ``def name(normal_velocity, depth, p1, ...)`` in a Python file (docs/laws.md)."""
+
+    function: Label = field(description="'path/to/file.py:name', the path relative to the scene file's folder")
+    parameters: dict[str, Number] = field({}, description="the function's arguments after the first two, by name")
+    sha256: Label | None = field(
+        None,
+        description="the file's digest: filled in when the scene is read; a changed"
+        " file is refused by a resolved scene that holds the old one",
+    )
+
+    @model_validator(mode="after")
+    def _usable(self) -> Self:
+        law = self.build()
+        if self.sha256 is not None and self.sha256 != law.sha256:
+            raise ValueError(
+                f"function = {self.function!r}: the file changed since this scene was resolved (sha256"
+                f" {law.sha256[:12]}..., the scene holds {self.sha256[:12]}...); drop sha256 to use it as it is now"
+            )
+        self.sha256 = law.sha256
+        return self
+
+    def build(self) -> UserLaw:
+        """The checked law (:func:`fem_loads.user_law.user_law`; read, probed and compiled once per process)."""
+        try:
+            return _user_law(self.function, tuple(sorted(self.parameters.items())))
+        except LawError as exc:
+            raise ValueError(str(exc)) from None
+
+
+@functools.lru_cache(maxsize=64)
+def _user_law(function: str, parameters: tuple[tuple[str, float], ...]) -> UserLaw:
+    return user_law(function, dict(parameters))
+
+
+#: the tag of each table form of a law (besides a name), with its spec
+LAW_TAGS: dict[str, type[Strict]] = {
+    "coefficients": LawSpec,
+    "polynomial": PolynomialLawSpec,
+    "power": PowerLawSpec,
+    "material": MaterialLawSpec,
+    "user": UserLawSpec,
+}
+_MODEL_TAGS = {"cavity_expansion": "coefficients", "locking_cavity_expansion": "material"}
+
+
 def _law_kind(value: object) -> str:
     if isinstance(value, str):
         return "name"
-    return (
-        "material"
-        if isinstance(value, (dict, MaterialLawSpec))
-        and "model" in (value if isinstance(value, dict) else value.model_fields_set)
-        else "coefficients"
-    )
+    if isinstance(value, Strict):
+        return next(tag for tag, spec in LAW_TAGS.items() if isinstance(value, spec))
+    if isinstance(value, dict):
+        if "function" in value:
+            return "user"
+        model = value.get("model")
+        if isinstance(model, str) and model in LAW_FAMILIES or model == "locking_cavity_expansion":
+            return _MODEL_TAGS.get(model, model)
+    return "coefficients"
 
 
 LawChoice = Annotated[
-    Annotated[str, Tag("name")] | Annotated[LawSpec, Tag("coefficients")] | Annotated[MaterialLawSpec, Tag("material")],
+    Annotated[str, Tag("name")]
+    | Annotated[LawSpec, Tag("coefficients")]
+    | Annotated[PolynomialLawSpec, Tag("polynomial")]
+    | Annotated[PowerLawSpec, Tag("power")]
+    | Annotated[MaterialLawSpec, Tag("material")]
+    | Annotated[UserLawSpec, Tag("user")],
     Discriminator(_law_kind),
 ]
-LAW_TAGS: dict[str, type[Strict]] = {"coefficients": LawSpec, "material": MaterialLawSpec}  # LawChoice's table tags
+AnyLawSpec = LawSpec | PolynomialLawSpec | PowerLawSpec | MaterialLawSpec | UserLawSpec
 
 
-def build_law(law: str | LawSpec | MaterialLawSpec) -> ResistanceLaw:
-    """The resistance law a scene names, gives by coefficients or derives from material constants."""
+def build_law(law: str | AnyLawSpec) -> ResistanceLaw | UserLaw:
+    """The resistance law a scene names, gives by a family's coefficients, derives from material constants or
+    reads from the user's file."""
     return resistance_law(law) if isinstance(law, str) else law.build()
 
 
 def _check_law_name(value: object) -> object:
     if isinstance(value, str) and value not in NAMED_LAWS:
         raise ValueError(
-            f"unknown law {value!r}: must be one of {', '.join(sorted(NAMED_LAWS))}"
-            " or a table with A, sigma_0, B and rho_0"
+            f"unknown law {value!r}: must be one of {', '.join(sorted(NAMED_LAWS))}, a table of a family's"
+            f" coefficients (model = {', '.join(LAW_FAMILIES)}) or function = 'file.py:name'"
         )
     return value
 
@@ -111,7 +225,7 @@ class Target(Strict):
             raise ValueError("layers: the last layer goes on forever; drop its thickness")
         return self
 
-    def build(self) -> ResistanceLaw | LayeredTarget:
+    def build(self) -> ResistanceLaw | UserLaw | LayeredTarget:
         """The law of a homogeneous target, or the layers."""
         if self.layers is None:
             return build_law(self.law)
@@ -171,14 +285,21 @@ class Effects(Strict):
         " |V| + |omega| r_max: the sine of the incidence angle over which"
         " the stress rises",
     )
+    contact: Literal["one_sided", "centred"] = field(
+        "one_sided",
+        description="where the contact ramp lies: from Vn = 0 up (one_sided: an element sliding along the"
+        " target is unloaded) or centred on Vn = 0 (half loaded there); two models with two limits"
+        " (docs/model.md)",
+    )
     free_surface: FreeSurfaceSpec | None = None
     gravity: bool = False
     gravity_acceleration: Number = field(9.80665, unit="m/s^2", ge=0.0, le=1e3)
 
     @property
-    def contact(self) -> dict[str, float]:
-        """``contact_width`` and ``contact_incidence``, as the load and the 1-D reference take them."""
-        return {"contact_width": self.contact_width, "contact_incidence": self.contact_incidence}
+    def contact_ramp(self) -> dict[str, Any]:
+        """``contact_width``, ``contact_incidence`` and ``contact``, as the load and the 1-D reference take them."""
+        widths = {"contact_width": self.contact_width, "contact_incidence": self.contact_incidence}
+        return {**widths, "contact": self.contact}
 
     @property
     def sharp_contact(self) -> bool:

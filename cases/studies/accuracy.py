@@ -285,7 +285,7 @@ def _reference(sweep: Sweep, finest: pd.DataFrame) -> dict:
             prepared.mass.mass,
             base.impact.speed,
             base.numerics.stop_speed,
-            **base.effects.contact,
+            **base.effects.contact_ramp,
         )
         return {
             "kind": "1-D integration with exact nose entry and the same contact width (exact)",

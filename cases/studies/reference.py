@@ -153,14 +153,15 @@ def axial_depth_1d(
     rtol: float = 1e-12,
     contact_width: float = 0.0,
     contact_incidence: float = 0.0,
+    contact: str = "one_sided",
 ) -> tuple[float, float]:
     """Tip depth (m) at which the speed falls to ``stop_speed``, with exact nose entry.
 
     Integrates ``dP/dt = V, m dV/dt = -F(P, V)`` through the nose-entry phase
     (``G`` interpolated to round-off on Chebyshev points); after full
     embedding the closed form takes over exactly.  With a contact width
-    ``w + delta V > 0`` (``contact_width``, ``contact_incidence``) the whole run
-    is integrated with the force of :func:`axial_force`.
+    ``w + delta V > 0`` (``contact_width``, ``contact_incidence``, the ramp ``contact``), or a law
+    other than cavity expansion, the whole run is integrated with the force of :func:`axial_force`.
 
     Returns
     -------
@@ -170,8 +171,10 @@ def axial_depth_1d(
         Speed (m/s) when the nose is fully embedded.
     """
     check_nose_alone_presses(profile)
-    if contact_width > 0.0 or contact_incidence > 0.0:
-        return _axial_depth_contact(profile, law, mass, speed, stop_speed, rtol, contact_width, contact_incidence)
+    cavity = isinstance(law, ResistanceLaw) and law.linear == law.power == 0.0 and not law.depth_dependent
+    if contact_width > 0.0 or contact_incidence > 0.0 or not cavity:
+        ramp = (contact_width, contact_incidence, contact)
+        return _axial_depth_contact(profile, law, mass, speed, stop_speed, rtol, *ramp)
     ln = profile.nose_length
     # G is smooth on the nose: tabulate it once on Chebyshev points for a fast, exact-to-rtol integrand
     nodes = 0.5 * ln * (1 - np.cos(np.linspace(0, math.pi, 401)))
@@ -229,23 +232,33 @@ def axial_force(
     speed: float,
     contact_width: float,
     contact_incidence: float = 0.0,
+    contact: str = "one_sided",
 ) -> float:
-    """Axial force (N) with the nose embedded to ``depth`` (m) at ``speed`` (m/s), with the contact width
-    ``W = w + delta V`` (m/s; ``w = contact_width``, ``delta = contact_incidence``, ``W > 0``).
+    """Axial force (N) with the nose tip at ``depth`` (m) at ``speed`` (m/s), with the contact width
+    ``W = w + delta V`` (m/s; ``w = contact_width``, ``delta = contact_incidence``; 0: sharp) and ramp ``contact``.
 
-    ``int_0^P' 2 pi r r' (A sigma_0 + B rho_0 V^2 sin^2) S(V sin / W) ds`` by 2000-point Gauss-Legendre
-    quadrature, plus a flat front face (``sin = 1``) of a blunt nose.
+    ``int_0^P' 2 pi r r' f(V sin, P - s) c(V sin / W) ds`` by 2000-point Gauss-Legendre quadrature over the
+    embedded part of the nose (``s`` from the tip, ``f`` the law at the element's normal velocity and depth,
+    ``c`` the contact factor: ``S(x)`` one-sided, ``S(1/2 + x)`` centred, the step ``x > 0`` sharp), plus a
+    flat front face (``sin = 1``) of a blunt nose.  The shank (``Vn = 0``) carries no axial force.
     """
     width = contact_width + contact_incidence * speed
+    offset = 0.5 if contact == "centred" else 0.0
     extent = min(max(depth, 0.0), profile.nose_length)
     x, weights = _GAUSS
     s = 0.5 * extent * (x + 1.0)
     slope = profile.slope_at(s)
     sine = slope / np.sqrt(1.0 + slope**2)
-    stress = (law.static_stress + law.dynamic_density * speed**2 * sine**2) * smooth_step(speed * sine / width)
+
+    def factor(normal_velocity: np.ndarray) -> np.ndarray:
+        return smooth_step(normal_velocity / width + offset) if width > 0.0 else (normal_velocity > 0.0) * 1.0
+
+    stress = law.normal_stress(speed * sine, depth - s) * factor(speed * sine)
     force = 0.5 * extent * float(np.sum(weights * 2 * np.pi * profile.radius_at(s) * slope * stress))
-    face = law.static_stress + law.dynamic_density * speed**2
-    return force + math.pi * profile.tip_radius**2 * face * float(smooth_step(np.array(speed / width)))
+    if depth < 0.0 or profile.tip_radius == 0.0:
+        return force
+    face = float(law.normal_stress(np.array([speed]), depth)[0] * factor(np.array([speed]))[0])
+    return force + math.pi * profile.tip_radius**2 * face
 
 
 def _axial_depth_contact(
@@ -257,9 +270,10 @@ def _axial_depth_contact(
     rtol: float,
     contact_width: float,
     contact_incidence: float,
+    contact: str,
 ) -> tuple[float, float]:
     def rate(t: float, y: np.ndarray) -> list[float]:
-        return [y[1], -axial_force(profile, law, y[0], y[1], contact_width, contact_incidence) / mass]
+        return [y[1], -axial_force(profile, law, y[0], y[1], contact_width, contact_incidence, contact) / mass]
 
     entry = _integrate(rate, [0.0, speed], stop_speed, rtol, embedded_at=profile.nose_length)
     if len(entry.t_events[0]) == 0:

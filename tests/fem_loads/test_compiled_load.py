@@ -12,8 +12,8 @@ from support import MIRROR_Y, mirrored_states
 from cases import load_scene, prepare_projectile, scene_path
 from cases.run.compiled import _import_compiled
 from dynamics.quaternion import normalize, rotation_matrix
-from fem_loads import DAFLLoads, SurfaceQuadrature, resistance_law
-from fem_loads.target import Friction
+from fem_loads import DAFLLoads, ResistanceLaw, SurfaceQuadrature, resistance_law
+from fem_loads.target import FreeSurface, Friction, LayeredTarget
 
 _, compiled = _import_compiled()  # numba's cache in the folder named for the compiled code
 
@@ -70,7 +70,7 @@ def test_kernel_without_mirror_quarters(quadrature):
     plain = SurfaceQuadrature(quadrature.points, quadrature.normals, quadrature.weights)
     assert plain.mirror_quarters is None
     loads, reference_loads = DAFLLoads(plain, SOIL, **SMOOTH), DAFLLoads(quadrature, SOIL, **SMOOTH)
-    assert compiled.kernel_data(loads)[6].shape == (1, 6)
+    assert compiled.kernel_data(loads)[compiled.KERNEL_ARRAYS.index("image_signs")].shape == (1, 6)
     rng = np.random.default_rng(8)
     for _ in range(20):
         state = _random_state(rng, -0.5)
@@ -121,8 +121,35 @@ def test_lowest_height_equals_the_numpy_one(quadrature, mode):
         )
 
 
-def test_effects_the_kernel_does_not_cover_are_refused(quadrature):
-    for loads in (DAFLLoads(quadrature, SOIL, friction=Friction(0.1)), DAFLLoads(quadrature, SOIL, separation=False)):
-        assert not compiled.supports(loads)
-        with pytest.raises(ValueError, match="one resistance law with separation"):
-            compiled.kernel_data(loads)
+LAYERS = LayeredTarget((0.2, 0.5), (SOIL, resistance_law("softer_soil"), ResistanceLaw(2e6, 1e3, linear=3e4)))
+#: every effect and law of the kernel, each alone and some together (with the default smooth switches)
+EFFECTS = {
+    "coulomb": {"friction": Friction(0.1)},
+    "capped": {"friction": Friction(0.3, 4e6)},
+    "no-separation": {"separation": False},
+    "free-surface": {"free_surface": FreeSurface(0.3, 0.2)},
+    "layers": {"law": LAYERS},
+    "centred": {"contact": "centred"},
+    "polynomial": {"law": ResistanceLaw(3e6, 800.0, linear=2e4)},
+    "power": {"law": ResistanceLaw(4e6, 0.0, power=5e3, exponent=1.6)},
+    "depth-gradient": {"law": ResistanceLaw(3e6, 1e3, depth_gradient=2e6)},
+    "table": {"law": ResistanceLaw(3e6, 1e3, strength_table=((0.0, 0.0), (0.3, 5e6), (1.0, 6e6)))},
+    "all": {"law": LAYERS, "friction": Friction(0.2), "free_surface": FreeSurface(0.3), "contact": "centred"},
+}
+
+
+@pytest.mark.parametrize("effect", list(EFFECTS))
+@pytest.mark.parametrize("sharp", [False, True], ids=["smooth", "sharp"])
+@pytest.mark.parametrize("depth", [-5.0, -0.4, 0.3], ids=["embedded", "entering", "tip-in"])
+def test_kernel_computes_every_effect_as_numpy_does(quadrature, effect, sharp, depth):
+    options = {"law": SOIL, **({} if sharp else SMOOTH), **EFFECTS[effect]}
+    if sharp and "contact" in options:
+        options["contact_incidence"] = 0.005
+    loads = DAFLLoads(quadrature, options.pop("law"), **options)
+    assert compiled.supports(loads)
+    rng = np.random.default_rng(23)
+    for _ in range(10):
+        state = _random_state(rng, depth)
+        reference = np.concatenate(loads(*state))
+        scale = max(np.abs(reference).max(), 1.0)
+        np.testing.assert_allclose(_kernel_load(loads, state), reference, rtol=0, atol=1e-11 * scale)

@@ -155,11 +155,12 @@ def test_layers_and_free_surface_blend_smoothly():
     layered = LayeredTarget((1.0,), (resistance_law("soil"), resistance_law("softer_soil")))
     depth = np.array([0.0, 0.99, 0.995, 1.0, 1.005, 1.01, 2.0])
     lengths = np.full(depth.shape, 0.01)
-    static, _ = layered.coefficients(depth, lengths)
+    static = layered.normal_stress(np.zeros(depth.shape), depth, lengths)
     soil, softer = resistance_law("soil").static_stress, resistance_law("softer_soil").static_stress
     np.testing.assert_allclose(static[[0, 1, -1]], [soil, soil, softer])
     assert static[3] == pytest.approx(0.5 * (soil + softer)) and np.all(np.diff(static) <= 0)
-    np.testing.assert_array_equal(layered.coefficients(depth)[0], np.where(depth < 1.0, soil, softer))  # sharp
+    sharp = layered.normal_stress(np.zeros(depth.shape), depth)
+    np.testing.assert_array_equal(sharp, np.where(depth < 1.0, soil, softer))
     factor = FreeSurface(0.5, 0.2).factor(np.array([-1.0, 0.0, 0.25, 0.5, 2.0]))
     np.testing.assert_allclose(factor, [0.2, 0.2, 0.6, 1.0, 1.0])
 

@@ -289,7 +289,7 @@ def _normal_impact_error(*overrides: str) -> float:
         result.prepared.mass.mass,
         scene.impact.speed,
         scene.numerics.stop_speed,
-        **scene.effects.contact,
+        **scene.effects.contact_ramp,
     )
     assert record.end_reason == "stopped"
     return record.depth / reference - 1.0

@@ -150,7 +150,7 @@ def test_a_boat_tail_goes_as_deep_as_its_nose_says():
         result.prepared.mass.mass,
         scene.impact.speed,
         scene.numerics.stop_speed,
-        **scene.effects.contact,
+        **scene.effects.contact_ramp,
     )
     assert depth == pytest.approx(reference, rel=5e-4)
     cylinder = summarise(run_scene(load_scene(scene_path("forrestal_luk_test2")))).depth

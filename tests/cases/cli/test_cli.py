@@ -258,7 +258,7 @@ def test_help_lists_every_value_the_code_takes(monkeypatch):
         shown = help_text(command).split("--set KEY=VALUE", 2)[2]
         assert all(name in shown for name in NAMED_LAWS), command
     contact = help_text("contact").split("--incidences", 2)[2]
-    assert all(f"effects.{name}" in contact for name in Effects().contact)
+    assert all(f"effects.{name}" in contact for name in Effects().contact_ramp)
     fit = help_text("fit").split("--observe", 2)[2]
     assert all(quantity in fit for quantity in RUN_QUANTITIES + STUDY_QUANTITIES)
 

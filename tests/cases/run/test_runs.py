@@ -36,7 +36,7 @@ def test_normal_impact_matches_the_1d_integration():
     scene = result.scene
     profile, law, mass = result.prepared.profile, scene.target.build(), result.prepared.mass.mass
     reference, _ = axial_depth_1d(
-        profile, law, mass, scene.impact.speed, scene.numerics.stop_speed, **scene.effects.contact
+        profile, law, mass, scene.impact.speed, scene.numerics.stop_speed, **scene.effects.contact_ramp
     )
     assert result.trajectory.end_reason == "stopped"
     assert history["tip_depth"].max() == pytest.approx(reference, rel=1e-3)
