@@ -27,13 +27,9 @@ through a pointer: the kernel and the step are compiled and cached once for ever
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from typing import Any
 
 import numpy as np
-from llvmlite import ir
-from numba import njit, types
-from numba.extending import intrinsic, register_jitable
+from numba import njit
 
 from .kernel_layout import (
     CONSTANT_CONTACT_INCIDENCE,
@@ -69,54 +65,13 @@ from .kernel_layout import (
     kernel_data,
     supports,
 )
-from .ramps import smooth_step_scalars
-from .resistance import normal_stress_scalars, polynomial_stress_scalars
-from .target import slip_factor_scalars
-from .user_law import MAX_PARAMETERS, user_law_signature
+from .native import builtin_stress, call_user_law, polynomial_stress, slip_factor, smooth_step
+from .user_law import user_law_signature
 
 __all__ = ["dafl_kernel", "lowest_height_kernel", "kernel_data", "supports", "KERNEL_ARRAYS", "USER_LAW_SIGNATURE"]
 
 #: how the kernel calls a user's law (:func:`~fem_loads.user_law.user_law_signature`)
 USER_LAW_SIGNATURE = user_law_signature()
-
-
-@intrinsic
-def _call_user_law_intrinsic(
-    typingctx: Any,
-    address: Any,
-    normal_velocity: Any,
-    depth: Any,
-    p0: Any,
-    p1: Any,
-    p2: Any,
-    p3: Any,
-    p4: Any,
-    p5: Any,
-    p6: Any,
-    p7: Any,
-) -> Any:
-    """Call the cfunc at ``address`` (an int64) with ``(Vn, z, p0 .. p7)``: a C call through a pointer, so the
-    kernel and the step are compiled once for every user law and take the law as data."""
-    signature = types.float64(types.int64, *([types.float64] * (2 + MAX_PARAMETERS)))
-
-    def codegen(context: Any, builder: Any, signature: Any, arguments: Any) -> Any:
-        function_type = ir.FunctionType(ir.DoubleType(), [ir.DoubleType()] * (2 + MAX_PARAMETERS))
-        pointer = builder.inttoptr(arguments[0], function_type.as_pointer())
-        return builder.call(pointer, arguments[1:])
-
-    return signature, codegen
-
-
-# the intrinsic as the kernels call it, (address, Vn, z, p0 .. p7) -> sigma (numba passes the typing context)
-_call_user_law: Callable[..., float] = _call_user_law_intrinsic
-
-
-_smooth_step = njit(inline="always", error_model="numpy")(smooth_step_scalars)
-# the polynomial part as numba sees it where normal_stress_scalars calls it (the plain function stays plain)
-register_jitable(inline="always", error_model="numpy")(polynomial_stress_scalars)
-_builtin_stress = njit(inline="always", error_model="numpy")(normal_stress_scalars)
-_polynomial_stress = njit(inline="always", error_model="numpy")(polynomial_stress_scalars)
-_slip_factor = njit(inline="always", error_model="numpy")(slip_factor_scalars)
 
 
 _NO_TABLE = np.zeros(0)
@@ -134,13 +89,13 @@ def _layered_stress(data: tuple[np.ndarray, ...], normal_velocity: float, depth:
         below = 0.0
         if layer < interfaces.shape[0]:
             if entry_length > 0.0:
-                below = _smooth_step((depth - interfaces[layer]) / entry_length + 0.5)
+                below = smooth_step((depth - interfaces[layer]) / entry_length + 0.5)
             elif depth >= interfaces[layer]:
                 below = 1.0
         share = above - below
         if share != 0.0:
             if user:
-                law = _call_user_law(
+                law = call_user_law(
                     data[DATA_USER_LAW_ADDRESS][0],
                     normal_velocity,
                     depth,
@@ -155,7 +110,7 @@ def _layered_stress(data: tuple[np.ndarray, ...], normal_velocity: float, depth:
                 )
             else:
                 first, count = rows[layer, 0], rows[layer, 1]
-                law = _builtin_stress(
+                law = builtin_stress(
                     normal_velocity,
                     depth,
                     p[layer, 0],
@@ -214,10 +169,10 @@ def _smooth_sums(
             z = 0.0
             if needs_depth or not embedded:
                 z = height + (up0 * points[0, j] + up1 * points[1, j] + up2 * points[2, j])
-            stress = _polynomial_stress(max(normal_velocity, 0.0), -z, c0, c1, c2, c3)
-            stress *= _smooth_step(normal_velocity * inverse_width + offset) * weights[j]
+            stress = polynomial_stress(max(normal_velocity, 0.0), -z, c0, c1, c2, c3)
+            stress *= smooth_step(normal_velocity * inverse_width + offset) * weights[j]
             if not embedded:
-                stress *= _smooth_step(0.5 - z * inverse_entry[j])
+                stress *= smooth_step(0.5 - z * inverse_entry[j])
             a0 += stress * n0
             a1 += stress * n1
             a2 += stress * n2
@@ -283,7 +238,7 @@ def _sums(
             # SIMD lanes, and the points on either side of a switch cost the same
             if separation:
                 if smooth_contact:
-                    contact = _smooth_step(normal_velocity * inverse_width + offset)
+                    contact = smooth_step(normal_velocity * inverse_width + offset)
                 else:
                     contact = 1.0 if normal_velocity > guard else 0.0
                 law_velocity = max(normal_velocity, 0.0)
@@ -296,15 +251,15 @@ def _sums(
             if layered:
                 stress = _layered_stress(data, law_velocity, -z, 2.0 * half_entry_length[j])
             elif user:
-                stress = _call_user_law(address, law_velocity, -z, c0, c1, c2, c3, c4, c5, c6, c7)
+                stress = call_user_law(address, law_velocity, -z, c0, c1, c2, c3, c4, c5, c6, c7)
             else:
-                stress = _builtin_stress(law_velocity, -z, c0, c1, c2, c3, c4, c5, depths, stresses)
+                stress = builtin_stress(law_velocity, -z, c0, c1, c2, c3, c4, c5, depths, stresses)
             stress = stress * contact if separation else max(stress, 0.0)
             if surface_depth > 0.0:
-                stress *= surface_fraction + (1.0 - surface_fraction) * _smooth_step(-z / surface_depth)
+                stress *= surface_fraction + (1.0 - surface_fraction) * smooth_step(-z / surface_depth)
             if not embedded:
                 if smooth_entry:
-                    stress *= _smooth_step(0.5 - z * inverse_entry[j])
+                    stress *= smooth_step(0.5 - z * inverse_entry[j])
                 else:
                     stress = stress if z < 0.0 else 0.0
             stress *= weights[j]
@@ -324,7 +279,7 @@ def _sums(
                 tau = mu * stress
                 if cap > 0.0:
                     tau = min(tau, cap * weights[j])
-                f = tau * _slip_factor(s0 * s0 + s1 * s1 + s2 * s2, width, speed2)
+                f = tau * slip_factor(s0 * s0 + s1 * s1 + s2 * s2, width, speed2)
                 friction[0] -= f * s0
                 friction[1] -= f * s1
                 friction[2] -= f * s2

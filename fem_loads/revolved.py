@@ -36,6 +36,10 @@ from numba import njit
 
 from mesh import Profile
 
+from .native import builtin_stress, call_user_law, slip_factor, smooth_step
+from .resistance import ResistanceLaw
+from .user_law import MAX_PARAMETERS, UserLaw
+
 __all__ = [
     "RevolvedSurface",
     "revolved_surface",
@@ -56,7 +60,15 @@ LAW_FIELDS = (
     "friction_coefficient",
     "friction_cap",
     "max_radius",
+    "linear",
+    "power",
+    "exponent",
+    "depth_gradient",
+    "contact_offset",
+    "user_law_address",
+    *(f"user_parameter_{k}" for k in range(MAX_PARAMETERS)),
 )
+_LINEAR, _POWER, _EXPONENT, _GRADIENT, _OFFSET, _ADDRESS, _USER = 8, 9, 10, 11, 12, 13, 14
 _RAMP_X, _RAMP_W = np.polynomial.legendre.leggauss(4)  # arcs of a ramp: the integrand is a smooth polynomial
 _FRICTION_X, _FRICTION_W = np.polynomial.legendre.leggauss(6)  # arcs with friction: its slip direction too
 OUTLINE_POINTS = 257  # samples of the profile where the lowest point is sought: 4 mm apart on a 1 m body
@@ -153,43 +165,86 @@ def revolved_surface(
 
 
 def law_data(
-    static_stress: float,
-    dynamic_density: float,
+    law: ResistanceLaw | UserLaw,
     contact_width: float,
     contact_incidence: float,
     entry_length: float,
     max_radius: float,
     friction_coefficient: float = 0.0,
     friction_cap: float | None = None,
+    contact: str = "one_sided",
 ) -> np.ndarray:
     """The law, its switches and friction as the kernel takes them (:data:`LAW_FIELDS`; SI units).
 
     ``contact_width`` ``w`` (m/s) and ``contact_incidence`` ``delta`` give the contact ramp's width
-    ``W = w + delta (|V| + |q| max_radius)``; ``entry_length`` ``l`` (m) the entry ramp's (0: sharp).
+    ``W = w + delta (|V| + |q| max_radius)``, ``contact`` where it lies (``"one_sided"``, ``"centred"``);
+    ``entry_length`` ``l`` (m) the entry ramp's (0: sharp).  A built-in law's strength table is not taken
+    (the caller refuses it); a user law enters by its cfunc's address (exact in a float below 2^53).
     """
-    return np.array(
-        [
-            static_stress,
-            dynamic_density,
-            contact_width,
-            contact_incidence,
-            entry_length,
-            friction_coefficient,
-            friction_cap or 0.0,
-            max_radius,
-        ],
-        dtype=float,
+    data = np.zeros(len(LAW_FIELDS))
+    data[2:8] = contact_width, contact_incidence, entry_length, friction_coefficient, friction_cap or 0.0, max_radius
+    data[_OFFSET] = 0.5 if contact == "centred" else 0.0
+    if isinstance(law, UserLaw):
+        address = law.compiled().address
+        if address >= 2**53:
+            raise ValueError("the user law's address does not fit the law array")
+        data[_ADDRESS] = float(address)
+        data[_USER : _USER + MAX_PARAMETERS] = law.parameter_values
+    else:
+        if law.strength_table:
+            raise ValueError("the ring model takes no strength table")
+        data[0], data[1] = law.static_stress, law.dynamic_density
+        data[_LINEAR], data[_POWER], data[_EXPONENT], data[_GRADIENT] = (
+            law.linear,
+            law.power,
+            law.exponent,
+            law.depth_gradient,
+        )
+    return data
+
+
+_NO_TABLE = np.zeros(0)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _law_stress(law: np.ndarray, normal_velocity: float, depth: float) -> float:
+    """The law at ``Vn >= 0`` (m/s) and depth (m): the built-in function, or the user's through its address."""
+    if law[_ADDRESS] != 0.0:
+        u = law[_USER : _USER + MAX_PARAMETERS]
+        return call_user_law(int(law[_ADDRESS]), normal_velocity, depth, u[0], u[1], u[2], u[3], u[4], u[5], u[6], u[7])
+    return builtin_stress(
+        normal_velocity,
+        depth,
+        law[0],
+        law[_GRADIENT],
+        law[_LINEAR],
+        law[1],
+        law[_POWER],
+        law[_EXPONENT],
+        _NO_TABLE,
+        _NO_TABLE,
     )
 
 
-@njit(cache=True, inline="always")
-def _smooth_step(t: float) -> float:
-    """The C2 quintic step of :mod:`fem_loads.ramps`, ``S(clip(t, 0, 1))``."""
-    if t <= 0.0:
+@njit(cache=True, inline="always", error_model="numpy")
+def _entering(height: float, entry: float) -> float:
+    """The entry factor at ``height`` (m above the surface): the smooth ramp over ``entry`` (m), or sharp."""
+    if entry > 0.0:
+        return smooth_step(0.5 - height / entry)
+    return 1.0 if height < 0.0 else 0.0
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _pressing_stress(law: np.ndarray, normal_velocity: float, depth: float, width: float) -> float:
+    """``f(max(Vn, 0), z) c(Vn)``: the law times the contact factor (the smooth ramp, one-sided or centred, or
+    the sharp switch at ``Vn = 0``)."""
+    if width > 0.0:
+        contact = smooth_step(normal_velocity / width + law[_OFFSET])
+    else:
+        contact = 1.0 if normal_velocity > 0.0 else 0.0
+    if contact == 0.0:
         return 0.0
-    if t >= 1.0:
-        return 1.0
-    return t * t * t * (10.0 + t * (6.0 * t - 15.0))
+    return _law_stress(law, max(normal_velocity, 0.0), depth) * contact
 
 
 @njit(cache=True, inline="always")
@@ -202,14 +257,22 @@ def _add_switch(switches: np.ndarray, count: int, value: float) -> int:
 
 @njit(cache=True, inline="always")
 def _switches(
-    switches: np.ndarray, a: float, b: float, h0: float, h1: float, width: float, entry: float, cap_speed: float
+    switches: np.ndarray,
+    a: float,
+    b: float,
+    h0: float,
+    h1: float,
+    start: float,
+    full: float,
+    entry: float,
+    cap_speed: float,
 ) -> int:
     """The values of ``c = cos phi`` where the law switches around one ring, with -1 and 1, sorted."""
     switches[0] = -1.0
     count = 1
     if b != 0.0:
-        count = _add_switch(switches, count, -a / b)  # separation, Vn = 0
-        count = _add_switch(switches, count, (width - a) / b)  # the contact ramp's end, Vn = W
+        count = _add_switch(switches, count, (start - a) / b)  # separation, the contact ramp's start
+        count = _add_switch(switches, count, (full - a) / b)  # the contact ramp's end
         if cap_speed < 1.0:
             count = _add_switch(switches, count, (cap_speed - a) / b)  # friction reaches its cap
     if h1 != 0.0:
@@ -244,16 +307,6 @@ def _closed_arc(low: float, high: float, a: float, b: float, static: float, dyna
 
 
 @njit(cache=True, inline="always")
-def _slip_factor(slip2: float, width: float, speed2: float) -> float:
-    """``k`` of :meth:`fem_loads.dafl.DAFLLoads._slip`: the friction stress along the slip is ``tau k s``."""
-    if width > 0.0:
-        return 1.0 / math.sqrt(slip2 + width * width)
-    if slip2 > 1e-24 * speed2:
-        return 1.0 / math.sqrt(slip2)
-    return 0.0
-
-
-@njit(cache=True, inline="always")
 def _gauss_arc(
     low: float,
     high: float,
@@ -274,7 +327,7 @@ def _gauss_arc(
     """Integrals over the arc ``low < cos phi < high`` by Gauss-Legendre panels of at most 45 degrees (6 points
     integrate cos^4 over one to 1e-9, where over a half ring they would err by 1e-4): ``sigma``,
     ``sigma cos phi``, and the friction stress's x and z components and its moment arm."""
-    static, dynamic, entry, mu, cap = law[0], law[1], law[4], law[5], law[6]
+    entry, mu, cap = law[4], law[5], law[6]
     j0 = j1 = jx = jz = jm = 0.0
     phi_low, phi_high = math.acos(high), math.acos(low)
     panels = int(math.ceil((phi_high - phi_low) / _PANEL))
@@ -284,14 +337,12 @@ def _gauss_arc(
         phi = phi_low + (2 * (g // nodes.shape[0]) + 1) * half + half * nodes[g % nodes.shape[0]]
         c = math.cos(phi)
         vn = a + b * c
-        if vn <= 0.0:
+        height = h0 + h1 * c
+        entering = _entering(height, entry)
+        if entering == 0.0:
             continue
-        sigma = static + dynamic * vn * vn
-        if width > 0.0:
-            sigma *= _smooth_step(vn / width)
-        if entry > 0.0:
-            sigma *= _smooth_step(0.5 - (h0 + h1 * c) / entry)
-        elif h0 + h1 * c >= 0.0:
+        sigma = _pressing_stress(law, vn, -height, width) * entering
+        if sigma == 0.0:
             continue
         weight = half * weights[g % nodes.shape[0]]
         j0 += sigma * weight
@@ -302,7 +353,7 @@ def _gauss_arc(
             sx = vx + q * rho * c - vn * n_axial
             sy = -vn * n_radial * math.sin(phi)
             sz = vz - q * x - vn * n_radial * c
-            k = _slip_factor(sx * sx + sy * sy + sz * sz, width, vx * vx + vz * vz)
+            k = slip_factor(sx * sx + sy * sy + sz * sz, width, vx * vx + vz * vz)
             jx += tau * k * sx * weight
             jz += tau * k * sz * weight
             jm += tau * k * (rho * c * sx - x * sz) * weight
@@ -315,21 +366,15 @@ def _uniform_ring(
 ) -> tuple[float, float]:
     """A ring loaded the same all round (``b = 0``, ``h1 = 0``: axial motion, the axis vertical): ``sigma`` over
     the half ring, and the friction's axial part (the slip along the meridian); no side load, exactly."""
-    static, dynamic, entry, mu, cap = law[0], law[1], law[4], law[5], law[6]
-    if a <= 0.0 or h0 >= 0.5 * entry:
-        return 0.0, 0.0
-    sigma = static + dynamic * a * a
-    if width > 0.0:
-        sigma *= _smooth_step(a / width)
-    if entry > 0.0:
-        sigma *= _smooth_step(0.5 - h0 / entry)
-    elif h0 >= 0.0:
+    entry, mu, cap = law[4], law[5], law[6]
+    sigma = _pressing_stress(law, a, -h0, width) * _entering(h0, entry)
+    if sigma == 0.0:
         return 0.0, 0.0
     jx = 0.0
     if mu > 0.0:
         tau = min(mu * sigma, cap) if cap > 0.0 else mu * sigma
         sx = vx - a * n_axial
-        jx = math.pi * tau * _slip_factor(sx * sx + (a * n_radial) ** 2, width, vx * vx) * sx
+        jx = math.pi * tau * slip_factor(sx * sx + (a * n_radial) ** 2, width, vx * vx) * sx
     return math.pi * sigma, jx
 
 
@@ -353,8 +398,12 @@ def pitch_plane_load(
     """
     static, dynamic, entry, mu, cap = law[0], law[1], law[4], law[5], law[6]
     width = law[2] + law[3] * (math.sqrt(vx * vx + vz * vz) + abs(q) * law[7])
+    # the contact ramp runs from Vn = start to Vn = full (0 and W one-sided, -W/2 and W/2 centred)
+    start, full = -law[_OFFSET] * width, (1.0 - law[_OFFSET]) * width
+    # the law exactly c0 + c2 Vn^2: the closed forms below are its integrals (else Gauss-Legendre throughout)
+    quadratic = law[_ADDRESS] == 0.0 and law[_LINEAR] == 0.0 and law[_POWER] == 0.0 and law[_GRADIENT] == 0.0
     cap_speed = 2.0  # a normal velocity beyond any: no cap
-    if mu > 0.0 and cap > mu * static and dynamic > 0.0:
+    if quadratic and mu > 0.0 and cap > mu * static and dynamic > 0.0:
         cap_speed = math.sqrt((cap / mu - static) / dynamic)
     fx = fz = my = 0.0
     switches = np.empty(8)
@@ -364,24 +413,24 @@ def pitch_plane_load(
         b = n_radial * vz + q * (rho * n_axial - x * n_radial)
         h0 = height - sin_theta * x
         h1 = cos_theta * rho
-        if h0 - abs(h1) >= 0.5 * entry or a + abs(b) <= 0.0:
+        if h0 - abs(h1) >= 0.5 * entry or a + abs(b) <= start:
             continue  # wholly out of the target, or wholly moving away from it
         j0 = j1 = jx = jz = jm = 0.0
-        if mu == 0.0 and a - abs(b) >= width and h0 + abs(h1) <= -0.5 * entry:
+        if quadratic and mu == 0.0 and a - abs(b) >= full and h0 + abs(h1) <= -0.5 * entry:
             # wholly pressing at the full law and wholly inside: I0 = pi, I1 = 0, I2 = pi/2, I3 = 0
             j0 = math.pi * (static + dynamic * (a * a + 0.5 * b * b))
             j1 = math.pi * dynamic * a * b
         elif b == 0.0 and h1 == 0.0 and (mu == 0.0 or q == 0.0):
             j0, jx = _uniform_ring(a, h0, vx, n_axial, n_radial, law, width)
         else:
-            count = _switches(switches, a, b, h0, h1, width, entry, cap_speed)
+            count = _switches(switches, a, b, h0, h1, start, full, entry, cap_speed)
             for m in range(count - 1):
                 low, high = switches[m], switches[m + 1]
                 middle = 0.5 * (low + high)
                 speed_middle, height_middle = a + b * middle, h0 + h1 * middle
-                if high <= low or speed_middle <= 0.0 or height_middle >= 0.5 * entry:
+                if high <= low or speed_middle <= start or height_middle >= 0.5 * entry:
                     continue  # the arc moves away from the target, or lies outside it
-                if mu == 0.0 and speed_middle >= width and height_middle <= -0.5 * entry:
+                if quadratic and mu == 0.0 and speed_middle >= full and height_middle <= -0.5 * entry:
                     d0, d1 = _closed_arc(low, high, a, b, static, dynamic)
                     j0 += d0
                     j1 += d1

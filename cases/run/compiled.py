@@ -52,6 +52,7 @@ COMPILED_SOURCES = (
     "dynamics.integrators",
     "fem_loads.compiled",
     "fem_loads.kernel_layout",
+    "fem_loads.native",
     "fem_loads.resistance",
     "fem_loads.ramps",
     "fem_loads.target",

@@ -80,8 +80,8 @@ class ReducedModel:
         announce_compiling("pitch_plane_step")
         use_numba_cache()
         from dynamics.pitch_plane import TABLEAU
-        from fem_loads import ResistanceLaw
         from fem_loads.revolved import law_data, revolved_surface
+        from fem_loads.target import LayeredTarget
 
         from ..run.pitch_plane_step import pitch_plane_trajectory
 
@@ -90,19 +90,19 @@ class ReducedModel:
         self.rtol = rtol
         self.surface = revolved_surface(prepared.profile, float(prepared.tip[0]), **(rings or RINGS))
         law, effects, numerics = scene.target.build(), scene.effects, scene.numerics
-        assert isinstance(law, ResistanceLaw)  # _check_supported refused layers
+        assert not isinstance(law, LayeredTarget)  # _check_supported refused layers
         friction = effects.friction.build()
         # the mesh's entry ramp: each point enters over entry_smoothing times the square root of its weight
         entry = numerics.entry_smoothing * math.sqrt(float(np.median(prepared.quadrature.weights)))
         self.law = law_data(
-            law.static_stress,
-            law.dynamic_density,
+            law,
             effects.contact_width,
             effects.contact_incidence,
             entry,
             self.surface.max_radius,
             friction.coefficient if friction else 0.0,
             friction.cap if friction else None,
+            effects.contact,
         )
         self.mass = float(prepared.mass.mass)
         self.inertia = float(prepared.mass.inertia[1, 1])
@@ -325,8 +325,14 @@ def _check_supported(scene: Scene) -> None:
         )
     from fem_loads.target import LayeredTarget
 
-    if isinstance(scene.target.build(), LayeredTarget):
+    law = scene.target.build()
+    if isinstance(law, LayeredTarget):
         raise InputError("target.layers: penetrate predict needs a homogeneous target (one law); drop the layers")
+    if getattr(law, "strength_table", None):
+        raise InputError(
+            "target.law.strength_table: penetrate predict takes strength that grows with depth as depth_gradient"
+            " only; drop the table (penetrate critical runs it)"
+        )
     if effects.free_surface is not None:
         raise InputError("effects.free_surface: penetrate predict has no free-surface reduction; drop it")
     if not effects.separation:

@@ -2,15 +2,18 @@
 
 import functools
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 from support import meshed, slow_except
 
+import cases
 from cases.studies.reference import embedded_axial_force
-from fem_loads import DAFLLoads, mass_properties, resistance_law, surface_quadrature
+from fem_loads import DAFLLoads, ResistanceLaw, mass_properties, resistance_law, surface_quadrature
 from fem_loads.revolved import PitchPlaneLoad, law_data, lowest_height, revolved_surface
 from fem_loads.target import Friction
+from fem_loads.user_law import user_law
 from mesh import BODY, BluntOgiveNose, ConeNose, OgiveNose, Profile, ProjectileGeometry, analytic_mass_properties
 
 SOIL = resistance_law("soil")
@@ -25,29 +28,39 @@ def rotation(theta: float) -> np.ndarray:
 
 
 @functools.cache
-def _mesh_case(friction: Friction | None):
-    """The paper's body at 10 mm (the mesh test_dafl and test_effects use), its DAFL and the tip's place."""
+def _quadrature():
+    """The paper's body at 10 mm (the mesh test_dafl and test_effects use), its quadrature and the tip's place."""
     mesh = meshed(ProjectileGeometry(PAPER), 0.01, 2)
     centre = mass_properties(mesh, {BODY: 1.0}).centre
-    quadrature = surface_quadrature(mesh, centre, PAPER, "exact")
+    return surface_quadrature(mesh, centre, PAPER, "exact"), -float(centre[0])
+
+
+@functools.cache
+def _mesh_case(friction: Friction | None, law=SOIL, contact: str = "one_sided"):
+    """The DAFL of the paper's body at 10 mm with ``law`` and ``friction``, and the tip's place."""
+    quadrature, tip = _quadrature()
     entry_smoothing = ENTRY / math.sqrt(float(np.median(quadrature.weights)))
-    loads = DAFLLoads(quadrature, SOIL, friction=friction, contact_incidence=DELTA, entry_smoothing=entry_smoothing)
-    return loads, -float(centre[0])
+    loads = DAFLLoads(
+        quadrature, law, friction=friction, contact_incidence=DELTA, contact=contact, entry_smoothing=entry_smoothing
+    )
+    return loads, tip
 
 
-def _rings(friction: Friction | None, tip: float, entry: float = ENTRY, **counts) -> PitchPlaneLoad:
+def _rings(
+    friction: Friction | None, tip: float, entry: float = ENTRY, law=SOIL, contact: str = "one_sided", **counts
+) -> PitchPlaneLoad:
     surface = revolved_surface(PAPER, tip, **counts)
-    law = law_data(
-        SOIL.static_stress,
-        SOIL.dynamic_density,
+    data = law_data(
+        law,
         0.0,
         DELTA,
         entry,
         surface.max_radius,
         friction.coefficient if friction else 0.0,
         friction.cap if friction else None,
+        contact,
     )
-    return PitchPlaneLoad(surface, law)
+    return PitchPlaneLoad(surface, data)
 
 
 # height of the centre (m), axis tilt from straight down (deg), speed (m/s), attack (deg), pitch rate (rad/s)
@@ -70,7 +83,30 @@ def test_the_ring_load_is_the_mesh_load(state, friction):
     length in the moment (measured at most 0.1 %).  Wholly embedded with the reduced model's 24 rings;
     partly embedded with 96 on the nose and 48 on the shank, since the waterline cuts the rings'
     integrand along the axis (24 rings err there by up to 6 % in the side force, docs/theory.md)."""
-    loads, tip = _mesh_case(FRICTIONS[friction])
+    _compare_with_mesh(state, FRICTIONS[friction])
+
+
+LAWS = {
+    "polynomial": ResistanceLaw(3e6, 900.0, linear=2.5e4),
+    "power": ResistanceLaw(4e6, 0.0, power=5e3, exponent=1.6),
+    "depth gradient": ResistanceLaw(1e7, 2e3, depth_gradient=3e6),
+    "user law": user_law(
+        f"{Path(cases.__file__).parent}/laws/soil_laws.py:overburden",
+        {"c0": 1e7, "c2": 2e3, "unit_weight": 1.8e4, "lateral_ratio": 0.5},
+    ),
+}
+
+
+@pytest.mark.parametrize("contact", ["one_sided", "centred"])
+@pytest.mark.parametrize("law", list(LAWS))
+@pytest.mark.parametrize("state", ["embedded, turning", "nose entering, tilted"])
+def test_the_ring_load_is_the_mesh_load_for_every_law_and_contact(state, law, contact):
+    """Every law family and a user's law, either contact ramp: the same agreement as the shipped law's."""
+    _compare_with_mesh(state, Friction(0.1), LAWS[law], contact)
+
+
+def _compare_with_mesh(state: str, friction: Friction | None, law=SOIL, contact: str = "one_sided") -> None:
+    loads, tip = _mesh_case(friction, law, contact)
     counts = {} if STATES[state][0] < -1.0 else {"nose_rings": 96, "shank_rings": 48}
     height, tilt, speed, attack, q = STATES[state]
     theta = math.radians(90.0 - tilt)  # 90 deg: the axis straight down
@@ -78,7 +114,7 @@ def test_the_ring_load_is_the_mesh_load(state, friction):
     world = rotation(theta)
     force, moment = loads(np.array([0.0, 0.0, height]), world @ velocity_body, world, np.array([0.0, q, 0.0]))
     force = world.T @ force
-    rings = _rings(FRICTIONS[friction], tip, **counts)(height, theta, velocity_body[[0, 2]], q)
+    rings = _rings(friction, tip, law=law, contact=contact, **counts)(height, theta, velocity_body[[0, 2]], q)
     size = float(np.hypot(force[0], force[2]))
     assert size > 1e4
     assert abs(rings[0] - force[0]) < 3e-3 * size
@@ -94,9 +130,7 @@ def test_closed_form_arcs_are_the_integrals():
     surface = revolved_surface(PAPER, 0.5, nose_rings=16, shank_rings=8)
 
     def load(mu):
-        return PitchPlaneLoad(
-            surface, law_data(SOIL.static_stress, SOIL.dynamic_density, 0.0, 0.0, 0.0, surface.max_radius, mu)
-        )
+        return PitchPlaneLoad(surface, law_data(SOIL, 0.0, 0.0, 0.0, surface.max_radius, mu))
 
     exact, gauss = load(0.0), load(1e-300)
     rng = np.random.default_rng(7)
@@ -121,7 +155,7 @@ def test_rings_carry_the_exact_area_and_volume(nose):
 def test_axial_force_is_the_closed_form(speed):
     """Axial motion, wholly embedded, sharp switches: ``pi a^2 (A sigma_0 + N B rho_0 V^2)`` (the nose factor)."""
     surface = revolved_surface(PAPER, 0.5)
-    law = law_data(SOIL.static_stress, SOIL.dynamic_density, 0.0, 0.0, 0.0, surface.max_radius)
+    law = law_data(SOIL, 0.0, 0.0, 0.0, surface.max_radius)
     fx, fz, my = PitchPlaneLoad(surface, law)(-5.0, math.pi / 2, (speed, 0.0), 0.0)
     assert -fx == pytest.approx(embedded_axial_force(PAPER, SOIL, speed), rel=1e-9)
     assert fz == 0.0 and my == 0.0

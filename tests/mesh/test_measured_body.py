@@ -129,7 +129,7 @@ def test_a_flare_presses_in_axial_motion(speed):
     force, _ = loads(np.array([0.0, 0.0, -10.0]), np.array([0.0, 0.0, -speed]), DOWN, np.zeros(3))
     assert force[2] == pytest.approx(exact, rel=5e-3)
     surface = revolved_surface(FLARE, -float(centre[0]), nose_rings=24, shank_rings=24)
-    rings = PitchPlaneLoad(surface, law_data(SOIL.static_stress, SOIL.dynamic_density, 0, 0, 0, surface.max_radius))
+    rings = PitchPlaneLoad(surface, law_data(SOIL, 0, 0, 0, surface.max_radius))
     assert -rings(-10.0, math.pi / 2, (speed, 0.0), 0.0)[0] == pytest.approx(exact, rel=1e-6)
     with pytest.raises(ValueError, match="flare"):
         check_nose_alone_presses(FLARE)

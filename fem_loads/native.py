@@ -1,0 +1,68 @@
+"""The compiled forms of the scalar definitions the numpy path shares, and the call into a user's law.
+
+Each of :data:`smooth_step`, :data:`slip_factor`, :data:`builtin_stress` and :data:`polynomial_stress` is
+numba's compilation of the one definition the numpy path evaluates on arrays
+(:func:`fem_loads.ramps.smooth_step_scalars`, :func:`fem_loads.target.slip_factor_scalars`,
+:func:`fem_loads.resistance.normal_stress_scalars` and its polynomial part), for the compiled kernels
+(:mod:`fem_loads.compiled`, :mod:`fem_loads.revolved`) to inline.
+
+:func:`call_user_law` calls a user's law, a C call through the address of its numba ``cfunc``
+(:meth:`fem_loads.user_law.UserLaw.compiled`).  The kernels take the address as data, so they are compiled
+and cached once for every law; a function object passed instead would be typed anew on every call from
+Python (100-200 us) and compiled anew in every process.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from llvmlite import ir
+from numba import njit, types
+from numba.extending import intrinsic, register_jitable
+
+from .ramps import smooth_step_scalars
+from .resistance import normal_stress_scalars, polynomial_stress_scalars
+from .target import slip_factor_scalars
+from .user_law import MAX_PARAMETERS
+
+__all__ = ["call_user_law", "smooth_step", "slip_factor", "builtin_stress", "polynomial_stress"]
+
+smooth_step = njit(inline="always", error_model="numpy")(smooth_step_scalars)
+slip_factor = njit(inline="always", error_model="numpy")(slip_factor_scalars)
+polynomial_stress = njit(inline="always", error_model="numpy")(polynomial_stress_scalars)
+# the polynomial part as numba sees it inside normal_stress_scalars (the plain function stays plain; not
+# inlined at numba's level, whose renaming of its augmented assignments trips a pedantic SSA check)
+register_jitable(error_model="numpy")(polynomial_stress_scalars)
+builtin_stress = njit(inline="always", error_model="numpy")(normal_stress_scalars)
+
+
+@intrinsic
+def _call_user_law_intrinsic(
+    typingctx: Any,
+    address: Any,
+    normal_velocity: Any,
+    depth: Any,
+    p0: Any,
+    p1: Any,
+    p2: Any,
+    p3: Any,
+    p4: Any,
+    p5: Any,
+    p6: Any,
+    p7: Any,
+) -> Any:
+    """Call the cfunc at ``address`` (an int64) with ``(Vn, z, p0 .. p7)``: a C call through a pointer, so the
+    kernel and the step are compiled once for every user law and take the law as data."""
+    signature = types.float64(types.int64, *([types.float64] * (2 + MAX_PARAMETERS)))
+
+    def codegen(context: Any, builder: Any, signature: Any, arguments: Any) -> Any:
+        function_type = ir.FunctionType(ir.DoubleType(), [ir.DoubleType()] * (2 + MAX_PARAMETERS))
+        pointer = builder.inttoptr(arguments[0], function_type.as_pointer())
+        return builder.call(pointer, arguments[1:])
+
+    return signature, codegen
+
+
+#: the intrinsic as the kernels call it, (address, Vn, z, p0 .. p7) -> sigma (numba passes the typing context)
+call_user_law: Callable[..., float] = _call_user_law_intrinsic
