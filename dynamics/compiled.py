@@ -31,7 +31,7 @@ from numba import njit
 
 from .integrators import Evaluation, RungeKutta, StepResult, path_increment_scalars
 from .quaternion import dexp_inverse_scalars, exp_scalars, hamilton_scalars, rotation_scalars
-from .rigid_body import RigidBody, State
+from .rigid_body import RigidBody, State, euler_scalars
 
 __all__ = ["CompiledLoad", "CompiledRungeKutta", "rk_step"]
 
@@ -178,6 +178,7 @@ _hamilton_scalars = njit(inline="always", error_model="numpy")(hamilton_scalars)
 _rotation_scalars = njit(inline="always", error_model="numpy")(rotation_scalars)
 _dexp_inverse_scalars = njit(inline="always", error_model="numpy")(dexp_inverse_scalars)
 _path_increment_scalars = njit(inline="always", error_model="numpy")(path_increment_scalars)
+_euler_scalars = njit(inline="always", error_model="numpy")(euler_scalars)
 
 
 @njit(inline="always", error_model="numpy")
@@ -222,20 +223,17 @@ def _evaluate(
     """One load evaluation and Newton-Euler; ``out[at:at + 12]`` = (a, alpha, F, M)."""
     _rotation(q, rotation)
     load(data, x, v, rotation, w, loads)
-    for i in range(3):
-        force = loads[i] + constant_force[i]
-        out[at + 6 + i] = force
-        out[at + 9 + i] = loads[3 + i]
-        out[at + i] = force / mass
-    w0, w1, w2 = w[0], w[1], w[2]
-    h0 = inertia[0, 0] * w0 + inertia[0, 1] * w1 + inertia[0, 2] * w2
-    h1 = inertia[1, 0] * w0 + inertia[1, 1] * w1 + inertia[1, 2] * w2
-    h2 = inertia[2, 0] * w0 + inertia[2, 1] * w1 + inertia[2, 2] * w2
-    r0 = loads[3] - (w1 * h2 - w2 * h1)
-    r1 = loads[4] - (w2 * h0 - w0 * h2)
-    r2 = loads[5] - (w0 * h1 - w1 * h0)
-    for i in range(3):
-        out[at + 3 + i] = inverse[i, 0] * r0 + inverse[i, 1] * r1 + inverse[i, 2] * r2
+    for c in range(3):
+        force = loads[c] + constant_force[c]
+        out[at + 6 + c] = force
+        out[at + 9 + c] = loads[3 + c]
+        out[at + c] = force / mass
+    i, j = inertia, inverse
+    out[at + 3], out[at + 4], out[at + 5] = _euler_scalars(
+        loads[3], loads[4], loads[5], w[0], w[1], w[2],
+        i[0, 0], i[0, 1], i[0, 2], i[1, 0], i[1, 1], i[1, 2], i[2, 0], i[2, 1], i[2, 2],
+        j[0, 0], j[0, 1], j[0, 2], j[1, 0], j[1, 1], j[1, 2], j[2, 0], j[2, 1], j[2, 2],
+    )  # fmt: skip
 
 
 @njit(inline="always", error_model="numpy")

@@ -38,6 +38,7 @@ import numpy as np
 from numba import njit
 
 from .integrators import DormandPrince54
+from .rigid_body import euler_scalars
 
 __all__ = [
     "trajectory",
@@ -75,6 +76,9 @@ PlaneLoad = Callable[[tuple[np.ndarray, ...], float, float, float, float, float,
 LowestPoint = Callable[[tuple[np.ndarray, ...], float, float, float], float]
 
 
+_euler_scalars = njit(inline="always", error_model="numpy")(euler_scalars)
+
+
 @njit(cache=True, inline="always")
 def _derivative(
     load: PlaneLoad,
@@ -96,7 +100,9 @@ def _derivative(
     out[2] = -y[5]
     out[3] = (cos_t * loads[0] + sin_t * loads[1]) / mass
     out[4] = (-sin_t * loads[0] + cos_t * loads[1]) / mass - gravity
-    out[5] = loads[2] / inertia
+    # Euler's equation about the pitch axis: the spin vector lies on it, so omega x (I omega) vanishes
+    out[5] = _euler_scalars(0.0, loads[2], 0.0, 0.0, y[5], 0.0, 1.0, 0.0, 0.0, 0.0, inertia, 0.0, 0.0, 0.0, 1.0,
+                            1.0, 0.0, 0.0, 0.0, 1.0 / inertia, 0.0, 0.0, 0.0, 1.0)[1]  # fmt: skip
 
 
 @njit(cache=True, inline="always")

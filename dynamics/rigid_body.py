@@ -10,7 +10,46 @@ import numpy as np
 
 from .quaternion import rotation_matrix
 
-__all__ = ["RigidBody", "State", "LoadFunction"]
+__all__ = ["RigidBody", "State", "LoadFunction", "euler_scalars"]
+
+
+def euler_scalars(
+    m0: float,
+    m1: float,
+    m2: float,
+    w0: float,
+    w1: float,
+    w2: float,
+    i00: float,
+    i01: float,
+    i02: float,
+    i10: float,
+    i11: float,
+    i12: float,
+    i20: float,
+    i21: float,
+    i22: float,
+    j00: float,
+    j01: float,
+    j02: float,
+    j10: float,
+    j11: float,
+    j12: float,
+    j20: float,
+    j21: float,
+    j22: float,
+) -> tuple[float, float, float]:
+    """Euler's equations on the components: the angular acceleration ``I^-1 (M - omega x (I omega))`` (body
+    frame, rad/s^2) for the moment ``M`` (N m), the angular velocity ``omega`` (rad/s), the inertia ``I``
+    (``i``, kg m^2, by rows) and its inverse (``j``).  The one definition: the Python step, the compiled step
+    (:mod:`dynamics.compiled`) and the pitch-plane model (:mod:`dynamics.pitch_plane`) use it."""
+    h0 = i00 * w0 + i01 * w1 + i02 * w2  # I omega
+    h1 = i10 * w0 + i11 * w1 + i12 * w2
+    h2 = i20 * w0 + i21 * w1 + i22 * w2
+    r0 = m0 - (w1 * h2 - w2 * h1)  # M - omega x (I omega)
+    r1 = m1 - (w2 * h0 - w0 * h2)
+    r2 = m2 - (w0 * h1 - w1 * h0)
+    return j00 * r0 + j01 * r1 + j02 * r2, j10 * r0 + j11 * r1 + j12 * r2, j20 * r0 + j21 * r1 + j22 * r2
 
 
 class LoadFunction(Protocol):
@@ -45,7 +84,8 @@ class RigidBody:
     # derived in __post_init__: the inverse, and both matrices' rows as Python floats
     _inertia_inverse: np.ndarray = field(init=False, repr=False, compare=False)
     _inertia_rows: tuple[tuple[float, ...], ...] = field(init=False, repr=False, compare=False)
-    _inverse_rows: tuple[tuple[float, ...], ...] = field(init=False, repr=False, compare=False)
+    _inertia_flat: tuple[float, ...] = field(init=False, repr=False, compare=False)
+    _inverse_flat: tuple[float, ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         inertia = np.asarray(self.inertia, dtype=float)
@@ -60,18 +100,15 @@ class RigidBody:
         # the same matrices as Python floats: called several times per step on 3-vectors, where
         # numpy's per-call overhead (~1 us) is most of the cost
         object.__setattr__(self, "_inertia_rows", tuple(tuple(row) for row in inertia.tolist()))
-        object.__setattr__(self, "_inverse_rows", tuple(tuple(row) for row in self._inertia_inverse.tolist()))
+        object.__setattr__(self, "_inertia_flat", tuple(inertia.ravel().tolist()))
+        object.__setattr__(self, "_inverse_flat", tuple(self._inertia_inverse.ravel().tolist()))
 
     def accelerations(
         self, force: np.ndarray, moment: np.ndarray, angular_velocity: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
         """Linear acceleration (world) and angular acceleration (body) from Newton-Euler."""
-        w0, w1, w2 = angular_velocity.tolist()
-        h0, h1, h2 = (a * w0 + b * w1 + c * w2 for a, b, c in self._inertia_rows)  # I omega
-        m0, m1, m2 = moment.tolist()
-        # M - omega x (I omega)
-        r0, r1, r2 = m0 - (w1 * h2 - w2 * h1), m1 - (w2 * h0 - w0 * h2), m2 - (w0 * h1 - w1 * h0)
-        return force / self.mass, np.array([a * r0 + b * r1 + c * r2 for a, b, c in self._inverse_rows])
+        alpha = euler_scalars(*moment.tolist(), *angular_velocity.tolist(), *self._inertia_flat, *self._inverse_flat)
+        return force / self.mass, np.array(alpha)
 
     def kinetic_energy(self, state: State) -> float:
         """Translational plus rotational kinetic energy (J)."""
