@@ -102,11 +102,18 @@ def _read_function(path: Path, name: str, digest: str) -> Callable[..., Any]:
         try:
             spec.loader.exec_module(module)
         except Exception as exc:  # the user's file: any error in it is theirs to fix
-            raise LawError(f"function = '{path}:{name}': the file does not run: {type(exc).__name__}: {exc}") from None
+            first = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+            raise LawError(
+                f"function = '{path}:{name}': the file does not run ({type(exc).__name__}: {first}); it must"
+                " import without error"
+            ) from None
         sys.modules[module_name] = module  # numba finds a function's globals through its module
         function = getattr(module, name, None)
         if not callable(function) or not inspect.isfunction(function):
-            raise LawError(f"function = '{path}:{name}': the file defines no function {name!r}")
+            raise LawError(
+                f"function = '{path}:{name}': the file defines no function {name!r} (give the name of a function"
+                " defined in it)"
+            )
         _READ[key] = function
     return _READ[key]
 
@@ -123,7 +130,10 @@ def user_law(source: str, parameters: Mapping[str, float], folder: Path | None =
     try:
         digest = hashlib.sha256(path.read_bytes()).hexdigest()
     except OSError as exc:
-        raise LawError(f"function = {source!r}: cannot read {path} ({exc.strerror or exc})") from None
+        raise LawError(
+            f"function = {source!r}: cannot read {path} ({exc.strerror or exc}); give a readable .py file, absolute"
+            " or relative to the scene file's folder"
+        ) from None
     shown = f"{path}:{name}"
     function = _read_function(path.resolve(), name, digest)
     ordered = _parameters(function, shown, parameters)
@@ -170,8 +180,8 @@ def _probe(law: UserLaw, shown: str) -> None:
         except Exception as exc:
             first = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
             raise LawError(
-                f"function = '{shown}': fails on arrays of Vn and depth ({type(exc).__name__}: {first}); write it"
-                " with numpy's functions (np.maximum, np.where), which take floats and arrays alike"
+                f"function = '{shown}': fails on arrays of Vn and depth ({type(exc).__name__}: {first}); it must"
+                " take arrays: write it with numpy's functions (np.maximum, np.where), which take floats too"
             ) from None
     bad = ~(np.isfinite(plain) & (plain >= 0.0))
     if bad.any():
@@ -184,14 +194,18 @@ def _probe(law: UserLaw, shown: str) -> None:
         compiled = law.compiled()
     except Exception as exc:
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise LawError(f"function = '{shown}': numba cannot compile it: {first}") from None
+        raise LawError(
+            f"function = '{shown}': numba cannot compile it ({first}); it must use arithmetic and numpy's functions"
+            " on floats only"
+        ) from None
     values = law.parameter_values
     for i, j in np.ndindex(speeds.shape):
         fast = compiled(speeds[i, j], depths[i, j], *values)
         if not abs(fast - plain[i, j]) <= 1e-9 * max(abs(plain[i, j]), 1.0):
             raise LawError(
                 f"function = '{shown}': compiled, it gives {fast:g} Pa at Vn = {speeds[i, j]:g} m/s, depth"
-                f" {depths[i, j]:g} m, and {plain[i, j]:g} Pa on arrays (use numpy's functions, not Python's)"
+                f" {depths[i, j]:g} m, and {plain[i, j]:g} Pa on arrays (it must give the same numbers: use numpy's"
+                " functions, not Python's)"
             )
 
 

@@ -84,7 +84,7 @@ BAD_LAWS = {
     "no function named": ("laws.py", {}, "give 'path/to/file.py:name'"),
     "missing file": ("nowhere.py:f", {}, "cannot read"),
     "not defined": ("{file}:absent", {}, "defines no function 'absent'"),
-    "file raises": ("{broken}:f", {}, "the file does not run: ZeroDivisionError"),
+    "file raises": ("{broken}:f", {}, "the file does not run (ZeroDivisionError"),
     "one argument": ("{file}:one_argument", {}, "must be def one_argument(normal_velocity, depth"),
     "keyword arguments": ("{file}:keywords", {"c0": 1.0}, "plain arguments only"),
     "unknown parameter": ("{file}:constant", {"c0": 1.0, "c9": 2.0}, "c9 unknown to"),

@@ -27,6 +27,7 @@ from pathlib import Path
 from unittest import mock
 
 import annotated_types
+import numpy as np
 import pandas as pd
 import pytest
 from hypothesis import HealthCheck, example, given, settings
@@ -1187,3 +1188,70 @@ def test_real_command_bad_input(cli_files, args, expected):
     assert expected in done.stderr and "Traceback" not in done.stderr
     assert len(done.stderr.strip().splitlines()) == 1 and done.stdout == ""
     assert _listing(work) == before
+
+
+# ---------------------------------------------------------------------------
+# a user's own resistance law: any file, any function, any parameters
+
+LAW_BODIES = (
+    "c0 + c2 * normal_velocity**2",  # a usable law
+    "c0 + 0.0 * depth",  # usable, depth-dependent in form
+    "c0 - normal_velocity",  # negative on the probe
+    "1.0 / normal_velocity",  # infinite at Vn = 0
+    "np.sqrt(normal_velocity - 1.0)",  # NaN below 1 m/s
+    "max(normal_velocity, c0)",  # Python's max: fails on arrays
+    "str(c0)",  # not a number
+    "undefined_name",  # NameError
+    "[c0, c2]",  # a list
+    "None",
+    "c0 * np.exp(normal_velocity)",  # overflows to inf
+    "np.asarray(float(str(c0))) + 0.0 * normal_velocity",  # runs on arrays, numba cannot compile it
+)
+ARGUMENT_LISTS = ("normal_velocity, depth, c0, c2", "normal_velocity, depth, c0", "normal_velocity", "v, z, *, c0")
+PARAMETER_VALUES = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True), st.integers(-10, 10**9), st.booleans(), st.text(max_size=5)
+)
+
+
+ANY_LAW = st.tuples(
+    st.sampled_from(LAW_BODIES),
+    st.sampled_from(ARGUMENT_LISTS),
+    st.sampled_from(["law", "missing", "np"]),
+    st.dictionaries(st.sampled_from(["c0", "c2", "k", "zz"]), PARAMETER_VALUES, max_size=3),
+    st.sampled_from(["", "import numpy as np\n", "1 / 0\n", "def (\n"]),
+)
+USABLE_LAW = st.tuples(
+    st.sampled_from(LAW_BODIES[:2]),
+    st.just(ARGUMENT_LISTS[0]),
+    st.just("law"),
+    st.fixed_dictionaries({"c0": st.floats(0, 1e8), "c2": st.floats(0, 1e4)}),
+    st.just(""),
+)
+
+
+@fuzz(60)
+@given(case=st.one_of(ANY_LAW, USABLE_LAW))
+def test_a_user_law_is_used_or_refused_in_one_line(tmp_path_factory, case):
+    """A law file with any of these bodies, arguments and parameters: the scene is valid and its law gives finite
+    stresses >= 0 on both paths, or it is refused in one line naming target.law."""
+    body, arguments, name, parameters, prefix = case
+    folder = tmp_path_factory.mktemp("law")
+    (folder / "my_law.py").write_text(f"{prefix}import numpy as np\n\ndef law({arguments}):\n    return {body}\n")
+    law = {"function": f"{folder / 'my_law.py'}:{name}", "parameters": parameters}
+
+    try:
+        with np.errstate(all="ignore"):
+            scene = load_scene(GOOD, [("target.law", law)])
+    except SceneError as exc:
+        check_error(str(exc), GOOD)
+        assert "target.law" in str(exc), str(exc)
+        OUTCOMES["user laws"]["refused"] += 1
+        return
+    check_scene(scene)
+    OUTCOMES["user laws"]["valid"] += 1
+    built = scene.target.build()  # a usable law: finite stresses >= 0, the same on both paths
+    speeds, depths = np.array([0.0, 10.0, 500.0, 2500.0]), np.array([0.0, 1.0, 30.0, 0.5])
+    plain = built.normal_stress(speeds, depths)
+    compiled = [built.compiled()(v, z, *built.parameter_values) for v, z in zip(speeds, depths)]
+    np.testing.assert_allclose(compiled, plain, rtol=1e-12)
+    assert np.all(np.isfinite(plain)) and np.all(plain >= 0.0)

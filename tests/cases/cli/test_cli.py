@@ -51,6 +51,15 @@ def test_run_human_summary():
         (["--set", "impact.attack_angle=95"], "impact.attack_angle = 95: must be <= 90"),
         (["--set", "impact.speed"], "--set 'impact.speed': expected KEY=VALUE"),
         (["--set", "numerics.bogus=1"], "numerics.bogus: unknown key"),
+        (["--set", "target.law={function='nowhere.py:law'}"], "target.law: function = 'nowhere.py:law': cannot read"),
+        (
+            [
+                "--set",
+                f"target.law={{function='{scene_path('paper_p3').parent}/laws/soil_laws.py:overburden', parameters={{c0=1}}}}",
+            ],
+            "needs c2, unit_weight, lateral_ratio",
+        ),
+        (["--set", "target.law={model='power', c0=1e6, c=1e4, n=0}"], "target.law.n = 0: must be > 0"),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(args, message, tmp_path):
@@ -58,6 +67,7 @@ def test_bad_input_is_one_line_and_exit_2(args, message, tmp_path):
     assert done.returncode == 2
     assert message in done.stderr and "Traceback" not in done.stderr
     assert len(done.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists()  # nothing written
     assert not (tmp_path / "o").exists()
 
 
