@@ -16,6 +16,7 @@ from cases.cli import main
 from cases.run import HISTORY_UNITS
 
 FAST = ["--set", "numerics.mesh_size=0.03"]
+LAWS = scene_path("paper_p3").parent / "laws" / "soil_laws.py"
 REQUIRED = {"depth", "path_length", "end_reason", "final_speed", "max_attack_angle", "axis_angle_change", "wall_time"}
 
 
@@ -55,7 +56,7 @@ def test_run_human_summary():
         (
             [
                 "--set",
-                f"target.law={{function='{scene_path('paper_p3').parent}/laws/soil_laws.py:overburden', parameters={{c0=1}}}}",
+                f"target.law={{function='{LAWS}:overburden', parameters={{c0=1}}}}",
             ],
             "needs c2, unit_weight, lateral_ratio",
         ),
