@@ -19,6 +19,7 @@ from .options import (
     positive_float,
     study,
 )
+from .speeds import speed_range
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -57,9 +58,27 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
         "compare.md, compare.csv and compare.png",
     )
     compare.late_help(
-        compare.add_argument("--laws", required=True, metavar="A,B,...", help="comma-separated law names"),
-        lambda: f"comma-separated law names, of {law_names()} (docs/effects.md)",
+        compare.add_argument("--laws", default="", metavar="A,B,...", help="comma-separated law names"),
+        lambda: f"comma-separated law names, of {law_names()} (docs/laws.md)",
     )
+    compare.add_argument(
+        "--law",
+        action="append",
+        default=[],
+        metavar="LABEL=LAW",
+        help="a law as target.law takes it, labelled, e.g. 'poly={model=\"polynomial\", c0=1.2e7, c1=3e4, c2=1500}'"
+        " or a user's function 'mine={function=\"laws.py:f\", parameters={c0=1e7}}' (repeatable; docs/laws.md)",
+    )
+    compare.add_argument(
+        "--speeds", metavar="V1,V2,...", help="also measure each law's depth at these impact speeds (m/s)"
+    )
+    compare.add_argument(
+        "--critical", type=speed_range, metavar="LOW:HIGH", help="also seek each law's critical speed in this range"
+    )
+    compare.add_argument(
+        "--resolution", type=positive_float, default=5.0, help="of --critical (m/s, default %(default)s)"
+    )
+    compare.add_argument("--convergent", action="store_true", help="also measure each law's convergent speed")
     compare.set_defaults(handler=compare_laws)
 
     accuracy = _study_parser(
@@ -155,21 +174,36 @@ def incidences_help() -> str:
 
 
 def compare_laws(args: argparse.Namespace) -> int:
-    from fem_loads.resistance import UnknownLawError
-
     from ..run import RunStore
+    from ..scene import parse_override
     from ..studies.compare import compare_laws as compare
 
-    laws = [name.strip() for name in args.laws.split(",") if name.strip()]
+    laws: list[tuple[str, object]] = [(name.strip(), name.strip()) for name in args.laws.split(",") if name.strip()]
+    for text in args.law:
+        label, separator, value = text.partition("=")
+        if not separator or not label.strip():
+            raise InputError(f"--law {text!r}: expected LABEL=LAW, e.g. 'poly={{model=\"polynomial\", c0=1e7}}'")
+        laws.append((label.strip(), parse_override(f"target.law={value}")[1]))
     if not laws:
-        raise InputError("--laws: give one or more law names, e.g. soil,softer_soil")
-    try:
-        with study(args) as pool:
-            table = compare(args.scene, overrides(args), laws, RunStore(args.store), args.out, pool)
-    except UnknownLawError as exc:
-        raise InputError(f"--laws: {exc}") from None
+        raise InputError("--laws, --law: give one or more laws, e.g. --laws soil,softer_soil")
+    if len({label for label, _ in laws}) < len(laws):
+        raise InputError("--laws, --law: each law needs a label of its own (allowed: distinct names)")
+    speeds = _numbers("--speeds", args.speeds) if args.speeds else None
+    with study(args) as pool:
+        comparison = compare(
+            args.scene,
+            overrides(args),
+            laws,
+            RunStore(args.store),
+            args.out,
+            pool,
+            speeds=speeds,
+            critical=args.critical,
+            resolution=args.resolution,
+            convergent=args.convergent,
+        )
     if args.json:
-        print(table.to_json(orient="records"))
+        print(comparison.table.to_json(orient="records"))
         return 0
     out = Path(args.out)
     print((out / "compare.md").read_text())

@@ -1,77 +1,173 @@
-"""Run one scene under several resistance laws, side by side: ``penetrate compare``."""
+"""Run one scene under several resistance laws, side by side: ``penetrate compare``.
+
+Any law a scene takes can be compared: a name, a family's coefficients or a user's function.  For each law the
+report gives the scene's run (depth, path, turn, end), optionally the depth against the impact speed, the
+critical and the convergent speeds, and the normal stress on the body at one instant: the scene's start
+moved one body length into the target, so every law is seen on the same state.
+"""
 
 from __future__ import annotations
 
+import math
 import os
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
+import numpy as np
 import pandas as pd
 
-from fem_loads.resistance import resistance_law
-
-from ..run import RunStore, atomic_write_text
-from ..scene import Overrides
+from ..run import RunStore, atomic_write_text, initial_state, prepare_projectile
+from ..scene import Overrides, Scene
 from ..viz.figures import legend_outside, save_figure, subplots
 from .pool import Pool
+from .speeds import find_critical_velocities, measure_convergent_velocity
 from .sweep import Sweep, SweepResult, Variation, run_sweep
 
-__all__ = ["compare_laws", "COLUMNS"]
+__all__ = ["compare_laws", "LawComparison", "COLUMNS"]
 
 COLUMNS = ("end_reason", "depth", "path_length", "final_time", "max_attack_angle", "axis_angle_change")
-UNITS = "Units: Pa, kg/m^3, m, m, s, deg, deg."
+UNITS = "Units: m, m, s, deg, deg; speeds m/s; stress MPa."
+
+
+@dataclass
+class LawComparison:
+    """What :func:`compare_laws` measured: the table (one row per law) and what the figure draws."""
+
+    table: pd.DataFrame
+    runs: SweepResult
+    depth_by_speed: pd.DataFrame | None
+    nose_stress: dict[str, tuple[np.ndarray, np.ndarray]]
 
 
 def compare_laws(
     scene: str | os.PathLike,
     overrides: Overrides | None,
-    laws: list[str],
+    laws: Sequence[tuple[str, Any]],
     store: RunStore,
     out: str | os.PathLike,
     pool: Pool | None = None,
-) -> pd.DataFrame:
-    """Run ``scene`` once per named law; write ``compare.csv``, ``compare.md`` and ``compare.png`` in ``out``.
+    speeds: Sequence[float] | None = None,
+    critical: tuple[float, float] | None = None,
+    resolution: float = 5.0,
+    convergent: bool = False,
+) -> LawComparison:
+    """Run ``scene`` once per law; write ``compare.csv``, ``compare.md`` and ``compare.png`` in ``out``.
 
-    Raises
-    ------
-    fem_loads.UnknownLawError
-        For a name that is not a known law, before any run.
+    Parameters
+    ----------
+    laws : sequence of (label, law)
+        Each law as ``target.law`` takes it (a name, or a table); every scene is checked before any run.
+    speeds : sequence of float, optional
+        Impact speeds (m/s) at which each law's depth is measured too.
+    critical : (low, high), optional
+        The range (m/s) in which each law's critical speed is sought, to ``resolution``.
+    convergent : bool
+        Also measure each law's characteristic convergent speed.
     """
-    named = [(name, resistance_law(name)) for name in laws]
-    sweep = Sweep.from_file(scene, overrides, [Variation({"target.law": name}) for name, _ in named])
+    variations = [Variation({"target.law": law}) for _, law in laws]
+    sweep = Sweep.from_file(scene, overrides, variations)
+    labels = [label for label, _ in laws]
     result = run_sweep(sweep, store, pool)
     table = result.table()
-    table.insert(1, "A_sigma_0", [law.static_stress for _, law in named])
-    table.insert(2, "B_rho_0", [law.dynamic_density for _, law in named])
+    table.insert(0, "law", labels)
+    table = table.drop(columns=["target.law"])
+    depth_by_speed = None
+    if speeds:
+        by_speed = Sweep.from_file(
+            scene, overrides, [Variation({**v.values, "impact.speed": float(s)}) for v in variations for s in speeds]
+        )
+        grid = run_sweep(by_speed, store, pool).table()
+        grid.insert(0, "law", [label for label in labels for _ in speeds])
+        depth_by_speed = grid[["law", "impact.speed", "depth", "end_reason"]]
+    if critical is not None:
+        bases = [Sweep(sweep.base, [v], sweep.source) for v in variations]
+        searches = find_critical_velocities(bases, store, critical, resolution, pool)
+        table["critical_speed"] = [s.critical_velocity for s in searches]
+    if convergent:
+        found = [
+            measure_convergent_velocity(Sweep(sweep.base, [v], sweep.source), store, pool=pool) for v in variations
+        ]
+        table["convergent_speed"] = [f.characteristic_convergent_velocity for f in found]
+    stress = {label: embedded_stress(s) for label, s in zip(labels, sweep.scenes)}
+    table["peak_nose_stress"] = [float(values.max()) / 1e6 for _, values in stress.values()]
+    comparison = LawComparison(table, result, depth_by_speed, stress)
     out = Path(out)
     atomic_write_text(out / "compare.csv", table.to_csv(index=False))
-    atomic_write_text(out / "compare.md", _markdown(table, sweep.scenes[0].name or Path(scene).stem, len(laws)))
-    _figure(result, laws, out / "compare.png")
-    return table
+    name = sweep.scenes[0].name or Path(scene).stem
+    atomic_write_text(out / "compare.md", _markdown(comparison, name))
+    _figure(comparison, out / "compare.png")
+    return comparison
 
 
-def _markdown(table: pd.DataFrame, name: str, count: int) -> str:
-    shown = ["target.law", "A_sigma_0", "B_rho_0", *[c for c in COLUMNS if c in table]]
-    lines = [f"# {name} under {count} resistance laws", "", "| " + " | ".join(shown) + " |", "|" + "---|" * len(shown)]
+def embedded_stress(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """``(x, sigma_n)``: the axial position (m, from the tip, backwards) and normal stress (Pa) of every surface
+    point at the scene's start (speed, attitude, spin) moved one body length below the surface."""
+    prepared = prepare_projectile(scene)
+    loads = scene.loads(prepared.quadrature)
+    state = initial_state(scene, prepared)
+    rotation = state.rotation
+    position = np.array([0.0, 0.0, -(loads.max_radius + prepared.profile.length)])
+    field = loads.surface_stress(position, state.velocity, rotation, state.angular_velocity)
+    x = float(prepared.tip[0]) - prepared.quadrature.points[:, 0]
+    return x, field.sigma_n
+
+
+def _markdown(comparison: LawComparison, name: str) -> str:
+    table = comparison.table
+    shown = [c for c in ("law", *COLUMNS, "critical_speed", "convergent_speed", "peak_nose_stress") if c in table]
+    lines = [
+        f"# {name} under {len(table)} resistance laws",
+        "",
+        "| " + " | ".join(shown) + " |",
+        "|" + "---|" * len(shown),
+    ]
     for _, row in table.iterrows():
-        cells = [f"{row[c]:.4g}" if isinstance(row[c], float) else str(row[c]) for c in shown]
+        cells = []
+        for c in shown:
+            value = row[c]
+            if isinstance(value, float):
+                cells.append("none found" if math.isnan(value) else f"{value:.4g}")
+            else:
+                cells.append("none found" if value is None else str(value))
         lines.append("| " + " | ".join(cells) + " |")
-    lines += ["", UNITS, "", "![speed against depth](compare.png)", ""]
+    lines += ["", UNITS, "peak_nose_stress: the largest normal stress one body length in, at the impact speed.", ""]
+    if comparison.depth_by_speed is not None:
+        wide = comparison.depth_by_speed.pivot(index="impact.speed", columns="law", values="depth")
+        lines += ["Depth (m) against impact speed (m/s):", "", "| impact speed | " + " | ".join(wide.columns) + " |"]
+        lines.append("|" + "---|" * (len(wide.columns) + 1))
+        for speed, row in wide.iterrows():
+            lines.append(f"| {speed:g} | " + " | ".join(f"{value:.4g}" for value in row) + " |")
+        lines.append("")
+    lines += ["![runs, depth against speed, stress on the body](compare.png)", ""]
     return "\n".join(lines)
 
 
-def _figure(result: SweepResult, laws: list[str], path: Path) -> None:
-    fig, axes = subplots(1, 2, figsize=(12.5, 4.4))
-    for i, (law, run) in enumerate(zip(laws, result.runs)):
-        if run.failed:
-            continue
-        h = result.history(i)
-        axes[0].plot(h["tip_depth"], h["speed"], label=law)
-        axes[1].plot(h["position_x"], -h["position_z"], label=law)
+def _figure(comparison: LawComparison, path: Path) -> None:
+    panels = 3 if comparison.depth_by_speed is not None else 2
+    fig, axes = subplots(1, panels, figsize=(5.0 * panels + 1.5, 4.4))
+    result = comparison.runs
+    for i, label in enumerate(comparison.table["law"]):
+        if not result.runs[i].failed:
+            h = result.history(i)
+            axes[0].plot(h["tip_depth"], h["speed"], label=label)
+        x, sigma = comparison.nose_stress[label]
+        order = np.argsort(x)
+        axes[1].plot(x[order], sigma[order] / 1e6, ".", markersize=2, label=label)
+        if comparison.depth_by_speed is not None:
+            rows = comparison.depth_by_speed[comparison.depth_by_speed["law"] == label]
+            axes[2].plot(rows["impact.speed"], rows["depth"], "o-", label=label)
     axes[0].set(xlabel="depth of the nose tip (m)", ylabel="speed (m/s)", title="speed against depth")
-    axes[1].set(xlabel="horizontal position X (m)", ylabel="depth of the centre of mass (m)", title="trajectory")
-    axes[1].invert_yaxis()
+    axes[1].set(
+        xlabel="distance from the tip along the axis (m)",
+        ylabel="normal stress (MPa)",
+        title="stress on the body, one length in",
+    )
+    if comparison.depth_by_speed is not None:
+        axes[2].set(xlabel="impact speed (m/s)", ylabel="depth of the nose tip (m)", title="depth against speed")
     for ax in axes:
         ax.grid(alpha=0.3)
-    legend_outside(axes[1])  # the same laws in both panels: one legend, right of the panels
+    legend_outside(axes[-1])  # the same laws in every panel: one legend, right of the panels
     fig.tight_layout()
     save_figure(fig, path)

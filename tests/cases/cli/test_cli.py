@@ -130,7 +130,8 @@ def test_compare_says_where_it_wrote(tmp_path):
         str(tmp_path / "s2"),
         "--no-progress",
     )
-    assert bad.returncode == 2 and "--laws: law = 'clay'" in bad.stderr and not (tmp_path / "bad").exists()
+    assert bad.returncode == 2 and "target.law: unknown law 'clay'" in bad.stderr and not (tmp_path / "bad").exists()
+    assert len(bad.stderr.strip().splitlines()) == 1 and not (tmp_path / "s2").exists()
 
 
 # what a run of a cached projectile never imports: pictures, tables, clusters, meshing and its libraries

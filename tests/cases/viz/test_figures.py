@@ -125,7 +125,15 @@ def _draw_every_figure(tmp_path) -> None:
     ]
     ensemble_study._histograms(table, samples, tmp_path / "histograms.png")
     result = SimpleNamespace(runs=[SimpleNamespace(failed=False)] * 3, history=lambda i: study.history("abc"[i]))
-    compare._figure(result, ["soil", "sand", "clay"], tmp_path / "compare.png")
+    laws = ["soil", "sand", "clay"]
+    x = np.linspace(0.0, 1.0, 50)
+    by_speed = pd.DataFrame(
+        {"law": np.repeat(laws, 3), "impact.speed": np.tile([300.0, 500.0, 700.0], 3), "depth": np.arange(9.0)}
+    )
+    comparison = compare.LawComparison(
+        pd.DataFrame({"law": laws}), result, by_speed, {law: (x, 1e7 * (1.0 - x)) for law in laws}
+    )
+    compare._figure(comparison, tmp_path / "compare.png")
     paper.angle_figure(study, runs, "three runs", tmp_path / "angles.png")
     paper.history_figure(study, runs, 0.45, "three runs", tmp_path / "histories.png")
     ratios = [0.45, 0.5, 0.56, 0.6]
