@@ -94,34 +94,15 @@ def _layered_stress(data: tuple[np.ndarray, ...], normal_velocity: float, depth:
                 below = 1.0
         share = above - below
         if share != 0.0:
+            q = p[layer]
+            q0, q1, q2, q3, q4, q5, q6, q7 = q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7]
             if user:
-                law = call_user_law(
-                    data[DATA_USER_LAW_ADDRESS][0],
-                    normal_velocity,
-                    depth,
-                    p[layer, 0],
-                    p[layer, 1],
-                    p[layer, 2],
-                    p[layer, 3],
-                    p[layer, 4],
-                    p[layer, 5],
-                    p[layer, 6],
-                    p[layer, 7],
-                )
+                address = data[DATA_USER_LAW_ADDRESS][0]
+                law = call_user_law(address, normal_velocity, depth, q0, q1, q2, q3, q4, q5, q6, q7)
             else:
                 first, count = rows[layer, 0], rows[layer, 1]
-                law = builtin_stress(
-                    normal_velocity,
-                    depth,
-                    p[layer, 0],
-                    p[layer, 1],
-                    p[layer, 2],
-                    p[layer, 3],
-                    p[layer, 4],
-                    p[layer, 5],
-                    tables[0, first : first + count],
-                    tables[1, first : first + count],
-                )
+                depths, stresses = tables[0, first : first + count], tables[1, first : first + count]
+                law = builtin_stress(normal_velocity, depth, q0, q1, q2, q3, q4, q5, depths, stresses)
             stress += share * law
         above = below
         if above == 0.0:
