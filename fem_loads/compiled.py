@@ -116,33 +116,45 @@ def _layered_stress(data: tuple[np.ndarray, ...], normal_velocity: float, depth:
 _FAST = {"reassoc", "contract"}
 
 
-@njit(cache=True, error_model="numpy", fastmath=_FAST)
+@njit(cache=True, error_model="numpy", fastmath=_FAST, inline="always")
 def _smooth_sums(
     data: tuple[np.ndarray, ...],
     g: np.ndarray,
     up: np.ndarray,
+    v: np.ndarray,
+    w: np.ndarray,
     height: float,
-    inverse_width: float,
+    width: float,
     embedded: bool,
     sums: np.ndarray,
+    friction: np.ndarray,
+    with_friction: bool,
 ) -> None:
-    """:func:`_sums` for the shipped scenes' load: one built-in law without a power term or a table (its
-    :func:`~fem_loads.resistance.polynomial_stress_scalars` is the whole law), both smooth ramps, with separation
-    and nothing else: no calls and no branches per point, so the loop runs in SIMD lanes."""
-    normal_arm, points, weights, inverse_entry = (
-        data[DATA_NORMAL_ARM],
-        data[DATA_POINTS],
-        data[DATA_WEIGHTS],
-        data[DATA_INVERSE_ENTRY],
-    )
-    offset = data[DATA_CONSTANTS][CONSTANT_CONTACT_OFFSET]
-    needs_depth = data[DATA_CONSTANTS][CONSTANT_NEEDS_DEPTH] != 0.0
+    """:func:`_sums` for one built-in law without a power term or a table (its
+    :func:`~fem_loads.resistance.polynomial_stress_scalars` is the whole law), both smooth ramps, with separation,
+    and friction and the free surface or not (the shipped scenes' load, and their friction variants): no calls
+    and no branches that differ from point to point, so the loop runs in SIMD lanes.  ``with_friction`` is a
+    constant in each of the two functions that inline this one (:func:`_frictionless_sums`,
+    :func:`_friction_sums`): each compiles to a loop of its own without the other's branch."""
+    normal_arm, points, weights = data[DATA_NORMAL_ARM], data[DATA_POINTS], data[DATA_WEIGHTS]
+    inverse_entry, point_signs, constants = data[DATA_INVERSE_ENTRY], data[DATA_POINT_SIGNS], data[DATA_CONSTANTS]
+    offset = constants[CONSTANT_CONTACT_OFFSET]
+    mu, cap = constants[CONSTANT_FRICTION], constants[CONSTANT_FRICTION_CAP]
+    surface_depth = constants[CONSTANT_SURFACE_DEPTH]
+    inverse_surface = 1.0 / surface_depth if surface_depth > 0.0 else 0.0
+    # without a free surface the factor is f0 + (1 - f0) S(.) with f0 = 1: exactly 1
+    fraction = constants[CONSTANT_SURFACE_FRACTION] if surface_depth > 0.0 else 1.0
+    needs_depth = constants[CONSTANT_NEEDS_DEPTH] != 0.0 or surface_depth > 0.0
+    inverse_width = 1.0 / width if width > 0.0 else 0.0
+    speed2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
     c = data[DATA_LAWS][0]
     c0, c1, c2, c3 = c[0], c[1], c[2], c[3]
     for k in range(sums.shape[0]):
         g0, g1, g2, g3, g4, g5 = g[k, 0], g[k, 1], g[k, 2], g[k, 3], g[k, 4], g[k, 5]
         up0, up1, up2 = up[k, 0], up[k, 1], up[k, 2]
+        sy, sz = point_signs[k, 1], point_signs[k, 2]
         a0 = a1 = a2 = a3 = a4 = a5 = 0.0
+        f0 = f1 = f2 = f3 = f4 = f5 = 0.0
         for j in range(weights.shape[0]):
             n0, n1, n2 = normal_arm[0, j], normal_arm[1, j], normal_arm[2, j]
             n3, n4, n5 = normal_arm[3, j], normal_arm[4, j], normal_arm[5, j]
@@ -152,6 +164,7 @@ def _smooth_sums(
                 z = height + (up0 * points[0, j] + up1 * points[1, j] + up2 * points[2, j])
             stress = polynomial_stress(max(normal_velocity, 0.0), -z, c0, c1, c2, c3)
             stress *= smooth_step(normal_velocity * inverse_width + offset) * weights[j]
+            stress *= fraction + (1.0 - fraction) * smooth_step(-z * inverse_surface)
             if not embedded:
                 stress *= smooth_step(0.5 - z * inverse_entry[j])
             a0 += stress * n0
@@ -160,7 +173,64 @@ def _smooth_sums(
             a3 += stress * n3
             a4 += stress * n4
             a5 += stress * n5
+            if with_friction:
+                # the image's point and normal in the body frame, its velocity u = v + w x r and slip u - Vn n
+                r0, r1, r2 = points[0, j], sy * points[1, j], sz * points[2, j]
+                m0, m1, m2 = n0, sy * n1, sz * n2
+                s0 = v[0] + w[1] * r2 - w[2] * r1 - normal_velocity * m0
+                s1 = v[1] + w[2] * r0 - w[0] * r2 - normal_velocity * m1
+                s2 = v[2] + w[0] * r1 - w[1] * r0 - normal_velocity * m2
+                tau = mu * stress
+                if cap > 0.0:
+                    tau = min(tau, cap * weights[j])
+                t = tau * slip_factor(s0 * s0 + s1 * s1 + s2 * s2, width, speed2)
+                f0 -= t * s0
+                f1 -= t * s1
+                f2 -= t * s2
+                f3 -= t * (r1 * s2 - r2 * s1)
+                f4 -= t * (r2 * s0 - r0 * s2)
+                f5 -= t * (r0 * s1 - r1 * s0)
         sums[k, 0], sums[k, 1], sums[k, 2], sums[k, 3], sums[k, 4], sums[k, 5] = a0, a1, a2, a3, a4, a5
+        friction[0] += f0
+        friction[1] += f1
+        friction[2] += f2
+        friction[3] += f3
+        friction[4] += f4
+        friction[5] += f5
+
+
+@njit(cache=True, error_model="numpy", fastmath=_FAST)
+def _frictionless_sums(
+    data: tuple[np.ndarray, ...],
+    g: np.ndarray,
+    up: np.ndarray,
+    v: np.ndarray,
+    w: np.ndarray,
+    height: float,
+    width: float,
+    embedded: bool,
+    sums: np.ndarray,
+    friction: np.ndarray,
+) -> None:
+    """:func:`_smooth_sums` without friction."""
+    _smooth_sums(data, g, up, v, w, height, width, embedded, sums, friction, False)
+
+
+@njit(cache=True, error_model="numpy", fastmath=_FAST)
+def _friction_sums(
+    data: tuple[np.ndarray, ...],
+    g: np.ndarray,
+    up: np.ndarray,
+    v: np.ndarray,
+    w: np.ndarray,
+    height: float,
+    width: float,
+    embedded: bool,
+    sums: np.ndarray,
+    friction: np.ndarray,
+) -> None:
+    """:func:`_smooth_sums` with friction."""
+    _smooth_sums(data, g, up, v, w, height, width, embedded, sums, friction, True)
 
 
 @njit(cache=True, error_model="numpy", fastmath=_FAST)
@@ -312,8 +382,10 @@ def dafl_kernel(
         width = 0.0
     sums = np.zeros((images, 6))
     friction = np.zeros(6)
-    if constants[CONSTANT_PLAIN] != 0.0:
-        _smooth_sums(data, g, up, height, 1.0 / width if width > 0.0 else 0.0, embedded, sums)
+    if constants[CONSTANT_PLAIN] != 0.0 and constants[CONSTANT_FRICTION] > 0.0:
+        _friction_sums(data, g, up, v, angular_velocity, height, width, embedded, sums, friction)
+    elif constants[CONSTANT_PLAIN] != 0.0:
+        _frictionless_sums(data, g, up, v, angular_velocity, height, width, embedded, sums, friction)
     else:
         guard = constants[CONSTANT_GUARD] * speed_scale
         _sums(data, g, up, v, angular_velocity, height, width, guard, embedded, sums, friction)

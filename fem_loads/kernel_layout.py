@@ -175,8 +175,6 @@ def kernel_data(loads: DAFLLoads) -> tuple[np.ndarray, ...]:
         and loads.law.power == 0.0
         and not loads.law.strength_table
         and loads.separation
-        and loads.friction is None
-        and loads.free_surface is None
         and constants[CONSTANT_SMOOTH_CONTACT] != 0.0
         and constants[CONSTANT_SMOOTH_ENTRY] != 0.0
     )

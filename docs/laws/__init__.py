@@ -1,0 +1,1 @@
+"""The check of every law against the 1-D integration in docs/laws.md (python -m docs.laws.normal_impact)."""
