@@ -129,13 +129,15 @@ def _smooth_sums(
     sums: np.ndarray,
     friction: np.ndarray,
     with_friction: bool,
+    with_surface: bool,
 ) -> None:
     """:func:`_sums` for one built-in law without a power term or a table (its
     :func:`~fem_loads.resistance.polynomial_stress_scalars` is the whole law), both smooth ramps, with separation,
     and friction and the free surface or not (the shipped scenes' load, and their friction variants): no calls
     and no branches that differ from point to point, so the loop runs in SIMD lanes.  ``with_friction`` is a
-    constant in each of the two functions that inline this one (:func:`_frictionless_sums`,
-    :func:`_friction_sums`): each compiles to a loop of its own without the other's branch."""
+    and ``with_surface`` are constants in each of the two functions that inline this one
+    (:func:`_frictionless_sums`, the shipped scenes' load; :func:`_friction_sums`, with friction or a free
+    surface): each compiles to a loop of its own without the other's branches."""
     normal_arm, points, weights = data[DATA_NORMAL_ARM], data[DATA_POINTS], data[DATA_WEIGHTS]
     inverse_entry, point_signs, constants = data[DATA_INVERSE_ENTRY], data[DATA_POINT_SIGNS], data[DATA_CONSTANTS]
     offset = constants[CONSTANT_CONTACT_OFFSET]
@@ -164,7 +166,8 @@ def _smooth_sums(
                 z = height + (up0 * points[0, j] + up1 * points[1, j] + up2 * points[2, j])
             stress = polynomial_stress(max(normal_velocity, 0.0), -z, c0, c1, c2, c3)
             stress *= smooth_step(normal_velocity * inverse_width + offset) * weights[j]
-            stress *= fraction + (1.0 - fraction) * smooth_step(-z * inverse_surface)
+            if with_surface:
+                stress *= fraction + (1.0 - fraction) * smooth_step(-z * inverse_surface)
             if not embedded:
                 stress *= smooth_step(0.5 - z * inverse_entry[j])
             a0 += stress * n0
@@ -212,8 +215,8 @@ def _frictionless_sums(
     sums: np.ndarray,
     friction: np.ndarray,
 ) -> None:
-    """:func:`_smooth_sums` without friction."""
-    _smooth_sums(data, g, up, v, w, height, width, embedded, sums, friction, False)
+    """:func:`_smooth_sums` without friction or free surface."""
+    _smooth_sums(data, g, up, v, w, height, width, embedded, sums, friction, False, False)
 
 
 @njit(cache=True, error_model="numpy", fastmath=_FAST)
@@ -229,8 +232,9 @@ def _friction_sums(
     sums: np.ndarray,
     friction: np.ndarray,
 ) -> None:
-    """:func:`_smooth_sums` with friction."""
-    _smooth_sums(data, g, up, v, w, height, width, embedded, sums, friction, True)
+    """:func:`_smooth_sums` with friction or a free surface (a coefficient of 0 leaves no friction; without a free
+    surface its factor is exactly 1)."""
+    _smooth_sums(data, g, up, v, w, height, width, embedded, sums, friction, True, True)
 
 
 @njit(cache=True, error_model="numpy", fastmath=_FAST)
@@ -382,7 +386,9 @@ def dafl_kernel(
         width = 0.0
     sums = np.zeros((images, 6))
     friction = np.zeros(6)
-    if constants[CONSTANT_PLAIN] != 0.0 and constants[CONSTANT_FRICTION] > 0.0:
+    if constants[CONSTANT_PLAIN] != 0.0 and (
+        constants[CONSTANT_FRICTION] > 0.0 or constants[CONSTANT_SURFACE_DEPTH] > 0.0
+    ):
         _friction_sums(data, g, up, v, angular_velocity, height, width, embedded, sums, friction)
     elif constants[CONSTANT_PLAIN] != 0.0:
         _frictionless_sums(data, g, up, v, angular_velocity, height, width, embedded, sums, friction)
