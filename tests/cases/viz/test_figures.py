@@ -131,7 +131,7 @@ def _draw_every_figure(tmp_path) -> None:
         {"law": np.repeat(laws, 3), "impact.speed": np.tile([300.0, 500.0, 700.0], 3), "depth": np.arange(9.0)}
     )
     comparison = compare.LawComparison(
-        pd.DataFrame({"law": laws}), result, by_speed, {law: (x, 1e7 * (1.0 - x)) for law in laws}
+        pd.DataFrame({"law": laws}), result, by_speed, dict.fromkeys(laws, (x, 10000000.0 * (1.0 - x)))
     )
     compare._figure(comparison, tmp_path / "compare.png")
     paper.angle_figure(study, runs, "three runs", tmp_path / "angles.png")
