@@ -60,6 +60,12 @@ PROPERTIES = {  # test -> (property, what is generated)
         "every run stable or unstable over any range, with or without a disturbance; the last line names a"
         " --speeds range reaching further the right way, and the attack angle when the scene has none",
     ),
+    "test_a_user_law_is_used_or_refused_in_one_line": (
+        "user laws",
+        "a law file with any body (usable, negative, infinite, NaN, Python-only, not compilable, not a number),"
+        " arguments, function name and parameters; used, with finite stresses >= 0 equal on both paths, or"
+        " refused in one line naming target.law",
+    ),
     "test_valid_runs_write_finite_numbers": (
         "valid runs",
         "speeds, angles, spins, integrators, friction, history"
