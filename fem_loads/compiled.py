@@ -116,6 +116,36 @@ def _layered_stress(data: tuple[np.ndarray, ...], normal_velocity: float, depth:
 _FAST = {"reassoc", "contract"}
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _point_friction(
+    r0: float,
+    r1: float,
+    r2: float,
+    m0: float,
+    m1: float,
+    m2: float,
+    v: np.ndarray,
+    w: np.ndarray,
+    normal_velocity: float,
+    stress: float,
+    weight: float,
+    mu: float,
+    cap: float,
+    width: float,
+    speed2: float,
+) -> tuple[float, float, float, float, float, float]:
+    """The friction force and moment (body frame) of one point ``r`` with normal ``m`` carrying ``stress`` (its
+    normal stress times its ``weight``): ``-tau k s`` against the slip ``s = u - Vn m``, ``u = v + w x r``."""
+    s0 = v[0] + w[1] * r2 - w[2] * r1 - normal_velocity * m0
+    s1 = v[1] + w[2] * r0 - w[0] * r2 - normal_velocity * m1
+    s2 = v[2] + w[0] * r1 - w[1] * r0 - normal_velocity * m2
+    tau = mu * stress
+    if cap > 0.0:
+        tau = min(tau, cap * weight)
+    t = tau * slip_factor(s0 * s0 + s1 * s1 + s2 * s2, width, speed2)
+    return -t * s0, -t * s1, -t * s2, -t * (r1 * s2 - r2 * s1), -t * (r2 * s0 - r0 * s2), -t * (r0 * s1 - r1 * s0)
+
+
 @njit(cache=True, error_model="numpy", fastmath=_FAST, inline="always")
 def _smooth_sums(
     data: tuple[np.ndarray, ...],
@@ -177,22 +207,12 @@ def _smooth_sums(
             a4 += stress * n4
             a5 += stress * n5
             if with_friction:
-                # the image's point and normal in the body frame, its velocity u = v + w x r and slip u - Vn n
-                r0, r1, r2 = points[0, j], sy * points[1, j], sz * points[2, j]
-                m0, m1, m2 = n0, sy * n1, sz * n2
-                s0 = v[0] + w[1] * r2 - w[2] * r1 - normal_velocity * m0
-                s1 = v[1] + w[2] * r0 - w[0] * r2 - normal_velocity * m1
-                s2 = v[2] + w[0] * r1 - w[1] * r0 - normal_velocity * m2
-                tau = mu * stress
-                if cap > 0.0:
-                    tau = min(tau, cap * weights[j])
-                t = tau * slip_factor(s0 * s0 + s1 * s1 + s2 * s2, width, speed2)
-                f0 -= t * s0
-                f1 -= t * s1
-                f2 -= t * s2
-                f3 -= t * (r1 * s2 - r2 * s1)
-                f4 -= t * (r2 * s0 - r0 * s2)
-                f5 -= t * (r0 * s1 - r1 * s0)
+                # the image's point and normal in the body frame
+                r0, r1, r2, m0, m1, m2 = points[0, j], sy * points[1, j], sz * points[2, j], n0, sy * n1, sz * n2
+                d0, d1, d2, d3, d4, d5 = _point_friction(
+                    r0, r1, r2, m0, m1, m2, v, w, normal_velocity, stress, weights[j], mu, cap, width, speed2
+                )
+                f0, f1, f2, f3, f4, f5 = f0 + d0, f1 + d1, f2 + d2, f3 + d3, f4 + d4, f5 + d5
         sums[k, 0], sums[k, 1], sums[k, 2], sums[k, 3], sums[k, 4], sums[k, 5] = a0, a1, a2, a3, a4, a5
         friction[0] += f0
         friction[1] += f1
@@ -325,22 +345,13 @@ def _sums(
             a4 += stress * n4
             a5 += stress * n5
             if mu > 0.0 and stress != 0.0:
-                # the image's point and normal in the body frame, its velocity u = v + w x r and slip u - Vn n
-                r0, r1, r2 = points[0, j], point_signs[k, 1] * points[1, j], point_signs[k, 2] * points[2, j]
-                m0, m1, m2 = n0, point_signs[k, 1] * n1, point_signs[k, 2] * n2
-                s0 = v[0] + w[1] * r2 - w[2] * r1 - normal_velocity * m0
-                s1 = v[1] + w[2] * r0 - w[0] * r2 - normal_velocity * m1
-                s2 = v[2] + w[0] * r1 - w[1] * r0 - normal_velocity * m2
-                tau = mu * stress
-                if cap > 0.0:
-                    tau = min(tau, cap * weights[j])
-                f = tau * slip_factor(s0 * s0 + s1 * s1 + s2 * s2, width, speed2)
-                friction[0] -= f * s0
-                friction[1] -= f * s1
-                friction[2] -= f * s2
-                friction[3] -= f * (r1 * s2 - r2 * s1)
-                friction[4] -= f * (r2 * s0 - r0 * s2)
-                friction[5] -= f * (r0 * s1 - r1 * s0)
+                sy, sz = point_signs[k, 1], point_signs[k, 2]  # the image's point and normal in the body frame
+                r0, r1, r2, m0, m1, m2 = points[0, j], sy * points[1, j], sz * points[2, j], n0, sy * n1, sz * n2
+                d = _point_friction(
+                    r0, r1, r2, m0, m1, m2, v, w, normal_velocity, stress, weights[j], mu, cap, width, speed2
+                )
+                for c in range(6):
+                    friction[c] += d[c]
         sums[k, 0], sums[k, 1], sums[k, 2], sums[k, 3], sums[k, 4], sums[k, 5] = a0, a1, a2, a3, a4, a5
 
 
