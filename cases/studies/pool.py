@@ -2,9 +2,10 @@
 
 Workers only compute: each returns a run's record and history to the process
 that drives the study, which alone writes the run store.  Local workers are
-spawned processes (every core by default); with ``scheduler`` the runs go to
-an existing Dask cluster, whose workers import this project from their own
-environment.  Every worker reports the version of the code it ran
+processes (every core by default), forked from this one where that is safe
+(:func:`start_method`); with ``scheduler`` the runs go to an existing Dask
+cluster, whose workers import this project from their own environment.
+Every worker reports the version of the code it ran
 (:func:`~cases.run.persistence.code_version`), and a run made by other code
 than the driver's is refused rather than stored under the driver's version.
 """
@@ -15,6 +16,7 @@ import atexit
 import contextlib
 import os
 import sys
+import threading
 from collections.abc import Callable, Collection, Iterable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
@@ -31,7 +33,7 @@ from ..scene import Scene
 if TYPE_CHECKING:
     from tqdm import tqdm
 
-__all__ = ["Pool", "Progress", "study_progress", "run_missing", "run_job", "CodeMismatch"]
+__all__ = ["Pool", "Progress", "study_progress", "run_missing", "run_job", "start_method", "CodeMismatch"]
 
 
 class CodeMismatch(RuntimeError):
@@ -120,8 +122,16 @@ class Progress:
         if self.bar is None:
             from tqdm import tqdm
 
+            # no monitor thread (miniters=1 redraws at every run instead), so that workers can still be forked
+            tqdm.monitor_interval = 0
             self.bar = tqdm(
-                total=self.total, initial=self.done, unit="run", desc=self.name, dynamic_ncols=True, file=sys.stderr
+                total=self.total,
+                initial=self.done,
+                unit="run",
+                desc=self.name,
+                dynamic_ncols=True,
+                miniters=1,
+                file=sys.stderr,
             )
         else:
             self.bar.total = self.total  # the study has learnt of more runs: the bar's end moves out
@@ -193,13 +203,27 @@ def run_missing(todo: dict[str, Scene], store: RunStore, pool: Pool, keys: Itera
             _on_processes(jobs, list(todo.values()), pool.width, finish)
 
 
+def start_method() -> str:
+    """How local workers start: ``"fork"`` on Linux when this process runs a single thread, else ``"spawn"``.
+
+    A forked worker begins with this process's imports and the machine code it has loaded: it is ready in
+    milliseconds, where a spawned one imports numpy, scipy, numba and this project and loads the compiled
+    step again (about 1.5 s on 2 cores; a critical-speed search of #3 takes about half its time without it).
+    A process with other threads (pytest-xdist's workers, a Dask client, a pool already running) spawns,
+    because a thread may hold a lock at the moment of the fork that the child then waits for forever.
+    """
+    return "fork" if sys.platform == "linux" and threading.active_count() == 1 else "spawn"
+
+
 def _compile_once(scenes: Iterable[Scene], width: int) -> None:
     """Compile the compiled step here, once (announced), before local workers start, when the cache lacks it
-    and a run will take it: else every worker compiles it side by side, each saying so."""
+    and a run will take it: else every worker compiles it side by side, each saying so.  When the workers
+    are about to be forked, also load it from the cache here, so that they start with it loaded."""
     from ..run.compiled import needs_compiling, precompile
 
     compiled = any(scene.with_kernel(many_runs=True).numerics.kernel == "compiled" for scene in scenes)
-    if width > 1 and compiled and needs_compiling("dafl_step"):
+    forking = width not in _WARM and start_method() == "fork"
+    if width > 1 and compiled and (forking or needs_compiling("dafl_step")):
         precompile()
 
 
@@ -221,11 +245,11 @@ _WARM: dict[int, ProcessPoolExecutor] = {}
 
 
 def _warm_executor(count: int) -> ProcessPoolExecutor:
-    """``count`` spawned workers, kept for the rest of this process: a study that runs in rounds (the
-    bisection of a critical speed) finds them with their imports done and their projectiles prepared,
-    instead of spawning and preparing again each round (about 1.5 s a round)."""
+    """``count`` workers (:func:`start_method`), kept for the rest of this process: a study that runs in rounds
+    (the bisection of a critical speed) finds them with their imports done and their projectiles prepared,
+    instead of starting and preparing them again each round."""
     if count not in _WARM:
-        _WARM[count] = ProcessPoolExecutor(count, mp_context=get_context("spawn"))
+        _WARM[count] = ProcessPoolExecutor(count, mp_context=get_context(start_method()))
     return _WARM[count]
 
 

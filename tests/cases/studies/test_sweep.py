@@ -135,6 +135,49 @@ def test_rounds_of_a_study_reuse_warm_workers(tmp_path):
     )
 
 
+# run in a process of its own, which has one thread (as the command line has) when it starts its workers
+_FORKED_SWEEP = """
+import json, sys
+from cases import scene_path
+from cases.run import RunStore
+from cases.studies import Pool, Sweep, grid, pool, run_sweep
+sweep = Sweep.from_file(scene_path("paper_p3"), json.loads(sys.argv[2]), grid({"impact.speed": [1000, 1100, 1200]}))
+table = run_sweep(sweep, RunStore(sys.argv[1]), Pool(workers=2, progress=False)).table()
+print(pool._WARM[2]._mp_context.get_start_method())
+print(table.to_json())
+"""
+
+
+def test_a_single_threaded_process_forks_its_workers_and_they_give_the_table_one_worker_gives(tmp_path):
+    """Workers forked from a process with one thread (they start with its imports and loaded machine code) give
+    the runs one worker gives; a process with another thread running spawns its workers instead."""
+    import io
+    import threading
+
+    from cases.studies import pool as pool_module
+
+    done = subprocess.run(
+        [sys.executable, "-c", _FORKED_SWEEP, str(tmp_path / "forked"), json.dumps(QUICK)],
+        capture_output=True,
+        text=True,
+    )
+    assert done.returncode == 0, done.stderr
+    method, text = done.stdout.splitlines()[-2:]
+    assert method == "fork"
+    forked = pd.read_json(io.StringIO(text))
+    one = run_sweep(_sweep(), RunStore(tmp_path / "one"), Pool(workers=1, progress=False)).table()
+    pd.testing.assert_frame_equal(_stable(forked), _stable(one), check_dtype=False)
+
+    stop = threading.Event()
+    other = threading.Thread(target=stop.wait)
+    other.start()
+    try:
+        assert pool_module.start_method() == "spawn"
+    finally:
+        stop.set()
+        other.join()
+
+
 def test_a_failed_run_is_recorded_and_does_not_stop_the_others(tmp_path):
     store = RunStore(tmp_path)
     # a centre of mass the counterweight cannot reach fails at run time, in the worker
@@ -297,12 +340,14 @@ def test_bad_list_file(tmp_path):
 
 def test_the_compiled_step_is_compiled_once_before_local_workers_start(monkeypatch):
     """With numba's cache empty, a sweep on local workers compiles (and announces) the step once, in this
-    process, instead of in every worker side by side; a sweep that runs nothing compiled compiles nothing."""
+    process, instead of in every worker side by side; a sweep that runs nothing compiled compiles nothing.
+    Workers about to be forked find it loaded here even when the cache has it."""
     from cases import load_scene, scene_path
     from cases.run import compiled
     from cases.studies import pool
 
     calls = []
+    monkeypatch.setattr(pool, "start_method", lambda: "spawn")
     monkeypatch.setattr(compiled, "needs_compiling", lambda entry: True)
     monkeypatch.setattr(compiled, "precompile", lambda: calls.append("compiled"))
     scene = load_scene(scene_path("paper_p3"))
@@ -315,3 +360,8 @@ def test_the_compiled_step_is_compiled_once_before_local_workers_start(monkeypat
     monkeypatch.setattr(compiled, "needs_compiling", lambda entry: False)
     pool._compile_once([scene], width=2)
     assert calls == ["compiled"]
+    monkeypatch.setattr(pool, "start_method", lambda: "fork")
+    pool._compile_once([scene], width=3)  # no such workers yet: they will be forked from this process
+    assert calls == ["compiled", "compiled"]
+    pool._compile_once([numpy_only], width=3)
+    assert calls == ["compiled", "compiled"]
