@@ -6,7 +6,7 @@ What it may import is written once, in pyproject.toml's [tool.penetrate.rooms].
 
 from .dafl import DAFLLoads, SurfaceStress
 from .mass import MassProperties, mass_properties, to_skfem
-from .quadrature import NORMAL_MODELS, SurfaceQuadrature, mirror_quarters, surface_quadrature
+from .quadrature import NORMAL_MODELS, SurfaceQuadrature, find_mirror_images, surface_quadrature
 from .resistance import NAMED_LAWS, ResistanceLaw, UnknownLawError, resistance_law
 
 __all__ = [
@@ -15,7 +15,7 @@ __all__ = [
     "to_skfem",
     "SurfaceQuadrature",
     "surface_quadrature",
-    "mirror_quarters",
+    "find_mirror_images",
     "NORMAL_MODELS",
     "ResistanceLaw",
     "NAMED_LAWS",

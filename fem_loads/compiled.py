@@ -11,12 +11,12 @@
 * ``F = -R sum sigma n w``, ``M = -sum sigma r x n w``, and the friction's ``-sum tau k s w`` and its moment.
 
 Mirror symmetry is kept exactly as on the numpy path (:mod:`fem_loads.images`): each point of the
-quarter ``y > 0, z > 0`` is evaluated as its four images, every image's ``Vn`` and height summed
-in the same order with its own signs, each image's resultant summed separately over the points,
-and the four folded in mirrored pairs.  A state symmetric about a body plane then gives mirrored
-images bitwise-equal stresses and sums, and an exactly symmetric normal load.  A quadrature without
-mirror quarters is one "image" of every point.  The friction load is summed in body coordinates
-(as on the numpy path, not exactly symmetric).
+quarter ``y > 0, z > 0`` (or of the half, for one mirror plane) is evaluated as its four (two)
+images, every image's ``Vn`` and height summed in the same order with its own signs, each image's
+resultant summed separately over the points, and the images folded in mirrored pairs.  A state
+symmetric about a body plane then gives mirrored images bitwise-equal stresses and sums, and an
+exactly symmetric normal load.  A quadrature without mirror images is one "image" of every point.
+The friction load is summed in body coordinates (as on the numpy path, not exactly symmetric).
 
 The kernel takes its arrays as one tuple (:func:`kernel_data`, :data:`KERNEL_ARRAYS`), so the compiled
 Runge-Kutta step (:mod:`dynamics.compiled`) calls it without knowing what it computes.  A user's law
@@ -412,6 +412,8 @@ def dafl_kernel(
             # (P0 + Y P1) + Z (P2 + Y P3): mirrored images cancel or add exactly
             y, zs = image_signs[1, c], image_signs[2, c]
             body[c] = -((sums[0, c] + y * sums[1, c]) + zs * (sums[2, c] + y * sums[3, c])) + friction[c]
+        elif images == 2:  # one mirror plane: P0 + S P1
+            body[c] = -(sums[0, c] + image_signs[1, c] * sums[1, c]) + friction[c]
         else:
             body[c] = -sums[0, c] + friction[c]
     for i in range(3):

@@ -35,10 +35,11 @@ no separation: every embedded point stays in contact with
 the static pressure less the dynamic term.  An absent effect costs nothing.
 
 Mirror symmetry.  When the quadrature is mirror symmetric about the body
-planes ``y = 0`` and ``z = 0`` (``SurfaceQuadrature.mirror_quarters``), every
-per-point quantity is computed as four rows, one per mirror image of the
-quarter ``y > 0, z > 0``, and the resultant folds the images' sums in mirrored
-pairs (:mod:`fem_loads.images`).  A state symmetric about a plane then gives
+planes ``y = 0`` and ``z = 0``, or about one of them
+(``SurfaceQuadrature.mirror_images``), every per-point quantity is computed as
+four (or two) rows, one per mirror image of the quarter ``y > 0, z > 0`` (or
+the half), and the resultant folds the images' sums in mirrored pairs
+(:mod:`fem_loads.images`).  A state symmetric about a plane then gives
 exactly equal stresses on mirrored points, their differences are exactly zero
 and the load is exactly symmetric, whatever the summation order.  The friction
 load is summed over all points in their own order (not exactly symmetric).
@@ -166,8 +167,8 @@ class DAFLLoads:
         self._half_entry = 0.5 * float(self._entry_length.max()) if len(self._weights) else 0.0
         self._images = None
         self._hot_weights, self._hot_entry = self._weights, self._entry_length
-        if self.quadrature.mirror_quarters is not None:
-            self._images = MirrorImages(self.quadrature.mirror_quarters, self._normal_arm_t, self._points_t)
+        if q.mirror_images is not None:
+            self._images = MirrorImages(q.mirror_images, q.mirror_signs, self._normal_arm_t, self._points_t)
             self._hot_weights = self._images.quarter(self._weights)
             self._hot_entry = self._images.quarter(self._entry_length)
 

@@ -11,8 +11,8 @@ from typing import Any
 
 import numpy as np
 
+from . import images
 from .dafl import DAFLLoads
-from .images import IMAGE_SIGNS, POINT_SIGNS
 from .resistance import ResistanceLaw
 from .target import LayeredTarget
 from .user_law import MAX_PARAMETERS, UserLaw
@@ -78,7 +78,7 @@ __all__ = [
 #: the arrays of the kernel's data, in order (:func:`kernel_data`): a plain tuple of arrays, which numba's
 #: dispatcher types in C (a named tuple, or a function object in it, costs 100-200 us per call from Python)
 KERNEL_ARRAYS = (
-    "normal_arm",  # (6, m): [n | r x n] of the quarter's (or every) point
+    "normal_arm",  # (6, m): [n | r x n] of the fundamental part's (or every) point
     "points",  # (3, m), m
     "weights",  # (m,), m^2
     "inverse_entry",  # (m,): 1 / l (1/m), zero with sharp entry
@@ -146,9 +146,12 @@ def kernel_data(loads: DAFLLoads) -> tuple[np.ndarray, ...]:
     if not supports(loads):
         raise ValueError("the compiled load calls one user function: layers of different user laws run on numpy")
     quadrature = loads.quadrature
-    if quadrature.mirror_quarters is not None:
-        index = quadrature.mirror_quarters[0]
-        image_signs, point_signs = IMAGE_SIGNS, POINT_SIGNS
+    if quadrature.mirror_images is not None:
+        index = quadrature.mirror_images[0]
+        image_signs, point_signs = (
+            images.image_signs(quadrature.mirror_signs),
+            images.point_signs(quadrature.mirror_signs),
+        )
     else:
         index = np.arange(len(loads))
         image_signs, point_signs = np.ones((1, 6)), np.ones((1, 3))

@@ -24,13 +24,15 @@ built once, so each costs the same per load evaluation):
     their own quadrature, which is exact there.
 
 The projectile meshes are mirrored exactly about the planes ``y = 0`` and
-``z = 0`` (:mod:`mesh.geometry`), but scikit-fem computes each facet's points
-and normals from its own node order, so mirrored points differ in their last
-bits.  :func:`mirror_quarters` finds the four mirror images of every point of
-the quarter ``y > 0, z > 0`` and :func:`surface_quadrature` rewrites the other
-three quarters from it by exact sign changes: the quadrature is then mirror
-symmetric bitwise, and :class:`~fem_loads.DAFLLoads` can sum the images so
-that a symmetric state gives an exactly symmetric load.
+``z = 0`` (:mod:`mesh.geometry`; a file's body about those of its mirror planes,
+:mod:`mesh.symmetry`), but scikit-fem computes each facet's points and normals
+from its own node order, so mirrored points differ in their last bits.
+:func:`find_mirror_images` finds the mirror images of every point of the
+fundamental part (the quarter ``y > 0, z > 0``, or the half ``y > 0`` or
+``z > 0`` for one plane) and :func:`surface_quadrature` rewrites the other
+images from it by exact sign changes: the quadrature is then mirror symmetric
+bitwise, and :class:`~fem_loads.DAFLLoads` can sum the images so that a
+symmetric state gives an exactly symmetric load.
 """
 
 from __future__ import annotations
@@ -50,10 +52,12 @@ if TYPE_CHECKING:  # scikit-fem (and gmsh, by mesh.cad) is imported where it is 
 
     from mesh.cad import CadSurface
 
-__all__ = ["SurfaceQuadrature", "surface_quadrature", "mirror_quarters", "NORMAL_MODELS"]
+__all__ = ["SurfaceQuadrature", "surface_quadrature", "find_mirror_images", "NORMAL_MODELS"]
 
-# the sign of (y, z) in the four mirror images, in the order of ``mirror_quarters``
+# the sign of (y, z) in the four mirror images of two planes, in the order of ``mirror_images``
 MIRROR_SIGNS = ((1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0))
+# the images of each symmetry, by the axes of its planes (1: the plane y = 0, 2: z = 0)
+SIGNS_OF_PLANES = {(1, 2): MIRROR_SIGNS, (1,): MIRROR_SIGNS[:2], (2,): (MIRROR_SIGNS[0], MIRROR_SIGNS[2])}
 
 NORMAL_MODELS = ("mesh", "exact")
 
@@ -70,12 +74,14 @@ class SurfaceQuadrature:
         Outward unit normals.
     weights : ndarray, shape (n,)
         Area weights (m^2).
-    mirror_quarters : ndarray of int, shape (4, n // 4), optional
-        Indices of the four mirror images of each point in the quarter
-        ``y > 0, z > 0``: the point itself, its images in ``y = 0``, in
-        ``z = 0`` and in both (:data:`MIRROR_SIGNS`); the images are exact
-        (bitwise) sign changes of the point and its normal, with equal weights.
-        None for a quadrature without that symmetry.
+    mirror_images : ndarray of int, shape (k, n // k), optional
+        Indices of the mirror images of each point of the fundamental part: for
+        two mirror planes (k = 4) the quarter ``y > 0, z > 0``, the point
+        itself, its images in ``y = 0``, in ``z = 0`` and in both
+        (:data:`MIRROR_SIGNS`); for one plane (k = 2) the half on its positive
+        side and the images in it.  The images are exact (bitwise) sign changes
+        of the point and its normal, with equal weights.  None for a quadrature
+        without mirror symmetry.
     moment_arms : ndarray, shape (n, 3)
         ``r x n`` for each point, cached for the moment and the normal velocity.
     """
@@ -83,11 +89,26 @@ class SurfaceQuadrature:
     points: np.ndarray
     normals: np.ndarray
     weights: np.ndarray
-    mirror_quarters: np.ndarray | None = None
+    mirror_images: np.ndarray | None = None
     moment_arms: np.ndarray = field(init=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "moment_arms", np.cross(self.points, self.normals))
+
+    @property
+    def mirror_planes(self) -> tuple[int, ...]:
+        """The axes of the mirror planes (1: ``y = 0``, 2: ``z = 0``) of :attr:`mirror_images`; () without."""
+        if self.mirror_images is None:
+            return ()
+        if len(self.mirror_images) == 4:
+            return (1, 2)
+        point, image = self.points[self.mirror_images[0, 0]], self.points[self.mirror_images[1, 0]]
+        return (1,) if image[1] == -point[1] else (2,)
+
+    @property
+    def mirror_signs(self) -> tuple[tuple[float, float], ...]:
+        """The signs of ``(y, z)`` of each of :attr:`mirror_images`' rows."""
+        return SIGNS_OF_PLANES[self.mirror_planes] if self.mirror_images is not None else ((1.0, 1.0),)
 
     def __len__(self) -> int:
         return len(self.weights)
@@ -153,8 +174,11 @@ def _to_exact_surface(
     return points, normals, weights
 
 
-def mirror_quarters(points: np.ndarray, rtol: float = 1e-9) -> np.ndarray | None:
-    """The four mirror images (about ``y = 0`` and ``z = 0``) of each point of the quarter ``y > 0, z > 0``.
+def find_mirror_images(points: np.ndarray, rtol: float = 1e-9) -> np.ndarray | None:
+    """The mirror images of each point of the fundamental part, for the most mirror planes the points have.
+
+    Tries both planes ``y = 0`` and ``z = 0`` (the quarter ``y > 0, z > 0`` and its images in ``y = 0``, in
+    ``z = 0`` and in both), then ``y = 0`` alone (the half ``y > 0``), then ``z = 0`` alone (``z > 0``).
 
     Parameters
     ----------
@@ -166,38 +190,49 @@ def mirror_quarters(points: np.ndarray, rtol: float = 1e-9) -> np.ndarray | None
 
     Returns
     -------
-    ndarray of int, shape (4, n // 4), or None
-        Rows: the quarter's points, their images in ``y = 0``, in ``z = 0``
-        and in both; None unless every point has exactly one partner in each
-        image (a point on a plane, or an asymmetric set).
+    ndarray of int, shape (k, n // k), or None
+        Rows: the part's points and their images (see
+        :attr:`SurfaceQuadrature.mirror_images`); None unless every point has
+        exactly one partner in each image of some plane (a point on a plane,
+        or an asymmetric set).
     """
     from scipy.spatial import cKDTree  # imported where used: only when a quadrature is built
 
     n = len(points)
-    quarter = np.flatnonzero((points[:, 1] > 0) & (points[:, 2] > 0))
-    if n == 0 or 4 * len(quarter) != n:
+    if n == 0:
         return None
     tree = cKDTree(points)
-    images = [quarter]
-    for sign_y, sign_z in MIRROR_SIGNS[1:]:
-        distance, partner = tree.query(points[quarter] * np.array([1.0, sign_y, sign_z]))
-        if distance.max() > rtol * np.abs(points).max():
-            return None
-        images.append(partner)
-    table = np.array(images)
-    if len(np.unique(table)) != n:
-        return None
-    return table
+    for planes, signs in SIGNS_OF_PLANES.items():
+        part = np.flatnonzero(np.all([points[:, axis] > 0 for axis in planes], axis=0))
+        if len(signs) * len(part) != n:
+            continue
+        images = [part]
+        for sign_y, sign_z in signs[1:]:
+            distance, partner = tree.query(points[part] * np.array([1.0, sign_y, sign_z]))
+            if distance.max() > rtol * np.abs(points).max():
+                break
+            images.append(partner)
+        else:
+            table = np.array(images)
+            if len(np.unique(table)) == n:
+                return table
+    return None
 
 
-def _symmetrise(points: np.ndarray, normals: np.ndarray, weights: np.ndarray, images: np.ndarray) -> None:
-    """Rewrite the other three quarters from the first by exact sign changes (in place)."""
-    quarter = images[0]
-    for partner, (sign_y, sign_z) in zip(images[1:], MIRROR_SIGNS[1:]):
-        signs = np.array([1.0, sign_y, sign_z])
-        points[partner] = points[quarter] * signs
-        normals[partner] = normals[quarter] * signs
-        weights[partner] = weights[quarter]
+def _symmetrise(
+    points: np.ndarray,
+    normals: np.ndarray,
+    weights: np.ndarray,
+    images: np.ndarray,
+    signs: tuple[tuple[float, float], ...],
+) -> None:
+    """Rewrite the other images from the fundamental part by exact sign changes (in place)."""
+    part = images[0]
+    for partner, (sign_y, sign_z) in zip(images[1:], signs[1:]):
+        flip = np.array([1.0, sign_y, sign_z])
+        points[partner] = points[part] * flip
+        normals[partner] = normals[part] * flip
+        weights[partner] = weights[part]
 
 
 def _on_cad_surface(
@@ -324,7 +359,9 @@ def surface_quadrature(
     normals = np.ascontiguousarray(normals)
     weights = np.ascontiguousarray(weights)
     # each point keeps its facet (the renderer draws facet by facet): only the values are rewritten
-    images = mirror_quarters(points)
+    images = find_mirror_images(points)
+    quadrature = SurfaceQuadrature(points, normals, weights, images)
     if images is not None:
-        _symmetrise(points, normals, weights, images)
-    return SurfaceQuadrature(points, normals, weights, images)
+        _symmetrise(points, normals, weights, images, quadrature.mirror_signs)
+        quadrature = SurfaceQuadrature(points, normals, weights, images)  # the arms of the rewritten points
+    return quadrature

@@ -156,9 +156,9 @@ def _load(path: Path, spec: Projectile) -> PreparedProjectile | None:
             span = data["counterweight"]
             geometry = spec.shape(placed=(float(span[0]), float(span[1])) if span.size else None)
             mass = MassProperties(float(data["mass"]), data["centre"], data["inertia"], float(data["volume"]))
-            quarters = data["mirror_quarters"]
+            images = data["mirror_images"]
             quadrature = SurfaceQuadrature(
-                data["points"], data["normals"], data["weights"], quarters if quarters.size else None
+                data["points"], data["normals"], data["weights"], images if images.size else None
             )
             sizes = data["outline"]
             body = BodyOutline(*(float(v) for v in sizes)) if sizes.size else None
@@ -184,7 +184,7 @@ def _save(path: Path, prepared: PreparedProjectile) -> None:
         n_tetra=prepared.n_tetra,
         counterweight=np.array(span if span is not None else [], dtype=float),
         outline=np.array(dataclasses.astuple(prepared.outline) if prepared.outline else [], dtype=float),
-        mirror_quarters=q.mirror_quarters if q.mirror_quarters is not None else np.empty(0, dtype=np.int64),
+        mirror_images=q.mirror_images if q.mirror_images is not None else np.empty(0, dtype=np.int64),
     )
     atomic_write(path, buffer.getvalue())
 

@@ -65,10 +65,10 @@ def test_kernel_equals_the_numpy_load(quadrature, mode, depth):
     assert np.array_equal(_kernel_load(loads, outside), np.zeros(6))
 
 
-def test_kernel_without_mirror_quarters(quadrature):
+def test_kernel_without_mirror_images(quadrature):
     """The same points as one image (an asymmetric surface's layout): the same load."""
     plain = SurfaceQuadrature(quadrature.points, quadrature.normals, quadrature.weights)
-    assert plain.mirror_quarters is None
+    assert plain.mirror_images is None
     loads, reference_loads = DAFLLoads(plain, SOIL, **SMOOTH), DAFLLoads(quadrature, SOIL, **SMOOTH)
     assert compiled.kernel_data(loads)[compiled.KERNEL_ARRAYS.index("image_signs")].shape == (1, 6)
     rng = np.random.default_rng(8)

@@ -30,7 +30,7 @@ def _general(loads, position, velocity, rotation, spin):
 )
 def test_hot_path_equals_the_definition(loads, depth):
     rng = np.random.default_rng(7)
-    assert loads.quadrature.mirror_quarters is not None  # the folded sums are the ones under test
+    assert loads.quadrature.mirror_images is not None  # the folded sums are the ones under test
     for _ in range(20):
         rotation = rotation_matrix(normalize(rng.normal(size=4)))
         velocity = rng.normal(size=3) * 300.0

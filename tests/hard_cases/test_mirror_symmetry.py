@@ -16,7 +16,14 @@ from support import MIRROR_Y, meshed, mirrored_states
 
 from cases.run.runner import initial_attitude
 from dynamics.quaternion import rotation_matrix
-from fem_loads import DAFLLoads, SurfaceQuadrature, mass_properties, mirror_quarters, resistance_law, surface_quadrature
+from fem_loads import (
+    DAFLLoads,
+    SurfaceQuadrature,
+    find_mirror_images,
+    mass_properties,
+    resistance_law,
+    surface_quadrature,
+)
 from fem_loads.images import MirrorImages
 from fem_loads.mass import mirror_symmetric_axes
 from fem_loads.quadrature import MIRROR_SIGNS
@@ -66,7 +73,7 @@ def test_an_asymmetric_mesh_keeps_its_products_of_inertia():
 @pytest.mark.parametrize(("order", "model"), [(1, "mesh"), (1, "exact"), (2, "mesh"), (2, "exact")])
 def test_quadrature_is_mirror_symmetric_bitwise(order, model):
     q = _quadrature(order, model)
-    images = q.mirror_quarters
+    images = q.mirror_images
     assert images is not None and images.shape == (4, len(q) // 4)
     assert sorted(images.ravel().tolist()) == list(range(len(q)))
     quarter = images[0]
@@ -82,7 +89,7 @@ def test_symmetrising_moves_points_by_round_off_only():
     mesh = _mesh(2)
     centre = mass_properties(mesh, {BODY: 1.0}).centre
     raw = surface_quadrature(mesh, centre, PROFILE, "exact")
-    images = mirror_quarters(raw.points)
+    images = find_mirror_images(raw.points)
     # recompute the unsymmetrised quadrature through the module's steps, without the rewrite
     from skfem import ElementTetP0, FacetBasis
 
@@ -95,21 +102,21 @@ def test_symmetrising_moves_points_by_round_off_only():
     normals = np.asarray(fb.normals).reshape(3, -1).T
     normals = normals / np.linalg.norm(normals, axis=1)[:, None]
     points, normals, weights = _to_exact_surface(points, normals, fb.dx.reshape(-1), PROFILE)
-    assert np.array_equal(images, raw.mirror_quarters)
+    assert np.array_equal(images, raw.mirror_images)
     assert np.abs(raw.points - (points - centre)).max() < 1e-14
     assert np.abs(raw.normals - normals).max() < 1e-12
     assert np.abs(raw.weights - weights).max() < 1e-12 * weights.max()
 
 
-def test_asymmetric_points_have_no_mirror_quarters():
+def test_asymmetric_points_have_no_mirror_images():
     q = _quadrature(1, "exact")
     moved = q.points.copy()
-    moved[q.mirror_quarters[1][5], 0] += 1e-6  # one image no longer matches
-    assert mirror_quarters(moved) is None
+    moved[q.mirror_images[1][5], 0] += 1e-6  # one image no longer matches
+    assert find_mirror_images(moved) is None
     on_plane = q.points.copy()
     on_plane[0, 1] = 0.0  # a point on y = 0 belongs to no quarter
-    assert mirror_quarters(on_plane) is None
-    assert mirror_quarters(np.random.default_rng(0).normal(size=(400, 3))) is None
+    assert find_mirror_images(on_plane) is None
+    assert find_mirror_images(np.random.default_rng(0).normal(size=(400, 3))) is None
 
 
 def _random_state(rng: np.random.Generator):
@@ -181,7 +188,8 @@ def test_mirrored_states_give_exactly_mirrored_loads():
 def test_images_scatter_and_gather_are_inverse():
     q = _quadrature(1, "exact")
     images = MirrorImages(
-        q.mirror_quarters,
+        q.mirror_images,
+        q.mirror_signs,
         np.ascontiguousarray(np.hstack([q.normals, q.moment_arms]).T),
         np.ascontiguousarray(q.points.T),
     )
@@ -223,3 +231,79 @@ def test_a_quadrature_without_mirror_quarters_uses_the_plain_sums():
         state = _random_state(rng)
         a, b = np.concatenate(symmetric(*state)), np.concatenate(plain(*state))
         np.testing.assert_allclose(a, b, rtol=0, atol=1e-12 * np.abs(b).max())
+
+
+# a quadrature with one mirror plane: the two-plane one sheared along x by the other coordinate (x += 0.05 y
+# keeps the plane z = 0 and breaks y = 0; x += 0.05 z the reverse), its normals recomputed as the shear maps them
+def _one_plane(axis: int) -> SurfaceQuadrature:
+    q = _quadrature(2, "exact")
+    other = 3 - axis
+    shear = np.eye(3)
+    shear[0, other] = 0.05
+    normals = q.normals @ np.linalg.inv(shear)
+    return SurfaceQuadrature(
+        q.points @ shear.T,
+        normals / np.linalg.norm(normals, axis=1)[:, None],
+        q.weights,
+        find_mirror_images(q.points @ shear.T),
+    )
+
+
+@pytest.mark.parametrize("axis", [1, 2], ids=["plane y=0", "plane z=0"])
+def test_one_mirror_plane_is_found_and_its_halves_are_exact_images(axis):
+    q = _one_plane(axis)
+    assert q.mirror_images is not None and q.mirror_images.shape == (2, len(q) // 2)
+    assert q.mirror_planes == (axis,)
+    half, partner = q.mirror_images
+    signs = np.array([1.0, 1.0, 1.0])
+    signs[axis] = -1.0
+    assert (q.points[half, axis] > 0).all()
+    assert np.array_equal(q.points[partner], q.points[half] * signs)
+    assert np.array_equal(q.normals[partner], q.normals[half] * signs)
+
+
+@pytest.mark.parametrize("kernel", ["numpy", "numpy per image", "compiled"])
+@pytest.mark.parametrize("axis", [1, 2], ids=["plane y=0", "plane z=0"])
+def test_one_mirror_plane_keeps_a_state_in_it_exactly(axis, kernel):
+    """A state symmetric about the body's one mirror plane (moving and turning in it) gives exactly no force
+    across the plane and no moment out of it, entering and embedded, and the plain sums' load to round-off."""
+    loads = DAFLLoads(_one_plane(axis), SOIL, contact_incidence=0.005, entry_smoothing=4.0)
+    if kernel == "numpy per image":
+        loads._images.reproducible = False
+    if kernel == "compiled":
+        from cases.run.compiled import compiled_modules
+
+        layout = compiled_modules()[1]
+        data = layout.kernel_data(loads)
+
+        def load(*state):
+            out = np.empty(6)
+            layout.dafl_kernel(data, *state, out)
+            return out[:3], out[3:]
+    else:
+        load = loads
+    plain = DAFLLoads(
+        SurfaceQuadrature(loads.quadrature.points, loads.quadrature.normals, loads.quadrature.weights),
+        SOIL,
+        contact_incidence=0.005,
+        entry_smoothing=4.0,
+    )
+    nose_down = rotation_matrix(np.array([math.sqrt(0.5), 0.0, math.sqrt(0.5), 0.0]))
+    other = 3 - axis
+    rng = np.random.default_rng(12)
+    for depth in (-0.3, -3.0):
+        position = np.array([0.0, 0.0, depth])
+        for _ in range(10):
+            body_velocity = np.zeros(3)
+            body_velocity[0], body_velocity[other] = rng.uniform(100, 900), rng.normal() * 50
+            spin = np.zeros(3)
+            spin[axis] = rng.normal()  # turning about the plane's normal: the motion stays in the plane
+            state = (position, nose_down @ body_velocity, nose_down, spin)
+            force, moment = load(*state)
+            body_force = nose_down.T @ force
+            assert body_force[axis] == 0.0 and moment[0] == 0.0 and moment[other] == 0.0
+            assert body_force[other] != 0.0 and moment[axis] != 0.0
+            reference = np.concatenate(plain(*state))
+            np.testing.assert_allclose(
+                np.concatenate([force, moment]), reference, rtol=0, atol=1e-12 * np.abs(reference).max()
+            )
