@@ -102,8 +102,9 @@ class SurfaceQuadrature:
             return ()
         if len(self.mirror_images) == 4:
             return (1, 2)
+        # the half's points lie off their plane (y > 0, or z > 0), and their images across it
         point, image = self.points[self.mirror_images[0, 0]], self.points[self.mirror_images[1, 0]]
-        return (1,) if image[1] == -point[1] else (2,)
+        return (1,) if point[1] * image[1] < 0.0 else (2,)
 
     @property
     def mirror_signs(self) -> tuple[tuple[float, float], ...]:
@@ -249,11 +250,9 @@ def _on_cad_surface(
     from skfem.refdom import RefTri
 
     ref_points, ref_weights = get_quadrature(RefTri, intorder)
-    corners = mesh.points[mesh.outer[:, :3]]
+    nodes = mesh.points[mesh.outer]  # corners, and edge nodes on the surface (on its boundary curves too)
     assert mesh.outer_entity is not None  # checked by surface_quadrature
-    cad_points, cad_normals, cad_weights, planar = surface.quadrature(
-        corners, mesh.outer_entity, ref_points, ref_weights
-    )
+    cad_points, cad_normals, cad_weights, planar = surface.quadrature(nodes, mesh.outer_entity, ref_points, ref_weights)
     curved = ~np.repeat(planar, len(ref_weights))
     cosine = np.einsum("ij,ij->i", cad_normals[curved], normals[curved])
     points, normals, weights = points.copy(), normals.copy(), weights.copy()

@@ -14,7 +14,16 @@ from typing import Any
 
 import numpy as np
 
-from .geometry import TRI_EDGES, ProjectileMesh, _orient_tetra, elements, generate, gmsh_session
+from .geometry import (
+    MIRRORED_ENTITY,
+    TRI_EDGES,
+    ProjectileMesh,
+    _orient_tetra,
+    elements,
+    generate,
+    gmsh_session,
+    mirror_mesh,
+)
 from .imported import (
     CAD_SUFFIXES,
     UNITS,
@@ -27,8 +36,13 @@ from .imported import (
     regions,
     rotation_to_x,
 )
+from .parameters import node_parameters, parameter_rule, straighten_inner_edges
+from .symmetry import mirror_planes
 
-__all__ = ["cad_mesh", "CadSurface", "load_cad"]
+__all__ = ["cad_mesh", "CadSurface", "load_cad", "HIGH_ORDER_OPTIMIZE"]
+
+#: gmsh's ``Mesh.HighOrderOptimize`` for a CAD body's curved elements: 1, optimise the poor ones
+HIGH_ORDER_OPTIMIZE = 1
 
 
 def _declared_unit(path: str) -> str | None:
@@ -48,12 +62,18 @@ def _declared_unit(path: str) -> str | None:
 
 
 def load_cad(geometry: FileGeometry) -> dict[int, str]:
-    """Import the CAD solids into the current gmsh session as the file has them; their names by volume tag.
+    """Import the CAD solids into the current gmsh session as the file has them, and split them by the planes
+    through the axis; the pieces' names by volume tag.
 
     The solids are neither scaled nor turned here: OpenCASCADE's general transformation (gmsh's
     ``dilate``) would turn every plane, cylinder and surface of revolution into a B-spline; the
     mesh is scaled and turned instead (:func:`model_frame`), and :class:`CadSurface` maps back.
     """
+    return _split(geometry, _import(geometry))
+
+
+def _import(geometry: FileGeometry) -> dict[int, str]:
+    """Import the CAD solids as the file has them (sewn from loose faces where they close); names by volume tag."""
     import gmsh
 
     fmt = CAD_SUFFIXES[Path(geometry.path).suffix.lower()]
@@ -80,6 +100,15 @@ def load_cad(geometry: FileGeometry) -> dict[int, str]:
         )
     names = {v: _solid_name(gmsh.model.getEntityName(3, v), k) for k, v in enumerate(volumes)}
     check_size(_extent_of([(3, v) for v in volumes]) * UNITS[geometry.unit], geometry, _declared_unit(geometry.path))
+    return names
+
+
+def _split(geometry: FileGeometry, names: dict[int, str]) -> dict[int, str]:
+    """Split the imported solids by the planes through the axis; the pieces' names by volume tag."""
+    import gmsh
+
+    occ = gmsh.model.occ
+    volumes = list(names)
     # Split the solids by the two planes through the axis, and make touching solids share their interfaces
     # (one conforming mesh).  gmsh meshes a whole cone badly at its apex, a pole of its parameters on the
     # seam (the triangles there fold over and the volume mesh loses the tip); split into quarters, the apex
@@ -136,12 +165,24 @@ def _plane(occ: Any, normal: np.ndarray, half: float) -> int:
 
 
 def cad_mesh(geometry: FileGeometry, size: float, order: int) -> ProjectileMesh:
+    """The mesh of a CAD body in its model frame: meshed whole, or on one side of its mirror planes
+    (:mod:`mesh.symmetry`) and mirrored."""
+    import gmsh
+
     with gmsh_session("file"):
-        names = load_cad(geometry)
+        names = _import(geometry)
+        planes = mirror_planes(geometry, list(names))
+        names = _split(geometry, names)
+        _one_body(geometry, list(names))
+        names = _fundamental_part(geometry, names, planes)
         volumes = list(names)
-        _one_body(geometry, volumes)
-        outer = _outer_shell(volumes)
+        cuts = {s for _, s in gmsh.model.getEntities(2) if _on_mirror_plane(geometry, s, planes)}
+        outer = _outer_shell(volumes, cuts)
         region_of = regions(geometry, names)
+        # curved elements at a sharp tip or a cone fold over at usual sizes (an edge node pulled through the
+        # element); gmsh's optimisation moves the high-order nodes of the elements whose Jacobian is poor
+        # (below Mesh.HighOrderThresholdMin) and leaves the others as they are
+        gmsh.option.setNumber("Mesh.HighOrderOptimize", HIGH_ORDER_OPTIMIZE)
         generate(size / UNITS[geometry.unit], order)
         points, tetrahedra, triangles = elements(order)
         blocks = [tetrahedra([v]) for v in volumes]
@@ -163,9 +204,45 @@ def cad_mesh(geometry: FileGeometry, size: float, order: int) -> ProjectileMesh:
     outer_tris = points_index[tetra.size :].reshape(outer_tris.shape)
     points = model_frame(points[used], geometry)
     tetra = _orient_tetra(points, tetra)
-    return ProjectileMesh(
+    mesh = ProjectileMesh(
         points, tetra, region, orient_by_volume(points, outer_tris, tetra), order, outer_entity=entity
     )
+    for axis in planes:
+        mesh = mirror_mesh(mesh, axis)
+    return mesh
+
+
+def _fundamental_part(geometry: FileGeometry, names: dict[int, str], planes: tuple[int, ...]) -> dict[int, str]:
+    """The pieces on the positive side of each mirror plane (the others are their images); the rest removed."""
+    import gmsh
+
+    if not planes:
+        return names
+    rotation = rotation_to_x(geometry.axis)
+    occ = gmsh.model.occ
+    kept = {
+        v: name
+        for v, name in names.items()
+        if all(float(rotation[axis] @ occ.getCenterOfMass(3, v)) > 0.0 for axis in planes)
+    }
+    occ.remove([(3, v) for v in names if v not in kept], recursive=True)
+    occ.synchronize()
+    return kept
+
+
+def _on_mirror_plane(geometry: FileGeometry, surface: int, planes: tuple[int, ...]) -> bool:
+    """Whether a surface lies in one of the mirror planes: a cut through the body, inside the mirrored mesh."""
+    import gmsh
+
+    if not planes or gmsh.model.getType(2, surface) != "Plane":
+        return False
+    rotation = rotation_to_x(geometry.axis)
+    # three points of the plane: its parametrisation's corners (a plane's parameters span the plane itself)
+    low, high = (np.asarray(b) for b in gmsh.model.getParametrizationBounds(2, surface))
+    samples = np.array([low, [high[0], low[1]], [low[0], high[1]]])
+    points = np.asarray(gmsh.model.getValue(2, surface, samples.ravel().tolist())).reshape(3, 3)
+    extent = float(np.ptp(points, axis=0).max())
+    return any(bool(np.abs(points @ rotation[axis]).max() <= 1e-9 * extent) for axis in planes)
 
 
 def _meridian_edge_nodes(points: np.ndarray, surface: int, triangles: np.ndarray) -> None:
@@ -181,7 +258,7 @@ def _meridian_edge_nodes(points: np.ndarray, surface: int, triangles: np.ndarray
 
     if len(triangles) == 0:
         return
-    uv = _corner_parameters(surface, points[triangles[:, :3]])
+    uv = node_parameters(surface, points[triangles[:, :3]])
     fixes = {}
     for row, corner in zip(*np.nonzero(np.isnan(uv).any(axis=2))):
         d = int(np.flatnonzero(np.isnan(uv[row, corner]))[0])
@@ -223,12 +300,13 @@ def _one_body(geometry: FileGeometry, volumes: list[int]) -> None:
         )
 
 
-def _outer_shell(volumes: list[int]) -> list[int]:
-    """The boundary surfaces of the union of ``volumes`` on its outermost shell (closed voids left out)."""
+def _outer_shell(volumes: list[int], cuts: set[int] | frozenset[int] = frozenset()) -> list[int]:
+    """The boundary surfaces of the union of ``volumes`` on its outermost shell (closed voids left out), less the
+    surfaces ``cuts`` (the mirror planes' faces of a part to be mirrored: a void they cut stays apart)."""
     import gmsh
 
     boundary = sorted(
-        {abs(t) for _, t in gmsh.model.getBoundary([(3, v) for v in volumes], combined=True, oriented=False)}
+        {abs(t) for _, t in gmsh.model.getBoundary([(3, v) for v in volumes], combined=True, oriented=False)} - cuts
     )
     curves = {s: {abs(t) for _, t in gmsh.model.getBoundary([(2, s)], oriented=False)} for s in boundary}
     pairs = [(i, j) for i, a in enumerate(boundary) for j, b in enumerate(boundary) if i < j and curves[a] & curves[b]]
@@ -259,26 +337,29 @@ class CadSurface:
         self.tip = tip
 
     def quadrature(
-        self, corners: np.ndarray, entities: np.ndarray, ref_points: np.ndarray, ref_weights: np.ndarray
+        self, nodes: np.ndarray, entities: np.ndarray, ref_points: np.ndarray, ref_weights: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """A quadrature rule on the CAD surfaces, facet by facet, in their parametric coordinates.
 
-        Each facet's corners are given their parameters ``(u, v)`` on its CAD surface; the
-        rule maps onto the straight triangle between them in the parameter plane, and the
-        surface ``x(u, v)`` carries it onto the exact surface, with weights
-        ``w |det J_uv| |x_u x x_v|`` and the unit normal ``x_u x x_v``.  The facets'
-        parameter triangles tile each surface (they share their corners), so the rule
-        integrates over the exact surface; a boundary curve that is not straight in the
-        parameter plane is followed by chords (an area error of the order of the curvature
-        in the parameter plane times the element size squared, per unit length of such a
-        boundary).  Planes are left to the caller's facets (their own normals are exact).
+        Each facet's nodes are given their parameters ``(u, v)`` on its CAD surface; the rule
+        maps onto the triangle they span in the parameter plane (straight between three corners;
+        quadratic through six nodes, so that an edge on a curved boundary of the surface, where the
+        mesh puts its edge node on the boundary, follows it), and the surface ``x(u, v)`` carries
+        it onto the exact surface, with weights ``w |det J_uv| |x_u x x_v|`` and the unit normal
+        ``x_u x x_v``.  The facets' parameter triangles tile each surface (they share their
+        nodes), so the rule integrates over the exact surface; with corners only, a boundary curve
+        that is not straight in the parameter plane is followed by chords (an area error of the
+        order of its curvature in the parameter plane times the element size squared, per unit
+        length of it).  Planes are left to the caller's facets (their own normals are exact).
 
         Parameters
         ----------
-        corners : ndarray, shape (n, 3, 3)
-            The facets' corners (body frame, m).
+        nodes : ndarray, shape (n, 3, 3) or (n, 6, 3)
+            The facets' corners, or corners and edge nodes in the order of
+            :data:`~mesh.geometry.TRI_EDGES` (body frame, m).
         entities : ndarray, shape (n,)
-            The CAD surface of each facet.
+            The CAD surface of each facet (with a mirror's bit, :data:`~mesh.geometry.MIRRORED_ENTITY`, for a
+            facet on its image).
         ref_points : ndarray, shape (2, q)
             The rule's points on the reference triangle (0,0), (1,0), (0,1).
         ref_weights : ndarray, shape (q,)
@@ -296,7 +377,7 @@ class CadSurface:
         """
         import gmsh
 
-        n, q = len(corners), len(ref_weights)
+        n, q = len(nodes), len(ref_weights)
         scale = UNITS[self.geometry.unit]
         rotation = rotation_to_x(self.geometry.axis)
         shift = np.array([self.tip, 0.0, 0.0])
@@ -306,111 +387,28 @@ class CadSurface:
         planar = np.zeros(n, dtype=bool)
         with gmsh_session("surface"):
             load_cad(self.geometry)
-            for entity in np.unique(entities).tolist():
-                rows = np.flatnonzero(entities == entity)
+            for code in np.unique(entities).tolist():
+                rows = np.flatnonzero(entities == code)
+                # a mirrored triangle lies on the image of its surface: map it back, and the rule's points out
+                entity, signs = code, np.ones(3)
+                for axis, bit in MIRRORED_ENTITY.items():
+                    if code & bit:
+                        entity, signs[axis] = entity ^ bit, -1.0
                 if gmsh.model.getType(2, entity) == "Plane":
                     planar[rows] = True
                     continue
-                in_file = ((corners[rows] + shift) @ rotation) / scale  # body frame -> the file's coordinates
-                at, weight = _parameter_rule(_corner_parameters(entity, in_file), ref_points, ref_weights)
+                # body frame -> the file's coordinates
+                in_file = ((nodes[rows] * signs + shift) @ rotation) / scale
+                uv = node_parameters(entity, in_file)
+                if uv.shape[1] == 6:
+                    straighten_inner_edges(uv, nodes[rows, 3:])
+                at, weight = parameter_rule(uv, ref_points, ref_weights)
                 flat = at.reshape(-1).tolist()
                 value = np.asarray(gmsh.model.getValue(2, entity, flat)).reshape(len(rows), q, 3)
                 derivative = np.asarray(gmsh.model.getDerivative(2, entity, flat)).reshape(len(rows), q, 2, 3)
                 cross = np.cross(derivative[:, :, 0], derivative[:, :, 1])
                 jacobian = np.linalg.norm(cross, axis=2)
-                points[rows] = scale * value @ rotation.T - shift
-                normals[rows] = (cross / np.maximum(jacobian, np.finfo(float).tiny)[..., None]) @ rotation.T
+                points[rows] = (scale * value @ rotation.T - shift) * signs
+                normals[rows] = (cross / np.maximum(jacobian, np.finfo(float).tiny)[..., None]) @ rotation.T * signs
                 weights[rows] = weight * jacobian * scale**2
         return points.reshape(-1, 3), normals.reshape(-1, 3), weights.reshape(-1), planar
-
-
-def _parameter_rule(uv: np.ndarray, ref_points: np.ndarray, ref_weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Each facet's rule points in its parameter triangle, and their weights in the parameter plane.
-
-    ``uv``: (m, 3, 2) corner parameters, NaN in the degenerate parameter of a corner at a pole
-    (:func:`_corner_parameters`).  A facet without a pole maps the triangle rule linearly.  A facet
-    with a pole covers the region between the meridians of its other two corners: with ``t``
-    across it and ``s`` from the pole, ``a = a1 + (a2 - a1) t`` in the degenerate parameter and
-    ``b = (1 - s) b0 + s (1 - t) b1 + s t b2`` in the other, so the facets around a pole tile the
-    surface there as they do elsewhere.  The integrand is smooth in ``(t, s)`` but rational in the
-    triangle's own coordinates, so those facets take a Gauss-Legendre product rule on the square
-    with as many points as the triangle rule has (the few left over carry zero weight).
-    """
-    q = len(ref_weights)
-    xi, eta = ref_points
-    at = np.einsum("qk,mkd->mqd", np.column_stack([1.0 - xi - eta, xi, eta]), np.nan_to_num(uv))
-    e1, e2 = uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]
-    weight = np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])[:, None] * ref_weights[None, :]
-    t, s, square_weights = _square_rule(q)
-    for row, corner in zip(*np.nonzero(np.isnan(uv).any(axis=2))):
-        d = int(np.flatnonzero(np.isnan(uv[row, corner]))[0])  # the degenerate parameter
-        e = 1 - d
-        p0, p1, p2 = uv[row, [corner, (corner + 1) % 3, (corner + 2) % 3]]
-        across = (1.0 - t) * (p1[e] - p0[e]) + t * (p2[e] - p0[e])
-        at[row, :, d] = p1[d] + (p2[d] - p1[d]) * t
-        at[row, :, e] = p0[e] + s * across
-        weight[row] = square_weights * np.abs((p2[d] - p1[d]) * across)
-    return at, weight
-
-
-def _square_rule(q: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """A Gauss-Legendre product rule on the unit square with ``q`` points, padded with zero weights."""
-    across = max(1, math.isqrt(q))
-    along = q // across
-    a, wa = np.polynomial.legendre.leggauss(across)
-    b, wb = np.polynomial.legendre.leggauss(along)
-    t = np.zeros(q)
-    s = np.full(q, 0.5)
-    w = np.zeros(q)
-    t[: across * along] = np.repeat(0.5 * (a + 1.0), along)
-    s[: across * along] = np.tile(0.5 * (b + 1.0), across)
-    w[: across * along] = 0.25 * np.outer(wa, wb).ravel()
-    return t, s, w
-
-
-def _corner_parameters(entity: int, corners: np.ndarray) -> np.ndarray:
-    """The parameters ``(u, v)`` of each facet's corners on a CAD surface, shape (m, 3, 2).
-
-    A periodic parameter (a surface of revolution's angle) is unwrapped facet by facet so that
-    no facet spans the seam the long way round; a corner at a pole (where ``x_u = 0``, the apex
-    of a nose) has NaN for the parameter that is arbitrary there (:func:`_parameter_rule`).
-    """
-    import gmsh
-
-    m = len(corners)
-    flat = corners.reshape(-1, 3)
-    uv = np.asarray(gmsh.model.getParametrization(2, entity, flat.ravel().tolist())).reshape(m, 3, 2)
-    # poles: the derivative along one parameter vanishes there, and that parameter is arbitrary (NaN)
-    derivative = np.asarray(gmsh.model.getDerivative(2, entity, uv.reshape(-1).tolist())).reshape(m, 3, 2, 3)
-    speed = np.linalg.norm(derivative, axis=3)  # (m, 3, 2)
-    poles = [speed[:, :, d] < 1e-9 * np.maximum(speed[:, :, 1 - d], np.finfo(float).tiny) for d in range(2)]
-    for d in range(2):
-        uv[:, :, d][poles[d]] = np.nan
-    low, high = (np.asarray(b) for b in gmsh.model.getParametrizationBounds(2, entity))
-    scale = float(np.ptp(flat, axis=0).max()) or 1.0
-    # a patch of a periodic surface (a quarter of a surface of revolution across its seam): a corner on
-    # the seam may come back a period (an angle: 2 pi) away from the patch
-    for d in range(2):
-        margin = 1e-9 * max(high[d] - low[d], 1.0)
-        for shift in (2.0 * math.pi, -2.0 * math.pi):
-            outside = (uv[:, :, d] < low[d] - margin) | (uv[:, :, d] > high[d] + margin)
-            moved = uv[:, :, d] + shift
-            back = outside & (moved >= low[d] - margin) & (moved <= high[d] + margin)
-            if back.any():
-                trial = uv[back].copy()
-                trial[:, d] += shift
-                same = np.asarray(gmsh.model.getValue(2, entity, trial.ravel().tolist())).reshape(-1, 3)
-                ok = np.linalg.norm(same - flat.reshape(m, 3, 3)[back], axis=1) < 1e-9 * scale
-                rows, cols = np.nonzero(back)
-                uv[rows[ok], cols[ok], d] += shift
-    for d in range(2):
-        period = high[d] - low[d]
-        probe = np.array([0.5 * (low + high)] * 2)
-        probe[0, d], probe[1, d] = low[d], high[d]
-        ends = np.asarray(gmsh.model.getValue(2, entity, probe.ravel().tolist())).reshape(2, 3)
-        if np.linalg.norm(ends[0] - ends[1]) < 1e-9 * scale:  # closed in this direction: unwrap
-            values = uv[:, :, d]
-            with np.errstate(invalid="ignore"):
-                wide = np.nanmax(values, axis=1) - np.nanmin(values, axis=1) > 0.5 * period
-                values[wide] = np.where(values[wide] < low[d] + 0.5 * period, values[wide] + period, values[wide])
-    return uv

@@ -32,7 +32,7 @@ def build_file_mesh(geometry: FileGeometry, size: float, order: int = 2) -> Proj
     if folded.any():
         where = mesh.points[mesh.tetra[folded, 0]]
         fix = (
-            "a smaller numerics.mesh_size or numerics.geometry_order = 1"
+            "numerics.geometry_order = 1 (straight-sided tetrahedra, which cannot fold)"
             if geometry.is_cad
             else "untangle it (gmsh: Mesh.HighOrderOptimize = 2) or give 4-node tetrahedra"
         )

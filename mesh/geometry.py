@@ -30,7 +30,7 @@ import numpy as np
 
 from .profile import ProjectileGeometry
 
-__all__ = ["ProjectileMesh", "build_mesh", "BODY", "COUNTERWEIGHT", "OUTER"]
+__all__ = ["ProjectileMesh", "build_mesh", "mirror_mesh", "MIRRORED_ENTITY", "BODY", "COUNTERWEIGHT", "OUTER"]
 
 # region tags stored with each cell of a ProjectileMesh
 BODY, COUNTERWEIGHT, OUTER = 1, 2, 3
@@ -292,8 +292,17 @@ def _orient_outward(points: np.ndarray, tris: np.ndarray, geometry: ProjectileGe
     return tris
 
 
-def _mirror(mesh: ProjectileMesh, axis: int) -> ProjectileMesh:
-    """Union of a mesh with its mirror image in the plane ``x[axis] = 0``."""
+#: the bit a mirror image in the plane ``x[axis] = 0`` sets in an outer triangle's CAD surface tag
+#: (``ProjectileMesh.outer_entity``): the triangle lies on that surface's image (:class:`mesh.cad.CadSurface`)
+MIRRORED_ENTITY = {1: 1 << 24, 2: 1 << 25}
+
+
+def mirror_mesh(mesh: ProjectileMesh, axis: int) -> ProjectileMesh:
+    """Union of a mesh with its mirror image in the plane ``x[axis] = 0`` (``axis`` 1 or 2).
+
+    Nodes within 1e-10 of the size of the plane are put on it, so that the image matches bitwise; the
+    image's outer triangles keep their CAD surfaces with the mirror's bit (:data:`MIRRORED_ENTITY`).
+    """
     points = mesh.points.copy()
     scale = np.abs(points).max()
     on_plane = np.abs(points[:, axis]) <= 1e-10 * scale
@@ -311,6 +320,11 @@ def _mirror(mesh: ProjectileMesh, axis: int) -> ProjectileMesh:
         tetra_region=np.concatenate([mesh.tetra_region, mesh.tetra_region]),
         outer=np.vstack([mesh.outer, _permute(image[mesh.outer], tri_perm, TRI_EDGES)]),
         order=mesh.order,
+        outer_entity=(
+            None
+            if mesh.outer_entity is None
+            else np.concatenate([mesh.outer_entity, mesh.outer_entity ^ MIRRORED_ENTITY[axis]])
+        ),
     )
 
 
@@ -337,7 +351,7 @@ def build_mesh(geometry: ProjectileGeometry, size: float, order: int = 2) -> Pro
         raise ValueError(f"mesh size = {size}: must lie in (0, {geometry.profile.length}) m")
     with gmsh_session("projectile"):
         quarter = _mesh_quarter(geometry, size, order)
-    return _mirror(_mirror(quarter, 1), 2)
+    return mirror_mesh(mirror_mesh(quarter, 1), 2)
 
 
 @contextlib.contextmanager

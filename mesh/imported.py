@@ -83,6 +83,9 @@ class FileGeometry:
     cell_field : str or None
         For a mesh file: the cell-data field whose values name the materials
         (default: the physical groups).
+    symmetry : str
+        The mirror planes a CAD body is meshed by (:data:`mesh.symmetry.SYMMETRIES`): ``"auto"``
+        (those it has), ``"none"``, or one it is declared to have and is checked for.
     """
 
     path: str
@@ -91,6 +94,7 @@ class FileGeometry:
     axis: tuple[float, float, float] = (1.0, 0.0, 0.0)
     materials: tuple[str, ...] = ()
     cell_field: str | None = None
+    symmetry: str = "auto"
 
     @property
     def is_cad(self) -> bool:

@@ -180,6 +180,12 @@ class GeometryFileSpec(Strict):
     cell_field: Label | None = field(
         None, description="a mesh's cell-data field that names the materials (default: the physical groups)"
     )
+    symmetry: Literal["auto", "none", "mirror_y", "mirror_z", "mirrors", "revolution"] = field(
+        "auto",
+        description="the mirror planes a CAD body is meshed by (on one side, then mirrored): those it has"
+        " (auto), none, or declared and checked: y = 0 (mirror_y), z = 0 (mirror_z), both (mirrors,"
+        " revolution); docs/geometry.md",
+    )
     sha256: Label | None = field(
         None,
         description="the file's digest: filled in when the scene is read; a changed"
@@ -196,6 +202,11 @@ class GeometryFileSpec(Strict):
             raise ValueError(
                 f"file = {self.file!r}: not a CAD or mesh file (allowed suffixes: CAD"
                 f" {', '.join(sorted(CAD_SUFFIXES))}; volume meshes {', '.join(MESH_SUFFIXES)})"
+            )
+        if suffix not in CAD_SUFFIXES and self.symmetry not in ("auto", "none"):
+            raise ValueError(
+                f"symmetry = {self.symmetry!r}: a mesh file is used as its elements are; mirror planes apply to"
+                f' CAD files ({", ".join(sorted(CAD_SUFFIXES))}): say symmetry = "none" or give the CAD file'
             )
         if suffix in CAD_SUFFIXES and self.cell_field is not None:
             raise ValueError(
@@ -439,7 +450,9 @@ class Projectile(Strict):
         if self.geometry is not None:
             g = self.geometry
             assert g.sha256 is not None  # filled in when the file is read (GeometryFileSpec._readable)
-            return FileGeometry(str(g.file), g.sha256, g.unit, (*g.axis,), tuple(self.materials or {}), g.cell_field)
+            return FileGeometry(
+                str(g.file), g.sha256, g.unit, (*g.axis,), tuple(self.materials or {}), g.cell_field, g.symmetry
+            )
         profile = self.profile()
         if self.interior is None:
             return ProjectileGeometry(profile)

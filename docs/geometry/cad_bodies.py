@@ -81,6 +81,63 @@ def write_body(
     return path
 
 
+def write_fused_cone(path: str | os.PathLike, half_angle: float = 12.92, scale: float = 1e-3) -> Path:
+    """The validation body with a cone nose, as a CAD user draws it: a cylinder fused with a cone (not revolved
+    from a profile), written in the unit ``scale`` (default millimetres)."""
+    path = Path(path)
+    a, length = 0.5 * VALIDATION["diameter"] / scale, VALIDATION["length"] / scale
+    nose = a / math.tan(math.radians(half_angle))
+    with _gmsh() as gmsh:
+        occ = gmsh.model.occ
+        cylinder = occ.addCylinder(0, 0, 0, length - nose, 0, 0, a)
+        cone = occ.addCone(length - nose, 0, 0, nose, 0, 0, a, 0.0)
+        occ.fuse([(3, cylinder)], [(3, cone)])
+        occ.synchronize()
+        gmsh.write(str(path))
+    return path
+
+
+def write_changed_body(
+    path: str | os.PathLike,
+    diameter: float = 0.105,
+    length: float = 0.6,
+    crh: float = 2.5,
+    recess: tuple[float, float] | None = None,
+    fins: tuple[float, ...] = (),
+    cut: tuple[float, float, float] | None = None,
+) -> Path:
+    """A tangent-ogive body (m) changed, written as STEP in millimetres: a flat base ``recess = (depth,
+    radius)``; tail ``fins`` at the given angles (degrees from +y towards +z; 150 mm long, 30 mm out, 4 mm
+    thick); the nose ``cut`` by the plane 40 mm behind the tip whose normal is the given direction (its
+    material on the normal's side removed)."""
+    path = Path(path)
+    scale = 1e-3
+    with _gmsh() as gmsh:
+        occ = gmsh.model.occ
+        solid = _revolved(occ, diameter, length, crh, None, scale)
+        a, big = 0.5 * diameter / scale, 4 * diameter / scale
+        if recess is not None:
+            depth, radius = (v / scale for v in recess)
+            pocket = occ.addCylinder(-1.0, 0, 0, depth + 1.0, 0, 0, radius)
+            solid = occ.cut([(3, solid)], [(3, pocket)])[0][0][1]
+        for angle in fins:
+            fin = occ.addBox(0, -2.0, a - 1.0, 150.0, 4.0, 31.0)  # standing out along +z, then turned
+            occ.rotate([(3, fin)], 0, 0, 0, 1, 0, 0, math.radians(angle - 90.0))
+            solid = occ.fuse([(3, solid)], [(3, fin)])[0][0][1]
+        if cut is not None:
+            cutter = occ.addBox(0, -big, -big, big, 2 * big, 2 * big)  # the half-space x > 0, turned onto the normal
+            normal = np.asarray(cut, dtype=float) / np.linalg.norm(cut)
+            turn = np.cross([1.0, 0.0, 0.0], normal)
+            if np.linalg.norm(turn) > 1e-12:
+                angle = math.atan2(np.linalg.norm(turn), normal[0])
+                occ.rotate([(3, cutter)], 0, 0, 0, *(turn / np.linalg.norm(turn)), angle)
+            occ.translate([(3, cutter)], length / scale - 40.0, 0, 0)
+            occ.cut([(3, solid)], [(3, cutter)])
+        occ.synchronize()
+        gmsh.write(str(path))
+    return path
+
+
 def write_volume_mesh(path: str | os.PathLike, size: float, order: int = 2, counterweight=None, **body) -> Path:
     """Mesh a body with gmsh and write it as ``.msh`` (physical groups "body", "counterweight") or, through
     meshio, any other format (cell data ``material``: 1 body, 2 counterweight)."""

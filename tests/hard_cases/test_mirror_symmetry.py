@@ -307,3 +307,13 @@ def test_one_mirror_plane_keeps_a_state_in_it_exactly(axis, kernel):
             np.testing.assert_allclose(
                 np.concatenate([force, moment]), reference, rtol=0, atol=1e-12 * np.abs(reference).max()
             )
+
+
+@pytest.mark.parametrize("axis", [1, 2], ids=["plane y=0", "plane z=0"])
+def test_the_plane_of_images_that_match_to_round_off_only_is_theirs(axis):
+    """Images found before they are rewritten (as surface_quadrature finds them) differ from exact ones in their
+    last bits: their plane is still the one across which they lie."""
+    q = _one_plane(axis)
+    noisy = q.points * (1.0 + 1e-13 * np.random.default_rng(3).normal(size=q.points.shape))
+    images = find_mirror_images(noisy)
+    assert images is not None and SurfaceQuadrature(noisy, q.normals, q.weights, images).mirror_planes == (axis,)
