@@ -268,9 +268,9 @@ def test_p3_from_a_step_file_stays_straight_at_2000_m_s(folder):
     """#3 with a solid nose (the eroded-nose study's whole body, cases/bodies/make_bodies.py) as STEP (metres,
     body and counterweight), at 2000 m/s with no attack angle, at the study's 20 mm: exactly straight (up to 2
     degrees off before, from the whole mesh's asymmetry)."""
-    from cases.bodies.make_bodies import write_eroded_p3
-
     import gmsh
+
+    from cases.bodies.make_bodies import write_eroded_p3
 
     path = write_eroded_p3(folder / "p3_whole.step", 0.0, 0.0)
     gmsh.initialize(interruptible=False)
@@ -303,7 +303,10 @@ def test_p3_from_a_step_file_stays_straight_at_2000_m_s(folder):
             r"projectile.geometry: symmetry = \'mirrors\': a mesh file is used as its elements are; mirror planes apply"
             r' to CAD files .*say symmetry = "none" or give the CAD file',
         ),
-        ('file = "{step}", symmetry = "sideways"', r"projectile.geometry.symmetry = 'sideways': input should be 'auto', 'none', 'mirror_y'"),
+        (
+            'file = "{step}", symmetry = "sideways"',
+            r"projectile.geometry.symmetry = 'sideways': input should be 'auto', 'none', 'mirror_y'",
+        ),
     ],
 )
 def test_a_symmetry_that_cannot_apply_is_one_line_and_exit_2(folder, tmp_path, geometry, message):
