@@ -41,7 +41,7 @@ STORE = RunStore("runs/erosion-store")
 POOL = Pool(progress=False)
 DEPTH = 0.04  # m behind the tip
 ANGLES = (0.0, 2.5, 5.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0)  # degrees of the cut's normal from the axis
-SPEEDS = list(range(200, 2001, 200))  # m/s
+SPEEDS = list(range(200, 2401, 200))  # m/s
 CRITICAL_RANGE = (200.0, 2400.0)
 SCENE = "cases/eroded_p3.toml"
 
@@ -71,7 +71,8 @@ def study() -> dict:
     searches = find_critical_velocities(per_body, STORE, CRITICAL_RANGE, 5.0, POOL)
     record = []
     for k, (label, _) in enumerate(written):
-        mass = prepare_projectile(per_body[k].scenes[0]).mass
+        prepared = prepare_projectile(per_body[k].scenes[0])
+        mass = prepared.mass
         runs = swept.runs[k * len(SPEEDS) : (k + 1) * len(SPEEDS)]
         record.append(
             {
@@ -79,6 +80,7 @@ def study() -> dict:
                 "mass": mass.mass,
                 "centre_from_tip": mass.centre_from_tip,
                 "transverse_inertia": mass.transverse_inertia,
+                "mirror_planes": [{1: "y = 0", 2: "z = 0"}[axis] for axis in prepared.quadrature.mirror_planes],
                 "largest_product_of_inertia": float(
                     max(abs(mass.inertia[0, 1]), abs(mass.inertia[0, 2]), abs(mass.inertia[1, 2]))
                 ),
@@ -109,10 +111,10 @@ def report(record: dict) -> None:
     )
     print()
     print(
-        "| nose | mass (kg) | centre of mass from the tip (m) | transverse inertia (kg m^2) | critical impact "
-        "velocity (m/s) | axis turn at 1200 m/s (deg) | largest attack angle at 1200 m/s (deg) |"
+        "| nose | mirror planes | mass (kg) | centre of mass from the tip (m) | transverse inertia (kg m^2) | critical"
+        " impact velocity (m/s) | axis turn at 1200 m/s (deg) | largest attack angle at 1200 m/s (deg) |"
     )
-    print("|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|")
     for body in record["bodies"]:
         at = next(run for run in body["runs"] if run["speed"] == 1200)
         critical = (
@@ -121,7 +123,8 @@ def report(record: dict) -> None:
             else f"none up to {CRITICAL_RANGE[1]:g}"
         )
         print(
-            f"| {body['body']} | {body['mass']:.2f} | {body['centre_from_tip']:.4f} | "
+            f"| {body['body']} | {', '.join(body['mirror_planes']) or 'none'} | {body['mass']:.2f} |"
+            f" {body['centre_from_tip']:.4f} | "
             f"{body['transverse_inertia']:.3f} | {critical} | {at['axis_turn']:+.1f} | {at['max_attack_angle']:.2f} |"
         )
     print()
@@ -131,6 +134,12 @@ def report(record: dict) -> None:
     print("|---|" + "---|" * len(record["speeds"]))
     for body in record["bodies"]:
         print(f"| {body['body']} | " + " | ".join(f"{run['axis_turn']:+.1f}" for run in body["runs"]) + " |")
+    print()
+    whole, square = (max(abs(run["axis_turn"]) for run in body["runs"]) for body in record["bodies"][:2])
+    print(
+        f"The largest axis turn over every speed of the two bodies of revolution: the whole nose {whole:.2g} deg,"
+        f" the square cut {square:.2g} deg."
+    )
 
 
 def figures(record: dict) -> None:

@@ -31,7 +31,7 @@ PROPERTIES = {  # test -> (property, what is generated)
     ),
     "test_geometry_projectiles_validate_or_explain": (
         "projectiles from files",
-        "the geometry table's keys (file, unit, axis, cell_field) valid or not, with or"
+        "the geometry table's keys (file, unit, axis, cell_field, symmetry) valid or not, with or"
         " without the mass, the materials and the analytic keys it excludes",
     ),
     "test_mutated_scene_files_validate_or_explain": ("mutated scene files", "the mutated scenes, written as TOML"),

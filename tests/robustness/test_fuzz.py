@@ -523,7 +523,7 @@ def body_files(tmp_path_factory) -> dict[str, str]:
 
 @st.composite
 def geometry_projectiles(draw):
-    """Test 2 with its projectile from a file: the geometry table's keys (file, unit, axis, cell_field)
+    """Test 2 with its projectile from a file: the geometry table's keys (file, unit, axis, cell_field, symmetry)
     drawn valid or not, with or without the mass, the materials and the analytic keys it excludes."""
     geometry = {}
     for key, valid in (
@@ -531,6 +531,7 @@ def geometry_projectiles(draw):
         ("unit", st.sampled_from(["m", "mm", "cm", "in"])),
         ("axis", st.lists(st.sampled_from([0.0, 1.0, -1.0, 0.5]), min_size=3, max_size=3)),
         ("cell_field", st.sampled_from(["material", "gmsh:physical"])),
+        ("symmetry", st.sampled_from(["auto", "none", "mirror_y", "mirror_z", "mirrors", "revolution"])),
     ):
         choice = draw(st.sampled_from(["valid", "valid", "absent", "garbage"]))
         if choice == "valid" or (key == "file" and choice == "absent"):
