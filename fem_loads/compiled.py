@@ -31,6 +31,7 @@ import math
 import numpy as np
 from numba import njit
 
+from .compiled_point import exposure_correction, law_setup, point_friction, point_stress
 from .kernel_layout import (
     CONSTANT_CONTACT_INCIDENCE,
     CONSTANT_CONTACT_OFFSET,
@@ -42,30 +43,24 @@ from .kernel_layout import (
     CONSTANT_MAX_RADIUS,
     CONSTANT_NEEDS_DEPTH,
     CONSTANT_PLAIN,
-    CONSTANT_SEPARATION,
     CONSTANT_SMOOTH_CONTACT,
-    CONSTANT_SMOOTH_ENTRY,
     CONSTANT_SURFACE_DEPTH,
     CONSTANT_SURFACE_FRACTION,
-    CONSTANT_USER_LAW,
     DATA_CONSTANTS,
+    DATA_EXPOSURE_COLUMNS,
     DATA_HALF_ENTRY_LENGTH,
     DATA_IMAGE_SIGNS,
-    DATA_INTERFACES,
     DATA_INVERSE_ENTRY,
     DATA_LAWS,
     DATA_NORMAL_ARM,
     DATA_POINT_SIGNS,
     DATA_POINTS,
-    DATA_TABLE_ROWS,
-    DATA_TABLES,
-    DATA_USER_LAW_ADDRESS,
     DATA_WEIGHTS,
     KERNEL_ARRAYS,
     kernel_data,
     supports,
 )
-from .native import builtin_stress, call_user_law, polynomial_stress, slip_factor, smooth_step
+from .native import polynomial_stress, smooth_step
 from .user_law import user_law_signature
 
 __all__ = ["dafl_kernel", "lowest_height_kernel", "kernel_data", "supports", "KERNEL_ARRAYS", "USER_LAW_SIGNATURE"]
@@ -74,76 +69,10 @@ __all__ = ["dafl_kernel", "lowest_height_kernel", "kernel_data", "supports", "KE
 USER_LAW_SIGNATURE = user_law_signature()
 
 
-_NO_TABLE = np.zeros(0)
-
-
-@njit(cache=True, error_model="numpy")
-def _layered_stress(data: tuple[np.ndarray, ...], normal_velocity: float, depth: float, entry_length: float) -> float:
-    """The layers' laws blended over ``entry_length`` (m) across each interface
-    (:class:`~fem_loads.target.LayeredTarget`), at ``Vn`` (m/s) and depth (m)."""
-    interfaces, p, rows, tables = data[DATA_INTERFACES], data[DATA_LAWS], data[DATA_TABLE_ROWS], data[DATA_TABLES]
-    user = data[DATA_CONSTANTS][CONSTANT_USER_LAW] != 0.0
-    stress = 0.0
-    above = 1.0  # the share of this layer and those below it: S((z - d)/l + 1/2) of its top interface d
-    for layer in range(interfaces.shape[0] + 1):
-        below = 0.0
-        if layer < interfaces.shape[0]:
-            if entry_length > 0.0:
-                below = smooth_step((depth - interfaces[layer]) / entry_length + 0.5)
-            elif depth >= interfaces[layer]:
-                below = 1.0
-        share = above - below
-        if share != 0.0:
-            q = p[layer]
-            q0, q1, q2, q3, q4, q5, q6, q7 = q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7]
-            if user:
-                address = data[DATA_USER_LAW_ADDRESS][0]
-                law = call_user_law(address, normal_velocity, depth, q0, q1, q2, q3, q4, q5, q6, q7)
-            else:
-                first, count = rows[layer, 0], rows[layer, 1]
-                depths, stresses = tables[0, first : first + count], tables[1, first : first + count]
-                law = builtin_stress(normal_velocity, depth, q0, q1, q2, q3, q4, q5, depths, stresses)
-            stress += share * law
-        above = below
-        if above == 0.0:
-            break
-    return stress
-
-
 # fastmath: reassociation (and fused multiply-adds) let the per-image sums over the points run in SIMD
 # lanes; each image runs the same machine code on its own signs, so mirrored images still get
 # bitwise-equal sums from bitwise-equal stresses, and the fold stays exact
 _FAST = {"reassoc", "contract"}
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def _point_friction(
-    r0: float,
-    r1: float,
-    r2: float,
-    m0: float,
-    m1: float,
-    m2: float,
-    v: np.ndarray,
-    w: np.ndarray,
-    normal_velocity: float,
-    stress: float,
-    weight: float,
-    mu: float,
-    cap: float,
-    width: float,
-    speed2: float,
-) -> tuple[float, float, float, float, float, float]:
-    """The friction force and moment (body frame) of one point ``r`` with normal ``m`` carrying ``stress`` (its
-    normal stress times its ``weight``): ``-tau k s`` against the slip ``s = u - Vn m``, ``u = v + w x r``."""
-    s0 = v[0] + w[1] * r2 - w[2] * r1 - normal_velocity * m0
-    s1 = v[1] + w[2] * r0 - w[0] * r2 - normal_velocity * m1
-    s2 = v[2] + w[0] * r1 - w[1] * r0 - normal_velocity * m2
-    tau = mu * stress
-    if cap > 0.0:
-        tau = min(tau, cap * weight)
-    t = tau * slip_factor(s0 * s0 + s1 * s1 + s2 * s2, width, speed2)
-    return -t * s0, -t * s1, -t * s2, -t * (r1 * s2 - r2 * s1), -t * (r2 * s0 - r0 * s2), -t * (r0 * s1 - r1 * s0)
 
 
 @njit(cache=True, error_model="numpy", fastmath=_FAST, inline="always")
@@ -209,7 +138,7 @@ def _smooth_sums(
             if with_friction:
                 # the image's point and normal in the body frame
                 r0, r1, r2, m0, m1, m2 = points[0, j], sy * points[1, j], sz * points[2, j], n0, sy * n1, sz * n2
-                d0, d1, d2, d3, d4, d5 = _point_friction(
+                d0, d1, d2, d3, d4, d5 = point_friction(
                     r0, r1, r2, m0, m1, m2, v, w, normal_velocity, stress, weights[j], mu, cap, width, speed2
                 )
                 f0, f1, f2, f3, f4, f5 = f0 + d0, f1 + d1, f2 + d2, f3 + d3, f4 + d4, f5 + d5
@@ -288,56 +217,24 @@ def _sums(
         data[DATA_POINT_SIGNS],
         data[DATA_CONSTANTS],
     )
-    address = data[DATA_USER_LAW_ADDRESS][0]
-    layered = data[DATA_INTERFACES].shape[0] > 0
-    user = constants[CONSTANT_USER_LAW] != 0.0
-    separation = constants[CONSTANT_SEPARATION] != 0.0
-    smooth_contact, smooth_entry = constants[CONSTANT_SMOOTH_CONTACT] != 0.0, constants[CONSTANT_SMOOTH_ENTRY] != 0.0
-    offset = constants[CONSTANT_CONTACT_OFFSET]
-    surface_depth, surface_fraction = constants[CONSTANT_SURFACE_DEPTH], constants[CONSTANT_SURFACE_FRACTION]
+    layered, user, address, law, depths, stresses, switches = law_setup(data, width)
+    surface_depth = constants[CONSTANT_SURFACE_DEPTH]
     needs_depth = constants[CONSTANT_NEEDS_DEPTH] != 0.0 or surface_depth > 0.0
     mu, cap = constants[CONSTANT_FRICTION], constants[CONSTANT_FRICTION_CAP]
-    inverse_width = 1.0 / width if width > 0.0 else 0.0
     speed2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
-    c = data[DATA_LAWS][0]
-    c0, c1, c2, c3, c4, c5, c6, c7 = c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]
-    count = data[DATA_TABLE_ROWS][0, 1]
-    depths, stresses = data[DATA_TABLES][0, :count].copy(), data[DATA_TABLES][1, :count].copy()
     for k in range(sums.shape[0]):
         a0 = a1 = a2 = a3 = a4 = a5 = 0.0
         for j in range(weights.shape[0]):
             n0, n1, n2 = normal_arm[0, j], normal_arm[1, j], normal_arm[2, j]
             n3, n4, n5 = normal_arm[3, j], normal_arm[4, j], normal_arm[5, j]
             normal_velocity = g[k, 0] * n0 + g[k, 1] * n1 + g[k, 2] * n2 + g[k, 3] * n3 + g[k, 4] * n4 + g[k, 5] * n5
-            # branch-free where the points differ (the factors are selects, not jumps): the loop then runs in
-            # SIMD lanes, and the points on either side of a switch cost the same
-            if separation:
-                if smooth_contact:
-                    contact = smooth_step(normal_velocity * inverse_width + offset)
-                else:
-                    contact = 1.0 if normal_velocity > guard else 0.0
-                law_velocity = max(normal_velocity, 0.0)
-            else:
-                contact = 1.0
-                law_velocity = normal_velocity
             z = 0.0  # the height; the depth below the surface is -z
             if needs_depth or not embedded:
                 z = height + (up[k, 0] * points[0, j] + up[k, 1] * points[1, j] + up[k, 2] * points[2, j])
-            if layered:
-                stress = _layered_stress(data, law_velocity, -z, 2.0 * half_entry_length[j])
-            elif user:
-                stress = call_user_law(address, law_velocity, -z, c0, c1, c2, c3, c4, c5, c6, c7)
-            else:
-                stress = builtin_stress(law_velocity, -z, c0, c1, c2, c3, c4, c5, depths, stresses)
-            stress = stress * contact if separation else max(stress, 0.0)
-            if surface_depth > 0.0:
-                stress *= surface_fraction + (1.0 - surface_fraction) * smooth_step(-z / surface_depth)
-            if not embedded:
-                if smooth_entry:
-                    stress *= smooth_step(0.5 - z * inverse_entry[j])
-                else:
-                    stress = stress if z < 0.0 else 0.0
-            stress *= weights[j]
+            stress = point_stress(
+                data, j, normal_velocity, z, embedded, guard, layered, user, address, law, depths, stresses, switches,
+                weights, inverse_entry, half_entry_length,
+            )  # fmt: skip
             a0 += stress * n0
             a1 += stress * n1
             a2 += stress * n2
@@ -347,7 +244,7 @@ def _sums(
             if mu > 0.0 and stress != 0.0:
                 sy, sz = point_signs[k, 1], point_signs[k, 2]  # the image's point and normal in the body frame
                 r0, r1, r2, m0, m1, m2 = points[0, j], sy * points[1, j], sz * points[2, j], n0, sy * n1, sz * n2
-                d = _point_friction(
+                d = point_friction(
                     r0, r1, r2, m0, m1, m2, v, w, normal_velocity, stress, weights[j], mu, cap, width, speed2
                 )
                 for c in range(6):
@@ -397,6 +294,7 @@ def dafl_kernel(
         width = 0.0
     sums = np.zeros((images, 6))
     friction = np.zeros(6)
+    guard = constants[CONSTANT_GUARD] * speed_scale
     if constants[CONSTANT_PLAIN] != 0.0 and (
         constants[CONSTANT_FRICTION] > 0.0 or constants[CONSTANT_SURFACE_DEPTH] > 0.0
     ):
@@ -404,8 +302,9 @@ def dafl_kernel(
     elif constants[CONSTANT_PLAIN] != 0.0:
         _frictionless_sums(data, g, up, v, angular_velocity, height, width, embedded, sums, friction)
     else:
-        guard = constants[CONSTANT_GUARD] * speed_scale
         _sums(data, g, up, v, angular_velocity, height, width, guard, embedded, sums, friction)
+    if data[DATA_EXPOSURE_COLUMNS].shape[0] > 0:
+        exposure_correction(data, g, up, v, angular_velocity, height, width, guard, embedded, sums, friction)
     body = np.empty(6)
     for c in range(6):
         if images == 4:

@@ -124,6 +124,10 @@ class DAFLLoads:
         ``l / sqrt(weight)``: the length over which a point enters the target (and
         crosses a layer interface), in units of the square root of its quadrature weight
         (about its own size).  0: sharp.
+    exposure : bool
+        True (default): a point the target cannot reach, the ray along its velocity meeting the body
+        (``SurfaceQuadrature.exposure``, :mod:`fem_loads.exposure`), carries no stress.  False: every
+        point with a positive ``Vn`` does.  A quadrature without a table (a convex body) is unaffected.
     """
 
     def __init__(
@@ -139,6 +143,7 @@ class DAFLLoads:
         contact_incidence: float = 0.0,
         contact: str = "one_sided",
         entry_smoothing: float = 0.0,
+        exposure: bool = True,
     ) -> None:
         if not (contact_width >= 0.0 and contact_incidence >= 0.0 and entry_smoothing >= 0.0):
             raise ValueError("contact_width, contact_incidence and entry_smoothing must be >= 0")
@@ -171,6 +176,13 @@ class DAFLLoads:
             self._images = MirrorImages(q.mirror_images, q.mirror_signs, self._normal_arm_t, self._points_t)
             self._hot_weights = self._images.quarter(self._weights)
             self._hot_entry = self._images.quarter(self._entry_length)
+        # the points that can be hidden: their positions in the part (or in every point), and each image's signs
+        self.exposure = q.exposure if exposure and q.exposure is not None and len(q.exposure.columns) else None
+        if self.exposure is not None:
+            part = q.mirror_images[0] if q.mirror_images is not None else np.arange(len(q))
+            self._exposed_points = q.points[part[self.exposure.columns]]  # (c, 3)
+            signs = self._images.point_signs if self._images is not None else np.ones((1, 3))
+            self._exposure_signs = signs[:, None, :]  # (k, 1, 3)
 
     def __len__(self) -> int:
         return len(self._weights)
@@ -292,7 +304,21 @@ class DAFLLoads:
             stress *= self.free_surface.factor(np.asarray(depth))
         if heights is not None:
             stress *= self._entry(heights)
+        if self.exposure is not None:
+            factor = self._exposure_factor(velocity @ rotation, angular_velocity)
+            if self._images is None:
+                stress[self.exposure.columns] *= factor[0]
+            else:
+                stress[:, self.exposure.columns] *= factor
         return stress, normal_velocity, speed_scale
+
+    def _exposure_factor(self, body_velocity: np.ndarray, angular_velocity: np.ndarray) -> np.ndarray:
+        """The exposure of the points that can be hidden, shape (k, c): each image's point velocity
+        ``u = v + omega x r``, turned back into the part's frame by the image's signs, looked up."""
+        assert self.exposure is not None  # called only with a table
+        signs = self._exposure_signs
+        velocity = body_velocity + np.cross(angular_velocity, self._exposed_points * signs)
+        return self.exposure.factor(velocity * signs)
 
     def stress(
         self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray

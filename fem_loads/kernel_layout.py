@@ -51,6 +51,9 @@ __all__ = [
     "DATA_TABLE_ROWS",
     "DATA_INTERFACES",
     "DATA_USER_LAW_ADDRESS",
+    "DATA_EXPOSURE_COLUMNS",
+    "DATA_EXPOSURE_TABLE",
+    "DATA_EXPOSURE_FORWARD",
 ]
 
 #: the positions of the scalars in the data's "constants" array
@@ -91,6 +94,9 @@ KERNEL_ARRAYS = (
     "table_rows",  # (layers, 2), int: each layer's first row in tables and its count
     "interfaces",  # (layers - 1,): the layers' interfaces (m below the surface)
     "user_law",  # (1,), int: the address of a user law's cfunc (USER_LAW_SIGNATURE), 0 without one
+    "exposure_columns",  # (c,), int: the points that can be hidden (Exposure.columns); empty for a convex body
+    "exposure_table",  # (c, 6, N + 1, N + 1), uint8: their exposure at the cube map's nodes
+    "exposure_forward",  # (c,): the cosine of each one's cone of exposure about +x (Exposure.forward_cosine)
 )
 (
     DATA_NORMAL_ARM,
@@ -106,6 +112,9 @@ KERNEL_ARRAYS = (
     DATA_TABLE_ROWS,
     DATA_INTERFACES,
     DATA_USER_LAW_ADDRESS,
+    DATA_EXPOSURE_COLUMNS,
+    DATA_EXPOSURE_TABLE,
+    DATA_EXPOSURE_FORWARD,
 ) = range(len(KERNEL_ARRAYS))
 
 
@@ -202,4 +211,17 @@ def kernel_data(loads: DAFLLoads) -> tuple[np.ndarray, ...]:
         table_rows,
         contiguous(interfaces),
         np.array([0 if user is None else user.address], dtype=np.int64),
+        *_exposure_arrays(loads),
+    )
+
+
+def _exposure_arrays(loads: DAFLLoads) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``exposure_columns``, ``exposure_table`` and ``exposure_forward`` of :func:`kernel_data` (empty without)."""
+    exposure = loads.exposure
+    if exposure is None:
+        return np.zeros(0, dtype=np.int64), np.zeros((0, 6, 2, 2), dtype=np.uint8), np.zeros(0)
+    return (
+        np.ascontiguousarray(exposure.columns, dtype=np.int64),
+        np.ascontiguousarray(exposure.table, dtype=np.uint8),
+        np.ascontiguousarray(exposure.forward_cosine, dtype=float),
     )

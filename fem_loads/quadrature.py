@@ -45,6 +45,7 @@ import numpy as np
 from mesh.geometry import ProjectileMesh
 from mesh.profile import Profile
 
+from .exposure import DEFAULT_RESOLUTION, Exposure, exposure_table
 from .mass import to_skfem
 
 if TYPE_CHECKING:  # scikit-fem (and gmsh, by mesh.cad) is imported where it is used
@@ -52,7 +53,7 @@ if TYPE_CHECKING:  # scikit-fem (and gmsh, by mesh.cad) is imported where it is 
 
     from mesh.cad import CadSurface
 
-__all__ = ["SurfaceQuadrature", "surface_quadrature", "find_mirror_images", "NORMAL_MODELS"]
+__all__ = ["SurfaceQuadrature", "surface_quadrature", "find_mirror_images", "with_exposure", "NORMAL_MODELS"]
 
 # the sign of (y, z) in the four mirror images of two planes, in the order of ``mirror_images``
 MIRROR_SIGNS = ((1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0))
@@ -82,6 +83,9 @@ class SurfaceQuadrature:
         side and the images in it.  The images are exact (bitwise) sign changes
         of the point and its normal, with equal weights.  None for a quadrature
         without mirror symmetry.
+    exposure : Exposure, optional
+        Which points the target cannot reach, by the direction they move (:mod:`fem_loads.exposure`);
+        None for a convex body, whose every point with a positive ``Vn`` is reached.
     moment_arms : ndarray, shape (n, 3)
         ``r x n`` for each point, cached for the moment and the normal velocity.
     """
@@ -90,6 +94,7 @@ class SurfaceQuadrature:
     normals: np.ndarray
     weights: np.ndarray
     mirror_images: np.ndarray | None = None
+    exposure: Exposure | None = None
     moment_arms: np.ndarray = field(init=False)
 
     def __post_init__(self) -> None:
@@ -364,3 +369,24 @@ def surface_quadrature(
         _symmetrise(points, normals, weights, images, quadrature.mirror_signs)
         quadrature = SurfaceQuadrature(points, normals, weights, images)  # the arms of the rewritten points
     return quadrature
+
+
+def with_exposure(
+    quadrature: SurfaceQuadrature, triangles: np.ndarray, lift: float, resolution: int = DEFAULT_RESOLUTION
+) -> SurfaceQuadrature:
+    """``quadrature`` with the exposure of its points (:mod:`fem_loads.exposure`): a table for each point of its
+    fundamental part (or each point) that the body can hide, none for a convex body.
+
+    Parameters
+    ----------
+    triangles : ndarray, shape (t, 3, 3)
+        The outer surface as flat triangles, in the quadrature's frame (about the centre of mass, m).
+    lift : float
+        How far off the surface the rays start (m); see :func:`~fem_loads.exposure.exposure_table`.
+    """
+    part = quadrature.mirror_images[0] if quadrature.mirror_images is not None else np.arange(len(quadrature))
+    columns, table = exposure_table(quadrature.points[part], quadrature.normals[part], triangles, lift, resolution)
+    exposure = Exposure.from_table(columns, table) if len(columns) else None
+    return SurfaceQuadrature(
+        quadrature.points, quadrature.normals, quadrature.weights, quadrature.mirror_images, exposure
+    )

@@ -30,7 +30,16 @@ import numpy as np
 
 from .profile import ProjectileGeometry
 
-__all__ = ["ProjectileMesh", "build_mesh", "mirror_mesh", "MIRRORED_ENTITY", "BODY", "COUNTERWEIGHT", "OUTER"]
+__all__ = [
+    "ProjectileMesh",
+    "build_mesh",
+    "mirror_mesh",
+    "outer_triangles",
+    "MIRRORED_ENTITY",
+    "BODY",
+    "COUNTERWEIGHT",
+    "OUTER",
+]
 
 # region tags stored with each cell of a ProjectileMesh
 BODY, COUNTERWEIGHT, OUTER = 1, 2, 3
@@ -290,6 +299,17 @@ def _orient_outward(points: np.ndarray, tris: np.ndarray, geometry: ProjectileGe
     tris = tris.copy()
     tris[flipped] = _permute(tris[flipped], (0, 2, 1), TRI_EDGES)
     return tris
+
+
+def outer_triangles(mesh: ProjectileMesh) -> np.ndarray:
+    """The outer surface as flat triangles, shape (t, 3, 3) (m): each curved (6-node) triangle split into four
+    through its edge nodes, which lie on the surface, so that the flat ones keep a quarter of its sag."""
+    outer = mesh.outer
+    if mesh.order == 1:
+        return mesh.points[outer]
+    c0, c1, c2, e01, e12, e02 = (outer[:, k] for k in range(6))  # corners, then edges in TRI_EDGES' order
+    split = np.stack([[c0, e01, e02], [e01, c1, e12], [e02, e12, c2], [e01, e12, e02]], axis=1)  # (3, 4, n)
+    return mesh.points[split.transpose(2, 1, 0).reshape(-1, 3)]
 
 
 #: the bit a mirror image in the plane ``x[axis] = 0`` sets in an outer triangle's CAD surface tag

@@ -51,6 +51,7 @@ COMPILED_SOURCES = (
     "dynamics.quaternion",
     "dynamics.integrators",
     "fem_loads.compiled",
+    "fem_loads.compiled_point",
     "fem_loads.kernel_layout",
     "fem_loads.native",
     "fem_loads.resistance",

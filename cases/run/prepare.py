@@ -16,14 +16,17 @@ import io
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from fem_loads import MassProperties, SurfaceQuadrature, mass_properties, surface_quadrature, to_skfem
+from fem_loads.exposure import Exposure
+from fem_loads.quadrature import with_exposure
 from mesh import Profile, ProjectileGeometry, ProjectileMesh, build_mesh, read_mesh, write_mesh
 from mesh.cad import CadSurface
 from mesh.files import build_file_mesh
+from mesh.geometry import outer_triangles
 from mesh.imported import BodyOutline, FileGeometry, GeometryError, body_frame, outline
 
 from ..scene import InputError, Numerics, Projectile, Scene
@@ -158,7 +161,7 @@ def _load(path: Path, spec: Projectile) -> PreparedProjectile | None:
             mass = MassProperties(float(data["mass"]), data["centre"], data["inertia"], float(data["volume"]))
             images = data["mirror_images"]
             quadrature = SurfaceQuadrature(
-                data["points"], data["normals"], data["weights"], images if images.size else None
+                data["points"], data["normals"], data["weights"], images if images.size else None, _exposure(data)
             )
             sizes = data["outline"]
             body = BodyOutline(*(float(v) for v in sizes)) if sizes.size else None
@@ -172,6 +175,10 @@ def _save(path: Path, prepared: PreparedProjectile) -> None:
     m, q = prepared.mass, prepared.quadrature
     buffer = io.BytesIO()
     span = getattr(prepared.geometry, "counterweight", None)
+    arrays: dict[str, Any] = {
+        "mirror_images": q.mirror_images if q.mirror_images is not None else np.empty(0, dtype=np.int64),
+        **_exposure_arrays(q.exposure),
+    }
     np.savez(
         buffer,
         mass=m.mass,
@@ -184,9 +191,31 @@ def _save(path: Path, prepared: PreparedProjectile) -> None:
         n_tetra=prepared.n_tetra,
         counterweight=np.array(span if span is not None else [], dtype=float),
         outline=np.array(dataclasses.astuple(prepared.outline) if prepared.outline else [], dtype=float),
-        mirror_images=q.mirror_images if q.mirror_images is not None else np.empty(0, dtype=np.int64),
+        **arrays,
     )
     atomic_write(path, buffer.getvalue())
+
+
+def _exposure_arrays(exposure: Exposure | None) -> dict[str, np.ndarray]:
+    """The exposure's arrays for the cache file, its table as bits (an eighth of the bytes); none for None."""
+    if exposure is None:
+        return {"exposure_columns": np.empty(0, dtype=np.int64)}
+    return {
+        "exposure_columns": exposure.columns,
+        "exposure_shape": np.array(exposure.table.shape),
+        "exposure_bits": np.packbits(exposure.table.ravel()),
+        "exposure_forward": exposure.forward_cosine,
+    }
+
+
+def _exposure(data: Any) -> Exposure | None:
+    """The exposure kept by :func:`_exposure_arrays` (an ``np.load`` of the cache file)."""
+    columns = data["exposure_columns"]
+    if not columns.size:
+        return None
+    shape = tuple(int(n) for n in data["exposure_shape"])
+    table = np.unpackbits(data["exposure_bits"], count=int(np.prod(shape))).reshape(shape)
+    return Exposure(columns, table, data["exposure_forward"])
 
 
 def _compute(spec: Projectile, numerics: Numerics, geometry: ProjectileGeometry | FileGeometry) -> PreparedProjectile:
@@ -237,6 +266,8 @@ def _compute(spec: Projectile, numerics: Numerics, geometry: ProjectileGeometry 
             f"{size}: the elements of this mesh are too distorted to integrate ({exc});"
             " a finer numerics.mesh_size, or numerics.geometry_order = 1, usually works"
         ) from exc
+    # rays start a twentieth of an element off the surface: beyond the split facets' sag from it
+    quadrature = with_exposure(quadrature, outer_triangles(mesh) - mass.centre, 0.05 * numerics.mesh_size)
     return PreparedProjectile(
         geometry, _scaled_inertia(spec, mass), quadrature, len(mesh.tetra), outline(mesh) if from_file else None
     )

@@ -195,4 +195,5 @@ class Scene(Strict):
             free_surface=free_surface,
             **effects.contact_ramp,
             entry_smoothing=self.numerics.entry_smoothing,
+            exposure=effects.exposure,
         )

@@ -292,6 +292,12 @@ class Effects(Strict):
         " (docs/model.md)",
     )
     free_surface: FreeSurfaceSpec | None = None
+    exposure: bool = field(
+        True,
+        description="only surface the target can reach carries stress: a point whose ray along its velocity meets"
+        " the body is unloaded (base recesses, grooves, the lee of fins); false loads every point with Vn > 0"
+        " (docs/geometry.md)",
+    )
     gravity: bool = False
     gravity_acceleration: Number = field(9.80665, unit="m/s^2", ge=0.0, le=1e3)
 

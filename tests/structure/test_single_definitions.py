@@ -26,7 +26,7 @@ def _definitions() -> list[tuple[object, object]]:
     """(compiled form, the one definition) pairs."""
     from dynamics import compiled as compiled_step
     from dynamics import pitch_plane, rigid_body
-    from fem_loads import compiled, native, ramps, resistance, revolved, target
+    from fem_loads import compiled, compiled_point, native, ramps, resistance, revolved, target
 
     return [
         (native.smooth_step, ramps.smooth_step_scalars),
@@ -34,8 +34,8 @@ def _definitions() -> list[tuple[object, object]]:
         (native.builtin_stress, resistance.normal_stress_scalars),
         (native.polynomial_stress, resistance.polynomial_stress_scalars),
         (compiled.smooth_step, ramps.smooth_step_scalars),
-        (compiled.slip_factor, target.slip_factor_scalars),
-        (compiled.builtin_stress, resistance.normal_stress_scalars),
+        (compiled_point.slip_factor, target.slip_factor_scalars),
+        (compiled_point.builtin_stress, resistance.normal_stress_scalars),
         (compiled.polynomial_stress, resistance.polynomial_stress_scalars),
         (revolved.smooth_step, ramps.smooth_step_scalars),
         (revolved.slip_factor, target.slip_factor_scalars),

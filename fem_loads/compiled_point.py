@@ -1,0 +1,289 @@
+"""One surface point of the compiled DAFL kernel (:mod:`fem_loads.compiled`): its stress, its friction, and the
+correction of the sums for the points the target cannot reach (:mod:`fem_loads.exposure`).
+
+Everything here is inlined into the kernel's loops (``inline="always"``), so that the sums over the points
+and the correction of the hidden ones compute each point's stress with the same machine code.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .kernel_layout import (
+    CONSTANT_CONTACT_OFFSET,
+    CONSTANT_FRICTION,
+    CONSTANT_FRICTION_CAP,
+    CONSTANT_NEEDS_DEPTH,
+    CONSTANT_SEPARATION,
+    CONSTANT_SMOOTH_CONTACT,
+    CONSTANT_SMOOTH_ENTRY,
+    CONSTANT_SURFACE_DEPTH,
+    CONSTANT_SURFACE_FRACTION,
+    CONSTANT_USER_LAW,
+    DATA_CONSTANTS,
+    DATA_EXPOSURE_COLUMNS,
+    DATA_EXPOSURE_FORWARD,
+    DATA_EXPOSURE_TABLE,
+    DATA_HALF_ENTRY_LENGTH,
+    DATA_INTERFACES,
+    DATA_INVERSE_ENTRY,
+    DATA_LAWS,
+    DATA_NORMAL_ARM,
+    DATA_POINT_SIGNS,
+    DATA_POINTS,
+    DATA_TABLE_ROWS,
+    DATA_TABLES,
+    DATA_USER_LAW_ADDRESS,
+    DATA_WEIGHTS,
+)
+from .native import builtin_stress, call_user_law, slip_factor, smooth_step
+
+__all__ = ["layered_stress", "point_friction", "law_setup", "point_stress", "exposure_correction"]
+
+
+@njit(cache=True, error_model="numpy")
+def layered_stress(data: tuple[np.ndarray, ...], normal_velocity: float, depth: float, entry_length: float) -> float:
+    """The layers' laws blended over ``entry_length`` (m) across each interface
+    (:class:`~fem_loads.target.LayeredTarget`), at ``Vn`` (m/s) and depth (m)."""
+    interfaces, p, rows, tables = data[DATA_INTERFACES], data[DATA_LAWS], data[DATA_TABLE_ROWS], data[DATA_TABLES]
+    user = data[DATA_CONSTANTS][CONSTANT_USER_LAW] != 0.0
+    stress = 0.0
+    above = 1.0  # the share of this layer and those below it: S((z - d)/l + 1/2) of its top interface d
+    for layer in range(interfaces.shape[0] + 1):
+        below = 0.0
+        if layer < interfaces.shape[0]:
+            if entry_length > 0.0:
+                below = smooth_step((depth - interfaces[layer]) / entry_length + 0.5)
+            elif depth >= interfaces[layer]:
+                below = 1.0
+        share = above - below
+        if share != 0.0:
+            q = p[layer]
+            q0, q1, q2, q3, q4, q5, q6, q7 = q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7]
+            if user:
+                address = data[DATA_USER_LAW_ADDRESS][0]
+                law = call_user_law(address, normal_velocity, depth, q0, q1, q2, q3, q4, q5, q6, q7)
+            else:
+                first, count = rows[layer, 0], rows[layer, 1]
+                depths, stresses = tables[0, first : first + count], tables[1, first : first + count]
+                law = builtin_stress(normal_velocity, depth, q0, q1, q2, q3, q4, q5, depths, stresses)
+            stress += share * law
+        above = below
+        if above == 0.0:
+            break
+    return stress
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def point_friction(
+    r0: float,
+    r1: float,
+    r2: float,
+    m0: float,
+    m1: float,
+    m2: float,
+    v: np.ndarray,
+    w: np.ndarray,
+    normal_velocity: float,
+    stress: float,
+    weight: float,
+    mu: float,
+    cap: float,
+    width: float,
+    speed2: float,
+) -> tuple[float, float, float, float, float, float]:
+    """The friction force and moment (body frame) of one point ``r`` with normal ``m`` carrying ``stress`` (its
+    normal stress times its ``weight``): ``-tau k s`` against the slip ``s = u - Vn m``, ``u = v + w x r``."""
+    s0 = v[0] + w[1] * r2 - w[2] * r1 - normal_velocity * m0
+    s1 = v[1] + w[2] * r0 - w[0] * r2 - normal_velocity * m1
+    s2 = v[2] + w[0] * r1 - w[1] * r0 - normal_velocity * m2
+    tau = mu * stress
+    if cap > 0.0:
+        tau = min(tau, cap * weight)
+    t = tau * slip_factor(s0 * s0 + s1 * s1 + s2 * s2, width, speed2)
+    return -t * s0, -t * s1, -t * s2, -t * (r1 * s2 - r2 * s1), -t * (r2 * s0 - r0 * s2), -t * (r0 * s1 - r1 * s0)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def law_setup(
+    data: tuple[np.ndarray, ...], width: float
+) -> tuple[bool, bool, int, np.ndarray, np.ndarray, np.ndarray, tuple[bool, bool, float, float, float, float, bool]]:
+    """What every point's stress shares, read once before a loop over the points: ``(layered, user, address, law,
+    depths, stresses, switches)``, the law's coefficients ``law`` (the first layer's), its strength table, and the
+    switches ``(separation, smooth_contact, 1 / W, contact offset, free surface depth and fraction, smooth_entry)``
+    at the contact width ``W`` (m/s)."""
+    constants = data[DATA_CONSTANTS]
+    count = data[DATA_TABLE_ROWS][0, 1]
+    switches = (
+        constants[CONSTANT_SEPARATION] != 0.0,
+        constants[CONSTANT_SMOOTH_CONTACT] != 0.0,
+        1.0 / width if width > 0.0 else 0.0,
+        constants[CONSTANT_CONTACT_OFFSET],
+        constants[CONSTANT_SURFACE_DEPTH],
+        constants[CONSTANT_SURFACE_FRACTION],
+        constants[CONSTANT_SMOOTH_ENTRY] != 0.0,
+    )
+    return (
+        data[DATA_INTERFACES].shape[0] > 0,
+        constants[CONSTANT_USER_LAW] != 0.0,
+        data[DATA_USER_LAW_ADDRESS][0],
+        data[DATA_LAWS][0].copy(),
+        data[DATA_TABLES][0, :count].copy(),
+        data[DATA_TABLES][1, :count].copy(),
+        switches,
+    )
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def point_stress(
+    data: tuple[np.ndarray, ...],
+    j: int,
+    normal_velocity: float,
+    z: float,
+    embedded: bool,
+    guard: float,
+    layered: bool,
+    user: bool,
+    address: int,
+    law: np.ndarray,
+    depths: np.ndarray,
+    stresses: np.ndarray,
+    switches: tuple[bool, bool, float, float, float, float, bool],
+    weights: np.ndarray,
+    inverse_entry: np.ndarray,
+    half_entry_length: np.ndarray,
+) -> float:
+    """The normal stress of point ``j`` times its weight (N/m^0: Pa m^2) at ``Vn`` (m/s) and height ``z`` (m): the
+    law, the contact ramp (or the sharp switch, ``Vn > guard``), the free surface and the entry, as
+    :meth:`DAFLLoads._stress <fem_loads.dafl.DAFLLoads._stress>` multiplies them."""
+    separation, smooth_contact, inverse_width, offset, surface_depth, surface_fraction, smooth_entry = switches
+    # branch-free where the points differ (the factors are selects, not jumps): the loop then runs in
+    # SIMD lanes, and the points on either side of a switch cost the same
+    if separation:
+        if smooth_contact:
+            contact = smooth_step(normal_velocity * inverse_width + offset)
+        else:
+            contact = 1.0 if normal_velocity > guard else 0.0
+        law_velocity = max(normal_velocity, 0.0)
+    else:
+        contact = 1.0
+        law_velocity = normal_velocity
+    if layered:
+        stress = layered_stress(data, law_velocity, -z, 2.0 * half_entry_length[j])
+    elif user:
+        stress = call_user_law(
+            address, law_velocity, -z, law[0], law[1], law[2], law[3], law[4], law[5], law[6], law[7]
+        )
+    else:
+        stress = builtin_stress(law_velocity, -z, law[0], law[1], law[2], law[3], law[4], law[5], depths, stresses)
+    stress = stress * contact if separation else max(stress, 0.0)
+    if surface_depth > 0.0:
+        stress *= surface_fraction + (1.0 - surface_fraction) * smooth_step(-z / surface_depth)
+    if not embedded:
+        if smooth_entry:
+            stress *= smooth_step(0.5 - z * inverse_entry[j])
+        else:
+            stress = stress if z < 0.0 else 0.0
+    return stress * weights[j]
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _exposure(table: np.ndarray, row: int, d0: float, d1: float, d2: float) -> float:
+    """:meth:`Exposure.factor <fem_loads.exposure.Exposure.factor>` of one point and direction (any length)."""
+    n = table.shape[2] - 1
+    a0, a1, a2 = abs(d0), abs(d1), abs(d2)
+    if a0 >= a1 and a0 >= a2:
+        face, major, s, t = (0 if d0 >= 0.0 else 1), a0, d1, d2
+    elif a1 >= a2:
+        face, major, s, t = (2 if d1 >= 0.0 else 3), a1, d2, d0
+    else:
+        face, major, s, t = (4 if d2 >= 0.0 else 5), a2, d0, d1
+    if major == 0.0:
+        return 1.0
+    x, y = (s / major + 1.0) * (0.5 * n), (t / major + 1.0) * (0.5 * n)
+    i, k = min(max(int(math.floor(x)), 0), n - 1), min(max(int(math.floor(y)), 0), n - 1)
+    fx, fy = x - i, y - k
+    a, b, c, d = (
+        table[row, face, i, k],
+        table[row, face, i + 1, k],
+        table[row, face, i, k + 1],
+        table[row, face, i + 1, k + 1],
+    )
+    if a == b and b == c and c == d:
+        return float(a)
+    return (1.0 - fx) * (1.0 - fy) * a + fx * (1.0 - fy) * b + (1.0 - fx) * fy * c + fx * fy * d
+
+
+@njit(cache=True, error_model="numpy")
+def exposure_correction(
+    data: tuple[np.ndarray, ...],
+    g: np.ndarray,
+    up: np.ndarray,
+    v: np.ndarray,
+    w: np.ndarray,
+    height: float,
+    width: float,
+    guard: float,
+    embedded: bool,
+    sums: np.ndarray,
+    friction: np.ndarray,
+) -> None:
+    """Add ``(e - 1)`` times each hideable point's stress sums and friction to ``sums`` and ``friction``, which
+    hold every point's at ``e = 1`` (so the loops over all the points keep their SIMD lanes).
+
+    A point moving into its cone of exposure (``Exposure.forward_cosine``) is skipped at the cost of its
+    velocity; the others look their exposure up, and only those partly hidden compute their stress again.
+    """
+    columns, table, forward = data[DATA_EXPOSURE_COLUMNS], data[DATA_EXPOSURE_TABLE], data[DATA_EXPOSURE_FORWARD]
+    normal_arm, points, point_signs = data[DATA_NORMAL_ARM], data[DATA_POINTS], data[DATA_POINT_SIGNS]
+    weights, inverse_entry, half_entry = data[DATA_WEIGHTS], data[DATA_INVERSE_ENTRY], data[DATA_HALF_ENTRY_LENGTH]
+    constants = data[DATA_CONSTANTS]
+    layered, user, address, law, depths, stresses, switches = law_setup(data, width)
+    needs_depth = constants[CONSTANT_NEEDS_DEPTH] != 0.0 or constants[CONSTANT_SURFACE_DEPTH] > 0.0
+    mu, cap = constants[CONSTANT_FRICTION], constants[CONSTANT_FRICTION_CAP]
+    speed2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
+    for k in range(sums.shape[0]):
+        sy, sz = point_signs[k, 1], point_signs[k, 2]
+        for row in range(columns.shape[0]):
+            j = columns[row]
+            r0, r1, r2 = points[0, j], sy * points[1, j], sz * points[2, j]
+            u0 = v[0] + w[1] * r2 - w[2] * r1
+            u1 = v[1] + w[2] * r0 - w[0] * r2
+            u2 = v[2] + w[0] * r1 - w[1] * r0
+            speed = math.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
+            if u0 > forward[row] * speed:
+                continue
+            exposure = _exposure(table, row, u0, sy * u1, sz * u2)  # the direction in the part's frame
+            if exposure == 1.0:
+                continue
+            n0, n1, n2 = normal_arm[0, j], normal_arm[1, j], normal_arm[2, j]
+            n3, n4, n5 = normal_arm[3, j], normal_arm[4, j], normal_arm[5, j]
+            normal_velocity = g[k, 0] * n0 + g[k, 1] * n1 + g[k, 2] * n2 + g[k, 3] * n3 + g[k, 4] * n4 + g[k, 5] * n5
+            z = 0.0
+            if needs_depth or not embedded:
+                z = height + (up[k, 0] * points[0, j] + up[k, 1] * points[1, j] + up[k, 2] * points[2, j])
+            stress = point_stress(
+                data, j, normal_velocity, z, embedded, guard, layered, user, address, law, depths, stresses, switches,
+                weights, inverse_entry, half_entry,
+            )  # fmt: skip
+            change = (exposure - 1.0) * stress
+            sums[k, 0] += change * n0
+            sums[k, 1] += change * n1
+            sums[k, 2] += change * n2
+            sums[k, 3] += change * n3
+            sums[k, 4] += change * n4
+            sums[k, 5] += change * n5
+            if mu > 0.0 and change != 0.0:
+                # the friction at the exposed stress less that at the full one (a cap makes it nonlinear)
+                weight, m0, m1, m2 = weights[j], n0, sy * n1, sz * n2
+                full = point_friction(
+                    r0, r1, r2, m0, m1, m2, v, w, normal_velocity, stress, weight, mu, cap, width, speed2
+                )
+                part = point_friction(
+                    r0, r1, r2, m0, m1, m2, v, w, normal_velocity, exposure * stress, weight, mu, cap, width, speed2
+                )
+                for c in range(6):
+                    friction[c] += part[c] - full[c]

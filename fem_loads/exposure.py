@@ -1,0 +1,202 @@
+"""Which surface the target can reach: each quadrature point's exposure to the soil, by the direction it moves.
+
+The DAFL loads every point whose normal velocity is positive.  On a body that is not convex that includes
+surface the soil cannot reach: the inner wall of a base recess, the faces of a groove behind a shoulder,
+fins in the lee of the body.  The body ahead of such a point has already opened the cavity it moves
+through.  The criterion used here: a point moving with velocity ``u`` (body frame, relative to the
+soil) meets the soil only if the ray from it along ``u`` leaves the body without hitting it.  Its
+*exposure* ``e`` is 1 then and 0 otherwise, and its stresses (normal and friction) are multiplied by ``e``.
+
+Computed once per body, from the geometry (:func:`exposure_table`), and kept with the quadrature:
+
+* a point on the body's convex hull (its tangent plane has the whole body on one side) is exposed in
+  every direction that gives it a positive ``Vn``: such a ray leaves the tangent plane's half-space at
+  once and never meets the body.  It needs no table, and a convex body (every body of revolution of
+  the paper, a nose cut by a plane) has none at all;
+* every other point gets ``e`` at the nodes of a cube map of directions, ``resolution`` cells along each
+  face's edge: a ray cast against the outer surface (its curved facets split in four flat triangles)
+  from the point, lifted off the surface by a fraction of the element size;
+* for a direction with ``d . n <= 0``, where the point carries no stress anyway, the ray goes along the
+  tangential part of ``d``, so that ``e`` is continuous across ``Vn = 0``;
+* between the nodes ``e`` is interpolated bilinearly on the face: a number in [0, 1], continuous in the
+  direction, so that an adaptive step sees no jump when a shadow's edge crosses a point; a cell whose four
+  nodes agree gives their value exactly.
+
+The rays are traced by Embree (through trimesh).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Exposure", "exposure_table", "cube_nodes", "DEFAULT_RESOLUTION"]
+
+#: cells along each edge of a cube face: 16 gives 6 x 17 x 17 directions, about 5.6 degrees apart
+DEFAULT_RESOLUTION = 16
+
+
+@dataclass(frozen=True)
+class Exposure:
+    """The exposure tables of the points that can be hidden.
+
+    Attributes
+    ----------
+    columns : ndarray of int, shape (c,)
+        The points that can be hidden, as columns of the loads' layout: positions in the fundamental
+        part's points (``SurfaceQuadrature.mirror_images[0]``) of a mirror-symmetric quadrature, else
+        point indices.  Every other point is exposed whenever its ``Vn`` is positive.
+    table : ndarray of uint8, shape (c, 6, N + 1, N + 1)
+        1 where the ray from the point along the node's direction (:func:`cube_nodes`) leaves the body.
+    forward_cosine : ndarray, shape (c,)
+        Each point is exposed (``e = 1``) in every direction ``d`` with ``d_x > forward_cosine |d|``
+        (body frame, x forward; 2 where no such cone is known): a shortcut for the compiled kernel,
+        which then skips a point moving into that cone (most of a forward run) without interpolating.
+    """
+
+    columns: np.ndarray
+    table: np.ndarray
+    forward_cosine: np.ndarray
+
+    @classmethod
+    def from_table(cls, columns: np.ndarray, table: np.ndarray) -> Exposure:
+        """The exposure of ``columns`` with their ``table``, and the cones in which each is exposed.
+
+        A direction inside a cell of the cube map is within the cell's angular diameter ``delta`` of each of
+        its corners.  So a direction less than ``theta - delta`` from +x, where ``theta`` is the smallest
+        angle from +x of the corners of the point's cells that are not wholly 1, lies in a cell wholly 1.
+        """
+        n = table.shape[-1] - 1
+        nodes = cube_nodes(n)
+        corners = np.stack([nodes[:, :-1, :-1], nodes[:, 1:, :-1], nodes[:, :-1, 1:], nodes[:, 1:, 1:]])
+        diameter = float(np.arccos(np.clip(np.einsum("f...d,f...d->f...", corners[0], corners[3]), -1, 1)).max())
+        diameter = max(
+            diameter, float(np.arccos(np.clip(np.einsum("f...d,f...d->f...", corners[1], corners[2]), -1, 1)).max())
+        )
+        cells = np.stack([table[:, :, :-1, :-1], table[:, :, 1:, :-1], table[:, :, :-1, 1:], table[:, :, 1:, 1:]])
+        unclear = np.logical_not(cells.all(axis=0))  # (c, 6, n, n)
+        angle = np.arccos(np.clip(corners[..., 0], -1.0, 1.0))  # (4, 6, n, n): each corner's angle from +x
+        nearest = np.where(unclear[np.newaxis], angle[:, np.newaxis], np.inf).min(axis=(0, 2, 3, 4))
+        cone = nearest - diameter
+        forward = np.where(cone > 0.0, np.cos(np.minimum(cone, np.pi)), 2.0)
+        return cls(np.asarray(columns, dtype=np.int64), np.ascontiguousarray(table, dtype=np.uint8), forward)
+
+    @property
+    def resolution(self) -> int:
+        return int(self.table.shape[-1]) - 1
+
+    def factor(self, directions: np.ndarray) -> np.ndarray:
+        """``e`` of each point of :attr:`columns` for directions (body frame, any length), shape (..., c, 3);
+        the result has shape (..., c)."""
+        n = self.resolution
+        magnitude = np.abs(directions)
+        axis = np.argmax(magnitude, axis=-1)
+        major = np.take_along_axis(directions, axis[..., None], axis=-1)[..., 0]
+        face = 2 * axis + (major < 0.0)
+        scale = np.where(major != 0.0, 1.0 / np.where(major != 0.0, np.abs(major), 1.0), 0.0)
+        s = np.take_along_axis(directions, ((axis + 1) % 3)[..., None], axis=-1)[..., 0] * scale
+        t = np.take_along_axis(directions, ((axis + 2) % 3)[..., None], axis=-1)[..., 0] * scale
+        x, y = (s + 1.0) * (0.5 * n), (t + 1.0) * (0.5 * n)
+        i, j = np.clip(np.floor(x).astype(np.int64), 0, n - 1), np.clip(np.floor(y).astype(np.int64), 0, n - 1)
+        fx, fy = x - i, y - j
+        rows = np.broadcast_to(np.arange(len(self.columns)), face.shape)
+        table = self.table
+        a, b = table[rows, face, i, j], table[rows, face, i + 1, j]
+        c, d = table[rows, face, i, j + 1], table[rows, face, i + 1, j + 1]
+        value = (1.0 - fx) * (1.0 - fy) * a + fx * (1.0 - fy) * b + (1.0 - fx) * fy * c + fx * fy * d
+        # a cell wholly hidden or wholly exposed is exactly 0 or 1, not 1 - 1e-16
+        return np.where((a == b) & (b == c) & (c == d), a, value)
+
+
+def cube_nodes(resolution: int) -> np.ndarray:
+    """The unit directions at the nodes of the cube map, shape (6, N + 1, N + 1, 3).
+
+    Face ``f`` is the side of the cube along axis ``f // 2`` (positive for even ``f``); node ``(i, j)`` of
+    it is the direction ``(+-1, s, t)`` in the axes ``(a, a + 1, a + 2)`` (mod 3), with ``s = 2 i / N - 1``
+    and ``t = 2 j / N - 1``, normalised.  :meth:`Exposure.factor` inverts this.
+    """
+    grid = 2.0 * np.arange(resolution + 1) / resolution - 1.0
+    s, t = np.meshgrid(grid, grid, indexing="ij")
+    nodes = np.zeros((6, resolution + 1, resolution + 1, 3))
+    for face in range(6):
+        axis, sign = face // 2, -1.0 if face % 2 else 1.0
+        nodes[face, :, :, axis] = sign
+        nodes[face, :, :, (axis + 1) % 3] = s
+        nodes[face, :, :, (axis + 2) % 3] = t
+    return nodes / np.linalg.norm(nodes, axis=-1, keepdims=True)
+
+
+def _on_hull(points: np.ndarray, normals: np.ndarray, nodes: np.ndarray, tolerance: float) -> np.ndarray:
+    """Whether each point's tangent plane has every node of the body on its inner side (within ``tolerance``)."""
+    from scipy.spatial import ConvexHull
+
+    corners = nodes[ConvexHull(nodes).vertices]
+    support = np.empty(len(points))
+    for start in range(0, len(points), 4096):  # (points x hull corners) in blocks
+        block = slice(start, start + 4096)
+        support[block] = (normals[block] @ corners.T).max(axis=1)
+    return support - np.einsum("ij,ij->i", normals, points) <= tolerance
+
+
+def exposure_table(
+    points: np.ndarray,
+    normals: np.ndarray,
+    triangles: np.ndarray,
+    lift: float,
+    resolution: int = DEFAULT_RESOLUTION,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Which points can be hidden, and their tables (see the module).
+
+    Parameters
+    ----------
+    points, normals : ndarray, shape (m, 3)
+        The points to test (the fundamental part of a mirror-symmetric quadrature, else every point) and
+        their outward unit normals, in the frame of ``triangles``.
+    triangles : ndarray, shape (t, 3, 3)
+        The outer surface as flat triangles (corners), the whole body.
+    lift : float
+        How far off the surface a ray starts (m): more than the flat triangles' distance from the exact
+        surface the points lie on, so that a point does not hide itself.
+    resolution : int
+        Cells along each edge of a cube face.
+
+    Returns
+    -------
+    columns : ndarray of int, shape (c,)
+        The points hidden in some direction.
+    table : ndarray of uint8, shape (c, 6, N + 1, N + 1)
+        Their exposure at the cube map's nodes.
+    """
+    import trimesh
+    from trimesh.ray.ray_pyembree import RayMeshIntersector
+
+    corners = triangles.reshape(-1, 3)
+    candidates = np.flatnonzero(~_on_hull(points, normals, corners, lift))
+    directions = cube_nodes(resolution).reshape(-1, 3)
+    if len(candidates) == 0:
+        return candidates, np.zeros((0, 6, resolution + 1, resolution + 1), dtype=np.uint8)
+    surface = trimesh.Trimesh(corners, np.arange(len(corners)).reshape(-1, 3), process=False)
+    tracer = RayMeshIntersector(surface)
+    table = np.empty((len(candidates), len(directions)), dtype=np.uint8)
+    for row, point in enumerate(candidates):
+        normal = normals[point]
+        along = directions @ normal
+        rays = directions.copy()
+        back = along <= 0.0  # no stress there: the ray along the tangential part keeps e continuous at Vn = 0
+        rays[back] -= along[back, None] * normal
+        length = np.linalg.norm(rays, axis=1)
+        rays[length < 1e-9] = _any_tangent(normal)
+        origin = np.broadcast_to(points[point] + lift * normal, rays.shape)
+        table[row] = ~tracer.intersects_any(origin, rays)  # type: ignore[no-untyped-call]  # trimesh is untyped
+    exposed_always = table.all(axis=1)
+    keep = ~exposed_always
+    shape = (-1, 6, resolution + 1, resolution + 1)
+    return candidates[keep], np.ascontiguousarray(table[keep].reshape(shape))
+
+
+def _any_tangent(normal: np.ndarray) -> np.ndarray:
+    """A unit vector perpendicular to ``normal``."""
+    helper = np.eye(3)[int(np.argmin(np.abs(normal)))]
+    tangent = np.cross(normal, helper)
+    return tangent / np.linalg.norm(tangent)
