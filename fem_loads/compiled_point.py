@@ -25,8 +25,9 @@ from .kernel_layout import (
     CONSTANT_USER_LAW,
     DATA_CONSTANTS,
     DATA_EXPOSURE_COLUMNS,
-    DATA_EXPOSURE_FORWARD,
-    DATA_EXPOSURE_TABLE,
+    DATA_EXPOSURE_CORNERS,
+    DATA_EXPOSURE_ROWS,
+    DATA_EXPOSURE_START,
     DATA_HALF_ENTRY_LENGTH,
     DATA_INTERFACES,
     DATA_INVERSE_ENTRY,
@@ -190,10 +191,15 @@ def point_stress(
     return stress * weights[j]
 
 
+#: where the smooth contact ramp's argument is below this, its factor (10 t^3) is below 1e-14: a point grazing
+#: the soil to round-off (a fin's face in straight motion) is not corrected, at a cost below 1e-17 of the load
+_RAMP_FLOOR = 1e-5
+
+
 @njit(cache=True, inline="always", error_model="numpy")
-def _exposure(table: np.ndarray, row: int, d0: float, d1: float, d2: float) -> float:
-    """:meth:`Exposure.factor <fem_loads.exposure.Exposure.factor>` of one point and direction (any length)."""
-    n = table.shape[2] - 1
+def _cell(n: int, d0: float, d1: float, d2: float) -> tuple[int, int, int, float, float]:
+    """The cube map's cell of a direction (any length, not zero): ``(face, i, j, fx, fy)``, the cell's first node
+    and the direction's place in it (:meth:`Exposure.factor <fem_loads.exposure.Exposure.factor>`)."""
     a0, a1, a2 = abs(d0), abs(d1), abs(d2)
     if a0 >= a1 and a0 >= a2:
         face, major, s, t = (0 if d0 >= 0.0 else 1), a0, d1, d2
@@ -201,20 +207,9 @@ def _exposure(table: np.ndarray, row: int, d0: float, d1: float, d2: float) -> f
         face, major, s, t = (2 if d1 >= 0.0 else 3), a1, d2, d0
     else:
         face, major, s, t = (4 if d2 >= 0.0 else 5), a2, d0, d1
-    if major == 0.0:
-        return 1.0
     x, y = (s / major + 1.0) * (0.5 * n), (t / major + 1.0) * (0.5 * n)
-    i, k = min(max(int(math.floor(x)), 0), n - 1), min(max(int(math.floor(y)), 0), n - 1)
-    fx, fy = x - i, y - k
-    a, b, c, d = (
-        table[row, face, i, k],
-        table[row, face, i + 1, k],
-        table[row, face, i, k + 1],
-        table[row, face, i + 1, k + 1],
-    )
-    if a == b and b == c and c == d:
-        return float(a)
-    return (1.0 - fx) * (1.0 - fy) * a + fx * (1.0 - fy) * b + (1.0 - fx) * fy * c + fx * fy * d
+    i, j = min(max(int(math.floor(x)), 0), n - 1), min(max(int(math.floor(y)), 0), n - 1)
+    return face, i, j, x - i, y - j
 
 
 @njit(cache=True, error_model="numpy")
@@ -231,44 +226,61 @@ def exposure_correction(
     sums: np.ndarray,
     friction: np.ndarray,
 ) -> None:
-    """Add ``(e - 1)`` times each hideable point's stress sums and friction to ``sums`` and ``friction``, which
-    hold every point's at ``e = 1`` (so the loops over all the points keep their SIMD lanes).
+    """Add ``(e - 1)`` times the stress sums and friction of each point hidden in the body's direction of motion to
+    ``sums`` and ``friction``, which hold every point's at ``e = 1`` (so the loops over all the points keep their
+    SIMD lanes).
 
-    A point moving into its cone of exposure (``Exposure.forward_cosine``) is skipped at the cost of its
-    velocity; the others look their exposure up, and only those partly hidden compute their stress again.
+    The direction is the body's velocity ``v`` (body frame), in each image's own signs; the points to correct are
+    those hidden at the four nodes of its cell of the cube map (:attr:`Exposure.hidden_rows`), each with ``e``
+    interpolated as :meth:`Exposure.factor <fem_loads.exposure.Exposure.factor>` does (0 exactly when hidden at
+    all four).
     """
-    columns, table, forward = data[DATA_EXPOSURE_COLUMNS], data[DATA_EXPOSURE_TABLE], data[DATA_EXPOSURE_FORWARD]
+    columns, start = data[DATA_EXPOSURE_COLUMNS], data[DATA_EXPOSURE_START]
+    rows, masks = data[DATA_EXPOSURE_ROWS], data[DATA_EXPOSURE_CORNERS]
     normal_arm, points, point_signs = data[DATA_NORMAL_ARM], data[DATA_POINTS], data[DATA_POINT_SIGNS]
     weights, inverse_entry, half_entry = data[DATA_WEIGHTS], data[DATA_INVERSE_ENTRY], data[DATA_HALF_ENTRY_LENGTH]
     constants = data[DATA_CONSTANTS]
+    if v[0] == 0.0 and v[1] == 0.0 and v[2] == 0.0:
+        return  # no direction of motion, no shadow
+    n = round(math.sqrt((start.shape[0] - 1) / 6.0))  # 6 N^2 cells
     layered, user, address, law, depths, stresses, switches = law_setup(data, width)
     needs_depth = constants[CONSTANT_NEEDS_DEPTH] != 0.0 or constants[CONSTANT_SURFACE_DEPTH] > 0.0
     mu, cap = constants[CONSTANT_FRICTION], constants[CONSTANT_FRICTION_CAP]
     speed2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
+    separation, smooth_contact, inverse_width, offset = switches[0], switches[1], switches[2], switches[3]
+    # the smooth ramp is zero at and below -offset W; the sharp switch at and below the guard
+    limit = -math.inf if smooth_contact else guard
+    if not smooth_contact:
+        inverse_width, offset = 0.0, 1.0
     for k in range(sums.shape[0]):
         sy, sz = point_signs[k, 1], point_signs[k, 2]
-        for row in range(columns.shape[0]):
-            j = columns[row]
-            r0, r1, r2 = points[0, j], sy * points[1, j], sz * points[2, j]
-            u0 = v[0] + w[1] * r2 - w[2] * r1
-            u1 = v[1] + w[2] * r0 - w[0] * r2
-            u2 = v[2] + w[0] * r1 - w[1] * r0
-            speed = math.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
-            if u0 > forward[row] * speed:
-                continue
-            exposure = _exposure(table, row, u0, sy * u1, sz * u2)  # the direction in the part's frame
-            if exposure == 1.0:
-                continue
-            n0, n1, n2 = normal_arm[0, j], normal_arm[1, j], normal_arm[2, j]
-            n3, n4, n5 = normal_arm[3, j], normal_arm[4, j], normal_arm[5, j]
+        face, i, j, fx, fy = _cell(n, v[0], sy * v[1], sz * v[2])  # the direction in the part's frame
+        shares = ((1.0 - fx) * (1.0 - fy), fx * (1.0 - fy), (1.0 - fx) * fy, fx * fy)
+        cell = (face * n + i) * n + j
+        for entry in range(start[cell], start[cell + 1]):
+            row, mask = rows[entry], masks[entry]
+            if mask == 15:
+                exposure = 0.0  # hidden at all four corners: exactly
+            else:
+                exposure = 1.0
+                for bit in range(4):
+                    if mask & (1 << bit):
+                        exposure -= shares[bit]
+            p = columns[row]
+            n0, n1, n2 = normal_arm[0, p], normal_arm[1, p], normal_arm[2, p]
+            n3, n4, n5 = normal_arm[3, p], normal_arm[4, p], normal_arm[5, p]
             normal_velocity = g[k, 0] * n0 + g[k, 1] * n1 + g[k, 2] * n2 + g[k, 3] * n3 + g[k, 4] * n4 + g[k, 5] * n5
+            if separation and (normal_velocity * inverse_width + offset <= _RAMP_FLOOR or normal_velocity <= limit):
+                continue  # below the contact ramp (or where it is below 1e-14), or the sharp switch: nothing to hide
             z = 0.0
             if needs_depth or not embedded:
-                z = height + (up[k, 0] * points[0, j] + up[k, 1] * points[1, j] + up[k, 2] * points[2, j])
+                z = height + (up[k, 0] * points[0, p] + up[k, 1] * points[1, p] + up[k, 2] * points[2, p])
             stress = point_stress(
-                data, j, normal_velocity, z, embedded, guard, layered, user, address, law, depths, stresses, switches,
+                data, p, normal_velocity, z, embedded, guard, layered, user, address, law, depths, stresses, switches,
                 weights, inverse_entry, half_entry,
             )  # fmt: skip
+            if stress == 0.0:
+                continue
             change = (exposure - 1.0) * stress
             sums[k, 0] += change * n0
             sums[k, 1] += change * n1
@@ -276,14 +288,14 @@ def exposure_correction(
             sums[k, 3] += change * n3
             sums[k, 4] += change * n4
             sums[k, 5] += change * n5
-            if mu > 0.0 and change != 0.0:
+            if mu > 0.0:
                 # the friction at the exposed stress less that at the full one (a cap makes it nonlinear)
-                weight, m0, m1, m2 = weights[j], n0, sy * n1, sz * n2
+                r0, r1, r2, m0, m1, m2 = points[0, p], sy * points[1, p], sz * points[2, p], n0, sy * n1, sz * n2
                 full = point_friction(
-                    r0, r1, r2, m0, m1, m2, v, w, normal_velocity, stress, weight, mu, cap, width, speed2
+                    r0, r1, r2, m0, m1, m2, v, w, normal_velocity, stress, weights[p], mu, cap, width, speed2
                 )
                 part = point_friction(
-                    r0, r1, r2, m0, m1, m2, v, w, normal_velocity, exposure * stress, weight, mu, cap, width, speed2
+                    r0, r1, r2, m0, m1, m2, v, w, normal_velocity, exposure * stress, weights[p], mu, cap, width, speed2
                 )
                 for c in range(6):
                     friction[c] += part[c] - full[c]

@@ -125,8 +125,8 @@ class DAFLLoads:
         crosses a layer interface), in units of the square root of its quadrature weight
         (about its own size).  0: sharp.
     exposure : bool
-        True (default): a point the target cannot reach, the ray along its velocity meeting the body
-        (``SurfaceQuadrature.exposure``, :mod:`fem_loads.exposure`), carries no stress.  False: every
+        True (default): a point the target cannot reach, the ray from it along the body's velocity meeting
+        the body (``SurfaceQuadrature.exposure``, :mod:`fem_loads.exposure`), carries no stress.  False: every
         point with a positive ``Vn`` does.  A quadrature without a table (a convex body) is unaffected.
     """
 
@@ -179,10 +179,8 @@ class DAFLLoads:
         # the points that can be hidden: their positions in the part (or in every point), and each image's signs
         self.exposure = q.exposure if exposure and q.exposure is not None and len(q.exposure.columns) else None
         if self.exposure is not None:
-            part = q.mirror_images[0] if q.mirror_images is not None else np.arange(len(q))
-            self._exposed_points = q.points[part[self.exposure.columns]]  # (c, 3)
             signs = self._images.point_signs if self._images is not None else np.ones((1, 3))
-            self._exposure_signs = signs[:, None, :]  # (k, 1, 3)
+            self._exposure_signs = signs[:, None, :]  # (k, 1, 3): each image's direction in the part's frame
 
     def __len__(self) -> int:
         return len(self._weights)
@@ -305,20 +303,19 @@ class DAFLLoads:
         if heights is not None:
             stress *= self._entry(heights)
         if self.exposure is not None:
-            factor = self._exposure_factor(velocity @ rotation, angular_velocity)
+            factor = self._exposure_factor(velocity @ rotation)
             if self._images is None:
                 stress[self.exposure.columns] *= factor[0]
             else:
                 stress[:, self.exposure.columns] *= factor
         return stress, normal_velocity, speed_scale
 
-    def _exposure_factor(self, body_velocity: np.ndarray, angular_velocity: np.ndarray) -> np.ndarray:
-        """The exposure of the points that can be hidden, shape (k, c): each image's point velocity
-        ``u = v + omega x r``, turned back into the part's frame by the image's signs, looked up."""
+    def _exposure_factor(self, body_velocity: np.ndarray) -> np.ndarray:
+        """The exposure of the points that can be hidden, shape (k, c), in the body's direction of motion turned
+        into the part's frame by each image's signs."""
         assert self.exposure is not None  # called only with a table
-        signs = self._exposure_signs
-        velocity = body_velocity + np.cross(angular_velocity, self._exposed_points * signs)
-        return self.exposure.factor(velocity * signs)
+        directions = body_velocity * self._exposure_signs  # (k, 1, 3)
+        return self.exposure.factor(np.broadcast_to(directions, (len(directions), len(self.exposure.columns), 3)))
 
     def stress(
         self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray

@@ -1,11 +1,14 @@
-"""Which surface the target can reach: each quadrature point's exposure to the soil, by the direction it moves.
+"""Which surface the target can reach: each quadrature point's exposure to the soil, by the direction of motion.
 
 The DAFL loads every point whose normal velocity is positive.  On a body that is not convex that includes
 surface the soil cannot reach: the inner wall of a base recess, the faces of a groove behind a shoulder,
 fins in the lee of the body.  The body ahead of such a point has already opened the cavity it moves
-through.  The criterion used here: a point moving with velocity ``u`` (body frame, relative to the
-soil) meets the soil only if the ray from it along ``u`` leaves the body without hitting it.  Its
-*exposure* ``e`` is 1 then and 0 otherwise, and its stresses (normal and friction) are multiplied by ``e``.
+through.  The criterion used here: the soil moves past the body against the body's velocity ``V`` (its
+centre of mass's, in the body frame); a point meets it only if the ray from the point along ``V`` leaves
+the body without hitting it.  Its *exposure* ``e`` is 1 then and 0 otherwise, and its stresses (normal
+and friction) are multiplied by ``e``.  The direction is the body's, one for every point: a rotating body's
+points move in directions up to ``asin(|omega| r_max / |V|)`` away from it (a few degrees in a turning run,
+about one cell of the table below), which this leaves out.
 
 Computed once per body, from the geometry (:func:`exposure_table`), and kept with the quadrature:
 
@@ -16,22 +19,30 @@ Computed once per body, from the geometry (:func:`exposure_table`), and kept wit
 * every other point gets ``e`` at the nodes of a cube map of directions, ``resolution`` cells along each
   face's edge: a ray cast against the outer surface (its curved facets split in four flat triangles)
   from the point, lifted off the surface by a fraction of the element size;
-* for a direction with ``d . n <= 0``, where the point carries no stress anyway, the ray goes along the
-  tangential part of ``d``, so that ``e`` is continuous across ``Vn = 0``;
+* within a cell's width of grazing, ``-sin(delta) < d . n <= 0`` (``delta`` the largest angular diameter of
+  a cell), the ray goes along the tangential part of ``d``: a surface that slides along the body's path (a
+  recess's wall at a small attack angle) is as hidden as its neighbours that advance, and ``e`` is
+  continuous across ``Vn = 0``;
+* a direction further back, ``d . n <= -sin(delta)``, recedes from the soil: ``e = 1`` there (its stress,
+  where the contact model gives it any, is a receding surface's, which no shadow changes);
 * between the nodes ``e`` is interpolated bilinearly on the face: a number in [0, 1], continuous in the
   direction, so that an adaptive step sees no jump when a shadow's edge crosses a point; a cell whose four
   nodes agree gives their value exactly.
 
-The rays are traced by Embree (through trimesh).
+The rays are traced by Embree (through trimesh).  For the compiled kernel each cell of the cube map also lists
+the points hidden at one of its corners (:attr:`Exposure.cell_rows`): an evaluation visits only the points
+hidden around the body's direction, and corrects those that carry stress (a few dozen in a forward run of
+the finned body).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Exposure", "exposure_table", "cube_nodes", "DEFAULT_RESOLUTION"]
+__all__ = ["Exposure", "exposure_table", "cube_nodes", "cell_diameter", "DEFAULT_RESOLUTION"]
 
 #: cells along each edge of a cube face: 16 gives 6 x 17 x 17 directions, about 5.6 degrees apart
 DEFAULT_RESOLUTION = 16
@@ -49,38 +60,29 @@ class Exposure:
         point indices.  Every other point is exposed whenever its ``Vn`` is positive.
     table : ndarray of uint8, shape (c, 6, N + 1, N + 1)
         1 where the ray from the point along the node's direction (:func:`cube_nodes`) leaves the body.
-    forward_cosine : ndarray, shape (c,)
-        Each point is exposed (``e = 1``) in every direction ``d`` with ``d_x > forward_cosine |d|``
-        (body frame, x forward; 2 where no such cone is known): a shortcut for the compiled kernel,
-        which then skips a point moving into that cone (most of a forward run) without interpolating.
+    cell_start, cell_rows, cell_corners : ndarray
+        The table by cell, for the compiled kernel: the rows (positions in :attr:`columns`) hidden at some
+        corner of cell ``k`` (its flat index over ``(6, N, N)``) are ``cell_rows[cell_start[k]:cell_start[k + 1]]``,
+        and ``cell_corners`` holds which corners, a bit each, in the order ``(i, j)``, ``(i + 1, j)``,
+        ``(i, j + 1)``, ``(i + 1, j + 1)``.
     """
 
     columns: np.ndarray
     table: np.ndarray
-    forward_cosine: np.ndarray
+    cell_start: np.ndarray = field(init=False)
+    cell_rows: np.ndarray = field(init=False)
+    cell_corners: np.ndarray = field(init=False)
 
-    @classmethod
-    def from_table(cls, columns: np.ndarray, table: np.ndarray) -> Exposure:
-        """The exposure of ``columns`` with their ``table``, and the cones in which each is exposed.
-
-        A direction inside a cell of the cube map is within the cell's angular diameter ``delta`` of each of
-        its corners.  So a direction less than ``theta - delta`` from +x, where ``theta`` is the smallest
-        angle from +x of the corners of the point's cells that are not wholly 1, lies in a cell wholly 1.
-        """
-        n = table.shape[-1] - 1
-        nodes = cube_nodes(n)
-        corners = np.stack([nodes[:, :-1, :-1], nodes[:, 1:, :-1], nodes[:, :-1, 1:], nodes[:, 1:, 1:]])
-        diameter = float(np.arccos(np.clip(np.einsum("f...d,f...d->f...", corners[0], corners[3]), -1, 1)).max())
-        diameter = max(
-            diameter, float(np.arccos(np.clip(np.einsum("f...d,f...d->f...", corners[1], corners[2]), -1, 1)).max())
-        )
-        cells = np.stack([table[:, :, :-1, :-1], table[:, :, 1:, :-1], table[:, :, :-1, 1:], table[:, :, 1:, 1:]])
-        unclear = np.logical_not(cells.all(axis=0))  # (c, 6, n, n)
-        angle = np.arccos(np.clip(corners[..., 0], -1.0, 1.0))  # (4, 6, n, n): each corner's angle from +x
-        nearest = np.where(unclear[np.newaxis], angle[:, np.newaxis], np.inf).min(axis=(0, 2, 3, 4))
-        cone = nearest - diameter
-        forward = np.where(cone > 0.0, np.cos(np.minimum(cone, np.pi)), 2.0)
-        return cls(np.asarray(columns, dtype=np.int64), np.ascontiguousarray(table, dtype=np.uint8), forward)
+    def __post_init__(self) -> None:
+        hidden = self.table == 0
+        corners = (hidden[:, :, :-1, :-1], hidden[:, :, 1:, :-1], hidden[:, :, :-1, 1:], hidden[:, :, 1:, 1:])
+        bits = sum(corner.astype(np.uint8) << bit for bit, corner in enumerate(corners))  # (c, 6, N, N)
+        flat = np.asarray(bits).reshape(len(self.table), -1)
+        cell, row = np.nonzero(flat.T)  # cell-major: each cell's rows in order
+        start = np.searchsorted(cell, np.arange(flat.shape[1] + 1))
+        object.__setattr__(self, "cell_start", start.astype(np.int64))
+        object.__setattr__(self, "cell_rows", row.astype(np.int64))
+        object.__setattr__(self, "cell_corners", flat.T[cell, row].astype(np.int64))
 
     @property
     def resolution(self) -> int:
@@ -105,8 +107,8 @@ class Exposure:
         a, b = table[rows, face, i, j], table[rows, face, i + 1, j]
         c, d = table[rows, face, i, j + 1], table[rows, face, i + 1, j + 1]
         value = (1.0 - fx) * (1.0 - fy) * a + fx * (1.0 - fy) * b + (1.0 - fx) * fy * c + fx * fy * d
-        # a cell wholly hidden or wholly exposed is exactly 0 or 1, not 1 - 1e-16
-        return np.where((a == b) & (b == c) & (c == d), a, value)
+        # a cell wholly hidden or wholly exposed is exactly 0 or 1, not 1 - 1e-16; no direction, no shadow
+        return np.where(major == 0.0, 1.0, np.where((a == b) & (b == c) & (c == d), a, value))
 
 
 def cube_nodes(resolution: int) -> np.ndarray:
@@ -178,21 +180,33 @@ def exposure_table(
         return candidates, np.zeros((0, 6, resolution + 1, resolution + 1), dtype=np.uint8)
     surface = trimesh.Trimesh(corners, np.arange(len(corners)).reshape(-1, 3), process=False)
     tracer = RayMeshIntersector(surface)
-    table = np.empty((len(candidates), len(directions)), dtype=np.uint8)
+    grazing = math.sin(cell_diameter(resolution))
+    table = np.ones((len(candidates), len(directions)), dtype=np.uint8)
     for row, point in enumerate(candidates):
         normal = normals[point]
         along = directions @ normal
-        rays = directions.copy()
-        back = along <= 0.0  # no stress there: the ray along the tangential part keeps e continuous at Vn = 0
-        rays[back] -= along[back, None] * normal
+        traced = np.flatnonzero(along > -grazing)  # advancing into the soil, or sliding along it
+        rays = directions[traced]
+        sliding = along[traced] <= 0.0
+        rays[sliding] -= along[traced][sliding, None] * normal  # along the surface
         length = np.linalg.norm(rays, axis=1)
         rays[length < 1e-9] = _any_tangent(normal)
         origin = np.broadcast_to(points[point] + lift * normal, rays.shape)
-        table[row] = ~tracer.intersects_any(origin, rays)  # type: ignore[no-untyped-call]  # trimesh is untyped
+        table[row, traced] = ~tracer.intersects_any(origin, rays)  # type: ignore[no-untyped-call]  # trimesh is untyped
     exposed_always = table.all(axis=1)
     keep = ~exposed_always
     shape = (-1, 6, resolution + 1, resolution + 1)
     return candidates[keep], np.ascontiguousarray(table[keep].reshape(shape))
+
+
+def cell_diameter(resolution: int) -> float:
+    """The largest angle (rad) between two corners of a cell of the cube map: a direction in a cell is within it
+    of each of the cell's corners."""
+    nodes = cube_nodes(resolution)
+    first, last = nodes[:, :-1, :-1], nodes[:, 1:, 1:]
+    across, other = nodes[:, 1:, :-1], nodes[:, :-1, 1:]
+    cosine = min(np.einsum("fijd,fijd->fij", first, last).min(), np.einsum("fijd,fijd->fij", across, other).min())
+    return float(np.arccos(np.clip(cosine, -1.0, 1.0)))
 
 
 def _any_tangent(normal: np.ndarray) -> np.ndarray:

@@ -52,8 +52,9 @@ __all__ = [
     "DATA_INTERFACES",
     "DATA_USER_LAW_ADDRESS",
     "DATA_EXPOSURE_COLUMNS",
-    "DATA_EXPOSURE_TABLE",
-    "DATA_EXPOSURE_FORWARD",
+    "DATA_EXPOSURE_START",
+    "DATA_EXPOSURE_ROWS",
+    "DATA_EXPOSURE_CORNERS",
 ]
 
 #: the positions of the scalars in the data's "constants" array
@@ -95,8 +96,9 @@ KERNEL_ARRAYS = (
     "interfaces",  # (layers - 1,): the layers' interfaces (m below the surface)
     "user_law",  # (1,), int: the address of a user law's cfunc (USER_LAW_SIGNATURE), 0 without one
     "exposure_columns",  # (c,), int: the points that can be hidden (Exposure.columns); empty for a convex body
-    "exposure_table",  # (c, 6, N + 1, N + 1), uint8: their exposure at the cube map's nodes
-    "exposure_forward",  # (c,): the cosine of each one's cone of exposure about +x (Exposure.forward_cosine)
+    "exposure_start",  # (6 N^2 + 1,), int: where each cell's hidden rows start (Exposure.cell_start)
+    "exposure_rows",  # (h,), int: the rows hidden at a corner of each cell, cell after cell (Exposure.cell_rows)
+    "exposure_corners",  # (h,), int: at which of its corners, a bit each (Exposure.cell_corners)
 )
 (
     DATA_NORMAL_ARM,
@@ -113,8 +115,9 @@ KERNEL_ARRAYS = (
     DATA_INTERFACES,
     DATA_USER_LAW_ADDRESS,
     DATA_EXPOSURE_COLUMNS,
-    DATA_EXPOSURE_TABLE,
-    DATA_EXPOSURE_FORWARD,
+    DATA_EXPOSURE_START,
+    DATA_EXPOSURE_ROWS,
+    DATA_EXPOSURE_CORNERS,
 ) = range(len(KERNEL_ARRAYS))
 
 
@@ -215,13 +218,18 @@ def kernel_data(loads: DAFLLoads) -> tuple[np.ndarray, ...]:
     )
 
 
-def _exposure_arrays(loads: DAFLLoads) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``exposure_columns``, ``exposure_table`` and ``exposure_forward`` of :func:`kernel_data` (empty without)."""
+def _exposure_arrays(loads: DAFLLoads) -> tuple[np.ndarray, ...]:
+    """``exposure_columns``, ``exposure_start``, ``exposure_rows`` and ``exposure_corners`` of :func:`kernel_data`
+    (empty without)."""
     exposure = loads.exposure
     if exposure is None:
-        return np.zeros(0, dtype=np.int64), np.zeros((0, 6, 2, 2), dtype=np.uint8), np.zeros(0)
-    return (
-        np.ascontiguousarray(exposure.columns, dtype=np.int64),
-        np.ascontiguousarray(exposure.table, dtype=np.uint8),
-        np.ascontiguousarray(exposure.forward_cosine, dtype=float),
+        return (
+            np.zeros(0, dtype=np.int64),
+            np.zeros(1, dtype=np.int64),
+            np.zeros(0, dtype=np.int64),
+            np.zeros(0, dtype=np.int64),
+        )
+    return tuple(
+        np.ascontiguousarray(array, dtype=np.int64)
+        for array in (exposure.columns, exposure.cell_start, exposure.cell_rows, exposure.cell_corners)
     )

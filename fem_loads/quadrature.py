@@ -386,7 +386,7 @@ def with_exposure(
     """
     part = quadrature.mirror_images[0] if quadrature.mirror_images is not None else np.arange(len(quadrature))
     columns, table = exposure_table(quadrature.points[part], quadrature.normals[part], triangles, lift, resolution)
-    exposure = Exposure.from_table(columns, table) if len(columns) else None
+    exposure = Exposure(columns, table) if len(columns) else None
     return SurfaceQuadrature(
         quadrature.points, quadrature.normals, quadrature.weights, quadrature.mirror_images, exposure
     )

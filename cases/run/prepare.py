@@ -204,7 +204,6 @@ def _exposure_arrays(exposure: Exposure | None) -> dict[str, np.ndarray]:
         "exposure_columns": exposure.columns,
         "exposure_shape": np.array(exposure.table.shape),
         "exposure_bits": np.packbits(exposure.table.ravel()),
-        "exposure_forward": exposure.forward_cosine,
     }
 
 
@@ -215,7 +214,7 @@ def _exposure(data: Any) -> Exposure | None:
         return None
     shape = tuple(int(n) for n in data["exposure_shape"])
     table = np.unpackbits(data["exposure_bits"], count=int(np.prod(shape))).reshape(shape)
-    return Exposure(columns, table, data["exposure_forward"])
+    return Exposure(columns, table)
 
 
 def _compute(spec: Projectile, numerics: Numerics, geometry: ProjectileGeometry | FileGeometry) -> PreparedProjectile:

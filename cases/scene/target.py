@@ -294,9 +294,9 @@ class Effects(Strict):
     free_surface: FreeSurfaceSpec | None = None
     exposure: bool = field(
         True,
-        description="only surface the target can reach carries stress: a point whose ray along its velocity meets"
-        " the body is unloaded (base recesses, grooves, the lee of fins); false loads every point with Vn > 0"
-        " (docs/geometry.md)",
+        description="only surface the target can reach carries stress: a point whose ray along the body's"
+        " velocity meets the body is unloaded (base recesses, grooves, the lee of fins); false loads every point"
+        " with Vn > 0 (docs/geometry.md)",
     )
     gravity: bool = False
     gravity_acceleration: Number = field(9.80665, unit="m/s^2", ge=0.0, le=1e3)
