@@ -73,11 +73,15 @@ class SurfaceStress(NamedTuple):
         Magnitude of the tangential stress (Pa), acting against the local slip; None without friction.
     normal_velocity : ndarray, shape (n,)
         ``Vn`` (m/s), positive into the target.
+    exposure : ndarray, shape (n,)
+        ``e`` (:mod:`fem_loads.exposure`): 1 where the target reaches the point, 0 where the body ahead hides
+        it, between at a shadow's edge; 1 everywhere without a table or with the effect off.
     """
 
     sigma_n: np.ndarray
     tau: np.ndarray | None
     normal_velocity: np.ndarray
+    exposure: np.ndarray
 
 
 CONTACT_MODELS = ("one_sided", "centred")
@@ -349,7 +353,16 @@ class DAFLLoads:
         if self.friction is not None:
             slip, scale, _ = self.slip(normal_velocity, velocity @ rotation, angular_velocity)
             tau = self.friction.stress(sigma) * scale * slip
-        return SurfaceStress(sigma, tau, normal_velocity)
+        exposure = np.ones_like(sigma)
+        if self.exposure is not None:
+            rows = np.ones(self._images.shape if self._images is not None else len(sigma))
+            factor = self._exposure_factor(velocity @ rotation)
+            if self._images is None:
+                rows[self.exposure.columns] = factor[0]
+            else:
+                rows[:, self.exposure.columns] = factor
+            exposure = self._scatter(rows)
+        return SurfaceStress(sigma, tau, normal_velocity, exposure)
 
     def _normal_velocity(
         self, velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray, generalised: np.ndarray

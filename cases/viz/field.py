@@ -156,6 +156,9 @@ class SurfaceField:
         Area-weighted facet mean of ``Vn`` (m/s).
     point_sigma_n : ndarray, shape (n_quadrature_points,)
         The normal stress at the quadrature points, as the loads use it (Pa).
+    hidden : ndarray of bool, shape (n_facets,)
+        The facets the target cannot reach though they advance into it (``Vn > 0``): hidden by the body
+        ahead (:mod:`fem_loads.exposure`), on more than half their area.
     """
 
     index: int
@@ -171,6 +174,7 @@ class SurfaceField:
     tau: np.ndarray | None
     normal_velocity: np.ndarray
     point_sigma_n: np.ndarray = field(repr=False)
+    hidden: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0, dtype=bool))
 
     def title(self, label: str = "") -> str:
         """One line: instant, time, speed, attack angle and tip depth."""
@@ -237,6 +241,7 @@ class FieldEvaluator:
             tau,
             self._facet_mean(stress.normal_velocity),
             stress.sigma_n,
+            self._facet_mean((1.0 - stress.exposure) * (stress.normal_velocity > 0.0)) > 0.5,
         )
 
     def world_points(self, index: int) -> np.ndarray:

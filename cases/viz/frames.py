@@ -45,6 +45,7 @@ __all__ = [
 STRESS_CMAP = "turbo"
 N_COLOURS = 256
 SOIL_LIGHT = (0.93, 0.88, 0.78)
+HIDDEN_COLOUR = (0.55, 0.55, 0.55)  # facets the target cannot reach (fem_loads.exposure): no stress colour
 BACKGROUND = "white"
 
 
@@ -63,8 +64,10 @@ def pyvista_off_screen() -> ModuleType:
 
 
 def colour_range(values: np.ndarray) -> tuple[float, float]:
-    """Colour range of a field (MPa): its min and max; a constant field gets a range of 1 MPa above it."""
-    lo, hi = float(values.min()), float(values.max())
+    """Colour range of a field (MPa): its min and max (of the numbers: a hidden facet is NaN); a constant field
+    gets a range of 1 MPa above it."""
+    finite = values[np.isfinite(values)]
+    lo, hi = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 0.0)
     return (lo, hi) if hi > lo else (lo, lo + 1.0)
 
 
@@ -203,6 +206,7 @@ class FrameRenderer:
                 cmap=STRESS_CMAP,
                 n_colors=N_COLOURS,
                 clim=(0.0, 1.0),
+                nan_color=HIDDEN_COLOUR,
                 lighting=lighting,
                 smooth_shading=False,
                 show_scalar_bar=True,
@@ -253,6 +257,8 @@ class FrameRenderer:
             values = fld.sigma_n if name == "sigma_n" else fld.tau
             assert values is not None  # tau is drawn only with friction, which gives it
             values_mpa = ev.cell_values(values) * 1e-6
+            hidden = ev.cell_values(fld.hidden) if fld.hidden.size else np.zeros(len(values_mpa), dtype=bool)
+            values_mpa[hidden] = np.nan  # drawn in HIDDEN_COLOUR: surface the target cannot reach
             mesh = self.meshes[name]
             mesh.points = points
             mesh.cell_data[name] = values_mpa
@@ -260,11 +266,14 @@ class FrameRenderer:
             self.actors[name].mapper.scalar_range = clim
             clims[name] = clim
             caption = fld.title(label) if row == 0 else "tangential stress tau (friction), against the slip"
+            if hidden.any():
+                caption += "   (grey: hidden by the body ahead)"
             if not values.any():
                 caption += "   (no stress on the surface)"
-            elif values_mpa.min() < clim[0] or values_mpa.max() > clim[1]:
+            elif np.nanmin(values_mpa) < clim[0] or np.nanmax(values_mpa) > clim[1]:
                 # a fixed range narrower than the field: its end colours would understate the extremes
-                caption += f"   (field {values_mpa.min():.4g} .. {values_mpa.max():.4g} MPa, beyond the colour bar)"
+                low, high = np.nanmin(values_mpa), np.nanmax(values_mpa)
+                caption += f"   (field {low:.4g} .. {high:.4g} MPa, beyond the colour bar)"
             self.texts[name].SetText(2, caption)  # 2: upper edge
             self.plotter.subplot(row, 0)
             self._aim(self.plotter.camera, fld, tip)

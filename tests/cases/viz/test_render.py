@@ -518,3 +518,26 @@ def test_render_command(tmp_path):
         args[:5] + ["--times", "soon", "--out", str(tmp_path / "bad")], capture_output=True, text=True, timeout=300
     )
     assert bad.returncode == 2 and "--times" in bad.stderr and "Traceback" not in bad.stderr
+
+
+def test_surface_the_target_cannot_reach_is_drawn_apart(tmp_path):
+    """The finned body thrown in pitching (300 rad/s), so that it meets the soil at an angle: the facets its fins and
+    shank hide (fem_loads.exposure) are grey in the picture, not a stress colour, and the caption says so."""
+    scene = load_scene(
+        scene_path("finned_test2"),
+        {"impact.speed": 600.0, "impact.angular_velocity": [0.0, 300.0, 0.0], "numerics.time_limit": 0.004},
+    )
+    ev = FieldEvaluator(run_scene(scene))
+    row = max(range(len(ev)), key=lambda index: int(ev.at(index).hidden.sum()))
+    fld = ev.at(row)
+    assert fld.hidden.sum() >= 10
+    from cases.viz.frames import HIDDEN_COLOUR
+
+    with FrameRenderer(ev, (960, 480)) as renderer:
+        renderer.render(row)
+        drawn = renderer.meshes["sigma_n"].cell_data["sigma_n"]
+        caption = renderer.texts["sigma_n"].GetText(2)
+        nan_colour = renderer.actors["sigma_n"].mapper.lookup_table.nan_color
+    assert np.isnan(drawn).sum() == ev.cell_values(fld.hidden).sum() > 0
+    assert "grey: hidden by the body ahead" in caption
+    assert tuple(nan_colour.float_rgb) == pytest.approx(HIDDEN_COLOUR, abs=1 / 255)  # stored as bytes
