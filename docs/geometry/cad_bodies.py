@@ -18,6 +18,21 @@ import numpy as np
 VALIDATION = {"diameter": 0.0952, "length": 1.4, "crh": 3.0}  # Forrestal and Luk's body (test 2 scene)
 
 
+def _write(gmsh, path: Path) -> None:
+    """``gmsh.write``, with OpenCASCADE's STEP writer's report (printed on the process's own stdout) dropped."""
+    import sys
+
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 1)
+            gmsh.write(str(path))
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
 @contextlib.contextmanager
 def _gmsh():
     import gmsh
@@ -77,7 +92,7 @@ def write_body(
         if axis == "z":
             occ.rotate(occ.getEntities(3), 0, 0, 0, 0, 1, 0, -0.5 * math.pi)  # +x onto +z
         occ.synchronize()
-        gmsh.write(str(path))
+        _write(gmsh, path)
     return path
 
 
@@ -93,7 +108,7 @@ def write_fused_cone(path: str | os.PathLike, half_angle: float = 12.92, scale: 
         cone = occ.addCone(length - nose, 0, 0, nose, 0, 0, a, 0.0)
         occ.fuse([(3, cylinder)], [(3, cone)])
         occ.synchronize()
-        gmsh.write(str(path))
+        _write(gmsh, path)
     return path
 
 
@@ -105,11 +120,13 @@ def write_changed_body(
     recess: tuple[float, float] | None = None,
     fins: tuple[float, ...] = (),
     cut: tuple[float, float, float] | None = None,
+    groove: tuple[float, float, float] | None = None,
 ) -> Path:
     """A tangent-ogive body (m) changed, written as STEP in millimetres: a flat base ``recess = (depth,
     radius)``; tail ``fins`` at the given angles (degrees from +y towards +z; 150 mm long, 30 mm out, 4 mm
     thick); the nose ``cut`` by the plane 40 mm behind the tip whose normal is the given direction (its
-    material on the normal's side removed)."""
+    material on the normal's side removed); a ring ``groove = (start, width, depth)`` around the shank, its
+    start measured from the tail."""
     path = Path(path)
     scale = 1e-3
     with _gmsh() as gmsh:
@@ -120,6 +137,12 @@ def write_changed_body(
             depth, radius = (v / scale for v in recess)
             pocket = occ.addCylinder(-1.0, 0, 0, depth + 1.0, 0, 0, radius)
             solid = occ.cut([(3, solid)], [(3, pocket)])[0][0][1]
+        if groove is not None:
+            start, wide, deep = (v / scale for v in groove)
+            ring = occ.addCylinder(start, 0, 0, wide, 0, 0, a + 1.0)
+            core = occ.addCylinder(start, 0, 0, wide, 0, 0, a - deep)
+            cutter = occ.cut([(3, ring)], [(3, core)])[0]
+            solid = occ.cut([(3, solid)], cutter)[0][0][1]
         for angle in fins:
             fin = occ.addBox(0, -2.0, a - 1.0, 150.0, 4.0, 31.0)  # standing out along +z, then turned
             occ.rotate([(3, fin)], 0, 0, 0, 1, 0, 0, math.radians(angle - 90.0))
@@ -134,7 +157,7 @@ def write_changed_body(
             occ.translate([(3, cutter)], length / scale - 40.0, 0, 0)
             occ.cut([(3, solid)], [(3, cutter)])
         occ.synchronize()
-        gmsh.write(str(path))
+        _write(gmsh, path)
     return path
 
 
