@@ -31,7 +31,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .compiled_point import exposure_correction, law_setup, point_friction, point_stress
+from .compiled_point import exposure_correction, image_friction, law_setup, point_friction, point_motion, point_stress
 from .kernel_layout import (
     CONSTANT_CONTACT_INCIDENCE,
     CONSTANT_CONTACT_OFFSET,
@@ -221,16 +221,13 @@ def _sums(
     surface_depth = constants[CONSTANT_SURFACE_DEPTH]
     needs_depth = constants[CONSTANT_NEEDS_DEPTH] != 0.0 or surface_depth > 0.0
     mu, cap = constants[CONSTANT_FRICTION], constants[CONSTANT_FRICTION_CAP]
-    speed2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
+    rule = (mu, cap, width, v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
     for k in range(sums.shape[0]):
         a0 = a1 = a2 = a3 = a4 = a5 = 0.0
         for j in range(weights.shape[0]):
-            n0, n1, n2 = normal_arm[0, j], normal_arm[1, j], normal_arm[2, j]
-            n3, n4, n5 = normal_arm[3, j], normal_arm[4, j], normal_arm[5, j]
-            normal_velocity = g[k, 0] * n0 + g[k, 1] * n1 + g[k, 2] * n2 + g[k, 3] * n3 + g[k, 4] * n4 + g[k, 5] * n5
-            z = 0.0  # the height; the depth below the surface is -z
-            if needs_depth or not embedded:
-                z = height + (up[k, 0] * points[0, j] + up[k, 1] * points[1, j] + up[k, 2] * points[2, j])
+            n0, n1, n2, n3, n4, n5, normal_velocity, z = point_motion(
+                normal_arm, points, g, up, k, j, height, needs_depth or not embedded
+            )
             stress = point_stress(
                 data, j, normal_velocity, z, embedded, guard, layered, user, address, law, depths, stresses, switches,
                 weights, inverse_entry, half_entry_length,
@@ -242,10 +239,8 @@ def _sums(
             a4 += stress * n4
             a5 += stress * n5
             if mu > 0.0 and stress != 0.0:
-                sy, sz = point_signs[k, 1], point_signs[k, 2]  # the image's point and normal in the body frame
-                r0, r1, r2, m0, m1, m2 = points[0, j], sy * points[1, j], sz * points[2, j], n0, sy * n1, sz * n2
-                d = point_friction(
-                    r0, r1, r2, m0, m1, m2, v, w, normal_velocity, stress, weights[j], mu, cap, width, speed2
+                d = image_friction(
+                    points, point_signs, k, j, normal_arm, v, w, normal_velocity, stress, weights[j], rule
                 )
                 for c in range(6):
                     friction[c] += d[c]

@@ -42,7 +42,15 @@ from .kernel_layout import (
 )
 from .native import builtin_stress, call_user_law, slip_factor, smooth_step
 
-__all__ = ["layered_stress", "point_friction", "law_setup", "point_stress", "exposure_correction"]
+__all__ = [
+    "layered_stress",
+    "point_friction",
+    "image_friction",
+    "law_setup",
+    "point_motion",
+    "point_stress",
+    "exposure_correction",
+]
 
 
 @njit(cache=True, error_model="numpy")
@@ -191,6 +199,51 @@ def point_stress(
     return stress * weights[j]
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def point_motion(
+    normal_arm: np.ndarray,
+    points: np.ndarray,
+    g: np.ndarray,
+    up: np.ndarray,
+    k: int,
+    j: int,
+    height: float,
+    with_height: bool,
+) -> tuple[float, float, float, float, float, float, float, float]:
+    """Point ``j`` in image ``k``: the part's ``[n | r x n]`` (6 numbers), ``Vn`` (m/s) from the image's generalised
+    velocity ``g[k]``, and the height ``z`` (m; 0 unless ``with_height``) from its up vector ``up[k]``."""
+    n0, n1, n2 = normal_arm[0, j], normal_arm[1, j], normal_arm[2, j]
+    n3, n4, n5 = normal_arm[3, j], normal_arm[4, j], normal_arm[5, j]
+    normal_velocity = g[k, 0] * n0 + g[k, 1] * n1 + g[k, 2] * n2 + g[k, 3] * n3 + g[k, 4] * n4 + g[k, 5] * n5
+    z = 0.0  # the height; the depth below the surface is -z
+    if with_height:
+        z = height + (up[k, 0] * points[0, j] + up[k, 1] * points[1, j] + up[k, 2] * points[2, j])
+    return n0, n1, n2, n3, n4, n5, normal_velocity, z
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def image_friction(
+    points: np.ndarray,
+    point_signs: np.ndarray,
+    k: int,
+    j: int,
+    normal_arm: np.ndarray,
+    v: np.ndarray,
+    w: np.ndarray,
+    normal_velocity: float,
+    stress: float,
+    weight: float,
+    friction: tuple[float, float, float, float],
+) -> tuple[float, float, float, float, float, float]:
+    """:func:`point_friction` of point ``j`` in image ``k`` (its point and normal in the body frame by the image's
+    signs); ``friction``: ``(mu, cap, W, |v|^2)``."""
+    sy, sz = point_signs[k, 1], point_signs[k, 2]
+    r0, r1, r2 = points[0, j], sy * points[1, j], sz * points[2, j]
+    m0, m1, m2 = normal_arm[0, j], sy * normal_arm[1, j], sz * normal_arm[2, j]
+    mu, cap, width, speed2 = friction
+    return point_friction(r0, r1, r2, m0, m1, m2, v, w, normal_velocity, stress, weight, mu, cap, width, speed2)
+
+
 #: where the smooth contact ramp's argument is below this, its factor (10 t^3) is below 1e-14: a point grazing
 #: the soil to round-off (a fin's face in straight motion) is not corrected, at a cost below 1e-17 of the load
 _RAMP_FLOOR = 1e-5
@@ -231,7 +284,7 @@ def exposure_correction(
     SIMD lanes).
 
     The direction is the body's velocity ``v`` (body frame), in each image's own signs; the points to correct are
-    those hidden at the four nodes of its cell of the cube map (:attr:`Exposure.hidden_rows`), each with ``e``
+    those hidden at a corner of its cell of the cube map (:attr:`Exposure.cell_rows`), each with ``e``
     interpolated as :meth:`Exposure.factor <fem_loads.exposure.Exposure.factor>` does (0 exactly when hidden at
     all four).
     """
@@ -267,14 +320,11 @@ def exposure_correction(
                     if mask & (1 << bit):
                         exposure -= shares[bit]
             p = columns[row]
-            n0, n1, n2 = normal_arm[0, p], normal_arm[1, p], normal_arm[2, p]
-            n3, n4, n5 = normal_arm[3, p], normal_arm[4, p], normal_arm[5, p]
-            normal_velocity = g[k, 0] * n0 + g[k, 1] * n1 + g[k, 2] * n2 + g[k, 3] * n3 + g[k, 4] * n4 + g[k, 5] * n5
+            n0, n1, n2, n3, n4, n5, normal_velocity, z = point_motion(
+                normal_arm, points, g, up, k, p, height, needs_depth or not embedded
+            )
             if separation and (normal_velocity * inverse_width + offset <= _RAMP_FLOOR or normal_velocity <= limit):
                 continue  # below the contact ramp (or where it is below 1e-14), or the sharp switch: nothing to hide
-            z = 0.0
-            if needs_depth or not embedded:
-                z = height + (up[k, 0] * points[0, p] + up[k, 1] * points[1, p] + up[k, 2] * points[2, p])
             stress = point_stress(
                 data, p, normal_velocity, z, embedded, guard, layered, user, address, law, depths, stresses, switches,
                 weights, inverse_entry, half_entry,
@@ -290,12 +340,12 @@ def exposure_correction(
             sums[k, 5] += change * n5
             if mu > 0.0:
                 # the friction at the exposed stress less that at the full one (a cap makes it nonlinear)
-                r0, r1, r2, m0, m1, m2 = points[0, p], sy * points[1, p], sz * points[2, p], n0, sy * n1, sz * n2
-                full = point_friction(
-                    r0, r1, r2, m0, m1, m2, v, w, normal_velocity, stress, weights[p], mu, cap, width, speed2
+                rule = (mu, cap, width, speed2)
+                full = image_friction(
+                    points, point_signs, k, p, normal_arm, v, w, normal_velocity, stress, weights[p], rule
                 )
-                part = point_friction(
-                    r0, r1, r2, m0, m1, m2, v, w, normal_velocity, exposure * stress, weights[p], mu, cap, width, speed2
+                part = image_friction(
+                    points, point_signs, k, p, normal_arm, v, w, normal_velocity, exposure * stress, weights[p], rule
                 )
                 for c in range(6):
                     friction[c] += part[c] - full[c]

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal, Self
+from typing import TYPE_CHECKING, Annotated, Literal, Self
 
 from pydantic import Field, model_validator
 
@@ -24,6 +24,9 @@ from mesh import (
 from mesh.imported import CAD_SUFFIXES, MATERIAL_BASE, FileGeometry, file_digest
 
 from .base import Label, Number, Strict, field
+
+if TYPE_CHECKING:
+    from fem_loads import MassProperties
 
 __all__ = [
     "Projectile",
@@ -273,6 +276,16 @@ class MassPropertiesSpec(Strict):
     centre_of_mass: Number = field(unit="m", gt=0.0, le=100.0, description="from the nose tip")
     axial_inertia: Number = field(unit="kg m^2", gt=0.0, le=1e9)
     transverse_inertia: Number = field(unit="kg m^2", gt=0.0, le=1e9)
+
+    @classmethod
+    def of(cls, mass: MassProperties) -> Self:
+        """The given properties of a body's integrated ones (a body of revolution's: axial and transverse)."""
+        return cls(
+            mass=mass.mass,
+            centre_of_mass=mass.centre_from_tip,
+            axial_inertia=mass.axial_inertia,
+            transverse_inertia=mass.transverse_inertia,
+        )
 
     @model_validator(mode="after")
     def _rigid_body(self) -> Self:

@@ -21,6 +21,7 @@ import numpy as np
 from cases import load_scene, run_scene, scene_path, summarise
 from cases.run import prepare_projectile
 from cases.run.compiled import compiled_modules
+from cases.scene.projectile import MassPropertiesSpec
 from docs.geometry.cad_bodies import write_changed_body
 from docs.measure import stamp
 from dynamics.quaternion import rotation_matrix
@@ -45,13 +46,7 @@ def shots(folder: Path) -> None:
     for label, change in CHANGES.items():
         path = write_changed_body(folder / f"{label.split(',')[0].replace(' ', '_')}.step", **change)
         changed = _scene(path, body_density=7850.0)
-        mass = prepare_projectile(changed).mass
-        given = {
-            "mass": mass.mass,
-            "centre_of_mass": mass.centre_from_tip,
-            "axial_inertia": mass.axial_inertia,
-            "transverse_inertia": mass.transverse_inertia,
-        }
+        given = MassPropertiesSpec.of(prepare_projectile(changed).mass).model_dump()
         reference = summarise(run_scene(_scene(plain, mass_properties=given)))
         for exposure in (True, False):
             scene = load_scene(

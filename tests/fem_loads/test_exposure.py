@@ -17,6 +17,7 @@ import pytest
 from cases import load_scene, run_scene, scene_path, summarise
 from cases.run import prepare_projectile
 from cases.run.compiled import compiled_modules
+from cases.scene.projectile import MassPropertiesSpec
 from dynamics.quaternion import normalize, rotation_matrix
 from fem_loads.exposure import Exposure, cube_nodes
 
@@ -182,13 +183,7 @@ def _recess_runs(folder: str) -> tuple:
     shot = {"impact.speed": 400.0, "impact.attack_angle": 5.0}
     geometry = {"geometry": {"file": str(recess), "unit": "mm"}, "body_density": 7850.0}
     recessed = load_scene(scene_path("forrestal_luk_test2"), {"projectile": geometry, **shot})
-    mass = prepare_projectile(recessed).mass
-    given = {
-        "mass": mass.mass,
-        "centre_of_mass": mass.centre_from_tip,
-        "axial_inertia": mass.axial_inertia,
-        "transverse_inertia": mass.transverse_inertia,
-    }
+    given = MassPropertiesSpec.of(prepare_projectile(recessed).mass).model_dump()
     reference = load_scene(
         scene_path("forrestal_luk_test2"),
         {"projectile": {"geometry": {"file": str(plain), "unit": "mm"}, "mass_properties": given}, **shot},
