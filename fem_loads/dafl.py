@@ -307,19 +307,19 @@ class DAFLLoads:
         if heights is not None:
             stress *= self._entry(heights)
         if self.exposure is not None:
-            factor = self._exposure_factor(velocity @ rotation)
-            if self._images is None:
-                stress[self.exposure.columns] *= factor[0]
-            else:
-                stress[:, self.exposure.columns] *= factor
+            self._expose(stress, velocity @ rotation)
         return stress, normal_velocity, speed_scale
 
-    def _exposure_factor(self, body_velocity: np.ndarray) -> np.ndarray:
-        """The exposure of the points that can be hidden, shape (k, c), in the body's direction of motion turned
-        into the part's frame by each image's signs."""
+    def _expose(self, values: np.ndarray, body_velocity: np.ndarray) -> None:
+        """Multiply ``values`` (the layout of the sums) by the exposure in the body's direction of motion, turned into
+        the part's frame by each image's signs: only the points its cell lists (:meth:`Exposure.hidden`)."""
         assert self.exposure is not None  # called only with a table
-        directions = body_velocity * self._exposure_signs  # (k, 1, 3)
-        return self.exposure.factor(np.broadcast_to(directions, (len(directions), len(self.exposure.columns), 3)))
+        if not body_velocity.any():
+            return  # no direction of motion, no shadow
+        rows = values[None, :] if self._images is None else values  # a view: (k, m)
+        for image, signs in enumerate(self._exposure_signs[:, 0]):
+            hidden, exposure = self.exposure.hidden(body_velocity * signs)
+            rows[image, self.exposure.columns[hidden]] *= exposure
 
     def stress(
         self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray
@@ -356,11 +356,7 @@ class DAFLLoads:
         exposure = np.ones_like(sigma)
         if self.exposure is not None:
             rows = np.ones(self._images.shape if self._images is not None else len(sigma))
-            factor = self._exposure_factor(velocity @ rotation)
-            if self._images is None:
-                rows[self.exposure.columns] = factor[0]
-            else:
-                rows[:, self.exposure.columns] = factor
+            self._expose(rows, velocity @ rotation)
             exposure = self._scatter(rows)
         return SurfaceStress(sigma, tau, normal_velocity, exposure)
 

@@ -88,6 +88,27 @@ class Exposure:
     def resolution(self) -> int:
         return int(self.table.shape[-1]) - 1
 
+    def hidden(self, direction: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The rows (positions in :attr:`columns`) not wholly exposed in one direction (body frame, any length, not
+        zero), and their exposure there: :meth:`factor`'s values below 1, from the direction's cell's list (the
+        other rows are exposed, 1)."""
+        n = self.resolution
+        axis = int(np.argmax(np.abs(direction)))
+        major = float(direction[axis])
+        face = 2 * axis + (major < 0.0)
+        s = float(direction[(axis + 1) % 3]) / abs(major)
+        t = float(direction[(axis + 2) % 3]) / abs(major)
+        x, y = (s + 1.0) * (0.5 * n), (t + 1.0) * (0.5 * n)
+        i, j = min(max(int(np.floor(x)), 0), n - 1), min(max(int(np.floor(y)), 0), n - 1)
+        fx, fy = x - i, y - j
+        cell = (face * n + i) * n + j
+        span = slice(self.cell_start[cell], self.cell_start[cell + 1])
+        masks = self.cell_corners[span]
+        shares = np.array([(1.0 - fx) * (1.0 - fy), fx * (1.0 - fy), (1.0 - fx) * fy, fx * fy])
+        bits = (masks[:, None] >> np.arange(4)) & 1
+        exposure = np.where(masks == 15, 0.0, 1.0 - bits @ shares)
+        return self.cell_rows[span], exposure
+
     def factor(self, directions: np.ndarray) -> np.ndarray:
         """``e`` of each point of :attr:`columns` for directions (body frame, any length), shape (..., c, 3);
         the result has shape (..., c)."""

@@ -203,3 +203,15 @@ def test_a_base_recess_the_soil_cannot_reach_does_not_change_the_shot(tmp_path_f
     assert abs(recessed.axis_angle_change - reference.axis_angle_change) < 0.1
     assert abs(everything.depth / reference.depth - 1.0) > 5e-3
     assert abs(everything.axis_angle_change - reference.axis_angle_change) > 1.0
+
+
+def test_one_direction_s_hidden_rows_are_the_factor_below_one():
+    exposure = _random_exposure(5, count=40)
+    rng = np.random.default_rng(6)
+    for direction in rng.normal(size=(300, 3)):
+        rows, values = exposure.hidden(direction)
+        dense = exposure.factor(np.broadcast_to(direction, (40, 3)))
+        expected = np.flatnonzero(dense < 1.0)
+        assert set(expected.tolist()) <= set(rows.tolist())
+        np.testing.assert_allclose(values, dense[rows], rtol=0, atol=1e-12)
+        assert np.array_equal(values == 0.0, dense[rows] == 0.0)
