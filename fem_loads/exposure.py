@@ -191,14 +191,15 @@ def exposure_table(
     table : ndarray of uint8, shape (c, 6, N + 1, N + 1)
         Their exposure at the cube map's nodes.
     """
-    import trimesh
-    from trimesh.ray.ray_pyembree import RayMeshIntersector
-
     corners = triangles.reshape(-1, 3)
     candidates = np.flatnonzero(~_on_hull(points, normals, corners, lift))
     directions = cube_nodes(resolution).reshape(-1, 3)
     if len(candidates) == 0:
         return candidates, np.zeros((0, 6, resolution + 1, resolution + 1), dtype=np.uint8)
+    # imported only for a body that is not convex (a second and more of the first preparation otherwise)
+    import trimesh
+    from trimesh.ray.ray_pyembree import RayMeshIntersector
+
     surface = trimesh.Trimesh(corners, np.arange(len(corners)).reshape(-1, 3), process=False)
     tracer = RayMeshIntersector(surface)
     grazing = math.sin(cell_diameter(resolution))
