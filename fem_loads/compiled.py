@@ -31,7 +31,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .compiled_point import exposure_correction, image_friction, law_setup, point_friction, point_motion, point_stress
+from .compiled_point import exposure_correction, image_friction, law_setup, point_motion, point_stress
 from .kernel_layout import (
     CONSTANT_CONTACT_INCIDENCE,
     CONSTANT_CONTACT_OFFSET,
@@ -107,13 +107,12 @@ def _smooth_sums(
     fraction = constants[CONSTANT_SURFACE_FRACTION] if surface_depth > 0.0 else 1.0
     needs_depth = constants[CONSTANT_NEEDS_DEPTH] != 0.0 or surface_depth > 0.0
     inverse_width = 1.0 / width if width > 0.0 else 0.0
-    speed2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
+    rule = (mu, cap, width, v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
     c = data[DATA_LAWS][0]
     c0, c1, c2, c3 = c[0], c[1], c[2], c[3]
     for k in range(sums.shape[0]):
         g0, g1, g2, g3, g4, g5 = g[k, 0], g[k, 1], g[k, 2], g[k, 3], g[k, 4], g[k, 5]
         up0, up1, up2 = up[k, 0], up[k, 1], up[k, 2]
-        sy, sz = point_signs[k, 1], point_signs[k, 2]
         a0 = a1 = a2 = a3 = a4 = a5 = 0.0
         f0 = f1 = f2 = f3 = f4 = f5 = 0.0
         for j in range(weights.shape[0]):
@@ -136,10 +135,8 @@ def _smooth_sums(
             a4 += stress * n4
             a5 += stress * n5
             if with_friction:
-                # the image's point and normal in the body frame
-                r0, r1, r2, m0, m1, m2 = points[0, j], sy * points[1, j], sz * points[2, j], n0, sy * n1, sz * n2
-                d0, d1, d2, d3, d4, d5 = point_friction(
-                    r0, r1, r2, m0, m1, m2, v, w, normal_velocity, stress, weights[j], mu, cap, width, speed2
+                d0, d1, d2, d3, d4, d5 = image_friction(
+                    points, point_signs, k, j, normal_arm, v, w, normal_velocity, stress, weights[j], rule
                 )
                 f0, f1, f2, f3, f4, f5 = f0 + d0, f1 + d1, f2 + d2, f3 + d3, f4 + d4, f5 + d5
         sums[k, 0], sums[k, 1], sums[k, 2], sums[k, 3], sums[k, 4], sums[k, 5] = a0, a1, a2, a3, a4, a5

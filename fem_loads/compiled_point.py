@@ -40,7 +40,7 @@ from .kernel_layout import (
     DATA_USER_LAW_ADDRESS,
     DATA_WEIGHTS,
 )
-from .native import builtin_stress, call_user_law, slip_factor, smooth_step
+from .native import builtin_stress, call_user_law, cube_cell, slip_factor, smooth_step
 
 __all__ = [
     "layered_stress",
@@ -249,22 +249,6 @@ def image_friction(
 _RAMP_FLOOR = 1e-5
 
 
-@njit(cache=True, inline="always", error_model="numpy")
-def _cell(n: int, d0: float, d1: float, d2: float) -> tuple[int, int, int, float, float]:
-    """The cube map's cell of a direction (any length, not zero): ``(face, i, j, fx, fy)``, the cell's first node
-    and the direction's place in it (:meth:`Exposure.factor <fem_loads.exposure.Exposure.factor>`)."""
-    a0, a1, a2 = abs(d0), abs(d1), abs(d2)
-    if a0 >= a1 and a0 >= a2:
-        face, major, s, t = (0 if d0 >= 0.0 else 1), a0, d1, d2
-    elif a1 >= a2:
-        face, major, s, t = (2 if d1 >= 0.0 else 3), a1, d2, d0
-    else:
-        face, major, s, t = (4 if d2 >= 0.0 else 5), a2, d0, d1
-    x, y = (s / major + 1.0) * (0.5 * n), (t / major + 1.0) * (0.5 * n)
-    i, j = min(max(int(math.floor(x)), 0), n - 1), min(max(int(math.floor(y)), 0), n - 1)
-    return face, i, j, x - i, y - j
-
-
 @njit(cache=True, error_model="numpy")
 def exposure_correction(
     data: tuple[np.ndarray, ...],
@@ -307,7 +291,7 @@ def exposure_correction(
         inverse_width, offset = 0.0, 1.0
     for k in range(sums.shape[0]):
         sy, sz = point_signs[k, 1], point_signs[k, 2]
-        face, i, j, fx, fy = _cell(n, v[0], sy * v[1], sz * v[2])  # the direction in the part's frame
+        face, i, j, fx, fy = cube_cell(n, v[0], sy * v[1], sz * v[2])  # the direction in the part's frame
         shares = ((1.0 - fx) * (1.0 - fy), fx * (1.0 - fy), (1.0 - fx) * fy, fx * fy)
         cell = (face * n + i) * n + j
         for entry in range(start[cell], start[cell + 1]):

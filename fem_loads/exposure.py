@@ -42,7 +42,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Exposure", "exposure_table", "cube_nodes", "cell_diameter", "DEFAULT_RESOLUTION"]
+__all__ = ["Exposure", "exposure_table", "cube_nodes", "cube_cell_scalars", "cell_diameter", "DEFAULT_RESOLUTION"]
 
 #: cells along each edge of a cube face: 16 gives 6 x 17 x 17 directions, about 5.6 degrees apart
 DEFAULT_RESOLUTION = 16
@@ -93,14 +93,7 @@ class Exposure:
         zero), and their exposure there: :meth:`factor`'s values below 1, from the direction's cell's list (the
         other rows are exposed, 1)."""
         n = self.resolution
-        axis = int(np.argmax(np.abs(direction)))
-        major = float(direction[axis])
-        face = 2 * axis + (major < 0.0)
-        s = float(direction[(axis + 1) % 3]) / abs(major)
-        t = float(direction[(axis + 2) % 3]) / abs(major)
-        x, y = (s + 1.0) * (0.5 * n), (t + 1.0) * (0.5 * n)
-        i, j = min(max(int(np.floor(x)), 0), n - 1), min(max(int(np.floor(y)), 0), n - 1)
-        fx, fy = x - i, y - j
+        face, i, j, fx, fy = cube_cell_scalars(n, float(direction[0]), float(direction[1]), float(direction[2]))
         cell = (face * n + i) * n + j
         span = slice(self.cell_start[cell], self.cell_start[cell + 1])
         masks = self.cell_corners[span]
@@ -111,7 +104,8 @@ class Exposure:
 
     def factor(self, directions: np.ndarray) -> np.ndarray:
         """``e`` of each point of :attr:`columns` for directions (body frame, any length), shape (..., c, 3);
-        the result has shape (..., c)."""
+        the result has shape (..., c): the table interpolated densely, every row at once (the loads use
+        :meth:`hidden`'s few rows; this is the form they are checked against)."""
         n = self.resolution
         magnitude = np.abs(directions)
         axis = np.argmax(magnitude, axis=-1)
@@ -130,6 +124,22 @@ class Exposure:
         value = (1.0 - fx) * (1.0 - fy) * a + fx * (1.0 - fy) * b + (1.0 - fx) * fy * c + fx * fy * d
         # a cell wholly hidden or wholly exposed is exactly 0 or 1, not 1 - 1e-16; no direction, no shadow
         return np.where(major == 0.0, 1.0, np.where((a == b) & (b == c) & (c == d), a, value))
+
+
+def cube_cell_scalars(n: int, d0: float, d1: float, d2: float) -> tuple[int, int, int, float, float]:
+    """The cube map's cell of a direction (any length, not zero), ``n`` cells along a face's edge: ``(face, i, j,
+    fx, fy)``, the cell's first node (:func:`cube_nodes`) and the direction's place in it, in [0, 1] each.  The one
+    definition: :meth:`Exposure.hidden` calls it and the compiled kernel compiles it (:mod:`fem_loads.native`)."""
+    a0, a1, a2 = abs(d0), abs(d1), abs(d2)
+    if a0 >= a1 and a0 >= a2:
+        face, major, s, t = (0 if d0 >= 0.0 else 1), a0, d1, d2
+    elif a1 >= a2:
+        face, major, s, t = (2 if d1 >= 0.0 else 3), a1, d2, d0
+    else:
+        face, major, s, t = (4 if d2 >= 0.0 else 5), a2, d0, d1
+    x, y = (s / major + 1.0) * (0.5 * n), (t / major + 1.0) * (0.5 * n)
+    i, j = min(max(int(math.floor(x)), 0), n - 1), min(max(int(math.floor(y)), 0), n - 1)
+    return face, i, j, x - i, y - j
 
 
 def cube_nodes(resolution: int) -> np.ndarray:

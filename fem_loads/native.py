@@ -1,9 +1,10 @@
 """The compiled forms of the scalar definitions the numpy path shares, and the call into a user's law.
 
-Each of :data:`smooth_step`, :data:`slip_factor`, :data:`builtin_stress` and :data:`polynomial_stress` is
-numba's compilation of the one definition the numpy path evaluates on arrays
+Each of :data:`smooth_step`, :data:`slip_factor`, :data:`builtin_stress`, :data:`polynomial_stress` and
+:data:`cube_cell` is numba's compilation of the one definition the numpy path evaluates
 (:func:`fem_loads.ramps.smooth_step_scalars`, :func:`fem_loads.target.slip_factor_scalars`,
-:func:`fem_loads.resistance.normal_stress_scalars` and its polynomial part), for the compiled kernels
+:func:`fem_loads.resistance.normal_stress_scalars` and its polynomial part,
+:func:`fem_loads.exposure.cube_cell_scalars`), for the compiled kernels
 (:mod:`fem_loads.compiled`, :mod:`fem_loads.revolved`) to inline.
 
 :func:`call_user_law` calls a user's law, a C call through the address of its numba ``cfunc``
@@ -21,12 +22,13 @@ from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic, register_jitable
 
+from .exposure import cube_cell_scalars
 from .ramps import smooth_step_scalars
 from .resistance import normal_stress_scalars, polynomial_stress_scalars
 from .target import slip_factor_scalars
 from .user_law import MAX_PARAMETERS
 
-__all__ = ["call_user_law", "smooth_step", "slip_factor", "builtin_stress", "polynomial_stress"]
+__all__ = ["call_user_law", "smooth_step", "slip_factor", "builtin_stress", "polynomial_stress", "cube_cell"]
 
 smooth_step = njit(inline="always", error_model="numpy")(smooth_step_scalars)
 slip_factor = njit(inline="always", error_model="numpy")(slip_factor_scalars)
@@ -35,6 +37,7 @@ polynomial_stress = njit(inline="always", error_model="numpy")(polynomial_stress
 # inlined at numba's level, whose renaming of its augmented assignments trips a pedantic SSA check)
 register_jitable(error_model="numpy")(polynomial_stress_scalars)
 builtin_stress = njit(inline="always", error_model="numpy")(normal_stress_scalars)
+cube_cell = njit(inline="always", error_model="numpy")(cube_cell_scalars)
 
 
 @intrinsic

@@ -52,6 +52,7 @@ COMPILED_SOURCES = (
     "dynamics.integrators",
     "fem_loads.compiled",
     "fem_loads.compiled_point",
+    "fem_loads.exposure",
     "fem_loads.kernel_layout",
     "fem_loads.native",
     "fem_loads.resistance",

@@ -26,7 +26,7 @@ def _definitions() -> list[tuple[object, object]]:
     """(compiled form, the one definition) pairs."""
     from dynamics import compiled as compiled_step
     from dynamics import pitch_plane, rigid_body
-    from fem_loads import compiled, compiled_point, native, ramps, resistance, revolved, target
+    from fem_loads import compiled, compiled_point, exposure, native, ramps, resistance, revolved, target
 
     return [
         (native.smooth_step, ramps.smooth_step_scalars),
@@ -40,12 +40,13 @@ def _definitions() -> list[tuple[object, object]]:
         (revolved.smooth_step, ramps.smooth_step_scalars),
         (revolved.slip_factor, target.slip_factor_scalars),
         (revolved.builtin_stress, resistance.normal_stress_scalars),
+        (native.cube_cell, exposure.cube_cell_scalars),
         (compiled_step._euler_scalars, rigid_body.euler_scalars),
         (pitch_plane._euler_scalars, rigid_body.euler_scalars),
     ]
 
 
-@pytest.mark.parametrize("index", range(13))
+@pytest.mark.parametrize("index", range(14))
 def test_each_compiled_form_is_the_one_definition(index):
     compiled, definition = _definitions()[index]
     assert getattr(compiled, "py_func", None) is definition, (compiled, definition)
