@@ -184,7 +184,7 @@ class DAFLLoads:
         self.exposure = q.exposure if exposure and q.exposure is not None and len(q.exposure.columns) else None
         if self.exposure is not None:
             signs = self._images.point_signs if self._images is not None else np.ones((1, 3))
-            self._exposure_signs = signs[:, None, :]  # (k, 1, 3): each image's direction in the part's frame
+            self._exposure_signs = signs  # (k, 3): each image's direction in the part's frame
 
     def __len__(self) -> int:
         return len(self._weights)
@@ -317,7 +317,7 @@ class DAFLLoads:
         if not body_velocity.any():
             return  # no direction of motion, no shadow
         rows = values[None, :] if self._images is None else values  # a view: (k, m)
-        for image, signs in enumerate(self._exposure_signs[:, 0]):
+        for image, signs in enumerate(self._exposure_signs):
             hidden, exposure = self.exposure.hidden(body_velocity * signs)
             rows[image, self.exposure.columns[hidden]] *= exposure
 

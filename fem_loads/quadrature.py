@@ -103,13 +103,7 @@ class SurfaceQuadrature:
     @property
     def mirror_planes(self) -> tuple[int, ...]:
         """The axes of the mirror planes (1: ``y = 0``, 2: ``z = 0``) of :attr:`mirror_images`; () without."""
-        if self.mirror_images is None:
-            return ()
-        if len(self.mirror_images) == 4:
-            return (1, 2)
-        # the half's points lie off their plane (y > 0, or z > 0), and their images across it
-        point, image = self.points[self.mirror_images[0, 0]], self.points[self.mirror_images[1, 0]]
-        return (1,) if point[1] * image[1] < 0.0 else (2,)
+        return _planes(self.points, self.mirror_images)
 
     @property
     def mirror_signs(self) -> tuple[tuple[float, float], ...]:
@@ -178,6 +172,17 @@ def _to_exact_surface(
             weights[disc] *= stretch
             points[disc, 1:] *= np.sqrt(stretch)
     return points, normals, weights
+
+
+def _planes(points: np.ndarray, images: np.ndarray | None) -> tuple[int, ...]:
+    """The axes of the mirror planes of the images (:attr:`SurfaceQuadrature.mirror_planes`)."""
+    if images is None:
+        return ()
+    if len(images) == 4:
+        return (1, 2)
+    # the half's points lie off their plane (y > 0, or z > 0), and their images across it
+    point, image = points[images[0, 0]], points[images[1, 0]]
+    return (1,) if point[1] * image[1] < 0.0 else (2,)
 
 
 def find_mirror_images(points: np.ndarray, rtol: float = 1e-9) -> np.ndarray | None:
@@ -364,11 +369,9 @@ def surface_quadrature(
     weights = np.ascontiguousarray(weights)
     # each point keeps its facet (the renderer draws facet by facet): only the values are rewritten
     images = find_mirror_images(points)
-    quadrature = SurfaceQuadrature(points, normals, weights, images)
     if images is not None:
-        _symmetrise(points, normals, weights, images, quadrature.mirror_signs)
-        quadrature = SurfaceQuadrature(points, normals, weights, images)  # the arms of the rewritten points
-    return quadrature
+        _symmetrise(points, normals, weights, images, SIGNS_OF_PLANES[_planes(points, images)])
+    return SurfaceQuadrature(points, normals, weights, images)
 
 
 def with_exposure(
