@@ -20,6 +20,14 @@ __all__ = ["register"]
 def _study_options(parser: Parser) -> None:
     add_scene_options(parser)
     add_pool_options(parser, "runs/store")
+    parser.add_argument(
+        "--guide",
+        choices=("auto", "reduced", "none"),
+        default="auto",
+        help="where the first full runs go: auto (default) the reduced model's prediction where it applies"
+        " (bodies of revolution in homogeneous targets, docs/studies.md), else unguided; reduced: refuse a"
+        " scene it does not apply to; none: unguided",
+    )
     parser.add_argument("--json", action="store_true", help="print the result as one JSON object")
 
 
@@ -115,10 +123,11 @@ def critical_speed(args: argparse.Namespace) -> int:
         )
     sweep, store = _inputs(args)
     with study(args) as pool:
-        search = find_critical_velocity(sweep, store, args.speeds, args.resolution, pool, args.guess)
+        search = find_critical_velocity(sweep, store, args.speeds, args.resolution, pool, args.guess, args.guide)
     if args.json:
         print(json.dumps(search.as_dict()))
         return 0 if search.critical_velocity is not None else 1
+    print(f"guide: {search.guide.text}")
     for run in search.indicator:
         print(
             f"{run.speed:8.1f} m/s   max attack angle {run.max_attack_angle:8.3f} deg"
@@ -126,13 +135,13 @@ def critical_speed(args: argparse.Namespace) -> int:
         )
     if search.critical_velocity is None:
         # the line ends with what to change: the options that would find the change
-        print(f"{search.message} ({len(search.indicator)} runs in {search.rounds} rounds): {search.fix}")
+        print(f"{search.message} ({len(search.indicator)} full runs in {search.rounds} rounds): {search.fix}")
         return 1
     assert search.bracket is not None  # a critical velocity is found with its bracket
     low, high = search.bracket
     print(
         f"critical impact velocity {search.critical_velocity:.1f} m/s (between {low:g} and {high:g} m/s;"
-        f" {len(search.indicator)} runs in {search.rounds} rounds)"
+        f" {len(search.indicator)} full runs in {search.rounds} rounds)"
     )
     return 0
 
@@ -142,10 +151,11 @@ def convergent_speed(args: argparse.Namespace) -> int:
 
     sweep, store = _inputs(args)
     with study(args) as pool:
-        result = measure_convergent_velocity(sweep, store, args.threshold, pool=pool)
+        result = measure_convergent_velocity(sweep, store, args.threshold, pool=pool, guide=args.guide)
     if args.json:
         print(json.dumps(result.as_dict()))
         return 0 if result.characteristic_convergent_velocity is not None else 1
+    print(f"guide: {result.guide.text}")
     for run in result.runs:
         converged = f"{run.convergence_speed:.1f} m/s" if run.convergence_speed is not None else "never"
         print(

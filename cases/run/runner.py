@@ -12,14 +12,16 @@ velocity, the axis angle ``phi = beta + alpha`` and the attack angle
 
 from __future__ import annotations
 
+import functools
 import math
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-from threadpoolctl import threadpool_limits
+from threadpoolctl import ThreadpoolController
 
 from dynamics import (
     METHODS,
@@ -222,9 +224,17 @@ def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
     # one BLAS thread: the products over ~1e4 points gain nothing from threads, and threads that
     # wait for a busy core (a sweep runs one process per core) cost up to 50x; one thread also
     # fixes the summation order, so results do not depend on the machine's core count
-    with threadpool_limits(limits=1, user_api="blas"):
+    with _blas("scipy.linalg" in sys.modules).limit(limits=1, user_api="blas"):
         trajectory = simulate(
             body, driving, state, method, control, time_limit=numerics.time_limit, events=events, guard=guard
         )
     end = time.perf_counter()
     return RunResult(scene, prepared, trajectory, end - start, end - integrate_start)
+
+
+@functools.cache
+def _blas(scipy_linalg: bool) -> ThreadpoolController:
+    """The loaded BLAS libraries, found once per process (a search reads every loaded library's header:
+    16 ms, a tenth of a run of #3; a forked worker inherits the result) and again once scipy.linalg has
+    loaded its own BLAS (``scipy_linalg``)."""
+    return ThreadpoolController()

@@ -29,9 +29,9 @@ import numpy as np
 from ..run import CONVERGENCE_THRESHOLD, PreparedProjectile, initial_state, prepare_projectile
 from ..run.compiled import announce_compiling, use_numba_cache
 from ..scene import InputError, Scene
-from .speeds import UNSTABLE_TURN, disturbance_fix, range_fix
+from .instability import UNSTABLE_TURN, disturbance_fix, range_fix
 
-__all__ = ["ReducedModel", "ReducedRun", "Prediction", "predict", "RTOL", "RINGS"]
+__all__ = ["ReducedModel", "ReducedRun", "Prediction", "predict", "check_supported", "RTOL", "RINGS"]
 
 RTOL = 1e-4  # the reduced runs' tolerance: the predicted speeds move by < 0.5 % to 1e-6 (docs/theory.md)
 RINGS = {"nose_rings": 12, "shank_rings": 8, "face_rings": 4}
@@ -76,7 +76,7 @@ class ReducedModel:
     def __init__(
         self, scene: Scene, prepared: PreparedProjectile, rtol: float = RTOL, rings: dict[str, int] | None = None
     ) -> None:
-        _check_supported(scene)
+        check_supported(scene)
         announce_compiling("pitch_plane_step")
         use_numba_cache()
         from dynamics.pitch_plane import TABLEAU
@@ -90,7 +90,7 @@ class ReducedModel:
         self.rtol = rtol
         self.surface = revolved_surface(prepared.profile, float(prepared.tip[0]), **(rings or RINGS))
         law, effects, numerics = scene.target.build(), scene.effects, scene.numerics
-        assert not isinstance(law, LayeredTarget)  # _check_supported refused layers
+        assert not isinstance(law, LayeredTarget)  # check_supported refused layers
         friction = effects.friction.build()
         # the mesh's entry ramp: each point enters over entry_smoothing times the square root of its weight
         entry = numerics.entry_smoothing * math.sqrt(float(np.median(prepared.quadrature.weights)))
@@ -315,7 +315,7 @@ def _critical(
     return 0.5 * (low + high), [low, high]
 
 
-def _check_supported(scene: Scene) -> None:
+def check_supported(scene: Scene) -> None:
     """One line naming what the reduced model cannot take, with what it needs."""
     projectile, effects, impact = scene.projectile, scene.effects, scene.impact
     if projectile.geometry is not None:

@@ -16,6 +16,10 @@ Definitions (docs/studies.md):
   as the pool has workers (k-section); the range's ends, or a guessed
   bracket's, count only once runs confirm them.  The critical velocity is the
   middle of the final bracket.
+* **Guided search** (the default where it applies, :mod:`.guide`): the reduced
+  pitch-plane model's prediction gives a first bracket one resolution wide; full
+  runs confirm its ends, and an end its run contradicts moves out by twice the
+  resolution, doubling each time (spare workers run the next speeds beyond it).
 * **Unstable run** (the critical speed's two sides, and whether a single run
   can give the convergent velocity): ``|axis_angle_change| >= UNSTABLE_TURN``
   (30 degrees).  In the paper's critical-speed searches the runs just below
@@ -39,8 +43,9 @@ import numpy as np
 
 from ..run import CONVERGENCE_THRESHOLD, RunStore, convergence_speed
 from ..run.history import attack_angle_peak
-from ..scene import InputError, Scene
-from ..scene.schema import Impact
+from ..scene import InputError
+from .guide import Guide, convergent_guide, critical_guide
+from .instability import UNSTABLE_TURN, disturbance_fix, indicator, is_unstable, range_fix, typed_number, undisturbed
 from .pool import Pool, study_progress
 from .sweep import Sweep, Variation, run_sweep
 
@@ -61,75 +66,6 @@ __all__ = [
     "disturbance_fix",
     "range_fix",
 ]
-
-UNSTABLE_TURN = 30.0  # deg of axis turn that marks an unstable run
-
-
-def indicator(axis_angle_change: float) -> float:
-    """The instability indicator of a run: how far its axis turned (deg)."""
-    return abs(axis_angle_change)
-
-
-def is_unstable(axis_angle_change: float) -> bool:
-    """Whether a run went unstable: its axis turned by at least :data:`UNSTABLE_TURN` degrees."""
-    return indicator(axis_angle_change) >= UNSTABLE_TURN
-
-
-# What a search that found nothing tells the user to change: the options that would find something.
-
-
-def _bound(name: str, kind: str) -> float:
-    """The schema's bound ``kind`` (``le``, ``ge``) of ``impact.NAME``: a suggested value stays allowed."""
-    return next(getattr(m, kind) for m in Impact.model_fields[name].metadata if hasattr(m, kind))
-
-
-def _typed(value: float, up: bool) -> float:
-    """``value`` rounded to two significant digits, up or down: a number a person would type."""
-    # the decimal exponent from the printed value: 10 ** exponent underflows for the smallest floats
-    exponent = int(f"{value:.12e}".split("e")[1]) - 1
-    units = float(f"{value:.12e}".split("e")[0]) * 10
-    # a value already on the grid stays (2400, not 2500); rounding of the division is not a step
-    units = math.ceil(units - 1e-9) if up else math.floor(units + 1e-9)
-    return float(f"{units}e{exponent}")
-
-
-def undisturbed(scene: Scene) -> bool:
-    """Whether the scene starts without a disturbance: straight, square to the surface, not spinning.
-
-    Such a run stays symmetric about its axis, never turns, and no speed makes it unstable.
-    """
-    impact = scene.impact
-    return not (impact.attack_angle or impact.oblique_angle or impact.yaw_angle or any(impact.angular_velocity))
-
-
-def disturbance_fix(scene: Scene) -> str:
-    """The option that would make the scene turn: a disturbance when it has none, else a larger attack angle."""
-    if undisturbed(scene):
-        return "give the scene a disturbance (--set impact.attack_angle=1)"
-    attack, top = scene.impact.attack_angle, _bound("attack_angle", "le")
-    if abs(attack) >= top:
-        return f"no larger attack angle is allowed (impact.attack_angle is {attack:g} deg)"
-    # at least a degree: twice a vanishing angle (1e-300 deg) is still no disturbance
-    larger = min(max(_typed(2 * abs(attack), up=True), 1.0), top)
-    # the same side as the scene's (a mirrored disturbance turns the same)
-    return f"a larger disturbance may turn it (--set impact.attack_angle={math.copysign(larger, attack):g})"
-
-
-def range_fix(stable: bool, limits: Sequence[float], scene: Scene, option: str = "--speeds") -> str:
-    """What to change when every run of the range ``limits`` was ``stable`` (else unstable): a wider range
-    (half as wide again above, half the lowest speed below), and a disturbance where the scene has none or
-    the range cannot grow."""
-    low, high = float(min(limits)), float(max(limits))
-    fixes = []
-    if stable:
-        top = min(_typed(1.5 * high, up=True), _bound("speed", "le"))
-        if top > high:
-            fixes.append(f"widen the range with {option} {low:g}:{top:g}")
-        if undisturbed(scene) or not fixes:
-            fixes.append(disturbance_fix(scene))
-    else:
-        fixes.append(f"lower the range with {option} {_typed(0.5 * low, up=False):g}:{high:g}")
-    return ", or ".join(fixes)
 
 
 @dataclass(frozen=True)
@@ -154,6 +90,7 @@ class CriticalSearch:
     message: str = ""
     rounds: int = 0
     fix: str = ""
+    guide: Guide = field(default_factory=lambda: Guide("none", "unguided"))
 
     def as_dict(self) -> dict:
         return {
@@ -164,6 +101,9 @@ class CriticalSearch:
             "fix": self.fix,
             "runs": len(self.indicator),
             "rounds": self.rounds,
+            "guide": self.guide.name,
+            "guide_text": self.guide.text,
+            "predicted_velocity": self.guide.predicted,
         }
 
 
@@ -174,6 +114,7 @@ def find_critical_velocity(
     resolution: float = 5.0,
     pool: Pool | None = None,
     guess: Sequence[float] | None = None,
+    guide: str = "auto",
 ) -> CriticalSearch:
     """The critical impact velocity between the lowest and highest of ``speeds``, to ``resolution``.
 
@@ -191,11 +132,13 @@ def find_critical_velocity(
         Where the runs go; each round holds as many runs as it has workers (:attr:`Pool.width`).
     guess : (low, high), optional
         A first bracket inside the range (a neighbour's result, a prediction); its ends count only once
-        runs confirm them, and the search widens to the range when they do not.
+        runs confirm them, and the search widens to the range when they do not.  It replaces the guide.
+    guide : {"auto", "reduced", "none"}
+        ``auto``: the reduced model's first bracket where it applies (:mod:`.guide`), else unguided, and
+        the result says why; ``reduced``: refuse a scene it does not apply to; ``none``: unguided.
     """
-    return find_critical_velocities([sweep_base], store, speeds, resolution, pool, None if guess is None else [guess])[
-        0
-    ]
+    guesses = None if guess is None else [guess]
+    return find_critical_velocities([sweep_base], store, speeds, resolution, pool, guesses, guide)[0]
 
 
 def _scan(
@@ -224,7 +167,10 @@ class _Bracket:
     """One search's state: the bracket ``[low, high]`` and whether a run confirms each end.
 
     An end not confirmed is assumed (the range's, or a guess's): stable at ``low``,
-    unstable at ``high``.  ``limits`` is the range the search may widen to.
+    unstable at ``high``.  ``limits`` is the range the search may widen to.  A guided
+    search has the ``centre`` of its guide's bracket and the ``resolution``: an end its run
+    contradicts gallops away from the guide's bracket (each step as long as the way already
+    gone, at least the resolution) instead of jumping to the range's end.
     """
 
     low: float
@@ -234,16 +180,35 @@ class _Bracket:
     high_run: bool = False
     failure: str = ""
     stable_throughout: bool = False
+    centre: float | None = None
+    resolution: float = 0.0
 
     def finished(self, resolution: float) -> bool:
         return bool(self.failure) or (self.low_run and self.high_run and self.high - self.low <= resolution * _SLACK)
 
+    def _gallop(self, speed: float) -> float:
+        """The next speed beyond ``speed``, away from the guide's centre, inside the range."""
+        assert self.centre is not None  # guided
+        bottom, top = self.limits
+        sign = 1.0 if speed >= self.centre else -1.0
+        # each step as long as the way already gone from the guide's bracket (whose ends lie half a resolution
+        # from its centre), at least one resolution: the distance doubles, from one resolution on
+        gone = abs(speed - self.centre) - 0.5 * self.resolution
+        return min(top, max(bottom, round(speed + sign * max(self.resolution, gone), 6)))
+
     def wanted(self, count: int, resolution: float) -> list[float]:
         """The speeds to run next: up to ``count`` that split the bracket evenly on the grid of half the
-        resolution, or, once it is narrow enough, the ends not confirmed yet."""
+        resolution, or, once it is narrow enough, the ends not confirmed yet.  A guided search runs its
+        doubtful ends first, and spare runs where the gallop beyond a doubtful end would go."""
         low, high = self.low, self.high
+        doubtful = [v for v, known in ((low, self.low_run), (high, self.high_run)) if not known]
+        if self.centre is not None and doubtful:
+            points = list(doubtful)
+            while len(points) < count and len(doubtful) == 1 and self._gallop(points[-1]) != points[-1]:
+                points.append(self._gallop(points[-1]))
+            return points[:count]
         if high - low <= resolution * _SLACK:
-            return [v for v, known in ((low, self.low_run), (high, self.high_run)) if not known][:count]
+            return doubtful[:count]
         count = min(count, math.ceil((high - low) / resolution - 1e-9) - 1)
         step = 0.5 * resolution
         points = {round(round((low + j * (high - low) / (count + 1)) / step) * step, 6) for j in range(1, count + 1)}
@@ -251,33 +216,44 @@ class _Bracket:
 
     def update(self, seen: dict[float, ScanRun]) -> None:
         """The new bracket: the lowest unstable run from its bottom up, and the highest stable run below
-        that; an end that its run contradicts moves out to the range's end (or the search fails there)."""
+        that; an end that its run contradicts moves out to the range's end, or a guided search's next
+        gallop (the search fails when the range's end was run and contradicts it too)."""
         unstable = {v for v, run in seen.items() if is_unstable(run.axis_angle_change)}
         stable = set(seen) - unstable
         bottom, top = self.limits
-        high = _end([v for v in unstable if v >= self.low], min, self.high, stable, top)
+        guided = self.centre is not None
+        up = self._gallop(max(stable, default=self.high)) if guided else top
+        high = _end([v for v in unstable if v >= self.low], min, self.high, stable, up, top)
         if high is None:
             self.failure = f"every run is stable, up to {max(stable):g} m/s"
             self.stable_throughout = True
             return
-        self.high, self.high_run = high
-        low = _end([v for v in stable if v < self.high], max, self.low, unstable, bottom)
+        down = self._gallop(min(unstable, default=self.low)) if guided else bottom
+        low = _end([v for v in stable if v < high[0]], max, self.low, unstable, down, bottom)
         if low is None:
             self.failure = f"every run is unstable, down to {min(unstable):g} m/s"
             return
-        self.low, self.low_run = low
+        # runs beyond a contradicted end (a guided search's gallop) may lie inside the new bracket
+        inside = [v for v in unstable if low[0] < v < high[0]]
+        (self.low, self.low_run), (self.high, self.high_run) = low, ((min(inside), True) if inside else high)
 
 
 def _end(
-    side: list[float], nearest: Callable[[list[float]], float], assumed: float, wrong_side: set[float], limit: float
+    side: list[float],
+    nearest: Callable[[list[float]], float],
+    assumed: float,
+    wrong_side: set[float],
+    moved: float,
+    limit: float,
 ) -> tuple[float, bool] | None:
     """One end of a bracket and whether a run confirms it: the ``nearest`` run on its side; else the assumed
-    end, unless its run lay on the wrong side: then the range's ``limit`` (None if that too was run and did)."""
+    end, unless its run lay on the wrong side: then the end ``moved`` out (the range's ``limit``, or a guided
+    search's next step towards it), and None if the limit too was run and lay on the wrong side."""
     if side:
         return nearest(side), True
     if assumed not in wrong_side:
         return assumed, False
-    return None if limit in wrong_side else (limit, False)
+    return None if limit in wrong_side else (moved, False)
 
 
 _SLACK = 1 + 1e-9  # a bracket this close to the resolution is narrow enough (rounding of the grid)
@@ -296,28 +272,43 @@ def _shares(brackets: Sequence[_Bracket], width: int) -> list[int]:
 
 
 def _first_brackets(
-    bases: Sequence[Sweep], speeds: Sequence[float], guesses: Sequence[Sequence[float] | None] | None
-) -> list[_Bracket]:
-    """A bracket per scene: its guess, else the range; bad input is refused before anything runs."""
+    bases: Sequence[Sweep],
+    speeds: Sequence[float],
+    resolution: float,
+    guesses: Sequence[Sequence[float] | None] | None,
+    guide: str,
+) -> tuple[list[_Bracket], list[Guide]]:
+    """A bracket per scene: its guess, else its guide's, else the range; bad input is refused before anything
+    runs."""
     low, high = float(min(speeds)), float(max(speeds))
     if not 0 < low < high:
         raise InputError(f"the range of speeds needs 0 < lowest < highest, got {low:g} and {high:g} m/s")
     guesses = list(guesses) if guesses is not None else [None] * len(bases)
     if len(guesses) != len(bases):
         raise ValueError(f"{len(guesses)} guesses for {len(bases)} scenes")
-    brackets = []
     for guess in guesses:
         g_low, g_high = (low, high) if guess is None else (float(min(guess)), float(max(guess)))
         if not low <= g_low < g_high <= high:
             raise InputError(
                 f"the guess {g_low:g} to {g_high:g} m/s must lie inside the range of speeds, {low:g} to {high:g} m/s"
             )
-        brackets.append(_Bracket(g_low, g_high, (low, high)))
     # every speed a search may run lies in the range: a speed the scene refuses fails here, not mid-search
     Sweep.combined(
         [(base, Variation({**base.variations[0].values, "impact.speed": v})) for base in bases for v in (low, high)]
     )
-    return brackets
+    brackets, guides = [], []
+    for base, guess in zip(bases, guesses):
+        if guess is not None:
+            brackets.append(_Bracket(float(min(guess)), float(max(guess)), (low, high)))
+            guides.append(Guide("none", "unguided: a guess given"))
+            continue
+        found, first = critical_guide(base.scenes[0], (low, high), resolution, guide)
+        guides.append(found)
+        if first is None:
+            brackets.append(_Bracket(low, high, (low, high)))
+        else:
+            brackets.append(_Bracket(first[0], first[1], (low, high), centre=0.5 * sum(first), resolution=resolution))
+    return brackets, guides
 
 
 def find_critical_velocities(
@@ -327,6 +318,7 @@ def find_critical_velocities(
     resolution: float = 5.0,
     pool: Pool | None = None,
     guesses: Sequence[Sequence[float] | None] | None = None,
+    guide: str = "auto",
 ) -> list[CriticalSearch]:
     """:func:`find_critical_velocity` for several scenes at once.
 
@@ -337,10 +329,10 @@ def find_critical_velocities(
     or unstable by :func:`is_unstable`; the new bracket is the lowest
     unstable run and the highest stable run below it.  The range's ends and
     a guess's are assumed until runs confirm them: an end contradicted by its
-    run widens the bracket to the range, and a range without the change says
-    so (``critical_velocity`` None).
+    run widens the bracket to the range (a guided search's moves out step by
+    step), and a range without the change says so (``critical_velocity`` None).
     """
-    brackets = _first_brackets(bases, speeds, guesses)
+    brackets, guides = _first_brackets(bases, speeds, resolution, guesses, guide)
     width = (pool or Pool()).width
     seen: list[dict[float, ScanRun]] = [{} for _ in bases]
     rounds = [0] * len(bases)
@@ -362,11 +354,10 @@ def find_critical_velocities(
         rows = sorted(seen[i].values(), key=lambda r: r.speed)
         if bracket.failure:
             fix = range_fix(bracket.stable_throughout, bracket.limits, bases[i].scenes[0])
-            results.append(CriticalSearch(None, None, rows, bracket.failure, rounds[i], fix))
+            results.append(CriticalSearch(None, None, rows, bracket.failure, rounds[i], fix, guides[i]))
         else:
-            results.append(
-                CriticalSearch(0.5 * (bracket.low + bracket.high), [bracket.low, bracket.high], rows, "", rounds[i])
-            )
+            middle, ends = 0.5 * (bracket.low + bracket.high), [bracket.low, bracket.high]
+            results.append(CriticalSearch(middle, ends, rows, "", rounds[i], "", guides[i]))
     return results
 
 
@@ -389,13 +380,38 @@ class ConvergentResult:
     characteristic_convergent_velocity: float | None
     runs: list[ConvergentRun]
     message: str
+    guide: Guide = field(default_factory=lambda: Guide("none", "unguided"))
 
     def as_dict(self) -> dict:
         return {
             "characteristic_convergent_velocity": self.characteristic_convergent_velocity,
             "runs": [asdict(run) for run in self.runs],
             "message": self.message,
+            "guide": self.guide.name,
+            "guide_text": self.guide.text,
         }
+
+
+def _convergent_runs(
+    sweep_base: Sweep, store: RunStore, pool: Pool | None, speeds: list[float], threshold: float
+) -> list[tuple[ConvergentRun, pd.DataFrame]]:
+    """Runs of the scene at ``speeds`` (one parallel sweep), each with its history."""
+    base_values = dict(sweep_base.variations[0].values)
+    variations = [Variation({**base_values, "impact.speed": v}) for v in speeds]
+    result = run_sweep(Sweep(sweep_base.base, variations, sweep_base.source), store, pool)
+    done = []
+    for i, (speed, run) in enumerate(zip(speeds, result.runs)):
+        if run.failed:
+            raise RuntimeError(f"the run at {speed:g} m/s failed: {run.error}")
+        s = run.summary
+        assert s is not None  # not failed
+        history = result.history(i)
+        unstable = is_unstable(s.axis_angle_change)
+        converged = convergence_speed(history, threshold)
+        done.append(
+            (ConvergentRun(speed, s.max_attack_angle, s.axis_angle_change, converged, unstable, s.end_reason), history)
+        )
+    return done
 
 
 def measure_convergent_velocity(
@@ -405,54 +421,66 @@ def measure_convergent_velocity(
     raise_factor: float = 1.15,
     max_speed: float = 4000.0,
     pool: Pool | None = None,
+    guide: str = "auto",
 ) -> ConvergentResult:
     """The characteristic convergent velocity from an unstable run of the scene.
 
     The scene runs at its own impact speed; if that run is stable (see
     :func:`is_unstable`), the speed is raised by ``raise_factor`` until a run
-    is unstable, and the message says so.
+    is unstable, and the message says so.  Guided (``guide``, as in
+    :func:`find_critical_velocity`), the first runs are the first raised speed
+    whose reduced run is unstable and the speed below it, together; the
+    speeds below those are not run (the message says so), and the search
+    goes down or on up from there when the full runs disagree with the guide.
     """
-    base_values = dict(sweep_base.variations[0].values)
     scene = sweep_base.scenes[0]
-    speed = scene.impact.speed
-    runs: list[ConvergentRun] = []
+    found, raised = convergent_guide(scene, raise_factor, max_speed, guide)
+    ladder = [scene.impact.speed]  # the raised speeds, each the one before times the factor
+
+    def rung(j: int) -> float:
+        while len(ladder) <= j:
+            ladder.append(ladder[-1] * raise_factor)
+        return round(ladder[j], 6)
+
+    done: dict[int, tuple[ConvergentRun, pd.DataFrame]] = {}
+    batch = [0] if not raised else [raised - 1, raised]
     with study_progress("convergent"):  # one progress bar for the raised runs
         while True:
-            variation = Variation({**base_values, "impact.speed": round(speed, 6)})
-            result = run_sweep(Sweep(sweep_base.base, [variation], sweep_base.source), store, pool)
-            run = result.runs[0]
-            if run.failed:
-                raise RuntimeError(f"the run at {speed:g} m/s failed: {run.error}")
-            s = run.summary
-            assert s is not None  # not failed
-            history = result.history(0)
-            runs.append(
-                ConvergentRun(
-                    round(speed, 6),
-                    s.max_attack_angle,
-                    s.axis_angle_change,
-                    convergence_speed(history, threshold),
-                    is_unstable(s.axis_angle_change),
-                    s.end_reason,
-                )
-            )
-            if runs[-1].unstable:
+            for j, outcome in zip(
+                batch, _convergent_runs(sweep_base, store, pool, [rung(j) for j in batch], threshold)
+            ):
+                done[j] = outcome
+            unstable = [j for j in done if done[j][0].unstable]
+            if unstable and (min(unstable) == 0 or min(unstable) - 1 in done):
                 break
-            if speed * raise_factor > max_speed:
+            if unstable:  # the guide's stable run is not: go down, two rungs at a time when guided
+                lowest = min(unstable)
+                batch = [
+                    j for j in ((lowest - 2, lowest - 1) if found.guided else (lowest - 1,)) if j >= 0 and j not in done
+                ]
+                continue
+            top = max(done)
+            if ladder[top] * raise_factor > max_speed:
+                runs = [done[j][0] for j in sorted(done)]
                 return ConvergentResult(
-                    None, runs, f"no unstable run up to {max_speed:g} m/s: {disturbance_fix(scene)}"
+                    None, runs, f"no unstable run up to {max_speed:g} m/s: {disturbance_fix(scene)}", found
                 )
-            speed *= raise_factor
-    value = runs[-1].convergence_speed
-    message = ""
-    if len(runs) > 1:
-        message = (
-            f"the run at {scene.impact.speed:g} m/s is stable; raised the impact speed to"
-            f" {speed:.6g} m/s to get an unstable run"
+            batch = [top + 1, top + 2] if found.guided and ladder[top] * raise_factor**2 <= max_speed else [top + 1]
+    first = min(unstable)
+    runs = [done[j][0] for j in sorted(done)]
+    run, history = done[first]
+    messages = []
+    if first:
+        messages.append(
+            f"the run at {scene.impact.speed:g} m/s is stable; raised the impact speed to {run.speed:.6g} m/s to get"
+            " an unstable run"
         )
-    if value is None:
-        message += ("; " if message else "") + _threshold_fix(history, threshold)
-    return ConvergentResult(value, runs, message)
+    skipped = [rung(j) for j in range(first) if j not in done]
+    if skipped:
+        messages.append(f"not run: {', '.join(f'{v:.6g}' for v in skipped)} m/s, stable in the reduced model")
+    if run.convergence_speed is None:
+        messages.append(_threshold_fix(history, threshold))
+    return ConvergentResult(run.convergence_speed, runs, "; ".join(messages), found)
 
 
 def _threshold_fix(history: pd.DataFrame, threshold: float) -> str:
@@ -463,5 +491,5 @@ def _threshold_fix(history: pd.DataFrame, threshold: float) -> str:
     text = f"the attack angle never fell below {threshold} deg"
     if not least > 0:  # nothing finite after the peak: no threshold would find a crossing
         return text
-    larger = _typed(1.1 * least, up=True)
+    larger = typed_number(1.1 * least, up=True)
     return f"{text} (its least after the peak: {least:.3g} deg): a larger threshold finds one, --threshold {larger:g}"

@@ -75,12 +75,13 @@ def base():
     return Sweep.from_file(scene_path("paper_p3"))
 
 
-def search(monkeypatch, base, critical: float, workers: int = 2, guess=None, speeds=RANGE, resolution=5.0):
+def search(
+    monkeypatch, base, critical: float, workers: int = 2, guess=None, speeds=RANGE, resolution=5.0, guide="none"
+):
     fake = FakeRuns(lambda scene: critical)
     monkeypatch.setattr(speeds_module, "run_sweep", fake)
-    result = find_critical_velocity(
-        base, store=None, speeds=speeds, resolution=resolution, pool=Pool(workers=workers, progress=False), guess=guess
-    )
+    pool = Pool(workers=workers, progress=False)
+    result = find_critical_velocity(base, None, speeds, resolution, pool, guess, guide)
     return result, fake
 
 
@@ -137,7 +138,7 @@ def test_a_gradual_change_is_bracketed_where_the_turn_reaches_30_degrees(monkeyp
     20 degrees and only reaches 30 degrees 8 m/s higher (projectile #1), the bracket holds the 30 degrees."""
     fake = FakeRuns(lambda scene: jump, gradual_turn)
     monkeypatch.setattr(speeds_module, "run_sweep", fake)
-    result = find_critical_velocity(base, None, RANGE, 5.0, Pool(workers=2, progress=False))
+    result = find_critical_velocity(base, None, RANGE, 5.0, Pool(workers=2, progress=False), guide="none")
     assert_confirmed(result, reaches_30(jump))
     assert result.critical_velocity - jump == pytest.approx(8, abs=2.5)
 
@@ -163,7 +164,9 @@ def test_a_family_shares_the_workers_round_by_round(monkeypatch, base):
     fake = FakeRuns(lambda scene: critical[scene.projectile.centre_of_mass_ratio])
     monkeypatch.setattr(speeds_module, "run_sweep", fake)
     bases = [Sweep.from_file(scene_path("paper_p3"), {"projectile.centre_of_mass_ratio": r}) for r in ratios]
-    results = find_critical_velocities(bases, None, list(range(400, 2001, 100)), 5.0, Pool(workers=2, progress=False))
+    results = find_critical_velocities(
+        bases, None, list(range(400, 2001, 100)), 5.0, Pool(workers=2, progress=False), guide="none"
+    )
     for r, result in zip(ratios, results):
         assert_confirmed(result, critical[r])
     open_searches = [sum(result.rounds > n for result in results) for n in range(len(fake.rounds))]
@@ -209,7 +212,8 @@ def test_any_critical_speed_workers_resolution_and_guess(base, critical, workers
     original = speeds_module.run_sweep
     speeds_module.run_sweep = fake
     try:
-        result = find_critical_velocity(base, None, RANGE, resolution, Pool(workers=workers, progress=False), guess)
+        pool = Pool(workers=workers, progress=False)
+        result = find_critical_velocity(base, None, RANGE, resolution, pool, guess, guide="none")
     finally:
         speeds_module.run_sweep = original
     assert_confirmed(result, critical if shape is turn else reaches_30(critical), resolution)
@@ -224,7 +228,7 @@ def test_the_command_passes_range_and_guess_and_says_runs_and_rounds(monkeypatch
     fake = FakeRuns(lambda scene: 907.3)
     monkeypatch.setattr(speeds_module, "run_sweep", fake)
     scene = str(scene_path("paper_p3"))
-    common = ["--store", str(tmp_path / "store"), "--workers", "2", "--no-progress"]
+    common = ["--store", str(tmp_path / "store"), "--workers", "2", "--no-progress", "--guide", "none"]
     assert main(["critical", scene, "--guess", "880:940", "--json", *common]) == 0
     record = json.loads(capsys.readouterr().out)
     assert record["bracket"] == [905.0, 907.5] and (record["runs"], record["rounds"]) == (5, 3)
@@ -233,7 +237,7 @@ def test_the_command_passes_range_and_guess_and_says_runs_and_rounds(monkeypatch
     assert capsys.readouterr().out.splitlines()[-1].startswith("every run is unstable, down to 1000 m/s (")
     assert main(["critical", scene, "--speeds", "800,1000", *common]) == 0  # a list counts by its ends
     assert capsys.readouterr().out.splitlines()[-1] == (
-        "critical impact velocity 907.5 m/s (between 905 and 910 m/s; 7 runs in 4 rounds)"
+        "critical impact velocity 907.5 m/s (between 905 and 910 m/s; 7 full runs in 4 rounds)"
     )
     assert min(fake.rounds[-4]) > 800 and max(fake.rounds[-4]) < 1000
 
@@ -322,7 +326,8 @@ def critical_command(tmp_path, *options):
     from cases.cli import main
 
     store = tmp_path / "store"
-    code = main(["critical", str(scene_path("paper_p3")), "--store", str(store), "--workers", "1", "--json", *options])
+    args = ["critical", str(scene_path("paper_p3")), "--store", str(store), "--workers", "1", "--guide", "none"]
+    code = main([*args, "--json", *options])
     return code, store
 
 
