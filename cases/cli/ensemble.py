@@ -36,6 +36,21 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
         metavar="KEY=START:STOP:STEP",
         help="the probabilities in bins of a sampled key (the last bin ends at STOP)",
     )
+    parser.add_argument(
+        "--fidelity",
+        choices=("full", "multi"),
+        default="full",
+        help="full (default): a full run per sample; multi: the reduced model sorts every sample and --full-runs"
+        " full runs measure each sort, near the stability boundary and an audit elsewhere (unbiased;"
+        " docs/ensembles.md)",
+    )
+    parser.add_argument(
+        "--full-runs",
+        type=positive_int,
+        default=1024,
+        metavar="N",
+        help="how many full runs a multi-fidelity ensemble makes (default 1024)",
+    )
     add_pool_options(parser, "runs/store")
     parser.add_argument(
         "--out",
@@ -75,6 +90,8 @@ def ensemble(args: argparse.Namespace) -> int:
             design=args.design,
             by=args.by,
             pool=pool,
+            fidelity=args.fidelity,
+            full_runs=args.full_runs,
         )
     if args.json:
         print(json.dumps(record))

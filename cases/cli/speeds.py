@@ -6,9 +6,10 @@ from __future__ import annotations
 import argparse
 import json
 import math
+from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .options import Parser, add_pool_options, add_scene_options, positive_float, study
+from .options import Parser, add_pool_options, add_scene_options, out_folder, positive_float, study
 
 if TYPE_CHECKING:
     from ..run import RunStore
@@ -17,9 +18,32 @@ if TYPE_CHECKING:
 __all__ = ["register"]
 
 
+def _speed_options(parser: Parser) -> None:
+    parser.add_argument(
+        "--speeds",
+        type=speed_range,
+        default=(200.0, 1600.0),
+        metavar="LOW:HIGH",
+        help="the range of impact speeds searched, m/s (default 200:1600; of a list or"
+        " START:STOP:STEP only the lowest and highest count)",
+    )
+    parser.add_argument(
+        "--resolution",
+        type=positive_float,
+        default=5.0,
+        metavar="M/S",
+        help="search until a stable and an unstable run are this close (default 5 m/s)",
+    )
+
+
 def _study_options(parser: Parser) -> None:
     add_scene_options(parser)
     add_pool_options(parser, "runs/store")
+    _guide_option(parser)
+    parser.add_argument("--json", action="store_true", help="print the result as one JSON object")
+
+
+def _guide_option(parser: Parser) -> None:
     parser.add_argument(
         "--guide",
         choices=("auto", "reduced", "none"),
@@ -28,20 +52,11 @@ def _study_options(parser: Parser) -> None:
         " (bodies of revolution in homogeneous targets, docs/studies.md), else unguided; reduced: refuse a"
         " scene it does not apply to; none: unguided",
     )
-    parser.add_argument("--json", action="store_true", help="print the result as one JSON object")
 
 
 def register(commands: argparse._SubParsersAction[Parser]) -> None:
     critical = commands.add_parser("critical", help="find the critical impact velocity of a scene's disturbance")
     _study_options(critical)
-    critical.add_argument(
-        "--speeds",
-        type=speed_range,
-        default=(200.0, 1600.0),
-        metavar="LOW:HIGH",
-        help="the range of impact speeds searched, m/s (default 200:1600; of a list or"
-        " START:STOP:STEP only the lowest and highest count)",
-    )
     critical.add_argument(
         "--guess",
         type=speed_range,
@@ -49,13 +64,7 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
         help="a first bracket inside the range, m/s (e.g. a neighbour's critical speed): runs"
         " confirm its ends, and the search widens to the range if they do not hold",
     )
-    critical.add_argument(
-        "--resolution",
-        type=positive_float,
-        default=5.0,
-        metavar="M/S",
-        help="search until a stable and an unstable run are this close (default 5 m/s)",
-    )
+    _speed_options(critical)
     critical.set_defaults(handler=critical_speed)
     convergent = commands.add_parser("convergent", help="measure the characteristic convergent velocity")
     _study_options(convergent)
@@ -67,6 +76,30 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
         help="the attack angle counts as converged below this (default 0.1 deg)",
     )
     convergent.set_defaults(handler=convergent_speed)
+    stability = commands.add_parser(
+        "map", help="the critical impact velocity over a grid of one or two inputs (guided searches, resumable)"
+    )
+    add_scene_options(stability, "the base scene TOML file")
+    stability.add_argument(
+        "--over",
+        action="append",
+        default=[],
+        required=True,
+        metavar="KEY=VALUES",
+        help="an axis of the map: START:STOP:STEP (inclusive) or V1,V2,...; one or two --over options",
+    )
+    _speed_options(stability)
+    add_pool_options(stability, "runs/store")
+    _guide_option(stability)
+    stability.add_argument(
+        "--out",
+        default="runs/map",
+        type=out_folder,
+        metavar="DIR",
+        help="where to write map.csv, .json, .md and map.png (default runs/map)",
+    )
+    stability.add_argument("--json", action="store_true", help="print the map as one JSON object")
+    stability.set_defaults(handler=stability_map)
     predict = commands.add_parser(
         "predict",
         help="predict both characteristic speeds without a full trajectory (reduced pitch-plane model, docs/theory.md)",
@@ -200,3 +233,27 @@ def predict_speeds(args: argparse.Namespace) -> int:
     for message in result.messages:  # last: a speed not found ends the output with the option that finds it
         print(message)
     return 0 if found else 1
+
+
+def stability_map(args: argparse.Namespace) -> int:
+    from ..run import RunStore
+    from ..studies.stability_map import stability_map as build
+    from .options import overrides
+
+    with study(args) as pool:
+        record = build(
+            args.scene,
+            overrides(args),
+            args.over,
+            RunStore(args.store),
+            args.out,
+            args.speeds,
+            args.resolution,
+            pool,
+            args.guide,
+        )
+    if args.json:
+        print(json.dumps(record))
+    else:
+        print((Path(args.out) / "map.md").read_text())
+    return 0

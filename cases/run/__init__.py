@@ -13,7 +13,7 @@ from .history import (
 )
 from .persistence import ContentCache, RunStore, atomic_write, atomic_write_text, cache_dir, code_version
 from .prepare import PreparedProjectile, body_mesh, cached_mesh, prepare_projectile
-from .runner import RunResult, initial_state, run_scene
+from .runner import RunResult, impact_positions, initial_attitude, initial_state, run_scene
 from .summary import RunSummary, StoredRun, summarise, write_outputs
 
 __all__ = [
@@ -24,6 +24,8 @@ __all__ = [
     "run_scene",
     "RunResult",
     "initial_state",
+    "initial_attitude",
+    "impact_positions",
     "history_table",
     "history_columns",
     "attack_angle_peak",

@@ -53,6 +53,7 @@ __all__ = [
     "compiled_driving",
     "initial_state",
     "initial_attitude",
+    "impact_positions",
     "step_control",
     "WithGravity",
     "STOPPED",
@@ -107,18 +108,31 @@ def initial_state(scene: Scene, prepared: PreparedProjectile) -> State:
     rotation = rotation_matrix(attitude)
     beta = math.radians(impact.oblique_angle)
     velocity = impact.speed * np.array([math.sin(beta), 0.0, -math.cos(beta)])
-    position = rotation @ (-prepared.tip)  # the tip at the origin
-    up = rotation[2]
+    position = impact_positions(prepared, rotation[None])[0]
+    return State(0.0, position, velocity, attitude, np.asarray(impact.angular_velocity, dtype=float))
+
+
+def impact_positions(prepared: PreparedProjectile, rotations: np.ndarray) -> np.ndarray:
+    """The centre of mass at impact for each attitude ``rotations`` (shape ``(n, 3, 3)``, body to world),
+    shape ``(n, 3)``, m: the tip at the origin, lifted until no point of the body lies below the surface."""
+    positions = -rotations @ prepared.tip  # the tip at the origin
+    ups = rotations[:, 2, :]
     if prepared.outline is None:
         # lowest point of the exact surface relative to the tip: min over s of
-        # (-s axis_Z - r(s) |transverse part of Z|)
+        # (-s axis_Z - r(s) |transverse part of Z|), in blocks that keep the (n, 20001) products small
         profile = prepared.profile
         s = np.linspace(0.0, profile.length, 20001)
-        lowest = float(np.min(-s * up[0] - profile.radius_at(s) * math.hypot(up[1], up[2])))
+        radius = profile.radius_at(s)
+        lowest = np.concatenate(
+            [
+                np.min(-np.outer(up[:, 0], s) - np.outer(np.hypot(up[:, 1], up[:, 2]), radius), axis=1)
+                for up in np.array_split(ups, max(1, len(ups) // 256))
+            ]
+        )
     else:  # a file's body: its lowest quadrature point (on the exact surface, within a fraction of an element)
-        lowest = float(np.min((prepared.quadrature.points - prepared.tip) @ up))
-    position[2] -= min(lowest, 0.0)
-    return State(0.0, position, velocity, attitude, np.asarray(impact.angular_velocity, dtype=float))
+        lowest = np.min((prepared.quadrature.points - prepared.tip) @ ups.T, axis=0)
+    positions[:, 2] -= np.minimum(lowest, 0.0)
+    return positions
 
 
 class WithGravity:

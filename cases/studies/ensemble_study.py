@@ -35,10 +35,13 @@ from .ensemble import (
     summary_record,
     variations,
 )
+from .multifidelity import FULL_RUNS, check_applies, multi_ensemble, multi_markdown
 from .pool import Pool
 from .sweep import Sweep, SweepResult, Variation, run_sweep
 
-__all__ = ["run_ensemble", "INTERVAL"]
+__all__ = ["run_ensemble", "INTERVAL", "FIDELITIES"]
+
+FIDELITIES = ("full", "multi")
 
 VOLATILE = ("wall_time", "integration_time")  # summary fields that differ from one run of a scene to the next
 
@@ -56,15 +59,20 @@ def _distributions(samples: Sequence[str], base: Sweep) -> list[Distribution]:
     return distributions
 
 
-def _sweep(base: Sweep, distributions: list[Distribution], values: np.ndarray, seed: int) -> Sweep:
-    """The runs as a sweep; a sample outside the scene's allowed range is refused with its index."""
-    parts = variations(distributions, values)
+def _sweep(
+    base: Sweep, distributions: list[Distribution], values: np.ndarray, seed: int, indices: np.ndarray | None = None
+) -> Sweep:
+    """The runs of the samples ``indices`` (default: all) as a sweep; a sample outside the scene's allowed range
+    is refused with its index."""
+    indices = np.arange(len(values)) if indices is None else np.asarray(indices, dtype=int)
+    parts = variations(distributions, values[indices])
     try:
         return Sweep(base.base, parts, base.source)
     except InputError as exc:
-        bad = next(i for i, v in enumerate(parts) if _invalid(base, v))
+        bad = next(int(indices[i]) for i, v in enumerate(parts) if _invalid(base, v))
+        values_text = ", ".join(f"{k} = {v:g}" for k, v in variations(distributions, values[[bad]])[0].values.items())
         raise InputError(
-            f"sample {bad} of seed {seed} ({', '.join(f'{k} = {v:g}' for k, v in parts[bad].values.items())}"
+            f"sample {bad} of seed {seed} ({values_text}"
             f"): {one_line(exc)}; keep the samples in range (truncnormal, uniform, choice)"
         ) from None
 
@@ -89,6 +97,8 @@ def run_ensemble(
     design: str = "random",
     by: str | None = None,
     pool: Pool | None = None,
+    fidelity: str = "full",
+    full_runs: int = FULL_RUNS,
 ) -> dict:
     """Run ``count`` samples of ``scene``; write the report in ``out`` and return its JSON record.
 
@@ -112,16 +122,40 @@ def run_ensemble(
         ``KEY=START:STOP:STEP``: the outcomes' probabilities in bins of a sampled key.
     pool : Pool, optional
         Where the runs go.
+    fidelity : {"full", "multi"}
+        ``full``: a full run per sample; ``multi``: the reduced model sorts every sample and ``full_runs``
+        full runs measure each sort (:mod:`.multifidelity`).
+    full_runs : int
+        How many full runs a ``multi`` ensemble makes.
 
     Returns
     -------
     dict
         ``{"runs", "probability", "interval", "curve", ...}``.
     """
+    if fidelity not in FIDELITIES:
+        raise InputError(f"--fidelity {fidelity!r}: expected one of {', '.join(FIDELITIES)}")
     base = Sweep.from_file(scene, overrides)
     distributions = _distributions(samples, base)
     bins = parse_bins(by, [d.key for d in distributions]) if by else None
+    if fidelity == "multi":
+        check_applies(base.scenes[0], [d.key for d in distributions])
     values = draw(distributions, count, seed, design)
+    if fidelity == "multi":
+        name = base.scenes[0].name or Path(scene).stem
+        # a sample out of the scene's range is refused before anything runs: each key's extremes are checked
+        extremes = np.unique(np.concatenate([values.argmin(axis=0), values.argmax(axis=0)]))
+        _sweep(base, distributions, values, seed, extremes)
+
+        def sweep_of(indices: np.ndarray) -> Sweep:
+            return _sweep(base, distributions, values, seed, indices)
+
+        record, samples_table = multi_ensemble(
+            base, distributions, values, store, pool or Pool(), seed, full_runs, bins, sweep_of
+        )
+        record.update(design=design, seed=seed)
+        _write_multi(Path(out), record, samples_table, name)
+        return json_safe(record)
     result = run_sweep(_sweep(base, distributions, values, seed), store, pool)
     table = _table(result)
     record = summary_record(estimate(table), count)
@@ -310,3 +344,12 @@ def _curve_figure(record: dict, path: Path) -> None:
     legend_outside(ax)  # the bands span the plot: no spot inside is free
     fig.tight_layout()
     save_figure(fig, path)
+
+
+def _write_multi(out: Path, record: dict, samples: pd.DataFrame, name: str) -> None:
+    """A multi-fidelity ensemble's files: the samples' table, its JSON, the report and the curve."""
+    atomic_write_text(out / "ensemble.csv", samples.to_csv(index=False))
+    atomic_write_text(out / "ensemble.json", json.dumps(json_safe(record), indent=1, allow_nan=False) + "\n")
+    atomic_write_text(out / "ensemble.md", multi_markdown(record, name))
+    if "curve" in record:
+        _curve_figure(record, out / "ensemble_curve.png")

@@ -23,7 +23,7 @@ from concurrent.futures.process import BrokenProcessPool
 from contextvars import ContextVar
 from dataclasses import dataclass
 from multiprocessing import get_context
-from typing import TYPE_CHECKING, Never
+from typing import TYPE_CHECKING, Any, Never
 
 from ..run import RunStore, code_version, prepare_projectile
 from ..run.prepare import preparation_key
@@ -33,7 +33,7 @@ from ..scene import Scene
 if TYPE_CHECKING:
     from tqdm import tqdm
 
-__all__ = ["Pool", "Progress", "study_progress", "run_missing", "run_job", "start_method", "CodeMismatch"]
+__all__ = ["Pool", "Progress", "study_progress", "run_missing", "run_job", "map_local", "start_method", "CodeMismatch"]
 
 
 class CodeMismatch(RuntimeError):
@@ -225,6 +225,15 @@ def _compile_once(scenes: Iterable[Scene], width: int) -> None:
     forking = width not in _WARM and start_method() == "fork"
     if width > 1 and compiled and (forking or needs_compiling("dafl_step")):
         precompile()
+
+
+def map_local(function: Callable[..., Any], jobs: Sequence[tuple], width: int) -> list:
+    """``function(*job)`` for each of ``jobs``, in order, on ``width`` local processes (the study's warm workers,
+    forked when :func:`start_method` allows): work that is not a run, such as the reduced model's sort of
+    an ensemble's samples.  ``function`` must be importable by name (a module's top-level function)."""
+    if width == 1 or len(jobs) <= 1:
+        return [function(*job) for job in jobs]
+    return list(_warm_executor(width).map(function, *zip(*jobs)))
 
 
 # what a finished run is handed to: its key, record, gzipped history and code version (run_job's result)

@@ -26,7 +26,14 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from ..run import CONVERGENCE_THRESHOLD, PreparedProjectile, initial_state, prepare_projectile
+from ..run import (
+    CONVERGENCE_THRESHOLD,
+    PreparedProjectile,
+    impact_positions,
+    initial_attitude,
+    initial_state,
+    prepare_projectile,
+)
 from ..run.compiled import announce_compiling, use_numba_cache
 from ..scene import InputError, Scene
 from .instability import UNSTABLE_TURN, disturbance_fix, range_fix
@@ -129,15 +136,38 @@ class ReducedModel:
         state[3:5] *= speed / self.scene.impact.speed
         return state
 
+    def starts(self, speeds: np.ndarray, attack_angles: np.ndarray, oblique_angles: np.ndarray) -> np.ndarray:
+        """The planar states at impact, shape ``(n, 6)``, for impact ``speeds`` (m/s) and attack and oblique angles
+        (deg) in place of the scene's, with its pitch rate: the run's own start (:func:`cases.run.initial_state`)."""
+        from dynamics.quaternion import rotation_matrix
+
+        rotations = np.array(
+            [rotation_matrix(initial_attitude(b, a, 0.0)) for a, b in zip(attack_angles, oblique_angles)]
+        )
+        positions = impact_positions(self.prepared, rotations.reshape(-1, 3, 3))
+        beta = np.radians(oblique_angles)
+        return np.column_stack(
+            [
+                positions[:, 0],
+                positions[:, 2],
+                np.radians(np.asarray(oblique_angles) + np.asarray(attack_angles)),
+                speeds * np.sin(beta),
+                -speeds * np.cos(beta),
+                np.full(len(speeds), self._start[5]),
+            ]
+        )
+
     def run(
         self,
         speed: float,
         stop_when_converged: bool = True,
         turn_limit: float = math.inf,
         time_limit: float | None = None,
+        start: np.ndarray | None = None,
     ) -> ReducedRun:
         """A reduced run from impact at ``speed`` (m/s) to its end (``turn_limit``: an axis turn that ends it, deg;
-        ``time_limit``: s, the scene's by default)."""
+        ``time_limit``: s, the scene's by default; ``start``: a state of :meth:`starts` with this speed instead of
+        the scene's)."""
         length, numerics = self.prepared.length, self.scene.numerics
         # absolute tolerances as the full model's error control sets them (cases.run.step_control)
         scales = np.array([length, length, 0.01, speed, speed, 0.01 * speed / length])
@@ -145,7 +175,7 @@ class ReducedModel:
             self.surface.rings,
             self.law,
             self.surface.outline,
-            self.start(speed),
+            self.start(speed) if start is None else start,
             self.mass,
             self.inertia,
             self.gravity,

@@ -211,8 +211,8 @@ class _Bracket:
             return doubtful[:count]
         count = min(count, math.ceil((high - low) / resolution - 1e-9) - 1)
         step = 0.5 * resolution
-        points = {round(round((low + j * (high - low) / (count + 1)) / step) * step, 6) for j in range(1, count + 1)}
-        return sorted(v for v in points if low < v < high)
+        split = {round(round((low + j * (high - low) / (count + 1)) / step) * step, 6) for j in range(1, count + 1)}
+        return sorted(v for v in split if low < v < high)
 
     def update(self, seen: dict[float, ScanRun]) -> None:
         """The new bracket: the lowest unstable run from its bottom up, and the highest stable run below

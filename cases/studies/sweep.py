@@ -57,25 +57,25 @@ def grid(parameters: Mapping[str, Sequence[Any]]) -> list[Variation]:
     return [Variation(dict(zip(keys, combo))) for combo in itertools.product(*parameters.values())]
 
 
-def parse_grid(text: str) -> tuple[str, list[Any]]:
-    """``key=v1,v2,...`` or ``key=start:stop:step`` (inclusive stop) -> (key, values)."""
+def parse_grid(text: str, option: str = "--grid") -> tuple[str, list[Any]]:
+    """``key=v1,v2,...`` or ``key=start:stop:step`` (inclusive stop) -> (key, values); errors name ``option``."""
     key, raw = text.split("=", 1) if "=" in text else (text, "")
     if not raw.strip():
-        raise InputError(f"--grid {text!r}: expected KEY=V1,V2,... or KEY=START:STOP:STEP")
-    key = ".".join(dotted_key(key, f"--grid {text!r}"))
+        raise InputError(f"{option} {text!r}: expected KEY=V1,V2,... or KEY=START:STOP:STEP")
+    key = ".".join(dotted_key(key, f"{option} {text!r}"))
     parts = raw.split(":")
     if len(parts) == 3:
         try:
             start, stop, step = (float(p) for p in parts)
         except ValueError:
-            raise InputError(f"--grid {text!r}: START:STOP:STEP must be numbers") from None
+            raise InputError(f"{option} {text!r}: START:STOP:STEP must be numbers") from None
         if not all(math.isfinite(v) for v in (start, stop, step)):
-            raise InputError(f"--grid {text!r}: START:STOP:STEP must be finite numbers")
+            raise InputError(f"{option} {text!r}: START:STOP:STEP must be finite numbers")
         if not step > 0 or stop < start:
-            raise InputError(f"--grid {text!r}: need STEP > 0 and STOP >= START")
+            raise InputError(f"{option} {text!r}: need STEP > 0 and STOP >= START")
         if (stop - start) / step >= MAX_GRID_VALUES:
             raise InputError(
-                f"--grid {text!r}: more than {MAX_GRID_VALUES} values (allowed: (STOP - START) / STEP"
+                f"{option} {text!r}: more than {MAX_GRID_VALUES} values (allowed: (STOP - START) / STEP"
                 f" < {MAX_GRID_VALUES})"
             )
         count = int(round((stop - start) / step)) + 1

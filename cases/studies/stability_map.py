@@ -1,0 +1,179 @@
+"""``penetrate map``: the critical impact velocity over a grid of one or two scene inputs.
+
+Each point of the grid is a critical-speed search of the scene with those inputs set
+(:func:`~cases.studies.speeds.find_critical_velocities`, all points in lockstep on the pool's workers),
+guided by the reduced model where it applies and confirmed by full runs.  The runs are kept in the run
+store, so an interrupted map resumes: its searches replay their rounds from the store and run only what is
+missing.  The study writes ``map.csv`` (a row per point), ``map.json``, ``map.md`` and ``map.png`` (a
+contour of the critical speed over two inputs, or a curve over one).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..run import RunStore, atomic_write_text
+from ..run.persistence import json_safe
+from ..scene import InputError, Overrides
+from ..viz.figures import axis_label, quantity_unit, save_figure, subplots
+from .pool import Pool
+from .speeds import find_critical_velocities
+from .sweep import Sweep, Variation, parse_grid
+
+__all__ = ["stability_map", "MAX_POINTS"]
+
+MAX_POINTS = 10_000  # points of one map
+
+
+def _axes(overs: Sequence[str]) -> list[tuple[str, list[Any]]]:
+    """The ``--over KEY=VALUES`` options as (key, values), one or two distinct keys, not the impact speed."""
+    if not 1 <= len(overs) <= 2:
+        raise InputError(f"--over: give one or two (KEY=START:STOP:STEP or KEY=V1,V2,...), got {len(overs)}")
+    axes = [parse_grid(text, "--over") for text in overs]
+    keys = [key for key, _ in axes]
+    if len(set(keys)) != len(keys):
+        raise InputError(f"--over: {keys[0]} given twice (allowed: two different keys)")
+    if "impact.speed" in keys:
+        raise InputError(
+            "--over impact.speed: the map searches the impact speed; map other inputs (--speeds sets its range)"
+        )
+    points = math.prod(len(values) for _, values in axes)
+    if points > MAX_POINTS:
+        raise InputError(f"--over: {points} points (allowed: at most {MAX_POINTS})")
+    return axes
+
+
+def stability_map(
+    scene: str | os.PathLike,
+    overrides: Overrides | None,
+    overs: Sequence[str],
+    store: RunStore,
+    out: str | os.PathLike,
+    speeds: tuple[float, float] = (200.0, 1600.0),
+    resolution: float = 5.0,
+    pool: Pool | None = None,
+    guide: str = "auto",
+) -> dict:
+    """The critical impact velocity at every point of the grid ``overs``; writes the map into ``out``.
+
+    Parameters
+    ----------
+    scene, overrides
+        The base scene file and its ``--set`` overrides.
+    overs : sequence of str
+        One or two ``KEY=START:STOP:STEP`` (inclusive) or ``KEY=V1,V2,...``: the grid's axes.
+    store : RunStore
+        Where runs are found and kept (a map resumes from it).
+    out : path
+        Where ``map.csv``, ``map.json``, ``map.md`` and ``map.png`` go.
+    speeds, resolution, guide
+        As ``penetrate critical`` takes them (m/s).
+
+    Returns
+    -------
+    dict
+        ``{"keys", "values", "points": [{KEY: value, ..., "critical_velocity", "bracket", "runs", "guide"}], ...}``.
+    """
+    start = time.perf_counter()
+    axes = _axes(overs)
+    keys = [key for key, _ in axes]
+    grid = [dict(zip(keys, combo)) for combo in _product([values for _, values in axes])]
+    bases = [Sweep.from_file(scene, overrides, [Variation(point)]) for point in grid]
+    searches = find_critical_velocities(bases, store, speeds, resolution, pool, guide=guide)
+    points = []
+    for point, search in zip(grid, searches):
+        points.append(
+            {
+                **point,
+                "critical_velocity": search.critical_velocity,
+                "bracket": search.bracket,
+                "runs": len(search.indicator),
+                "guide": search.guide.name,
+                "predicted_velocity": search.guide.predicted,
+                "message": search.message,
+            }
+        )
+    record = {
+        "scene": str(scene),
+        "keys": keys,
+        "values": [values for _, values in axes],
+        "speeds": list(speeds),
+        "resolution": resolution,
+        "points": points,
+        "full_runs": sum(p["runs"] for p in points),
+        "guided": sum(p["guide"] == "reduced" for p in points),
+        "wall_time": time.perf_counter() - start,
+    }
+    _write(Path(out), record)
+    return json_safe(record)
+
+
+def _product(lists: Sequence[Sequence[Any]]) -> list[tuple[Any, ...]]:
+    combos: list[tuple[Any, ...]] = [()]
+    for values in lists:
+        combos = [(*c, v) for c in combos for v in values]
+    return combos
+
+
+def _write(out: Path, record: dict) -> None:
+    import pandas as pd
+
+    table = pd.DataFrame(record["points"])
+    table[["bracket_low", "bracket_high"]] = [b if b else [math.nan, math.nan] for b in table.pop("bracket")]
+    atomic_write_text(out / "map.csv", table.to_csv(index=False))
+    atomic_write_text(out / "map.json", json.dumps(json_safe({**record, "wall_time": None}), indent=1) + "\n")
+    atomic_write_text(out / "map.md", _markdown(record))
+    _figure(record, out / "map.png")
+
+
+def _markdown(record: dict) -> str:
+    keys = record["keys"]
+    lines = [
+        f"# Critical impact velocity of {record['scene']} over {' and '.join(keys)}",
+        "",
+        f"{len(record['points'])} critical-speed searches in {record['speeds'][0]:g}-{record['speeds'][1]:g} m/s to"
+        f" {record['resolution']:g} m/s, {record['guided']} guided by the reduced model, {record['full_runs']} full"
+        " runs in all. A point without a critical speed says why.",
+        "",
+        "| " + " | ".join(keys) + " | critical velocity (m/s) | bracket (m/s) | full runs | guide |",
+        "|" + "---|" * (len(keys) + 4),
+    ]
+    for p in record["points"]:
+        value = f"{p['critical_velocity']:.1f}" if p["critical_velocity"] is not None else p["message"]
+        bracket = f"{p['bracket'][0]:g} - {p['bracket'][1]:g}" if p["bracket"] else "-"
+        cells = [f"{p[k]:g}" for k in keys]
+        lines.append("| " + " | ".join(cells) + f" | {value} | {bracket} | {p['runs']} | {p['guide']} |")
+    lines += ["", "![the map](map.png)", ""]
+    return "\n".join(lines)
+
+
+def _figure(record: dict, path: Path) -> None:
+    keys, values = record["keys"], record["values"]
+    critical = np.array(
+        [np.nan if p["critical_velocity"] is None else p["critical_velocity"] for p in record["points"]]
+    )
+    fig, ax = subplots(1, 1, figsize=(7.0, 4.6))
+    label = axis_label("critical velocity", "m/s")
+    if len(keys) == 1:
+        ax.plot(np.asarray(values[0], dtype=float), critical, marker="o")
+        ax.set(xlabel=axis_label(keys[0], quantity_unit(keys[0])), ylabel=label)
+    else:
+        x, y = (np.asarray(v, dtype=float) for v in values)
+        z = critical.reshape(len(x), len(y)).T
+        if len(x) > 1 and len(y) > 1 and np.isfinite(z).sum() >= 3:
+            filled = ax.contourf(x, y, np.ma.masked_invalid(z), levels=12, cmap="viridis")
+            fig.colorbar(filled, ax=ax, label=label)
+        ax.scatter(*np.meshgrid(x, y), c="k", s=6)
+        ax.set(xlabel=axis_label(keys[0], quantity_unit(keys[0])), ylabel=axis_label(keys[1], quantity_unit(keys[1])))
+    ax.set_title("critical impact velocity (points without one left blank)")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    save_figure(fig, path)
