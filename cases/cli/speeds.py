@@ -13,7 +13,7 @@ from .options import Parser, add_pool_options, add_scene_options, out_folder, po
 
 if TYPE_CHECKING:
     from ..run import RunStore
-    from ..studies import Sweep
+    from ..studies import CriticalSearch, Sweep
 
 __all__ = ["register"]
 
@@ -168,15 +168,20 @@ def critical_speed(args: argparse.Namespace) -> int:
         )
     if search.critical_velocity is None:
         # the line ends with what to change: the options that would find the change
-        print(f"{search.message} ({len(search.indicator)} full runs in {search.rounds} rounds): {search.fix}")
+        print(f"{search.message} ({_runs(search)}): {search.fix}")
         return 1
     assert search.bracket is not None  # a critical velocity is found with its bracket
     low, high = search.bracket
     print(
         f"critical impact velocity {search.critical_velocity:.1f} m/s (between {low:g} and {high:g} m/s;"
-        f" {len(search.indicator)} full runs in {search.rounds} rounds)"
+        f" {_runs(search)})"
     )
     return 0
+
+
+def _runs(search: CriticalSearch) -> str:
+    rounds = f"{search.rounds} round" + ("s" if search.rounds != 1 else "")
+    return f"{len(search.indicator)} full runs in {rounds}"
 
 
 def convergent_speed(args: argparse.Namespace) -> int:

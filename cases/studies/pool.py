@@ -33,7 +33,16 @@ from ..scene import Scene
 if TYPE_CHECKING:
     from tqdm import tqdm
 
-__all__ = ["Pool", "Progress", "study_progress", "run_missing", "run_job", "map_local", "start_method", "CodeMismatch"]
+__all__ = [
+    "Pool",
+    "Progress",
+    "study_progress",
+    "run_missing",
+    "run_job",
+    "map_local",
+    "start_method",
+    "CodeMismatch",
+]
 
 
 class CodeMismatch(RuntimeError):

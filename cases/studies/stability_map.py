@@ -171,7 +171,7 @@ def _figure(record: dict, path: Path) -> None:
         if len(x) > 1 and len(y) > 1 and np.isfinite(z).sum() >= 3:
             filled = ax.contourf(x, y, np.ma.masked_invalid(z), levels=12, cmap="viridis")
             fig.colorbar(filled, ax=ax, label=label)
-        ax.scatter(*np.meshgrid(x, y), c="k", s=6)
+        ax.scatter(*np.meshgrid(x, y), c="k", s=6, zorder=3, clip_on=False)
         ax.set(xlabel=axis_label(keys[0], quantity_unit(keys[0])), ylabel=axis_label(keys[1], quantity_unit(keys[1])))
     ax.set_title("critical impact velocity (points without one left blank)")
     ax.grid(alpha=0.3)

@@ -20,9 +20,7 @@ import math
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
-
-import pandas as pd
+from typing import TYPE_CHECKING, Any
 
 from ..run import RunStore, StoredRun
 from ..scene import (
@@ -38,6 +36,9 @@ from ..scene import (
     scene_key,
 )
 from .pool import Pool, run_missing
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = ["Variation", "grid", "parse_grid", "read_variations", "Sweep", "SweepResult", "run_sweep", "MAX_GRID_VALUES"]
 
@@ -180,6 +181,8 @@ class SweepResult:
             for name, value in record.items():
                 row[name] = json.dumps(value) if isinstance(value, (list, dict)) else value
             rows.append(row)
+        import pandas as pd  # here: a search or a sweep without a table does not pay its import (0.25 s)
+
         table = pd.DataFrame(rows)
         volatile = [c for c in ("wall_time", "integration_time") if c in table]
         return table[[c for c in table.columns if c not in volatile] + volatile]

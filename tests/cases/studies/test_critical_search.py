@@ -282,7 +282,7 @@ def test_the_command_ends_a_stable_range_with_the_options_to_change(monkeypatch,
     last = capsys.readouterr().out.splitlines()[-1]
     assert last.startswith("every run is stable, up to 1600 m/s (")
     assert last.endswith(
-        "rounds): widen the range with --speeds 200:2400, or give the scene a disturbance (--set impact.attack_angle=1)"
+        "round): widen the range with --speeds 200:2400, or give the scene a disturbance (--set impact.attack_angle=1)"
     )
 
 
