@@ -48,8 +48,10 @@ def main() -> None:
         " in all, from an empty run store."
     )
     print()
-    print("| impact speed (m/s) | all 3-D: P(unstable) | 95 % interval | multi-fidelity: P(unstable) | 95 % interval |"
-          " full runs in the bin | inside the all-3-D interval |")
+    print(
+        "| impact speed (m/s) | all 3-D: P(unstable) | 95 % interval | multi-fidelity: P(unstable) | 95 % interval |"
+        " full runs in the bin | inside the all-3-D interval |"
+    )
     print("|---|---|---|---|---|---|---|")
     inside = 0
     for a, b in zip(full["curve"], multi["curve"]):
