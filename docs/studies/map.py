@@ -47,9 +47,8 @@ def main() -> None:
     chosen = np.random.default_rng(0).choice(len(points), size=6, replace=False)
     print("Six points at random, searched again without the guide (`penetrate critical --guide none`):")
     print()
-    print(
-        "| attack angle (deg) | oblique angle (deg) | map (m/s) | unguided (m/s) | difference | full runs: map / unguided |"
-    )
+    header = "| attack angle (deg) | oblique angle (deg) | map (m/s) | unguided (m/s) | difference |"
+    print(header + " full runs: map / unguided |")
     print("|---|---|---|---|---|---|")
     for i in sorted(chosen):
         p = points[i]
