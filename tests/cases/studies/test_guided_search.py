@@ -101,8 +101,8 @@ def test_any_prediction_ends_in_a_confirmed_bracket(base, critical, predicted, w
 
 def test_the_reduced_model_guides_p3_and_a_file_projectile_falls_back_saying_why():
     guide, bracket = critical_guide(Sweep.from_file(scene_path("paper_p3")).scenes[0], RANGE, 5.0)
-    # docs/theory.md: the reduced model puts #3's critical speed within 0.3 % of the measured 908.8 m/s
-    assert guide.guided and guide.predicted == pytest.approx(908.8, rel=3e-3)
+    # docs/theory.md: the reduced model puts #3's critical speed within 0.3 % of the measured 910 m/s
+    assert guide.guided and guide.predicted == pytest.approx(910.0, rel=3e-3)
     assert bracket[1] - bracket[0] == 5.0 and bracket[0] < guide.predicted < bracket[1]
     eroded = Sweep.from_file(scene_path("eroded_test2")).scenes[0]
     guide, bracket = critical_guide(eroded, RANGE, 5.0)
@@ -111,3 +111,28 @@ def test_the_reduced_model_guides_p3_and_a_file_projectile_falls_back_saying_why
     with pytest.raises(InputError, match=r"^--guide reduced: the reduced model does not apply here \(projectile"):
         critical_guide(eroded, RANGE, 5.0, "reduced")
     assert critical_guide(eroded, RANGE, 5.0, "none")[0].text == "unguided (--guide none)"
+
+
+def test_the_command_says_which_guide_it_used_and_refuses_reduced_where_it_does_not_apply(capsys, tmp_path):
+    from cases.cli import main
+
+    eroded = str(scene_path("eroded_test2"))
+    common = ["--store", str(tmp_path), "--workers", "2", "--no-progress"]
+    assert main(["critical", eroded, "--guide", "reduced", *common]) == 2
+    error = capsys.readouterr().err.strip()
+    assert error.startswith("penetrate: error: --guide reduced: the reduced model does not apply here (projectile")
+    assert "\n" not in error
+    assert main(["convergent", eroded, "--guide", "reduced", *common]) == 2
+    assert capsys.readouterr().err.startswith("penetrate: error: --guide reduced: the reduced model does not apply")
+
+
+def test_a_multi_fidelity_ensemble_of_a_file_projectile_is_refused_in_one_line(capsys, tmp_path):
+    from cases.cli import main
+
+    args = ["ensemble", str(scene_path("eroded_test2")), "--sample", "impact.speed=uniform:250:300", "-n", "4"]
+    common = ["--store", str(tmp_path / "store"), "--out", str(tmp_path / "out"), "--no-progress"]
+    assert main([*args, "--fidelity", "multi", *common]) == 2
+    error = capsys.readouterr().err.strip()
+    assert error.startswith("penetrate: error: --fidelity multi: the reduced model does not apply (projectile.geometry")
+    assert error.endswith("use --fidelity full") and "\n" not in error
+    assert not (tmp_path / "out").exists() and not (tmp_path / "store").exists()
