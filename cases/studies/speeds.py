@@ -154,11 +154,7 @@ def _scan(
         return
     parts = [(bases[i], Variation({**bases[i].variations[0].values, "impact.speed": v})) for i, v in jobs]
     result = run_sweep(Sweep.combined(parts), store, pool)
-    for (i, v), run in zip(jobs, result.runs):
-        if run.failed:
-            raise RuntimeError(f"the run at {v:g} m/s failed: {run.error}")
-        s = run.summary
-        assert s is not None  # not failed
+    for (i, v), run, s in zip(jobs, result.runs, result.summaries([f"at {v:g} m/s" for _, v in jobs])):
         seen[i][v] = ScanRun(v, s.max_attack_angle, s.axis_angle_change, s.end_reason, run.key)
 
 
@@ -400,11 +396,7 @@ def _convergent_runs(
     variations = [Variation({**base_values, "impact.speed": v}) for v in speeds]
     result = run_sweep(Sweep(sweep_base.base, variations, sweep_base.source), store, pool)
     done = []
-    for i, (speed, run) in enumerate(zip(speeds, result.runs)):
-        if run.failed:
-            raise RuntimeError(f"the run at {speed:g} m/s failed: {run.error}")
-        s = run.summary
-        assert s is not None  # not failed
+    for i, (speed, s) in enumerate(zip(speeds, result.summaries([f"at {v:g} m/s" for v in speeds]))):
         history = result.history(i)
         unstable = is_unstable(s.axis_angle_change)
         converged = convergence_speed(history, threshold)

@@ -22,7 +22,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from ..run import RunStore, StoredRun
+from ..run import RunStore, RunSummary, StoredRun
 from ..scene import (
     InputError,
     Overrides,
@@ -170,6 +170,14 @@ class SweepResult:
     def history(self, index: int) -> pd.DataFrame:
         """The stored (thinned) time history of run ``index``."""
         return self.store.history(self.runs[index].key)
+
+    def summaries(self, labels: Sequence[str]) -> list[RunSummary]:
+        """Every run's summary, for a study that cannot go on without one: the first failed run raises a
+        ``RuntimeError`` naming its ``labels`` entry (e.g. ``at 910 m/s``) and its error."""
+        for label, run in zip(labels, self.runs):
+            if run.failed:
+                raise RuntimeError(f"the run {label} failed: {run.error}")
+        return [run.summary for run in self.runs if run.summary is not None]
 
     def table(self) -> pd.DataFrame:
         """One row per variation: the varied keys, the run key and the summary (or the error); timings last."""

@@ -63,7 +63,9 @@ class FakeRuns:
                     key=f"{scene.projectile.centre_of_mass_ratio}@{scene.impact.speed}",
                 )
             )
-        return SimpleNamespace(runs=runs)
+        from cases.studies.sweep import SweepResult
+
+        return SweepResult(sweep, runs, store)
 
     @property
     def runs(self) -> int:
@@ -377,3 +379,15 @@ def test_a_search_found_in_the_store_counts_its_runs_as_done(monkeypatch, capsys
     after = len(RunStore(tmp_path / "store").records())
     assert after > before and len(bars) == 1
     assert bars[0].n == bars[0].total == record["runs"]  # every run of this search: found or made
+
+
+def test_a_failed_run_ends_the_search_naming_its_speed_and_error(monkeypatch, base):
+    def failing(sweep, store, pool=None):
+        from cases.studies.sweep import SweepResult
+
+        runs = [SimpleNamespace(failed=True, error="ValueError: boom", summary=None, key="k") for _ in sweep.scenes]
+        return SweepResult(sweep, runs, store)
+
+    monkeypatch.setattr(speeds_module, "run_sweep", failing)
+    with pytest.raises(RuntimeError, match=r"^the run at 667.5 m/s failed: ValueError: boom$"):  # the first split
+        find_critical_velocity(base, None, RANGE, 5.0, Pool(workers=2, progress=False), guide="none")

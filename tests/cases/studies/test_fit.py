@@ -190,11 +190,12 @@ def test_a_characteristic_speed_not_found_says_what_to_change(tmp_path, monkeypa
     from types import SimpleNamespace
 
     from cases.studies import speeds as speeds_module
+    from cases.studies.sweep import SweepResult
 
     def stable(sweep, store, pool=None):
         summary = SimpleNamespace(max_attack_angle=0.0, end_reason="stopped", axis_angle_change=0.0)
         runs = [SimpleNamespace(failed=False, summary=summary, key=str(s.impact.speed)) for s in sweep.scenes]
-        return SimpleNamespace(runs=runs)
+        return SweepResult(sweep, runs, store)
 
     monkeypatch.setattr(speeds_module, "run_sweep", stable)
     with pytest.raises(RuntimeError) as caught:

@@ -110,14 +110,20 @@ class FakeConvergentRuns:
     def __call__(self, sweep, store, pool=None):
         from types import SimpleNamespace
 
-        speed = sweep.scenes[0].impact.speed
-        turn = 60.0 if speed >= self.unstable_from else 2.0
-        summary = SimpleNamespace(max_attack_angle=5.0, axis_angle_change=turn, end_reason="stopped")
-        run = SimpleNamespace(failed=False, error=None, summary=summary, key=str(speed))
-        speeds = np.linspace(speed, 0.0, 201)
-        angle = np.interp(speeds, [0.0, 0.5 * speed, 0.9 * speed, speed], [self.least, self.least + 1.0, 5.0, 1.0])
-        history = pd.DataFrame({"speed": speeds, "total_attack_angle": angle})
-        return SimpleNamespace(runs=[run], history=lambda index: history)
+        from cases.studies.sweep import SweepResult
+
+        runs, histories = [], []
+        for scene in sweep.scenes:
+            speed = scene.impact.speed
+            turn = 60.0 if speed >= self.unstable_from else 2.0
+            summary = SimpleNamespace(max_attack_angle=5.0, axis_angle_change=turn, end_reason="stopped")
+            runs.append(SimpleNamespace(failed=False, error=None, summary=summary, key=str(speed)))
+            speeds = np.linspace(speed, 0.0, 201)
+            angle = np.interp(speeds, [0.0, 0.5 * speed, 0.9 * speed, speed], [self.least, self.least + 1.0, 5.0, 1.0])
+            histories.append(pd.DataFrame({"speed": speeds, "total_attack_angle": angle}))
+        result = SweepResult(sweep, runs, store)
+        result.history = histories.__getitem__  # type: ignore[method-assign]
+        return result
 
 
 @pytest.mark.parametrize(
