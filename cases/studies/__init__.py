@@ -1,5 +1,5 @@
 """Studies: many runs of a scene and what they show (sweeps, characteristic speeds, their prediction by a reduced
-model, ensembles, accuracy, law comparisons, the paper).
+model and the searches it guides, stability maps, ensembles, accuracy, law comparisons, the paper).
 
 Nothing imports it but the command line.  What it may import is written once, in pyproject.toml's
 [tool.penetrate.rooms].

@@ -7,11 +7,11 @@ A guide turns its answer into the first full runs of a search:
 
 * **critical impact velocity**: the reduced model's change from stable to unstable, bisected to an
   eighth of the resolution, becomes a first bracket one resolution wide on the search's grid (half
-  the resolution).  Full runs at both ends confirm it; an end its run contradicts moves out, by twice
-  the resolution and doubling (:class:`~cases.studies.speeds.CriticalSearch`).
+  the resolution).  Full runs at both ends confirm it; an end its run contradicts gallops away from
+  it, one resolution and then doubling (:func:`~cases.studies.speeds.find_critical_velocities`).
 * **characteristic convergent velocity**: the first of the raised impact speeds (the scene's, times
   1.15, 1.15^2, ...) whose reduced run is unstable; full runs at it and at the speed below it decide,
-  and the raising goes on from there when they do not agree.
+  and the measurement goes down, or on up, from there when they do not agree.
 
 Where the reduced model does not apply (a projectile from a file, layers, a strength table, the
 free-surface reduction, no separation, yaw or roll, :func:`.predict.check_supported`) the search runs
