@@ -36,6 +36,7 @@ __all__ = [
     "Distribution",
     "parse_sample",
     "parse_bins",
+    "bin_index",
     "unit_points",
     "draw",
     "variations",
@@ -346,6 +347,15 @@ def estimate(table: pd.DataFrame) -> dict[str, Estimate]:
     }
 
 
+def bin_index(values: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """The bin of each of ``values`` among ``edges``: ``lo <= value < hi``, the last bin also ``value == hi``;
+    -1 or ``len(edges) - 1`` for a value outside them."""
+    values = np.asarray(values, dtype=float)
+    index = np.searchsorted(edges, values, side="right") - 1
+    index[values == edges[-1]] = len(edges) - 2
+    return index
+
+
 def curve(values: np.ndarray, table: pd.DataFrame, edges: np.ndarray) -> list[dict]:
     """The outcomes' probabilities in the bins ``edges`` of one sampled key's ``values``.
 
@@ -353,9 +363,7 @@ def curve(values: np.ndarray, table: pd.DataFrame, edges: np.ndarray) -> list[di
     left out.  Each bin: ``{"bin": [lo, hi], "runs": n, "finished": m, "unstable": p, ...,
     "interval": {"unstable": [lo, hi], ...}}`` (NaN for an empty bin).
     """
-    values = np.asarray(values, dtype=float)
-    index = np.searchsorted(edges, values, side="right") - 1
-    index[values == edges[-1]] = len(edges) - 2
+    index = bin_index(values, edges)
     bins = []
     for b in range(len(edges) - 1):
         estimates = estimate(table[index == b])

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from ..scene import InputError, Scene, one_line
-from .instability import UNSTABLE_TURN
+from .instability import UNSTABLE_TURN, raised_speeds
 
 if TYPE_CHECKING:
     from .predict import ReducedModel
@@ -97,25 +97,15 @@ def critical_guide(
     if model is None:
         assert unguided is not None
         return unguided, None
-    low, high = limits
+    from .predict import reduced_critical
 
-    def unstable(speed: float) -> bool:
-        return model.run(speed, turn_limit=UNSTABLE_TURN).unstable
-
-    if not unstable(high):
-        return Guide("reduced", f"reduced model: stable up to {high:g} m/s", None), grid_bracket(
-            high, limits, resolution
-        )
-    if unstable(low):
-        return Guide("reduced", f"reduced model: unstable down to {low:g} m/s", None), grid_bracket(
-            low, limits, resolution
-        )
-    while high - low > resolution / FINER:
-        middle = 0.5 * (low + high)
-        low, high = (low, middle) if unstable(middle) else (middle, high)
-    predicted = 0.5 * (low + high)
-    text = f"reduced model: critical {predicted:.1f} m/s"
-    return Guide("reduced", text, predicted), grid_bracket(predicted, limits, resolution)
+    predicted, stable = reduced_critical(model, limits, resolution / FINER)
+    if predicted is None:
+        end, text = (limits[1], "stable up to") if stable else (limits[0], "unstable down to")
+        return Guide("reduced", f"reduced model: {text} {end:g} m/s"), grid_bracket(end, limits, resolution)
+    return Guide("reduced", f"reduced model: critical {predicted:.1f} m/s", predicted), grid_bracket(
+        predicted, limits, resolution
+    )
 
 
 def convergent_guide(
@@ -128,11 +118,8 @@ def convergent_guide(
     if model is None:
         assert unguided is not None
         return unguided, None
-    speed, raised = scene.impact.speed, 0
-    while not model.run(round(speed, 6), turn_limit=UNSTABLE_TURN).unstable:
-        if speed * raise_factor > max_speed:
-            return Guide("reduced", f"reduced model: stable up to {max_speed:g} m/s"), None
-        speed *= raise_factor
-        raised += 1
-    text = f"reduced model: first unstable at {speed:.6g} m/s" + (f" (raised {raised} times)" if raised else "")
-    return Guide("reduced", text, round(speed, 6)), raised
+    for raised, speed in enumerate(raised_speeds(scene.impact.speed, raise_factor, max_speed)):
+        if model.run(round(speed, 6), turn_limit=UNSTABLE_TURN).unstable:
+            text = f"reduced model: first unstable at {speed:.6g} m/s" + (f" (raised {raised} times)" if raised else "")
+            return Guide("reduced", text, round(speed, 6)), raised
+    return Guide("reduced", f"reduced model: stable up to {max_speed:g} m/s"), None

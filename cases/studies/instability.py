@@ -13,9 +13,21 @@ from collections.abc import Sequence
 from ..scene import Scene
 from ..scene.schema import Impact
 
-__all__ = ["UNSTABLE_TURN", "indicator", "is_unstable", "undisturbed", "disturbance_fix", "range_fix", "typed_number"]
+__all__ = [
+    "UNSTABLE_TURN",
+    "RAISE_FACTOR",
+    "MAX_SPEED",
+    "indicator",
+    "is_unstable",
+    "raised_speeds",
+    "undisturbed",
+    "disturbance_fix",
+    "range_fix",
+    "typed_number",
+]
 
 UNSTABLE_TURN = 30.0  # deg of axis turn that marks an unstable run
+RAISE_FACTOR, MAX_SPEED = 1.15, 4000.0  # how a stable run's impact speed is raised for an unstable one (m/s)
 
 
 def indicator(axis_angle_change: float) -> float:
@@ -44,6 +56,15 @@ def typed_number(value: float, up: bool) -> float:
     # a value already on the grid stays (2400, not 2500); rounding of the division is not a step
     units = math.ceil(units - 1e-9) if up else math.floor(units + 1e-9)
     return float(f"{units}e{exponent}")
+
+
+def raised_speeds(speed: float, factor: float = RAISE_FACTOR, top: float = MAX_SPEED) -> list[float]:
+    """The impact speeds tried in turn for an unstable run (m/s): ``speed``, then each the one before times
+    ``factor``, as long as it stays at or below ``top`` (the first always, whatever its value)."""
+    speeds = [speed]
+    while speeds[-1] * factor <= top:
+        speeds.append(speeds[-1] * factor)
+    return speeds
 
 
 def undisturbed(scene: Scene) -> bool:

@@ -215,7 +215,7 @@ def multi_ensemble(
     """
     import pandas as pd
 
-    from .ensemble import OUTCOMES, outcomes
+    from .ensemble import OUTCOMES, bin_index, outcomes
     from .sweep import run_sweep
 
     keys = [d.key for d in distributions]
@@ -237,14 +237,17 @@ def multi_ensemble(
         column[chosen] = runs[name].to_numpy(float)
         table[name] = column
 
+    # whose full run counts for each outcome (``failed`` over every run, the others over the finished ones),
+    # and which had it
+    ran_any = table["full_run"].to_numpy()
+    finished = ran_any & (table["failed"].to_numpy() == 0)
+    had = {name: table[name].to_numpy() == 1 for name in OUTCOMES}
+
     def estimates(mask: np.ndarray) -> dict[str, dict]:
-        finished = table["full_run"].to_numpy() & (table["failed"].to_numpy() == 0)
-        ran_any = table["full_run"].to_numpy()
-        found = {}
-        for name in OUTCOMES:
-            ran = (ran_any if name == "failed" else finished)[mask]
-            found[name] = stratified(codes[mask], ran, table[name].to_numpy()[mask] == 1)
-        return found
+        return {
+            name: stratified(codes[mask], (ran_any if name == "failed" else finished)[mask], had[name][mask])
+            for name in OUTCOMES
+        }
 
     overall = estimates(np.ones(len(values), dtype=bool))
     record: dict[str, Any] = {
@@ -262,16 +265,14 @@ def multi_ensemble(
     }
     if bins is not None:
         key, edges = bins
-        column = table[key].to_numpy(float)
-        index = np.searchsorted(edges, column, side="right") - 1
-        index[column == edges[-1]] = len(edges) - 2
+        index = bin_index(table[key].to_numpy(float), edges)
         record["by"], record["curve"] = key, []
         for b in range(len(edges) - 1):
             found = estimates(index == b)
             entry: dict[str, Any] = {
                 "bin": [float(edges[b]), float(edges[b + 1])],
                 "runs": int((index == b).sum()),
-                "full_runs": int(table["full_run"].to_numpy()[index == b].sum()),
+                "full_runs": int(ran_any[index == b].sum()),
             }
             entry.update({name: e["probability"] for name, e in found.items()})
             entry["interval"] = {name: e["interval"] for name, e in found.items()}

@@ -36,13 +36,21 @@ from ..run import (
 )
 from ..run.compiled import announce_compiling, use_numba_cache
 from ..scene import InputError, Scene
-from .instability import UNSTABLE_TURN, disturbance_fix, range_fix
+from .instability import MAX_SPEED, UNSTABLE_TURN, disturbance_fix, raised_speeds, range_fix
 
-__all__ = ["ReducedModel", "ReducedRun", "Prediction", "predict", "check_supported", "RTOL", "RINGS"]
+__all__ = [
+    "ReducedModel",
+    "ReducedRun",
+    "Prediction",
+    "predict",
+    "reduced_critical",
+    "check_supported",
+    "RTOL",
+    "RINGS",
+]
 
 RTOL = 1e-4  # the reduced runs' tolerance: the predicted speeds move by < 0.5 % to 1e-6 (docs/theory.md)
 RINGS = {"nose_rings": 12, "shank_rings": 8, "face_rings": 4}
-RAISE_FACTOR, MAX_SPEED = 1.15, 4000.0  # as penetrate convergent raises a stable run's impact speed
 ASSUMPTIONS = (
     "a body of revolution moving in the vertical plane (no yaw, no roll or yaw rate)",
     "the scene's DAFL law, ramps and friction, integrated over the exact profile instead of the mesh",
@@ -259,20 +267,19 @@ def predict(
     )
 
 
-def _convergent(model: ReducedModel, speed: float, runs: list[ReducedRun], messages: list[str]) -> float | None:
+def _convergent(model: ReducedModel, impact_speed: float, runs: list[ReducedRun], messages: list[str]) -> float | None:
     """The convergence speed of the first unstable reduced run, from the scene's speed up by 15 % steps."""
-    while True:
+    for speed in raised_speeds(impact_speed):
         run = model.run(speed)
         runs.append(run)
         if run.unstable:
             break
-        if speed * RAISE_FACTOR > MAX_SPEED:
-            messages.append(
-                f"no unstable reduced run up to {MAX_SPEED:g} m/s: no characteristic convergent velocity;"
-                f" {disturbance_fix(model.scene)}"
-            )
-            return None
-        speed *= RAISE_FACTOR
+    else:
+        messages.append(
+            f"no unstable reduced run up to {MAX_SPEED:g} m/s: no characteristic convergent velocity;"
+            f" {disturbance_fix(model.scene)}"
+        )
+        return None
     if speed != model.scene.impact.speed:
         messages.append(
             f"the reduced run at {model.scene.impact.speed:g} m/s is stable; the convergent velocity is"
@@ -285,6 +292,15 @@ def _convergent(model: ReducedModel, speed: float, runs: list[ReducedRun], messa
             " measure the convergent velocity at a larger threshold with penetrate convergent --threshold"
         )
     return run.convergence_speed
+
+
+def reduced_critical(model: ReducedModel, speeds: tuple[float, float], resolution: float) -> tuple[float | None, bool]:
+    """The reduced model's critical impact velocity in ``speeds`` (m/s), bisected to ``resolution`` from nothing
+    known; None when the range holds no change, with whether its runs were then stable throughout (else
+    unstable down to the range's bottom)."""
+    runs: list[ReducedRun] = []
+    critical, _ = _critical(model, speeds, resolution, runs, [], None, speeds)
+    return critical, critical is None and not any(run.unstable for run in runs)
 
 
 def _critical(

@@ -18,8 +18,8 @@ Definitions (docs/studies.md):
   middle of the final bracket.
 * **Guided search** (the default where it applies, :mod:`.guide`): the reduced
   pitch-plane model's prediction gives a first bracket one resolution wide; full
-  runs confirm its ends, and an end its run contradicts moves out by twice the
-  resolution, doubling each time (spare workers run the next speeds beyond it).
+  runs confirm its ends, and an end its run contradicts gallops out, one
+  resolution and then doubling (spare workers run the next speeds beyond it).
 * **Unstable run** (the critical speed's two sides, and whether a single run
   can give the convergent velocity): ``|axis_angle_change| >= UNSTABLE_TURN``
   (30 degrees).  In the paper's critical-speed searches the runs just below
@@ -45,7 +45,18 @@ from ..run import CONVERGENCE_THRESHOLD, RunStore, convergence_speed
 from ..run.history import attack_angle_peak
 from ..scene import InputError
 from .guide import Guide, convergent_guide, critical_guide
-from .instability import UNSTABLE_TURN, disturbance_fix, indicator, is_unstable, range_fix, typed_number, undisturbed
+from .instability import (
+    MAX_SPEED,
+    RAISE_FACTOR,
+    UNSTABLE_TURN,
+    disturbance_fix,
+    indicator,
+    is_unstable,
+    raised_speeds,
+    range_fix,
+    typed_number,
+    undisturbed,
+)
 from .pool import Pool, study_progress
 from .sweep import Sweep, Variation, run_sweep
 
@@ -410,8 +421,8 @@ def measure_convergent_velocity(
     sweep_base: Sweep,
     store: RunStore,
     threshold: float = CONVERGENCE_THRESHOLD,
-    raise_factor: float = 1.15,
-    max_speed: float = 4000.0,
+    raise_factor: float = RAISE_FACTOR,
+    max_speed: float = MAX_SPEED,
     pool: Pool | None = None,
     guide: str = "auto",
 ) -> ConvergentResult:
@@ -427,11 +438,9 @@ def measure_convergent_velocity(
     """
     scene = sweep_base.scenes[0]
     found, raised = convergent_guide(scene, raise_factor, max_speed, guide)
-    ladder = [scene.impact.speed]  # the raised speeds, each the one before times the factor
+    ladder = raised_speeds(scene.impact.speed, raise_factor, max_speed)
 
     def rung(j: int) -> float:
-        while len(ladder) <= j:
-            ladder.append(ladder[-1] * raise_factor)
         return round(ladder[j], 6)
 
     done: dict[int, tuple[ConvergentRun, pd.DataFrame]] = {}
@@ -452,12 +461,12 @@ def measure_convergent_velocity(
                 ]
                 continue
             top = max(done)
-            if ladder[top] * raise_factor > max_speed:
+            if top + 1 == len(ladder):
                 runs = [done[j][0] for j in sorted(done)]
                 return ConvergentResult(
                     None, runs, f"no unstable run up to {max_speed:g} m/s: {disturbance_fix(scene)}", found
                 )
-            batch = [top + 1, top + 2] if found.guided and ladder[top] * raise_factor**2 <= max_speed else [top + 1]
+            batch = [j for j in ((top + 1, top + 2) if found.guided else (top + 1,)) if j < len(ladder)]
     first = min(unstable)
     runs = [done[j][0] for j in sorted(done)]
     run, history = done[first]

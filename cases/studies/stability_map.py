@@ -26,7 +26,7 @@ from ..scene import InputError, Overrides
 from ..viz.figures import axis_label, quantity_unit, save_figure, subplots
 from .pool import Pool
 from .speeds import find_critical_velocities
-from .sweep import Sweep, Variation, parse_grid
+from .sweep import Sweep, grid, parse_grid
 
 __all__ = ["stability_map", "MAX_POINTS"]
 
@@ -85,14 +85,14 @@ def stability_map(
     start = time.perf_counter()
     axes = _axes(overs)
     keys = [key for key, _ in axes]
-    grid = [dict(zip(keys, combo)) for combo in _product([values for _, values in axes])]
-    bases = [Sweep.from_file(scene, overrides, [Variation(point)]) for point in grid]
+    points_grid = grid(dict(axes))  # the last key varies fastest
+    bases = [Sweep.from_file(scene, overrides, [variation]) for variation in points_grid]
     searches = find_critical_velocities(bases, store, speeds, resolution, pool, guide=guide)
     points = []
-    for point, search in zip(grid, searches):
+    for variation, search in zip(points_grid, searches):
         points.append(
             {
-                **point,
+                **variation.values,
                 "critical_velocity": search.critical_velocity,
                 "bracket": search.bracket,
                 "runs": len(search.indicator),
@@ -114,13 +114,6 @@ def stability_map(
     }
     _write(Path(out), record)
     return json_safe(record)
-
-
-def _product(lists: Sequence[Sequence[Any]]) -> list[tuple[Any, ...]]:
-    combos: list[tuple[Any, ...]] = [()]
-    for values in lists:
-        combos = [(*c, v) for c in combos for v in values]
-    return combos
 
 
 def _write(out: Path, record: dict) -> None:
