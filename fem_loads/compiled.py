@@ -31,17 +31,15 @@ import math
 import numpy as np
 from numba import njit
 
-from .compiled_point import exposure_correction, image_friction, law_setup, point_motion, point_stress
+from .compiled_point import exposure_correction, image_friction, law_setup, point_motion, point_setup, point_stress
 from .kernel_layout import (
     CONSTANT_CONTACT_INCIDENCE,
     CONSTANT_CONTACT_OFFSET,
     CONSTANT_CONTACT_WIDTH,
     CONSTANT_FRICTION,
-    CONSTANT_FRICTION_CAP,
     CONSTANT_GUARD,
     CONSTANT_HALF_ENTRY,
     CONSTANT_MAX_RADIUS,
-    CONSTANT_NEEDS_DEPTH,
     CONSTANT_PLAIN,
     CONSTANT_SMOOTH_CONTACT,
     CONSTANT_SURFACE_DEPTH,
@@ -50,12 +48,9 @@ from .kernel_layout import (
     DATA_EXPOSURE_COLUMNS,
     DATA_HALF_ENTRY_LENGTH,
     DATA_IMAGE_SIGNS,
-    DATA_INVERSE_ENTRY,
     DATA_LAWS,
-    DATA_NORMAL_ARM,
     DATA_POINT_SIGNS,
     DATA_POINTS,
-    DATA_WEIGHTS,
     KERNEL_ARRAYS,
     kernel_data,
     supports,
@@ -97,17 +92,14 @@ def _smooth_sums(
     and ``with_surface`` are constants in each of the two functions that inline this one
     (:func:`_frictionless_sums`, the shipped scenes' load; :func:`_friction_sums`, with friction or a free
     surface): each compiles to a loop of its own without the other's branches."""
-    normal_arm, points, weights = data[DATA_NORMAL_ARM], data[DATA_POINTS], data[DATA_WEIGHTS]
-    inverse_entry, point_signs, constants = data[DATA_INVERSE_ENTRY], data[DATA_POINT_SIGNS], data[DATA_CONSTANTS]
+    points, normal_arm, point_signs, weights, inverse_entry, _, needs_depth, rule = point_setup(data, width, v)
+    constants = data[DATA_CONSTANTS]
     offset = constants[CONSTANT_CONTACT_OFFSET]
-    mu, cap = constants[CONSTANT_FRICTION], constants[CONSTANT_FRICTION_CAP]
     surface_depth = constants[CONSTANT_SURFACE_DEPTH]
     inverse_surface = 1.0 / surface_depth if surface_depth > 0.0 else 0.0
     # without a free surface the factor is f0 + (1 - f0) S(.) with f0 = 1: exactly 1
     fraction = constants[CONSTANT_SURFACE_FRACTION] if surface_depth > 0.0 else 1.0
-    needs_depth = constants[CONSTANT_NEEDS_DEPTH] != 0.0 or surface_depth > 0.0
     inverse_width = 1.0 / width if width > 0.0 else 0.0
-    rule = (mu, cap, width, v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
     c = data[DATA_LAWS][0]
     c0, c1, c2, c3 = c[0], c[1], c[2], c[3]
     for k in range(sums.shape[0]):
@@ -203,22 +195,11 @@ def _sums(
     Everything the points share is read from ``data`` before the loop: inside it, only array elements and
     floats (an array view made per point costs its reference counting, more than the law itself).
     """
-    normal_arm, points, weights, inverse_entry = (
-        data[DATA_NORMAL_ARM],
-        data[DATA_POINTS],
-        data[DATA_WEIGHTS],
-        data[DATA_INVERSE_ENTRY],
-    )
-    half_entry_length, point_signs, constants = (
-        data[DATA_HALF_ENTRY_LENGTH],
-        data[DATA_POINT_SIGNS],
-        data[DATA_CONSTANTS],
+    points, normal_arm, point_signs, weights, inverse_entry, half_entry_length, needs_depth, rule = point_setup(
+        data, width, v
     )
     layered, user, address, law, depths, stresses, switches = law_setup(data, width)
-    surface_depth = constants[CONSTANT_SURFACE_DEPTH]
-    needs_depth = constants[CONSTANT_NEEDS_DEPTH] != 0.0 or surface_depth > 0.0
-    mu, cap = constants[CONSTANT_FRICTION], constants[CONSTANT_FRICTION_CAP]
-    rule = (mu, cap, width, v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+    mu = rule[0]
     for k in range(sums.shape[0]):
         a0 = a1 = a2 = a3 = a4 = a5 = 0.0
         for j in range(weights.shape[0]):

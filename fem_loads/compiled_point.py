@@ -147,6 +147,33 @@ def law_setup(
 
 
 @njit(cache=True, inline="always", error_model="numpy")
+def point_setup(
+    data: tuple[np.ndarray, ...], width: float, v: np.ndarray
+) -> tuple[
+    np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, bool, tuple[float, float, float, float]
+]:
+    """What every loop over the points reads from ``data`` before it starts: ``(points, normal_arm, point_signs,
+    weights, inverse_entry, half_entry_length, needs_depth, rule)``, with ``needs_depth`` whether the stress needs
+    each point's depth and ``rule`` the friction's ``(mu, cap, W, |v|^2)`` for :func:`image_friction` (``v``: the
+    body's velocity, body frame; ``W``: the contact width, m/s).  The general law's own share is
+    :func:`law_setup`."""
+    constants = data[DATA_CONSTANTS]
+    needs_depth = constants[CONSTANT_NEEDS_DEPTH] != 0.0 or constants[CONSTANT_SURFACE_DEPTH] > 0.0
+    speed2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
+    rule = (constants[CONSTANT_FRICTION], constants[CONSTANT_FRICTION_CAP], width, speed2)
+    return (
+        data[DATA_POINTS],
+        data[DATA_NORMAL_ARM],
+        data[DATA_POINT_SIGNS],
+        data[DATA_WEIGHTS],
+        data[DATA_INVERSE_ENTRY],
+        data[DATA_HALF_ENTRY_LENGTH],
+        needs_depth,
+        rule,
+    )
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def point_stress(
     data: tuple[np.ndarray, ...],
     j: int,
@@ -274,16 +301,12 @@ def exposure_correction(
     """
     columns, start = data[DATA_EXPOSURE_COLUMNS], data[DATA_EXPOSURE_START]
     rows, masks = data[DATA_EXPOSURE_ROWS], data[DATA_EXPOSURE_CORNERS]
-    normal_arm, points, point_signs = data[DATA_NORMAL_ARM], data[DATA_POINTS], data[DATA_POINT_SIGNS]
-    weights, inverse_entry, half_entry = data[DATA_WEIGHTS], data[DATA_INVERSE_ENTRY], data[DATA_HALF_ENTRY_LENGTH]
-    constants = data[DATA_CONSTANTS]
     if v[0] == 0.0 and v[1] == 0.0 and v[2] == 0.0:
         return  # no direction of motion, no shadow
     n = round(math.sqrt((start.shape[0] - 1) / 6.0))  # 6 N^2 cells
+    points, normal_arm, point_signs, weights, inverse_entry, half_entry, needs_depth, rule = point_setup(data, width, v)
     layered, user, address, law, depths, stresses, switches = law_setup(data, width)
-    needs_depth = constants[CONSTANT_NEEDS_DEPTH] != 0.0 or constants[CONSTANT_SURFACE_DEPTH] > 0.0
-    mu, cap = constants[CONSTANT_FRICTION], constants[CONSTANT_FRICTION_CAP]
-    speed2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
+    mu = rule[0]
     separation, smooth_contact, inverse_width, offset = switches[0], switches[1], switches[2], switches[3]
     # the smooth ramp is zero at and below -offset W; the sharp switch at and below the guard
     limit = -math.inf if smooth_contact else guard
@@ -324,7 +347,6 @@ def exposure_correction(
             sums[k, 5] += change * n5
             if mu > 0.0:
                 # the friction at the exposed stress less that at the full one (a cap makes it nonlinear)
-                rule = (mu, cap, width, speed2)
                 full = image_friction(
                     points, point_signs, k, p, normal_arm, v, w, normal_velocity, stress, weights[p], rule
                 )
