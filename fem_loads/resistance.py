@@ -40,6 +40,8 @@ __all__ = [
     "resistance_law",
     "register_law",
     "locking_cavity_expansion",
+    "concrete_cavity_expansion",
+    "concrete_strength_factor",
     "normal_stress_scalars",
     "polynomial_stress_scalars",
     "UnknownLawError",
@@ -206,6 +208,31 @@ def locking_cavity_expansion(
     a = 2.0 / 3.0 * (1.0 - math.log(eta))
     b = (1.5 - 2.0 * cube + 0.5 * eta * cube) / (1.0 - eta) + cube
     return ResistanceLaw.from_coefficients(a, sigma_0, b, rho_0, name)
+
+
+#: Frew et al.'s fit of the static coefficient of concrete, ``S = FACTOR (f'c / MPa)^EXPONENT``
+CONCRETE_S_FACTOR, CONCRETE_S_EXPONENT = 82.6, -0.544
+
+
+def concrete_strength_factor(compressive_strength: float) -> float:
+    """``S = 82.6 (f'c / 1 MPa)^-0.544``: the static coefficient of concrete from its unconfined compressive
+    strength ``f'c`` (Pa), Frew, Hanchak, Green and Forrestal's empirical fit to penetration tests (IJIE 1998)."""
+    if not (math.isfinite(compressive_strength) and compressive_strength > 0.0):
+        raise ValueError(f"compressive_strength = {compressive_strength}: must be a finite number > 0")
+    return CONCRETE_S_FACTOR * (compressive_strength / 1e6) ** CONCRETE_S_EXPONENT
+
+
+def concrete_cavity_expansion(
+    compressive_strength: float, density: float, strength_factor: float | None = None, name: str = "concrete"
+) -> ResistanceLaw:
+    """Forrestal's spherical cavity expansion for concrete: ``sigma_n = S f'c + rho Vn^2``.
+
+    The cavity-expansion form ``A sigma_0 + B rho_0 Vn^2`` with ``sigma_0 = f'c`` (the unconfined
+    compressive strength, Pa), ``A = S``, ``B = 1`` and ``rho_0 = rho`` (kg/m^3); ``S`` (``strength_factor``)
+    defaults to :func:`concrete_strength_factor`.
+    """
+    factor = concrete_strength_factor(compressive_strength) if strength_factor is None else strength_factor
+    return ResistanceLaw.from_coefficients(factor, compressive_strength, 1.0, density, name)
 
 
 NAMED_LAWS: dict[str, ResistanceLaw] = {

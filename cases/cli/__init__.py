@@ -1,7 +1,8 @@
 """The ``penetrate`` command: a thin layer that reads options, calls ``cases`` and prints.
 
 Each command's parser and handler sit side by side in its module (:mod:`.run`, :mod:`.sweep`,
-:mod:`.speeds`, :mod:`.studies`, :mod:`.ensemble`, :mod:`.fit`, :mod:`.render`).  Errors are told apart by type: an
+:mod:`.speeds`, :mod:`.studies`, :mod:`.validate`, :mod:`.ensemble`, :mod:`.fit`, :mod:`.render`).  Errors are
+told apart by type: an
 :class:`~cases.scene.InputError` (a scene, an option, a file) is bad input, exit code 2; any
 other failure of a run or study is exit code 1.  Nothing imports this room; what it may import is
 written once, in pyproject.toml's [tool.penetrate.rooms].
@@ -16,12 +17,12 @@ import sys
 import warnings
 
 from ..scene import InputError, one_line
-from . import ensemble, fit, render, run, speeds, studies, sweep
+from . import ensemble, fit, render, run, speeds, studies, sweep, validate
 from .options import Parser, environment_defaults
 
 __all__ = ["main", "build_parser"]
 
-COMMANDS = (run, sweep, speeds, studies, ensemble, fit, render)
+COMMANDS = (run, sweep, speeds, studies, validate, ensemble, fit, render)
 
 
 def build_parser() -> Parser:

@@ -17,6 +17,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "Parser",
+    "SET_HELP",
     "positive_int",
     "positive_float",
     "out_folder",

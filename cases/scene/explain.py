@@ -122,8 +122,9 @@ def _explain_one(error: ErrorDetails) -> str:
         if loc and loc[-1] in LAW_TAGS:
             return (
                 f"{name} = {_show(given)}: must be a law (allowed: a name, {', '.join(sorted(NAMED_LAWS))};"
-                " a table of A, sigma_0, B, rho_0; model = polynomial (c0, c1, c2), power (c0, c, n) or"
-                " locking_cavity_expansion (sigma_0, rho_0, locking_strain); or function = 'file.py:name')"
+                " a table of A, sigma_0, B, rho_0; model = polynomial (c0, c1, c2), power (c0, c, n),"
+                " locking_cavity_expansion (sigma_0, rho_0, locking_strain) or concrete (compressive_strength,"
+                " density); or function = 'file.py:name')"
             )
         models = _field_at(loc)[1]
         keys = ", ".join(sorted({k for m in models for k in m.model_fields}))

@@ -7,7 +7,15 @@ from typing import Annotated, Any, Literal, Self
 
 from pydantic import Discriminator, Tag, field_validator, model_validator
 
-from fem_loads.resistance import LAW_FAMILIES, NAMED_LAWS, ResistanceLaw, locking_cavity_expansion, resistance_law
+from fem_loads.resistance import (
+    LAW_FAMILIES,
+    NAMED_LAWS,
+    ResistanceLaw,
+    concrete_cavity_expansion,
+    concrete_strength_factor,
+    locking_cavity_expansion,
+    resistance_law,
+)
 from fem_loads.target import FreeSurface, Friction, LayeredTarget
 from fem_loads.user_law import LawError, UserLaw, user_law
 
@@ -18,6 +26,7 @@ __all__ = [
     "PolynomialLawSpec",
     "PowerLawSpec",
     "MaterialLawSpec",
+    "ConcreteLawSpec",
     "UserLawSpec",
     "LAW_TAGS",
     "LawChoice",
@@ -107,6 +116,32 @@ class MaterialLawSpec(Strict):
         return locking_cavity_expansion(self.sigma_0, self.rho_0, self.locking_strain)
 
 
+class ConcreteLawSpec(Strict):
+    """Concrete by its compressive strength and density: Forrestal's cavity expansion ``S f'c + rho Vn^2`` with
+    Frew et al.'s ``S = 82.6 (f'c / MPa)^-0.544`` (docs/laws.md)."""
+
+    model: Literal["concrete"]
+    compressive_strength: Number = field(
+        unit="Pa", gt=0.0, le=1e9, description="f'c: the unconfined compressive strength"
+    )
+    density: Number = field(unit="kg/m^3", gt=0.0, le=1e5, description="rho: the concrete's density")
+    S: Number | None = field(
+        None,
+        ge=0.0,
+        le=1e3,
+        description="the static coefficient; filled in from f'c by Frew et al.'s fit when not given",
+    )
+
+    @model_validator(mode="after")
+    def _fill_strength_factor(self) -> Self:
+        if self.S is None:
+            self.S = concrete_strength_factor(self.compressive_strength)
+        return self
+
+    def build(self) -> ResistanceLaw:
+        return concrete_cavity_expansion(self.compressive_strength, self.density, self.S)
+
+
 class UserLawSpec(Strict):
     """A law of the user's own: ``def name(normal_velocity, depth, p1, ...)`` in a Python file (docs/laws.md)."""
 
@@ -148,9 +183,10 @@ LAW_TAGS: dict[str, type[Strict]] = {
     "polynomial": PolynomialLawSpec,
     "power": PowerLawSpec,
     "material": MaterialLawSpec,
+    "concrete": ConcreteLawSpec,
     "user": UserLawSpec,
 }
-_MODEL_TAGS = {"cavity_expansion": "coefficients", "locking_cavity_expansion": "material"}
+_MODEL_TAGS = {"cavity_expansion": "coefficients", "locking_cavity_expansion": "material", "concrete": "concrete"}
 
 
 def _law_kind(value: object) -> str:
@@ -162,7 +198,7 @@ def _law_kind(value: object) -> str:
         if "function" in value:
             return "user"
         model = value.get("model")
-        if isinstance(model, str) and model in LAW_FAMILIES or model == "locking_cavity_expansion":
+        if isinstance(model, str) and (model in LAW_FAMILIES or model in _MODEL_TAGS):
             return _MODEL_TAGS.get(model, model)
     return "coefficients"
 
@@ -173,10 +209,11 @@ LawChoice = Annotated[
     | Annotated[PolynomialLawSpec, Tag("polynomial")]
     | Annotated[PowerLawSpec, Tag("power")]
     | Annotated[MaterialLawSpec, Tag("material")]
+    | Annotated[ConcreteLawSpec, Tag("concrete")]
     | Annotated[UserLawSpec, Tag("user")],
     Discriminator(_law_kind),
 ]
-AnyLawSpec = LawSpec | PolynomialLawSpec | PowerLawSpec | MaterialLawSpec | UserLawSpec
+AnyLawSpec = LawSpec | PolynomialLawSpec | PowerLawSpec | MaterialLawSpec | ConcreteLawSpec | UserLawSpec
 
 
 def build_law(law: str | AnyLawSpec) -> ResistanceLaw | UserLaw:
@@ -189,7 +226,8 @@ def _check_law_name(value: object) -> object:
     if isinstance(value, str) and value not in NAMED_LAWS:
         raise ValueError(
             f"unknown law {value!r}: must be one of {', '.join(sorted(NAMED_LAWS))}, a table of a family's"
-            f" coefficients (model = {', '.join(LAW_FAMILIES)}) or function = 'file.py:name'"
+            f" coefficients (model = {', '.join(dict.fromkeys([*LAW_FAMILIES, *_MODEL_TAGS]))})"
+            " or function = 'file.py:name'"
         )
     return value
 

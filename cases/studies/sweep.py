@@ -141,14 +141,18 @@ class Sweep:
     @classmethod
     def combined(cls, parts: Sequence[tuple[Sweep, Variation]]) -> Sweep:
         """Variations of several base scenes as one sweep, each variation on its own base."""
+        return cls.from_bases([(base.base, base.source, variation) for base, variation in parts])
+
+    @classmethod
+    def from_bases(cls, parts: Sequence[tuple[dict, str, Variation]]) -> Sweep:
+        """One sweep of ``(base scene, its source, variation)`` parts, each variation on its own base (nested
+        dictionaries, before validation: each combined scene is validated once, here)."""
         sweep = cls.__new__(cls)
         sweep.base, sweep.source = {}, "scenes"
-        sweep.variations = [variation for _, variation in parts]
+        sweep.variations = [variation for _, _, variation in parts]
         sweep.scenes = [
-            scene_from_dict(apply_overrides(base.base, variation.values, base.source), base.source).with_kernel(
-                many_runs=True
-            )
-            for base, variation in parts
+            scene_from_dict(apply_overrides(base, variation.values, source), source).with_kernel(many_runs=True)
+            for base, source, variation in parts
         ]
         return sweep
 
