@@ -104,8 +104,8 @@ def law_names() -> str:
     return ", ".join(NAMED_LAWS)
 
 
-def add_scene_options(parser: Parser, what: str = "a scene TOML file") -> None:
-    parser.add_argument("scene", help=what)
+def add_scene_options(parser: Parser, what: str = "a scene TOML file", optional: bool = False) -> None:
+    parser.add_argument("scene", help=what, **({"nargs": "?"} if optional else {}))
     parser.late_help(
         parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP),
         lambda: f"{SET_HELP}; a named target.law is one of {law_names()}",

@@ -20,6 +20,7 @@ from .options import (
     study,
 )
 from .speeds import speed_range
+from .validate import SERIES_HELP
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -33,11 +34,12 @@ def _study_parser(
     help: str,
     writes: str,
     json_help: str = "print the table as JSON records",
+    scene_optional: bool = False,
 ) -> Parser:
     """A study's command with what every study takes: the scene and its overrides, where the runs go,
     ``--json`` and ``--out`` (default ``runs/NAME``; ``writes`` names what is written there)."""
     parser = commands.add_parser(name, help=help)
-    add_scene_options(parser)
+    add_scene_options(parser, "a scene TOML file" + (" (or --series)" if scene_optional else ""), scene_optional)
     add_pool_options(parser, "runs/store")
     parser.add_argument("--json", action="store_true", help=json_help)
     parser.add_argument(
@@ -54,12 +56,14 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
     compare = _study_parser(
         commands,
         "compare",
-        "run a scene under several resistance laws, side by side",
-        "compare.md, compare.csv and compare.png",
+        "run a scene, or a test series, under several resistance laws, side by side",
+        "compare.md, compare.csv and compare.png (and compare.json with --series)",
+        scene_optional=True,
     )
+    compare.add_argument("--series", metavar="SERIES", help=f"instead of a scene, {SERIES_HELP}; ranks the laws")
     compare.late_help(
         compare.add_argument("--laws", default="", metavar="A,B,...", help="comma-separated law names"),
-        lambda: f"comma-separated law names, of {law_names()} (docs/laws.md)",
+        lambda: f"comma-separated law names, of {law_names()}, and scene for the scene's own law (docs/laws.md)",
     )
     compare.add_argument(
         "--law",
@@ -176,18 +180,25 @@ def incidences_help() -> str:
 def compare_laws(args: argparse.Namespace) -> int:
     from ..run import RunStore
     from ..scene import parse_override
+    from ..studies.compare import SCENE_LAW
     from ..studies.compare import compare_laws as compare
 
-    laws: list[tuple[str, object]] = [(name.strip(), name.strip()) for name in args.laws.split(",") if name.strip()]
+    if (args.scene is None) == (args.series is None):
+        raise InputError("compare: give a scene file or --series SERIES (one of them)")
+    laws: list[tuple[str, object]] = [
+        (name, None if name == SCENE_LAW else name) for name in (n.strip() for n in args.laws.split(",")) if name
+    ]
     for text in args.law:
         label, separator, value = text.partition("=")
         if not separator or not label.strip():
             raise InputError(f"--law {text!r}: expected LABEL=LAW, e.g. 'poly={{model=\"polynomial\", c0=1e7}}'")
         laws.append((label.strip(), parse_override(f"target.law={value}")[1]))
     if not laws:
-        raise InputError("--laws, --law: give one or more laws, e.g. --laws soil,softer_soil")
+        raise InputError(f"--laws, --law: give one or more laws, e.g. --laws {SCENE_LAW},soil,softer_soil")
     if len({label for label, _ in laws}) < len(laws):
         raise InputError("--laws, --law: each law needs a label of its own (allowed: distinct names)")
+    if args.series is not None:
+        return _compare_series(args, laws)
     speeds = _numbers("--speeds", args.speeds) if args.speeds else None
     with study(args) as pool:
         comparison = compare(
@@ -209,6 +220,33 @@ def compare_laws(args: argparse.Namespace) -> int:
     print((out / "compare.md").read_text())
     print("written        " + ", ".join(str(out / name) for name in ("compare.md", "compare.csv", "compare.png")))
     return 0
+
+
+def _compare_series(args: argparse.Namespace, laws: list[tuple[str, object]]) -> int:
+    from ..run import RunStore
+    from ..run.persistence import json_safe
+    from ..studies.compare import compare_series
+    from ..studies.series import read_series
+    from .validate import report_failures
+
+    ignored = [flag for flag, given in (("--speeds", args.speeds), ("--critical", args.critical)) if given]
+    if args.convergent:
+        ignored.append("--convergent")
+    if ignored:
+        raise InputError(f"compare --series: {', '.join(ignored)} apply to a scene, not to a series (drop them)")
+    series = read_series(args.series)
+    with study(args) as pool:
+        comparison = compare_series(series, overrides(args), laws, RunStore(args.store), args.out, pool)
+    if args.json:
+        print(json.dumps(json_safe(comparison.record()), allow_nan=False))
+    else:
+        out = Path(args.out)
+        print((out / "compare.md").read_text())
+        print("written        " + ", ".join(str(out / f"compare.{ext}") for ext in ("md", "csv", "json", "png")))
+    failed = list(
+        dict.fromkeys(f"{row['label']} ({row['law']})" for row in comparison.rows if row["end_reason"] == "failed")
+    )
+    return report_failures("compare", failed)
 
 
 def _numbers(option: str, text: str) -> list[float]:

@@ -8,9 +8,10 @@ moved one body length into the target, so every law is seen on the same state.
 
 from __future__ import annotations
 
+import json
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -19,13 +20,17 @@ import numpy as np
 import pandas as pd
 
 from ..run import RunStore, atomic_write_text, initial_state, prepare_projectile
-from ..scene import Overrides, Scene
+from ..scene import InputError, Overrides, Scene
 from ..viz.figures import legend_outside, save_figure, subplots
 from .pool import Pool
+from .series import Series, combined
 from .speeds import find_critical_velocities, measure_convergent_velocity
 from .sweep import Sweep, SweepResult, Variation, run_sweep
 
-__all__ = ["compare_laws", "LawComparison", "COLUMNS"]
+__all__ = ["compare_laws", "compare_series", "LawComparison", "SeriesComparison", "law_values", "COLUMNS", "SCENE_LAW"]
+
+#: the label of the scene's own law in a comparison (``--laws scene``)
+SCENE_LAW = "scene"
 
 COLUMNS = ("end_reason", "depth", "path_length", "final_time", "max_attack_angle", "axis_angle_change")
 UNITS = "Units: m, m, s, deg, deg; speeds m/s; stress MPa."
@@ -39,6 +44,7 @@ class LawComparison:
     runs: SweepResult
     depth_by_speed: pd.DataFrame | None
     nose_stress: dict[str, tuple[np.ndarray, np.ndarray]]
+    body_lengths: list[float] | None = None
 
 
 def compare_laws(
@@ -58,7 +64,8 @@ def compare_laws(
     Parameters
     ----------
     laws : sequence of (label, law)
-        Each law as ``target.law`` takes it (a name, or a table); every scene is checked before any run.
+        Each law as ``target.law`` takes it (a name, or a table), or None for the scene's own law; every
+        scene is checked before any run.
     speeds : sequence of float, optional
         Impact speeds (m/s) at which each law's depth is measured too.
     critical : (low, high), optional
@@ -66,13 +73,13 @@ def compare_laws(
     convergent : bool
         Also measure each law's characteristic convergent speed.
     """
-    variations = [Variation({"target.law": law}) for _, law in laws]
+    variations = [Variation(law_values(law)) for _, law in laws]
     sweep = Sweep.from_file(scene, overrides, variations)
     labels = [label for label, _ in laws]
     result = run_sweep(sweep, store, pool)
     table = result.table()
     table.insert(0, "law", labels)
-    table = table.drop(columns=["target.law"])
+    table = table.drop(columns=["target.law"], errors="ignore")
     depth_by_speed = None
     if speeds:
         by_speed = Sweep.from_file(
@@ -92,13 +99,19 @@ def compare_laws(
         table["convergent_speed"] = [f.characteristic_convergent_velocity for f in found]
     stress = {label: embedded_stress(s) for label, s in zip(labels, sweep.scenes)}
     table["peak_nose_stress"] = [float(values.max()) / 1e6 for _, values in stress.values()]
-    comparison = LawComparison(table, result, depth_by_speed, stress)
+    lengths = [float(prepare_projectile(s).profile.length) for s in sweep.scenes]
+    comparison = LawComparison(table, result, depth_by_speed, stress, lengths)
     out = Path(out)
     atomic_write_text(out / "compare.csv", table.to_csv(index=False))
     name = sweep.scenes[0].name or Path(scene).stem
     atomic_write_text(out / "compare.md", _markdown(comparison, name))
     _figure(comparison, out / "compare.png")
     return comparison
+
+
+def law_values(law: Any | None) -> dict[str, Any]:
+    """The scene keys that give a scene ``law`` (None: the scene's own, nothing set)."""
+    return {} if law is None else {"target.law": law}
 
 
 def embedded_stress(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
@@ -118,7 +131,7 @@ def _markdown(comparison: LawComparison, name: str) -> str:
     table = comparison.table
     shown = [c for c in ("law", *COLUMNS, "critical_speed", "convergent_speed", "peak_nose_stress") if c in table]
     lines = [
-        f"# {name} under {len(table)} resistance laws",
+        f"# {name} under {len(table)} resistance law{'s' if len(table) != 1 else ''}",
         "",
         "| " + " | ".join(shown) + " |",
         "|" + "---|" * len(shown),
@@ -133,6 +146,16 @@ def _markdown(comparison: LawComparison, name: str) -> str:
                 cells.append("none found" if value is None else str(value))
         lines.append("| " + " | ".join(cells) + " |")
     lines += ["", UNITS, "peak_nose_stress: the largest normal stress one body length in, at the impact speed.", ""]
+    short = [
+        f"{law} stopped at {depth:.3g} m, short of one body length ({length:.3g} m)"
+        for law, depth, length in zip(table["law"], table.get("depth", []), comparison.body_lengths or [])
+        if isinstance(depth, float) and depth < length
+    ]
+    if short:
+        lines += [
+            "The stress one body length in is of a state these runs never reach: " + "; ".join(short) + ".",
+            "",
+        ]
     if comparison.depth_by_speed is not None:
         wide = comparison.depth_by_speed.pivot(index="impact.speed", columns="law", values="depth")
         lines += ["Depth (m) against impact speed (m/s):", "", "| impact speed | " + " | ".join(wide.columns) + " |"]
@@ -171,3 +194,119 @@ def _figure(comparison: LawComparison, path: Path) -> None:
     legend_outside(axes[-1])  # the same laws in every panel: one legend, right of the panels
     fig.tight_layout()
     save_figure(fig, path)
+
+
+@dataclass
+class SeriesComparison:
+    """What :func:`compare_series` measured: each law's predictions of the series, and the laws ranked."""
+
+    rows: list[dict[str, Any]]
+    ranking: list[dict[str, Any]]
+    settings: list[tuple[str, Any]]
+    source: str
+
+    def record(self) -> dict[str, Any]:
+        return {"series": self.source, "ranking": self.ranking, "shots": self.rows}
+
+
+def compare_series(
+    series: Series,
+    overrides: Overrides | None,
+    laws: Sequence[tuple[str, Any]],
+    store: RunStore,
+    out: str | os.PathLike,
+    pool: Pool | None = None,
+) -> SeriesComparison:
+    """Every shot of ``series`` under each law; the laws ranked by their mean |error| over every measurement
+    (then chi-squared); ``compare.md``, ``compare.csv``, ``compare.json`` and ``compare.png`` in ``out``.
+
+    ``laws`` as :func:`compare_laws` takes them (None: each shot's scene's own law).  A series whose columns
+    set the law of each shot is refused: there would be nothing to compare.
+    """
+    from .validate import error_summary, figure, prediction_rows
+
+    setting = [key for key in series.columns if key == "target" or key.startswith(("target.law", "target.layers"))]
+    if setting:
+        raise InputError(
+            f"compare --series: the series sets {setting[0]} per shot (a column), which the laws would replace;"
+            " drop the column, or compare with penetrate validate --set target.law=... one law at a time"
+        )
+    settings = list(overrides.items() if isinstance(overrides, Mapping) else overrides or [])
+    result = run_sweep(combined(series, series.parts(settings, [law_values(law) for _, law in laws])), store, pool)
+    rows = []
+    ranking = []
+    for k, (label, _) in enumerate(laws):
+        mine = [{"law": label, **row} for row in prediction_rows(series, result, offset=k * len(series.shots))]
+        rows += mine
+        quantities = list(dict.fromkeys(row["quantity"] for row in mine))
+        ranking.append(
+            {
+                "law": label,
+                **error_summary(mine),
+                "quantities": {q: error_summary([r for r in mine if r["quantity"] == q]) for q in quantities},
+            }
+        )
+    ranking.sort(key=_rank)
+    for place, entry in enumerate(ranking, start=1):
+        entry["rank"] = place
+    comparison = SeriesComparison(rows, ranking, settings, series.source)
+    out = Path(out)
+    table = pd.DataFrame([{**row, "warnings": "; ".join(w for w in row["warnings"] if w)} for row in rows])
+    atomic_write_text(out / "compare.csv", table.to_csv(index=False))
+    from ..run.persistence import json_safe
+
+    atomic_write_text(out / "compare.json", json.dumps(json_safe(comparison.record()), indent=1) + "\n")
+    atomic_write_text(out / "compare.md", _series_markdown(comparison, series))
+    figure(rows, {}, out / "compare.png", colour_by="law")
+    return comparison
+
+
+def _rank(entry: Mapping[str, Any]) -> tuple[float, float]:
+    """Mean |error| first (a law whose every run failed last), then chi-squared where given."""
+    mean = entry["mean_abs_error_percent"]
+    chi2 = entry["chi2"]
+    return (math.inf if mean is None or entry["failed"] else mean, math.inf if chi2 is None else chi2)
+
+
+def _series_markdown(comparison: SeriesComparison, series: Series) -> str:
+    name = Path(series.source).name
+    laws = [entry["law"] for entry in comparison.ranking]
+    lines = [f"# {name}: {len(series.shots)} shots under {len(laws)} resistance law{'s' if len(laws) != 1 else ''}"]
+    lines.append("")
+    if comparison.settings:
+        shown = ", ".join(f"`{k}={json.dumps(v)}`" for k, v in comparison.settings)
+        lines += [f"Set on every shot: {shown} (a column of the series beats it for its own shot).", ""]
+    lines += [
+        "| rank | law | measurements | mean abs error (%) | bias (%) | RMS (%) | chi-squared |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for entry in comparison.ranking:
+        failed = f" ({entry['failed']} failed)" if entry["failed"] else ""
+        cells = [_figure_cell(entry[k]) for k in ("mean_abs_error_percent", "bias_percent", "rms_percent", "chi2")]
+        lines.append(f"| {entry['rank']} | {entry['law']} | {entry['shots']}{failed} | " + " | ".join(cells) + " |")
+    lines += [
+        "",
+        "Ranked by the mean |error| over every measurement (per cent of the measurement), then chi-squared"
+        " (where every shot gives a sigma). The scene's own law is `scene`.",
+        "",
+        "| shot | quantity | measured | " + " | ".join(laws) + " |",
+        "|---|---|---|" + "---|" * len(laws),
+    ]
+    by_key = {(row["law"], row["label"], row["quantity"]): row for row in comparison.rows}
+    for shot in series.shots:
+        for measurement in shot.measurements:
+            cells = []
+            for law in laws:
+                row = by_key[(law, shot.label, measurement.quantity)]
+                predicted, error = row["predicted"], row["error_percent"]
+                end = "" if row["end_reason"] in ("stopped", "exited") else f", {row['end_reason']}"
+                cells.append("failed" if predicted is None else f"{predicted:.4g} ({error:+.1f} %{end})")
+            lines.append(
+                f"| {shot.label} | {measurement.quantity} | {measurement.value:.4g} | " + " | ".join(cells) + " |"
+            )
+    lines += ["", "Predicted (error against the measurement); SI units.", "", "![parity by law](compare.png)", ""]
+    return "\n".join(lines)
+
+
+def _figure_cell(value: float | None) -> str:
+    return "-" if value is None else f"{value:.3g}"
