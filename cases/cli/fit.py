@@ -16,14 +16,35 @@ from .options import (
     positive_int,
     study,
 )
+from .validate import SERIES_HELP
 
 __all__ = ["register"]
 
 
 def register(commands: argparse._SubParsersAction[Parser]) -> None:
     parser = commands.add_parser("fit", help="fit numeric scene keys to observed quantities (least squares)")
-    add_scene_options(parser)
+    add_scene_options(parser, "a scene TOML file (or --series)", optional=True)
     add_pool_options(parser, "runs/store")
+    parser.add_argument(
+        "--series",
+        metavar="SERIES",
+        help=f"fit to every measured shot of {SERIES_HELP[2:]} (instead of a scene and --observe)",
+    )
+    parser.add_argument(
+        "--holdout",
+        metavar="label=A,B|group=G|fraction=F",
+        help="with --series: shots kept out of the fit and predicted with its values, reported apart",
+    )
+    parser.add_argument(
+        "--folds",
+        type=int,
+        default=0,
+        metavar="K",
+        help="with --series: also a K-fold cross-validation of the shots fitted (default: none)",
+    )
+    parser.add_argument(
+        "--seed", type=int, default=0, metavar="N", help="draws --holdout fraction= and the folds (default 0)"
+    )
     parser.add_argument(
         "--param",
         action="append",
@@ -83,32 +104,87 @@ def run_fit(args: argparse.Namespace) -> int:
     import sys
 
     from ..run import RunStore
-    from ..scene import one_line
-    from ..studies.fit import NotIdentifiable, fit, write_report
+    from ..scene import InputError, one_line
+    from ..studies.fit import NotIdentifiable, fit, fit_series, parse_holdout, write_report
 
     if args.step is not None and not args.step < 1:
-        from ..scene import InputError
-
         raise InputError(f"--step {args.step:g}: must be below 1 (a fraction of each parameter's range)")
+    if (args.scene is None) == (args.series is None):
+        raise InputError("fit: give a scene file (with --observe) or --series SERIES (one of them)")
+    if args.series is None:
+        for flag, given in (("--holdout", args.holdout), ("--folds", args.folds)):
+            if given:
+                raise InputError(f"{flag}: holds shots of a series out; it needs --series")
+    elif args.observe:
+        raise InputError("--observe: a series gives the observations (its measured columns); drop --observe")
+    if args.series is not None and not args.param:
+        return _validation_only(args)
     try:
         with study(args) as pool:
-            result = fit(
-                args.scene,
-                overrides(args),
-                args.param,
-                args.observe,
-                RunStore(args.store),
-                pool,
-                resolution=args.resolution,
-                step=args.step,
-                max_evaluations=args.max_evaluations,
-            )
+            if args.series is not None:
+                from ..studies.series import read_series
+
+                holdout = parse_holdout(args.holdout) if args.holdout else None
+                series = read_series(args.series)
+                result = fit_series(
+                    series,
+                    overrides(args),
+                    args.param,
+                    RunStore(args.store),
+                    pool,
+                    holdout=holdout,
+                    folds=args.folds,
+                    seed=args.seed,
+                    step=args.step,
+                    max_evaluations=args.max_evaluations,
+                )
+                title = Path(series.source).name
+            else:
+                result = fit(
+                    args.scene,
+                    overrides(args),
+                    args.param,
+                    args.observe,
+                    RunStore(args.store),
+                    pool,
+                    resolution=args.resolution,
+                    step=args.step,
+                    max_evaluations=args.max_evaluations,
+                )
+                title = args.scene
     except NotIdentifiable as exc:
         print(f"penetrate fit: {one_line(exc)}", file=sys.stderr)
         return 1
-    write_report(result, Path(args.out), args.scene)
+    write_report(result, Path(args.out), title)
     if args.json:
         print(json.dumps(result.record()))
     else:
         print((Path(args.out) / "fit.md").read_text(), end="")
+    if not result.converged:
+        print(
+            f"penetrate fit: not converged in {args.max_evaluations} evaluations of the model (raise"
+            " --max-evaluations); the report shows where it stopped",
+            file=sys.stderr,
+        )
+        return 1
     return 0
+
+
+def _validation_only(args: argparse.Namespace) -> int:
+    """``fit --series`` without ``--param``: nothing to fit, so the series is validated, and the output says so."""
+    import sys
+
+    from .validate import validate
+
+    for flag, given in (("--holdout", args.holdout), ("--folds", args.folds)):
+        if given:
+            from ..scene import InputError
+
+            raise InputError(f"{flag}: without --param nothing is fitted, so nothing is held out (give --param)")
+    print(
+        "penetrate fit: no --param, so nothing is fitted: this is penetrate validate's report (predictions at the"
+        " scenes' own values)",
+        file=sys.stderr,
+    )
+    args.curve_points = 0
+    return validate(args)

@@ -105,7 +105,10 @@ def law_names() -> str:
 
 
 def add_scene_options(parser: Parser, what: str = "a scene TOML file", optional: bool = False) -> None:
-    parser.add_argument("scene", help=what, **({"nargs": "?"} if optional else {}))
+    if optional:
+        parser.add_argument("scene", help=what, nargs="?")
+    else:
+        parser.add_argument("scene", help=what)
     parser.late_help(
         parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help=SET_HELP),
         lambda: f"{SET_HELP}; a named target.law is one of {law_names()}",

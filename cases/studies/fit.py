@@ -24,21 +24,23 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..run import CONVERGENCE_THRESHOLD, RunStore, convergence_speed
+from ..run import CONVERGENCE_THRESHOLD, RunStore
 from ..scene import InputError, Overrides, apply_overrides, dotted_key, read_scene_data, scene_from_dict
 
 # the report is written by its own module; fit.write_report stays its public name
 from .fit_report import FitResult, write_report
 from .pool import Pool, study_progress
+from .series import RUN_QUANTITIES, Series, run_value
 from .speeds import disturbance_fix, find_critical_velocity, measure_convergent_velocity, undisturbed
 from .sweep import Sweep, Variation, run_sweep
+from .validate import error_summary, prediction_rows
 
 __all__ = [
     "Parameter",
@@ -52,23 +54,14 @@ __all__ = [
     "RUN_QUANTITIES",
     "STUDY_QUANTITIES",
     "check_counts",
+    "fit_bases",
+    "fit_series",
+    "Holdout",
+    "parse_holdout",
+    "split_series",
+    "HOLDOUT_KINDS",
 ]
 
-#: quantities of one run (its summary, and the convergence speed of its history)
-RUN_QUANTITIES = (
-    "depth",
-    "path_length",
-    "final_time",
-    "final_speed",
-    "max_attack_angle",
-    "final_attack_angle",
-    "axis_angle_change",
-    "convergence_speed",
-    "mass",
-    "centre_of_mass_from_tip",
-    "axial_inertia",
-    "transverse_inertia",
-)
 #: quantities of a study of the scene (penetrate critical, penetrate convergent)
 STUDY_QUANTITIES = ("critical_velocity", "characteristic_convergent_velocity")
 #: forward-difference step, as a fraction of each parameter's range
@@ -159,7 +152,8 @@ def parse_parameter(text: str, scenes: dict[str, dict]) -> Parameter:
 
 
 def parse_observation(text: str, default_scene: str) -> Observation:
-    """``[SCENE:]QUANTITY=VALUE[+-SIGMA]`` -> :class:`Observation` (SCENE a scene file; default the fit's own)."""
+    """``[SCENE:]QUANTITY=VALUE[+-SIGMA[%]]`` -> :class:`Observation` (SCENE a scene file; default the fit's own;
+    ``SIGMA%`` a sigma relative to the value)."""
     what = f"--observe {text!r}"
     left, _, right = text.partition("=")
     if not right:
@@ -173,9 +167,14 @@ def parse_observation(text: str, default_scene: str) -> Observation:
     value = _number(value_text, what)
     sigma = None
     if sigma_text:
-        sigma = _number(sigma_text, what)
+        relative = sigma_text.strip().endswith("%")
+        sigma = _number(sigma_text.strip().removesuffix("%"), what)
         if not sigma > 0:
             raise InputError(f"{what}: the standard deviation must be > 0")
+        if relative:
+            if value == 0:
+                raise InputError(f"{what}: a relative sigma of an observed 0 is 0; give it in SI units")
+            sigma = sigma / 100 * abs(value)
     return Observation(scene, quantity, value, sigma)
 
 
@@ -234,11 +233,7 @@ class _Model:
                 for i, o in run_observations:
                     if o.scene != scenes[scene]:
                         continue
-                    value = (
-                        convergence_speed(result.history(index))
-                        if o.quantity == "convergence_speed"
-                        else getattr(run.summary, o.quantity)
-                    )
+                    value = run_value(result, index, o.quantity)
                     results[point_index, i] = np.nan if value is None else value
         for i, o in enumerate(self.observations):
             if o.quantity not in STUDY_QUANTITIES:
@@ -358,7 +353,7 @@ def fit(
     ----------
     scene, overrides
         The fit's scene file and its ``--set`` overrides; the overrides apply to every scene an
-        observation names.
+        observation names (the report says so).
     parameters, observations : sequence of str
         The command line's ``--param`` and ``--observe`` texts.
     store : RunStore
@@ -382,7 +377,10 @@ def fit(
     """
     scene = str(scene)
     if not parameters:
-        raise InputError("--param: give at least one parameter, KEY=LO:HI")
+        raise InputError(
+            "--param: give at least one parameter, KEY=LO:HI (for predictions against measurements without a"
+            " fit, use penetrate validate with a series file)"
+        )
     if not observations:
         raise InputError("--observe: give at least one observation, [SCENE:]QUANTITY=VALUE[+-SIGMA]")
     observed = [parse_observation(text, scene) for text in observations]
@@ -393,6 +391,60 @@ def fit(
         data = apply_overrides(read_scene_data(name), overrides, name)
         scene_from_dict(data, name)  # a bad scene or override fails here, before any run
         bases[name] = data
+    notes = _observation_notes(observed, bases, overrides)
+    return fit_bases(
+        bases,
+        parameters,
+        observed,
+        store,
+        pool,
+        resolution=resolution,
+        step=step,
+        max_evaluations=max_evaluations,
+        notes=notes,
+    )
+
+
+def _observation_notes(
+    observed: Sequence[Observation], bases: dict[str, dict], overrides: Overrides | None
+) -> list[str]:
+    """What the report must say of the observations: ``--set`` applied to every scene, and observations of one
+    quantity of one run (the same scene after ``--set``), which count as repeats of one shot."""
+    notes = []
+    settings = list(overrides.items() if isinstance(overrides, Mapping) else overrides or [])
+    scenes = list(dict.fromkeys(o.scene for o in observed))
+    if settings and len(observed) > 1:
+        shown = ", ".join(f"{key}={value}" for key, value in settings)
+        notes.append(
+            f"--set {shown} applies to every observation's scene ({len(scenes)} scene"
+            f"{'s' if len(scenes) != 1 else ''}); to give each shot its own values, use a series file (fit --series)"
+        )
+    seen: dict[tuple[str, str], int] = {}
+    for index, o in enumerate(observed, start=1):
+        first = seen.setdefault((o.scene, o.quantity), index)
+        if first != index:
+            notes.append(
+                f"observations {first} and {index} are the same quantity of the same run ({Path(o.scene).name}):"
+                " the fit treats them as repeated measurements of one shot"
+            )
+    return notes
+
+
+def fit_bases(
+    bases: dict[str, dict],
+    parameters: Sequence[str],
+    observed: Sequence[Observation],
+    store: RunStore,
+    pool: Pool | None = None,
+    *,
+    resolution: float = 5.0,
+    step: float | None = None,
+    max_evaluations: int = 30,
+    notes: Sequence[str] = (),
+    labels: dict[str, str] | None = None,
+) -> FitResult:
+    """:func:`fit` of observations of scenes given as nested dictionaries (``bases``, by the name each
+    :attr:`Observation.scene` gives); ``labels`` names them in the report (default: the names)."""
     fitted = [parse_parameter(text, bases) for text in parameters]
     if len({p.key for p in fitted}) != len(fitted):
         raise InputError("--param: give each key once")
@@ -436,7 +488,14 @@ def fit(
     values = {p.key: p.value(float(u)) for p, u in zip(fitted, solution.x)}
     widths = np.array([p.high - p.low for p in fitted])
     jac_physical = final_jacobian / widths  # d(residual)/d(parameter)
-    notes = []
+    notes = list(notes)
+    converged = bool(solution.status > 0)
+    if not converged:
+        notes.insert(
+            0,
+            f"NOT CONVERGED: the least-squares fit stopped after {solution.nfev} evaluations of the model"
+            f" ({solution.message}); the values below are where it stopped, not a fit: raise --max-evaluations",
+        )
     covariance = None
     try:
         covariance = np.linalg.inv(jac_physical.T @ jac_physical)
@@ -462,10 +521,12 @@ def fit(
         se = np.sqrt(np.clip(np.diag(covariance), 0, None))
         errors = {p.key: float(s) for p, s in zip(fitted, se)}
         correlation = (covariance / np.outer(se, se)).round(6).tolist() if np.all(se > 0) else None
+    speeds = {name: scene_from_dict(data, name).impact.speed for name, data in bases.items()}
     rows = [
         {
-            "scene": o.scene,
+            "scene": (labels or {}).get(o.scene, o.scene),
             "quantity": o.quantity,
+            "impact_speed": speeds[o.scene],
             "observed": o.value,
             "sigma": o.sigma,
             "fitted": float(f),
@@ -484,4 +545,202 @@ def fit(
         cost=float(solution.cost),
         message=solution.message,
         notes=notes,
+        converged=converged,
+        starts={p.key: p.start for p in fitted},
     )
+
+
+#: how ``--holdout`` names the shots kept out of the fit
+HOLDOUT_KINDS = ("label", "group", "fraction")
+
+
+@dataclass(frozen=True)
+class Holdout:
+    """Shots kept out of a fit: by ``label`` or ``group`` (``names``), or a random ``fraction`` of them."""
+
+    kind: str
+    names: tuple[str, ...] = ()
+    fraction: float = 0.0
+
+
+def parse_holdout(text: str) -> Holdout:
+    """``label=A,B``, ``group=G`` or ``fraction=0.3`` -> :class:`Holdout`."""
+    what = f"--holdout {text!r}"
+    kind, _, raw = text.partition("=")
+    kind = kind.strip()
+    if kind not in HOLDOUT_KINDS or not raw.strip():
+        raise InputError(f"{what}: expected label=A,B,..., group=G,... or fraction=F (0 < F < 1)")
+    if kind == "fraction":
+        fraction = _number(raw, what)
+        if not 0 < fraction < 1:
+            raise InputError(f"{what}: the fraction must lie strictly between 0 and 1")
+        return Holdout(kind, fraction=fraction)
+    names = tuple(name.strip() for name in raw.split(",") if name.strip())
+    return Holdout(kind, names)
+
+
+def split_series(series: Series, holdout: Holdout | None, seed: int = 0) -> tuple[list[str], list[str]]:
+    """``(training, held out)`` labels of ``series`` under ``holdout``, each in the series' order; refused in
+    one line when a name matches no shot or nothing is left to fit."""
+    if holdout is None:
+        return series.labels, []
+    if holdout.kind == "fraction":
+        count = max(1, round(holdout.fraction * len(series.shots)))
+        chosen = set(np.random.default_rng(seed).permutation(len(series.shots))[:count].tolist())
+        held = [shot.label for i, shot in enumerate(series.shots) if i in chosen]
+    else:
+        known = series.labels if holdout.kind == "label" else series.groups
+        unknown = [name for name in holdout.names if name not in known]
+        if unknown:
+            raise InputError(
+                f"--holdout {holdout.kind}={','.join(holdout.names)}: no shot has the {holdout.kind} {unknown[0]!r}"
+                f" (the series' {holdout.kind}s: {', '.join(known)})"
+            )
+        attribute = "label" if holdout.kind == "label" else "group"
+        held = [shot.label for shot in series.shots if getattr(shot, attribute) in holdout.names]
+    training = [label for label in series.labels if label not in held]
+    if not training:
+        raise InputError(f"--holdout: every shot of {Path(series.source).name} is held out; leave some to fit")
+    return training, held
+
+
+def fit_series(
+    series: Series,
+    overrides: Overrides | None,
+    parameters: Sequence[str],
+    store: RunStore,
+    pool: Pool | None = None,
+    *,
+    holdout: Holdout | None = None,
+    folds: int = 0,
+    seed: int = 0,
+    step: float | None = None,
+    max_evaluations: int = 30,
+) -> FitResult:
+    """Fit ``parameters`` to the measured shots of ``series`` that ``holdout`` leaves in (the training shots).
+
+    The held-out shots are then predicted at the fitted values, and at the scenes' own values, and reported
+    apart from the fit (``FitResult.predictions``).  ``folds`` >= 2 adds a k-fold cross-validation of the
+    training shots (``FitResult.cross_validation``): each fold fitted on the others and predicted, which says
+    how well the calibration predicts shots it has not seen.  ``seed`` draws a held-out fraction and the folds.
+    """
+    if not parameters:
+        raise InputError("--param: give at least one parameter, KEY=LO:HI (without one, use penetrate validate)")
+    settings = list(overrides.items() if isinstance(overrides, Mapping) else overrides or [])
+    for text in parameters:
+        key = text.partition("=")[0].strip()
+        clash = [c for c in series.columns if c == key or c.startswith(f"{key}.") or key.startswith(f"{c}.")]
+        if clash:
+            raise InputError(
+                f"--param {text!r}: the series sets {clash[0]} per shot (a column), which the fit would override;"
+                " drop the column or fit another key"
+            )
+    training, held = split_series(series, holdout, seed)
+    if folds and not 2 <= folds <= len(training):
+        raise InputError(f"--folds {folds}: must lie in 2..{len(training)} (the training shots)")
+    result = _fit_shots(series.subset(training), settings, parameters, store, pool, step, max_evaluations)
+    if held:
+        kept_out = series.subset(held)
+        result.predictions = {
+            "held_out": held,
+            **_predict(kept_out, settings, result.parameters, result.starts, store, pool),
+        }
+    if folds:
+        result.cross_validation = _cross_validate(
+            series.subset(training), settings, parameters, store, pool, folds, seed, step, max_evaluations
+        )
+    return result
+
+
+def _observations(series: Series) -> list[Observation]:
+    return [Observation(shot.label, m.quantity, m.value, m.sigma) for shot in series.shots for m in shot.measurements]
+
+
+def _fit_shots(
+    series: Series,
+    settings: list[tuple[str, Any]],
+    parameters: Sequence[str],
+    store: RunStore,
+    pool: Pool | None,
+    step: float | None,
+    max_evaluations: int,
+) -> FitResult:
+    notes = []
+    if settings:
+        shown = ", ".join(f"{key}={value}" for key, value in settings)
+        notes.append(f"--set {shown} applies to every shot (a column of the series beats it for its own shot)")
+    return fit_bases(
+        series.bases(settings),
+        parameters,
+        _observations(series),
+        store,
+        pool,
+        step=step,
+        max_evaluations=max_evaluations,
+        notes=notes,
+    )
+
+
+def _predict(
+    series: Series,
+    settings: list[tuple[str, Any]],
+    fitted: dict[str, float],
+    starts: dict[str, float],
+    store: RunStore,
+    pool: Pool | None,
+) -> dict[str, Any]:
+    """The shots of ``series`` predicted at the fitted values and at the scenes' own (the start): their rows and
+    error summaries per quantity."""
+    from .series import combined
+
+    result = run_sweep(combined(series, series.parts(settings, [fitted, starts])), store, pool)
+    rows = prediction_rows(series, result)
+    start_rows = prediction_rows(series, result, offset=len(series.shots))
+    return {
+        "rows": rows,
+        "summary": _per_quantity(rows),
+        "start_rows": start_rows,
+        "start_summary": _per_quantity(start_rows),
+    }
+
+
+def _per_quantity(rows: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    quantities = dict.fromkeys(row["quantity"] for row in rows)
+    return {q: error_summary([r for r in rows if r["quantity"] == q]) for q in quantities}
+
+
+def _cross_validate(
+    series: Series,
+    settings: list[tuple[str, Any]],
+    parameters: Sequence[str],
+    store: RunStore,
+    pool: Pool | None,
+    folds: int,
+    seed: int,
+    step: float | None,
+    max_evaluations: int,
+) -> dict[str, Any]:
+    """k-fold cross-validation: each fold of the shots predicted by a fit to the others."""
+    order = np.random.default_rng(seed).permutation(len(series.shots))
+    assignment = {series.shots[int(i)].label: k % folds for k, i in enumerate(order)}
+    entries, rows = [], []
+    for fold in range(folds):
+        left_out = [label for label in series.labels if assignment[label] == fold]
+        kept = [label for label in series.labels if assignment[label] != fold]
+        try:
+            result = _fit_shots(series.subset(kept), settings, parameters, store, pool, step, max_evaluations)
+        except NotIdentifiable as exc:
+            raise NotIdentifiable(f"fold {fold + 1} of {folds} (left out: {', '.join(left_out)}): {exc}") from None
+        predicted = _predict(series.subset(left_out), settings, result.parameters, result.starts, store, pool)
+        fold_rows = [{"fold": fold + 1, **row} for row in predicted["rows"]]
+        rows += fold_rows
+        entries.append(
+            {
+                "fold": fold + 1,
+                "left_out": left_out,
+                "parameters": result.parameters,
+                "standard_errors": result.standard_errors,
+                "converged": result.converged,
+            }
+        )
+    return {"folds": entries, "rows": rows, "summary": _per_quantity(rows), "seed": seed}

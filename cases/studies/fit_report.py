@@ -23,10 +23,17 @@ class FitResult:
     cost: float
     message: str = ""
     notes: list[str] = field(default_factory=list)
+    converged: bool = True
+    starts: dict[str, float] = field(default_factory=dict)
+    #: the held-out shots of a series predicted at the fitted values (and at the starts); not part of the fit
+    predictions: dict[str, Any] | None = None
+    #: k-fold cross-validation of the training shots
+    cross_validation: dict[str, Any] | None = None
 
     def record(self) -> dict:
         """The JSON record: parameters, standard_errors, observations, runs (and the rest)."""
         return {
+            "converged": self.converged,
             "parameters": self.parameters,
             "standard_errors": self.standard_errors,
             "correlation": self.correlation,
@@ -37,7 +44,63 @@ class FitResult:
             "cost": self.cost,
             "message": self.message,
             "notes": self.notes,
+            "starts": self.starts,
+            "predictions": self.predictions,
+            "cross_validation": self.cross_validation,
         }
+
+
+def _prediction_lines(result: FitResult) -> list[str]:
+    """The held-out predictions and the cross-validation, each apart from the fit and labelled so."""
+    from .validate import summary_table
+
+    lines: list[str] = []
+    if result.predictions is not None:
+        p = result.predictions
+        lines += [
+            "",
+            f"## Predictions of the {len(p['held_out'])} held-out shots (not fitted)",
+            "",
+            "Predicted at the fitted values, and at the scenes' own values (before the fit), against the"
+            " measurements the fit did not see:",
+            "",
+            "| shot | quantity | impact speed (m/s) | measured | predicted | error (%) | before the fit | error (%) |",
+            "|---|---|---|---|---|---|---|---|",
+        ]
+        for row, start in zip(p["rows"], p["start_rows"]):
+            lines.append(
+                f"| {row['label']} | {row['quantity']} | {row['impact_speed']:g} | {row['measured']:.4g} |"
+                f" {_number(row['predicted'])} | {_percent(row['error_percent'])} | {_number(start['predicted'])} |"
+                f" {_percent(start['error_percent'])} |"
+            )
+        lines += ["", "Held out, at the fitted values:", "", *summary_table(p["summary"], {})]
+        lines += ["", "Held out, at the scenes' own values:", "", *summary_table(p["start_summary"], {})]
+    if result.cross_validation is not None:
+        cv = result.cross_validation
+        lines += [
+            "",
+            f"## {len(cv['folds'])}-fold cross-validation of the training shots (predictions, not fitted)",
+            "",
+            "| fold | left out | " + " | ".join(f"`{k}`" for k in result.parameters) + " |",
+            "|---|---|" + "---|" * len(result.parameters),
+        ]
+        for fold in cv["folds"]:
+            errors = fold["standard_errors"]
+            cells = [
+                f"{value:.6g} +- {'-' if errors[key] is None else format(errors[key], '.3g')}"
+                for key, value in fold["parameters"].items()
+            ]
+            lines.append(f"| {fold['fold']} | {', '.join(fold['left_out'])} | " + " | ".join(cells) + " |")
+        lines += ["", "Each fold predicted by the fit to the others:", "", *summary_table(cv["summary"], {})]
+    return lines
+
+
+def _number(value: float | None) -> str:
+    return "-" if value is None else f"{value:.4g}"
+
+
+def _percent(value: float | None) -> str:
+    return "-" if value is None else f"{value:+.1f}"
 
 
 def write_report(result: FitResult, out: Path, scene: str) -> None:
@@ -50,10 +113,17 @@ def write_report(result: FitResult, out: Path, scene: str) -> None:
 
     out = Path(out)
     atomic_write_text(out / "fit.json", json.dumps(json_safe(result.record()), indent=1, allow_nan=False) + "\n")
-    lines = [f"# Fit of {scene}", "", "| parameter | value | standard error |", "|---|---|---|"]
+    lines = [f"# Fit of {scene}", ""]
+    if not result.converged:
+        lines += [f"**{result.notes[0]}**", ""]
+    lines += ["| parameter | value | standard error | start |", "|---|---|---|---|"]
     for key, value in result.parameters.items():
         error = result.standard_errors[key]
-        lines.append(f"| `{key}` | {value:.6g} | {'-' if error is None else f'{error:.3g}'} |")
+        start = result.starts.get(key)
+        lines.append(
+            f"| `{key}` | {value:.6g} | {'-' if error is None else f'{error:.3g}'} |"
+            f" {'-' if start is None else f'{start:.6g}'} |"
+        )
     if result.correlation is not None and len(result.parameters) > 1:
         keys = list(result.parameters)
         lines += [
@@ -66,13 +136,20 @@ def write_report(result: FitResult, out: Path, scene: str) -> None:
         lines += [
             f"| `{k}` | " + " | ".join(f"{c:+.3f}" for c in row) + " |" for k, row in zip(keys, result.correlation)
         ]
-    lines += ["", "| scene | quantity | observed | sigma | fitted | residual |", "|---|---|---|---|---|---|"]
+    lines += [
+        "",
+        "The fit's own residuals (the observations it was fitted to):",
+        "",
+        "| scene | quantity | impact speed (m/s) | observed | sigma | fitted | residual |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for row in result.observations:
         sigma = "-" if row["sigma"] is None else f"{row['sigma']:.4g}"
         lines.append(
-            f"| {row['scene']} | {row['quantity']} | {row['observed']:.6g} | {sigma} | {row['fitted']:.6g} |"
-            f" {row['residual']:+.4g} |"
+            f"| {row['scene']} | {row['quantity']} | {row['impact_speed']:g} | {row['observed']:.6g} | {sigma} |"
+            f" {row['fitted']:.6g} | {row['residual']:+.4g} |"
         )
+    lines += _prediction_lines(result)
     lines += [
         "",
         f"Runs: {result.runs} ({result.new_runs} made by this fit, the rest found in the run store); "
