@@ -135,6 +135,7 @@ def test_the_acceptance_fit_reaches_the_depth_in_at_most_ten_runs(tmp_path, caps
     assert record["observations"][0] | {"fitted": 0, "residual": 0} == {
         "scene": TEST2,
         "quantity": "depth",
+        "impact_speed": 280.0,
         "observed": 5.5,
         "sigma": None,
         "fitted": 0,

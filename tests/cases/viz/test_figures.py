@@ -18,7 +18,7 @@ from matplotlib.path import Path as MplPath
 from matplotlib.transforms import Bbox
 
 import cases.viz.figures as figures_module
-from cases.studies import accuracy, compare, ensemble_study
+from cases.studies import accuracy, compare, ensemble_study, validate
 from cases.studies.ensemble import Distribution, wilson_interval
 from cases.studies.fit_report import FitResult, write_report
 from cases.studies.paper import figures as paper
@@ -164,9 +164,23 @@ def _draw_every_figure(tmp_path) -> None:
         patch.setattr(accuracy, "_markdown", lambda *args: "")
         accuracy._write(errors, {}, SimpleNamespace(name="p3"), tmp_path / "accuracy")
     observations = [
-        {"scene": "p3.toml", "quantity": q, "observed": v, "sigma": 0.1, "fitted": 1.02 * v, "residual": 0.2}
+        {
+            "scene": "p3.toml",
+            "quantity": q,
+            "impact_speed": 1200.0,
+            "observed": v,
+            "sigma": 0.1,
+            "fitted": 1.02 * v,
+            "residual": 0.2,
+        }
         for q, v in (("depth", 5.5), ("final_speed", 180.0))
     ]
+    shots = [
+        {"label": f"v{v}", "group": g, "quantity": "depth", "impact_speed": v, "predicted": d * 1.1, "measured": d}
+        for g, v, d in (("51 MPa", 405.0, 0.37), ("51 MPa", 1009.0, 1.75), ("23 MPa", 600.0, 1.2))
+    ]
+    curve = {"impact_speed": [405.0, 700.0, 1009.0], "depth": [0.4, 1.0, 1.9]}
+    validate.figure(shots, {"": {"51 MPa": curve}}, tmp_path / "validate.png")
     write_report(
         FitResult({"target.law.B": 1.2}, {"target.law.B": 0.01}, None, observations, 2, 0, 5, 0.1), tmp_path, "p3"
     )
@@ -218,7 +232,7 @@ def test_the_helpers_label_units_from_the_project_records():
 
 def test_every_axis_of_every_figure_says_its_unit(every_figure):
     out, drawn = every_figure
-    assert len(drawn) == 11
+    assert len(drawn) == 12
     missing = []
     for figure in drawn:
         figure.canvas.draw()
@@ -246,7 +260,7 @@ def test_every_axis_of_every_figure_says_its_unit(every_figure):
 def test_no_legend_covers_data(every_figure):
     _, drawn = every_figure
     with_legends = [f for f in drawn if any(ax.get_legend() for ax in f.axes) or f.legends]
-    assert len(with_legends) == 9  # all but the histograms and the fit's scatter
+    assert len(with_legends) == 10  # all but the histograms and the fit's scatter
     for figure in with_legends:
         assert not _covered(figure), figure.axes[0].get_title()
         # and the legend is not cut off instead: it lies inside the saved figure
