@@ -68,6 +68,7 @@ SHIPPED_SERIES = sorted(p.stem for p in SERIES_DIR.glob("*.csv"))
 #: the columns that are not scene keys
 RESERVED = ("label", "group", "scene")
 MAX_SHOTS = 10_000
+MAX_BYTES = 16 << 20
 
 
 @dataclass(frozen=True)
@@ -256,7 +257,9 @@ def read_series(path: str | os.PathLike[str]) -> Series:
         file = SERIES_DIR / f"{text_path.removesuffix('.csv')}.csv"
     if not file.is_file():
         shipped = ", ".join(SHIPPED_SERIES)
-        raise InputError(f"{text_path}: no such series file (a CSV file, or a shipped series: {shipped})")
+        raise InputError(f"{text_path}: no such series file (give a CSV file, or a shipped series: {shipped})")
+    if file.stat().st_size > MAX_BYTES:
+        raise InputError(f"{file}: larger than {MAX_BYTES >> 20} MiB (a series must be smaller; split it)")
     try:
         text = file.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:

@@ -628,6 +628,90 @@ def test_edited_scene_files(scratch, text):
     outcome("edited scene files", lambda: load_scene(path), path)
 
 
+SERIES_PLACES = ("row", "line", "header", "column", "empty", "no shots", "not a CSV", "not readable", "series file")
+
+
+def series_outcome(name: str, path: Path) -> None:
+    """Read a series file: a Series whose every shot validates, or one line that names the place."""
+    from cases.scene import InputError
+    from cases.studies.series import read_series
+
+    try:
+        series = read_series(path)
+    except InputError as exc:
+        message = str(exc)
+        assert message.isprintable() and "\n" not in message and "Traceback" not in message, message
+        assert message.startswith(str(path)), message
+        assert any(place in message for place in SERIES_PLACES), message
+        OUTCOMES[name]["InputError"] += 1
+        return
+    assert series.shots and all(shot.measurements for shot in series.shots)
+    OUTCOMES[name]["valid"] += 1
+
+
+@st.composite
+def edited_series(draw):
+    """A shipped series file with random characters deleted, inserted or replaced."""
+    from cases.studies.series import SERIES_DIR, SHIPPED_SERIES
+
+    text = (SERIES_DIR / f"{draw(st.sampled_from(SHIPPED_SERIES))}.csv").read_text()
+    for _ in range(draw(st.integers(1, 4))):
+        start = draw(st.integers(0, len(text)))
+        end = draw(st.integers(start, min(len(text), start + 10)))
+        insert = draw(
+            st.one_of(
+                st.text(max_size=5),
+                st.sampled_from([",", "\n", '"', "%", "-", "nan", "1e999", "#", "measured.", "sigma.depth", "."]),
+            )
+        )
+        text = text[:start] + insert + text[end:]
+    return text
+
+
+@fuzz(200)
+@given(edited_series())
+def test_edited_series_files(scratch, text):
+    path = scratch / "edited.csv"
+    path.write_bytes(text.encode("utf-8", "surrogatepass"))
+    series_outcome("edited series files", path)
+
+
+CELLS = st.one_of(
+    st.sampled_from(
+        ["", "1", "-1", "0", "nan", "inf", "5%", "-5%", "0%", "x", "1e400", "forrestal_luk_test2", '"a,b"']
+    ),
+    st.floats(allow_nan=True, allow_infinity=True).map(repr),
+    st.text(max_size=6),
+)
+COLUMNS = st.sampled_from(
+    [
+        "scene",
+        "label",
+        "group",
+        "impact.speed",
+        "impact.attack_angle",
+        "measured.depth",
+        "sigma.depth",
+        "measured.path_length",
+        "measured.nothing",
+        "sigma.path_length",
+        "projectile.mass",
+        "target.law",
+        "x.y",
+        "",
+    ]
+)
+
+
+@fuzz(200)
+@given(st.lists(COLUMNS, min_size=1, max_size=6), st.lists(st.lists(CELLS, min_size=1, max_size=7), max_size=4))
+def test_random_series_files(scratch, header, rows):
+    path = scratch / "random.csv"
+    lines = [",".join(header)] + [",".join(cell.replace("\n", " ") for cell in row) for row in rows]
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8", errors="surrogatepass")
+    series_outcome("random series files", path)
+
+
 @pytest.mark.parametrize(
     "text",
     [
@@ -767,6 +851,16 @@ def _bad_scene_files(folder: Path) -> dict[str, Path]:
     files["bad-field"].write_text(good.replace("attack_angle = 0.0", "attack_angle = 120.0"))  # no noise sets it
     files["unknown-key"].write_text(good + "\n[colour]\nred = 1\n")
     files["nested"].write_text("x = " + "[" * 3000 + "]" * 3000)
+    series = {
+        "series-no-scene": "scene,measured.depth\nnowhere.toml,5\n",
+        "series-bad-cell": f"scene,impact.speed,measured.depth\n{GOOD},fast,5\n",
+        "series-bad-key": f"scene,impact.colour,measured.depth\n{GOOD},1,5\n",
+        "series-bad-sigma": f"scene,measured.depth,sigma.depth\n{GOOD},5,-1%\n",
+        "series-empty": "",
+    }
+    for name, text in series.items():
+        files[name] = folder / f"{name}.csv"
+        files[name].write_text(text)
     return files
 
 
@@ -812,7 +906,9 @@ BAD_WHOLE = BAD_NUMBER + ["2.5", "1" * 5000]  # for int options
 def bad_command_lines(draw, files):
     """A command line with at least one bad input (the last word wins where options repeat)."""
     command = draw(
-        st.sampled_from(["run", "sweep", "critical", "convergent", "compare", "accuracy", "render", "fit", "ensemble"])
+        st.sampled_from(
+            ["run", "sweep", "critical", "convergent", "compare", "accuracy", "render", "fit", "ensemble", "validate"]
+        )
     )
     # the studies set some keys themselves: a bad value there would be overridden, not rejected
     overridden = {
@@ -823,6 +919,9 @@ def bad_command_lines(draw, files):
     }.get(command, ())
     scene_kind = draw(st.sampled_from([*files, "good", "good"]))
     scene = GOOD if scene_kind == "good" else str(files[scene_kind])
+    if command == "validate" and scene_kind == "good":
+        scene = str(files["folder"] / "good-series.csv")
+        Path(scene).write_text(f"scene,impact.speed,measured.depth\n{GOOD},280,4.98\n")
     args = [command, scene]
     noise = st.one_of(
         st.tuples(st.just("--set"), set_values.map(lambda v: f"impact.speed={v}")),
@@ -845,6 +944,8 @@ def bad_command_lines(draw, files):
         poisons += [("--laws", v) for v in [",", "clay", "soil,clay"]]
     if command == "accuracy":
         poisons += [("--sizes", v) for v in BAD_NUMBER[:6]]
+    if command == "validate":
+        poisons += [("--curve-points", v) for v in ["-1", "x", "100000", "1.5"]]
     if command == "fit":
         args += ["--param", "impact.speed=100:400", "--observe", "depth=5"]
         poisons += [
@@ -942,6 +1043,7 @@ EXTRA = {
     "render": ["--out", "outputs"],
     "fit": ["--out", "outputs", "--store", "store", "--no-progress"],
     "ensemble": ["--out", "outputs", "--store", "store", "--no-progress"],
+    "validate": ["--out", "outputs", "--store", "store", "--no-progress"],
 }
 
 
@@ -966,7 +1068,10 @@ def test_command_line_bad_input(cli_files, tmp_path_factory, data):
     assert code == 2, (args, stderr)  # bad input, found before anything runs
     if code == 2 and not message.startswith(("argument ", "unrecognized", "the following", "invalid choice")):
         sources = sorted((a for a in args if message.startswith(f"{a}: ")), key=len)  # the scene or a --list
-        check_error(message, sources[-1] if sources else None)
+        if sources and (sources[-1].endswith(".csv") or args[0] == "validate"):
+            assert any(place in message for place in SERIES_PLACES), message  # a series names its row and column
+        else:
+            check_error(message, sources[-1] if sources else None)
 
 
 # ---------------------------------------------------------------------------

@@ -99,7 +99,7 @@ def test_validate_command_writes_its_outputs(tmp_path, capsys):
     assert set(record["shots"][0]) >= {"label", "group", "predicted", "measured", "error_percent", "end_reason"}
     assert set(record["summary"]["depth"]) >= {"mean_abs_error_percent", "bias_percent", "rms_percent", "shots"}
     assert record["groups"]["51 MPa"]["depth"]["shots"] == 10
-    assert record["set"] == ['numerics.mesh_size=0.012']
+    assert record["set"] == ["numerics.mesh_size=0.012"]
     curve = record["curves"]["51 MPa"]
     assert curve["impact_speed"] == pytest.approx(np.linspace(405.0, 1201.0, 4), rel=1e-6)
     assert all(a < b for a, b in zip(curve["depth"], curve["depth"][1:]))  # faster goes deeper
@@ -153,7 +153,9 @@ def test_any_series_runs_unchanged(tmp_path):
         measured = shot.measured(row["quantity"])
         assert row["residual_sigmas"] == pytest.approx((row["predicted"] - measured.value) / measured.sigma)
     turns = [r for r in validation.rows if r["quantity"] == "axis_angle_change"]
-    assert validation.summary["axis_angle_change"]["chi2"] == pytest.approx(sum(r["residual_sigmas"] ** 2 for r in turns))
+    assert validation.summary["axis_angle_change"]["chi2"] == pytest.approx(
+        sum(r["residual_sigmas"] ** 2 for r in turns)
+    )
     assert validation.summary["path_length"]["shots"] == 3
     assert validation.groups == {"cone": validation.summary}  # the group defaults to the scene's name
 
@@ -197,7 +199,9 @@ def test_bad_series_are_refused_in_one_line_before_any_run(tmp_path, capsys, cas
 
 def test_a_bad_row_is_named_by_its_row_and_line(tmp_path):
     path = tmp_path / "s.csv"
-    path.write_text("# a comment\nscene,impact.speed,measured.depth\nforrestal_luk_test2,280,5\nforrestal_luk_test2,x y,5\n")
+    path.write_text(
+        "# a comment\nscene,impact.speed,measured.depth\nforrestal_luk_test2,280,5\nforrestal_luk_test2,x y,5\n"
+    )
     with pytest.raises(InputError, match=r"line 4 \(row 2\)|impact.speed"):
         read_series(path)
 
@@ -223,7 +227,12 @@ def test_compare_series_ranks_the_laws(tmp_path):
     for entry in comparison.ranking:
         rows = [row for row in comparison.rows if row["law"] == entry["law"]]
         assert entry["mean_abs_error_percent"] == pytest.approx(error_summary(rows)["mean_abs_error_percent"])
-    assert {p.name for p in (tmp_path / "out").iterdir()} == {"compare.md", "compare.csv", "compare.json", "compare.png"}
+    assert {p.name for p in (tmp_path / "out").iterdir()} == {
+        "compare.md",
+        "compare.csv",
+        "compare.json",
+        "compare.png",
+    }
 
 
 def test_compare_series_refuses_a_series_that_sets_the_law(tmp_path):
@@ -289,9 +298,10 @@ def test_k_fold_cross_validation_predicts_every_training_shot_once(tmp_path):
 def test_holdouts_by_label_group_and_fraction():
     series = read_series(CONCRETE)
     assert split_series(series, parse_holdout("label=v405,v1201"))[1] == ["v405", "v1201"]
-    assert split_series(series, parse_holdout("fraction=0.3"), seed=3)[1] == split_series(
-        series, parse_holdout("fraction=0.3"), seed=3
-    )[1]
+    assert (
+        split_series(series, parse_holdout("fraction=0.3"), seed=3)[1]
+        == split_series(series, parse_holdout("fraction=0.3"), seed=3)[1]
+    )
     assert len(split_series(series, parse_holdout("fraction=0.3"))[1]) == 3
     with pytest.raises(InputError, match="every shot"):
         split_series(series, parse_holdout("group=51 MPa"))
