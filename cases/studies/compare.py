@@ -282,7 +282,10 @@ def _series_markdown(comparison: SeriesComparison, series: Series) -> str:
     ]
     for entry in comparison.ranking:
         failed = f" ({entry['failed']} failed)" if entry["failed"] else ""
-        cells = [_figure_cell(entry[k]) for k in ("mean_abs_error_percent", "bias_percent", "rms_percent", "chi2")]
+        bias = "-" if entry["bias_percent"] is None else f"{entry['bias_percent']:+.1f}"
+        mean, rms = (entry[k] for k in ("mean_abs_error_percent", "rms_percent"))
+        cells = ["-" if mean is None else f"{mean:.1f}", bias, "-" if rms is None else f"{rms:.1f}"]
+        cells.append(_figure_cell(entry["chi2"]))
         lines.append(f"| {entry['rank']} | {entry['law']} | {entry['shots']}{failed} | " + " | ".join(cells) + " |")
     lines += [
         "",

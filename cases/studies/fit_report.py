@@ -149,7 +149,6 @@ def write_report(result: FitResult, out: Path, scene: str) -> None:
             f"| {row['scene']} | {row['quantity']} | {row['impact_speed']:g} | {row['observed']:.6g} | {sigma} |"
             f" {row['fitted']:.6g} | {row['residual']:+.4g} |"
         )
-    lines += _prediction_lines(result)
     lines += [
         "",
         f"Runs: {result.runs} ({result.new_runs} made by this fit, the rest found in the run store); "
@@ -157,6 +156,7 @@ def write_report(result: FitResult, out: Path, scene: str) -> None:
     ]
     if result.notes:
         lines += ["", *[f"* {note}" for note in result.notes]]
+    lines += _prediction_lines(result)
     lines += ["", "![observed against fitted](fit.png)", ""]
     atomic_write_text(out / "fit.md", "\n".join(lines))
     figure, axes = subplots(figsize=(5.5, 4.5))

@@ -224,6 +224,10 @@ def _cell(value: Any, digits: int = 4) -> str:
     return str(value)
 
 
+def _fixed(value: float | None) -> str:
+    return "-" if value is None else f"{value:.1f}"
+
+
 def _percent(value: float | None) -> str:
     return "-" if value is None else f"{value:+.1f}"
 
@@ -239,8 +243,8 @@ def summary_table(summary: Mapping[str, Any], groups: Mapping[str, Mapping[str, 
             failed = f" ({s['failed']} failed)" if s["failed"] else ""
             lines.append(
                 f"| {quantity}{'' if scope == 'all' else f', {scope}'} | {s['shots']}{failed} |"
-                f" {_cell(s['mean_abs_error_percent'], 3)} | {_percent(s['bias_percent'])} |"
-                f" {_cell(s['rms_percent'], 3)} | {_cell(s['chi2'], 3)} |"
+                f" {_fixed(s['mean_abs_error_percent'])} | {_percent(s['bias_percent'])} |"
+                f" {_fixed(s['rms_percent'])} | {_cell(s['chi2'], 3)} |"
             )
         if len(groups) == 1:
             break  # one group: its lines would repeat the series'
