@@ -105,7 +105,8 @@ def run_fit(args: argparse.Namespace) -> int:
 
     from ..run import RunStore
     from ..scene import InputError, one_line
-    from ..studies.fit import NotIdentifiable, fit, fit_series, parse_holdout, write_report
+    from ..studies.fit import NotIdentifiable, fit, write_report
+    from ..studies.fit_series import fit_series, parse_holdout
 
     if args.step is not None and not args.step < 1:
         raise InputError(f"--step {args.step:g}: must be below 1 (a fraction of each parameter's range)")

@@ -25,22 +25,19 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..run import CONVERGENCE_THRESHOLD, RunStore
+from ..run import RunStore
 from ..scene import InputError, Overrides, apply_overrides, dotted_key, read_scene_data, scene_from_dict
+from .fit_model import DIGITS, STUDY_QUANTITIES, FitModel, Observation, Parameter
 
 # the report is written by its own module; fit.write_report stays its public name
 from .fit_report import FitResult, write_report
 from .pool import Pool, study_progress
-from .series import RUN_QUANTITIES, Series, run_value
-from .speeds import disturbance_fix, find_critical_velocity, measure_convergent_velocity, undisturbed
-from .sweep import Sweep, Variation, run_sweep
-from .validate import error_summary, prediction_rows
+from .series import RUN_QUANTITIES
 
 __all__ = [
     "Parameter",
@@ -55,15 +52,10 @@ __all__ = [
     "STUDY_QUANTITIES",
     "check_counts",
     "fit_bases",
-    "fit_series",
-    "Holdout",
-    "parse_holdout",
-    "split_series",
-    "HOLDOUT_KINDS",
+    "finite_number",
+    "DIGITS",
 ]
 
-#: quantities of a study of the scene (penetrate critical, penetrate convergent)
-STUDY_QUANTITIES = ("critical_velocity", "characteristic_convergent_velocity")
 #: forward-difference step, as a fraction of each parameter's range
 RUN_STEP = 1e-3
 STUDY_STEP = 0.05
@@ -75,39 +67,13 @@ FLAT = 1e-6
 #: ranges), or a relative fall of the cost below 1e-8, ends the fit; each iteration costs a batch of
 #: runs, and a parameter known to 1e-4 of its range is known better than the data give it
 XTOL, FTOL, GTOL = 1e-4, 1e-8, 1e-10
-#: values set in a scene keep this many significant digits, so a point reached twice is the same run
-DIGITS = 12
 
 
 class NotIdentifiable(ValueError):
     """The observations do not determine a parameter (flat or collinear Jacobian); exit code 1."""
 
 
-@dataclass(frozen=True)
-class Parameter:
-    """A numeric scene key fitted within ``[low, high]``; ``start`` is the scene's own value."""
-
-    key: str
-    low: float
-    high: float
-    start: float
-
-    def value(self, unit: float) -> float:
-        """The value at ``unit`` in [0, 1] of the range, to :data:`DIGITS` significant digits."""
-        return float(f"{self.low + unit * (self.high - self.low):.{DIGITS}g}")
-
-
-@dataclass(frozen=True)
-class Observation:
-    """``quantity`` of ``scene`` observed as ``value`` with standard deviation ``sigma`` (None: not given)."""
-
-    scene: str
-    quantity: str
-    value: float
-    sigma: float | None
-
-
-def _number(text: str, what: str) -> float:
+def finite_number(text: str, what: str) -> float:
     try:
         value = float(text)
     except ValueError:
@@ -132,7 +98,7 @@ def parse_parameter(text: str, scenes: dict[str, dict]) -> Parameter:
     if not key.strip() or len(parts) != 2:
         raise InputError(f"{what}: expected KEY=LO:HI, e.g. target.law.B=0.3:3")
     key = ".".join(dotted_key(key, what))
-    low, high = (_number(p, what) for p in parts)
+    low, high = (finite_number(p, what) for p in parts)
     if not low < high:
         raise InputError(f"{what}: need LO < HI")
     starts = []
@@ -164,11 +130,11 @@ def parse_observation(text: str, default_scene: str) -> Observation:
     if quantity not in known:
         raise InputError(f"{what}: unknown quantity {quantity!r} (allowed: {', '.join(known)})")
     value_text, _, sigma_text = right.partition("+-")
-    value = _number(value_text, what)
+    value = finite_number(value_text, what)
     sigma = None
     if sigma_text:
         relative = sigma_text.strip().endswith("%")
-        sigma = _number(sigma_text.strip().removesuffix("%"), what)
+        sigma = finite_number(sigma_text.strip().removesuffix("%"), what)
         if not sigma > 0:
             raise InputError(f"{what}: the standard deviation must be > 0")
         if relative:
@@ -176,108 +142,6 @@ def parse_observation(text: str, default_scene: str) -> Observation:
                 raise InputError(f"{what}: a relative sigma of an observed 0 is 0; give it in SI units")
             sigma = sigma / 100 * abs(value)
     return Observation(scene, quantity, value, sigma)
-
-
-class _Model:
-    """The observations as a function of the parameters' unit values, through the run store (cached)."""
-
-    def __init__(
-        self,
-        bases: dict[str, dict],
-        parameters: Sequence[Parameter],
-        observations: Sequence[Observation],
-        store: RunStore,
-        pool: Pool | None,
-        resolution: float,
-    ) -> None:
-        self.bases, self.parameters, self.observations = bases, list(parameters), list(observations)
-        self.store, self.pool, self.resolution = store, pool, resolution
-        self.cache: dict[tuple[float, ...], np.ndarray] = {}
-        self.keys: set[str] = set()
-        self.new_runs = 0
-
-    def _values(self, unit: np.ndarray) -> dict[str, float]:
-        return {p.key: p.value(float(u)) for p, u in zip(self.parameters, unit)}
-
-    @staticmethod
-    def _key(point: np.ndarray) -> tuple[float, ...]:
-        return tuple(np.round(np.asarray(point, float), DIGITS))
-
-    def __call__(self, points: Sequence[np.ndarray]) -> list[np.ndarray]:
-        """The observed quantities at each point (unit values), runs of all points in one batch."""
-        wanted = [self._key(p) for p in points]
-        missing = list(dict.fromkeys(w for w in wanted if w not in self.cache))
-        if missing:
-            before = self.store.records()
-            self._evaluate([np.array(m) for m in missing])
-            self.new_runs += len(self.store.records() - before)  # the records this batch added
-        return [self.cache[w] for w in wanted]
-
-    def _evaluate(self, points: list[np.ndarray]) -> None:
-        run_observations = [(i, o) for i, o in enumerate(self.observations) if o.quantity in RUN_QUANTITIES]
-        scenes = list(dict.fromkeys(o.scene for _, o in run_observations))
-        parts = [
-            (Sweep(self.bases[scene], [Variation({})], scene), Variation(self._values(point)))
-            for point in points
-            for scene in scenes
-        ]
-        results = np.full((len(points), len(self.observations)), np.nan)
-        if parts:
-            sweep = Sweep.combined(parts)
-            result = run_sweep(sweep, self.store, self.pool)
-            self.keys.update(sweep.keys())
-            for index, run in enumerate(result.runs):
-                if run.failed:
-                    raise RuntimeError(f"a run of the fit failed ({parts[index][1].values}): {run.error}")
-                point_index, scene = divmod(index, len(scenes))
-                for i, o in run_observations:
-                    if o.scene != scenes[scene]:
-                        continue
-                    value = run_value(result, index, o.quantity)
-                    results[point_index, i] = np.nan if value is None else value
-        for i, o in enumerate(self.observations):
-            if o.quantity not in STUDY_QUANTITIES:
-                continue
-            for point_index, point in enumerate(points):
-                values = self._values(point)
-                base = Sweep(apply_overrides(self.bases[o.scene], values, o.scene), [Variation({})], o.scene)
-                results[point_index, i] = self._study(o.quantity, base)
-        for point, row in zip(points, results):
-            self.cache[self._key(point)] = row
-
-    def _study(self, quantity: str, base: Sweep) -> float:
-        if quantity == "critical_velocity":
-            speed = base.scenes[0].impact.speed
-            searched = (200.0, max(2000.0, 2 * speed))
-            search = find_critical_velocity(base, self.store, searched, self.resolution, self.pool)
-            value, why = search.critical_velocity, search.message
-            where = f" between {searched[0]:g} and {searched[1]:g} m/s"  # the search's range, fixed by the fit
-            used = {run.key for run in search.indicator}
-        else:
-            measured = measure_convergent_velocity(base, self.store, pool=self.pool)
-            value, where = measured.characteristic_convergent_velocity, ""
-            why = (
-                f"its attack angle never fell below {CONVERGENCE_THRESHOLD} deg"
-                if measured.runs[-1].unstable
-                else f"no unstable run up to {measured.runs[-1].speed:.6g} m/s"
-            )
-            start = base.variations[0].values
-            used = {
-                Sweep(base.base, [Variation({**start, "impact.speed": run.speed})], base.source).keys()[0]
-                for run in measured.runs
-            }
-        self.keys.update(used)
-        if value is None:
-            # the fit's own search range is fixed: what the user can change is the parameters' ranges or the scene
-            scene = base.scenes[0]
-            fixes = [f"keep the --param ranges where the scene has one{where}"] + (
-                [disturbance_fix(scene)] if undisturbed(scene) else []
-            )
-            raise RuntimeError(
-                f"{quantity} of {base.source} not found at {base.variations[0].values or 'the start'}"
-                f" ({why}): {', or '.join(fixes)}"
-            )
-        return float(value)
 
 
 def _sigmas(observations: Sequence[Observation]) -> np.ndarray:
@@ -451,7 +315,7 @@ def fit_bases(
     check_counts(fitted, observed)  # after the input's own checks (exit code 2), before any run
     if step is None:
         step = STUDY_STEP if any(o.quantity in STUDY_QUANTITIES for o in observed) else RUN_STEP
-    model = _Model(bases, fitted, observed, store, pool, resolution)
+    model = FitModel(bases, fitted, observed, store, pool, resolution)
     y = np.array([o.value for o in observed])
     sigma = _sigmas(observed)
 
@@ -548,199 +412,3 @@ def fit_bases(
         converged=converged,
         starts={p.key: p.start for p in fitted},
     )
-
-
-#: how ``--holdout`` names the shots kept out of the fit
-HOLDOUT_KINDS = ("label", "group", "fraction")
-
-
-@dataclass(frozen=True)
-class Holdout:
-    """Shots kept out of a fit: by ``label`` or ``group`` (``names``), or a random ``fraction`` of them."""
-
-    kind: str
-    names: tuple[str, ...] = ()
-    fraction: float = 0.0
-
-
-def parse_holdout(text: str) -> Holdout:
-    """``label=A,B``, ``group=G`` or ``fraction=0.3`` -> :class:`Holdout`."""
-    what = f"--holdout {text!r}"
-    kind, _, raw = text.partition("=")
-    kind = kind.strip()
-    if kind not in HOLDOUT_KINDS or not raw.strip():
-        raise InputError(f"{what}: expected label=A,B,..., group=G,... or fraction=F (0 < F < 1)")
-    if kind == "fraction":
-        fraction = _number(raw, what)
-        if not 0 < fraction < 1:
-            raise InputError(f"{what}: the fraction must lie strictly between 0 and 1")
-        return Holdout(kind, fraction=fraction)
-    names = tuple(name.strip() for name in raw.split(",") if name.strip())
-    return Holdout(kind, names)
-
-
-def split_series(series: Series, holdout: Holdout | None, seed: int = 0) -> tuple[list[str], list[str]]:
-    """``(training, held out)`` labels of ``series`` under ``holdout``, each in the series' order; refused in
-    one line when a name matches no shot or nothing is left to fit."""
-    if holdout is None:
-        return series.labels, []
-    if holdout.kind == "fraction":
-        count = max(1, round(holdout.fraction * len(series.shots)))
-        chosen = set(np.random.default_rng(seed).permutation(len(series.shots))[:count].tolist())
-        held = [shot.label for i, shot in enumerate(series.shots) if i in chosen]
-    else:
-        known = series.labels if holdout.kind == "label" else series.groups
-        unknown = [name for name in holdout.names if name not in known]
-        if unknown:
-            raise InputError(
-                f"--holdout {holdout.kind}={','.join(holdout.names)}: no shot has the {holdout.kind} {unknown[0]!r}"
-                f" (the series' {holdout.kind}s: {', '.join(known)})"
-            )
-        attribute = "label" if holdout.kind == "label" else "group"
-        held = [shot.label for shot in series.shots if getattr(shot, attribute) in holdout.names]
-    training = [label for label in series.labels if label not in held]
-    if not training:
-        raise InputError(f"--holdout: every shot of {Path(series.source).name} is held out; leave some to fit")
-    return training, held
-
-
-def fit_series(
-    series: Series,
-    overrides: Overrides | None,
-    parameters: Sequence[str],
-    store: RunStore,
-    pool: Pool | None = None,
-    *,
-    holdout: Holdout | None = None,
-    folds: int = 0,
-    seed: int = 0,
-    step: float | None = None,
-    max_evaluations: int = 30,
-) -> FitResult:
-    """Fit ``parameters`` to the measured shots of ``series`` that ``holdout`` leaves in (the training shots).
-
-    The held-out shots are then predicted at the fitted values, and at the scenes' own values, and reported
-    apart from the fit (``FitResult.predictions``).  ``folds`` >= 2 adds a k-fold cross-validation of the
-    training shots (``FitResult.cross_validation``): each fold fitted on the others and predicted, which says
-    how well the calibration predicts shots it has not seen.  ``seed`` draws a held-out fraction and the folds.
-    """
-    if not parameters:
-        raise InputError("--param: give at least one parameter, KEY=LO:HI (without one, use penetrate validate)")
-    settings = list(overrides.items() if isinstance(overrides, Mapping) else overrides or [])
-    for text in parameters:
-        key = text.partition("=")[0].strip()
-        clash = [c for c in series.columns if c == key or c.startswith(f"{key}.") or key.startswith(f"{c}.")]
-        if clash:
-            raise InputError(
-                f"--param {text!r}: the series sets {clash[0]} per shot (a column), which the fit would override;"
-                " drop the column or fit another key"
-            )
-    training, held = split_series(series, holdout, seed)
-    if folds and not 2 <= folds <= len(training):
-        raise InputError(f"--folds {folds}: must lie in 2..{len(training)} (the training shots)")
-    result = _fit_shots(series.subset(training), settings, parameters, store, pool, step, max_evaluations)
-    if held:
-        kept_out = series.subset(held)
-        result.predictions = {
-            "held_out": held,
-            **_predict(kept_out, settings, result.parameters, result.starts, store, pool),
-        }
-    if folds:
-        result.cross_validation = _cross_validate(
-            series.subset(training), settings, parameters, store, pool, folds, seed, step, max_evaluations
-        )
-    return result
-
-
-def _observations(series: Series) -> list[Observation]:
-    return [Observation(shot.label, m.quantity, m.value, m.sigma) for shot in series.shots for m in shot.measurements]
-
-
-def _fit_shots(
-    series: Series,
-    settings: list[tuple[str, Any]],
-    parameters: Sequence[str],
-    store: RunStore,
-    pool: Pool | None,
-    step: float | None,
-    max_evaluations: int,
-) -> FitResult:
-    notes = []
-    if settings:
-        shown = ", ".join(f"{key}={value}" for key, value in settings)
-        notes.append(f"--set {shown} applies to every shot (a column of the series beats it for its own shot)")
-    return fit_bases(
-        series.bases(settings),
-        parameters,
-        _observations(series),
-        store,
-        pool,
-        step=step,
-        max_evaluations=max_evaluations,
-        notes=notes,
-    )
-
-
-def _predict(
-    series: Series,
-    settings: list[tuple[str, Any]],
-    fitted: dict[str, float],
-    starts: dict[str, float],
-    store: RunStore,
-    pool: Pool | None,
-) -> dict[str, Any]:
-    """The shots of ``series`` predicted at the fitted values and at the scenes' own (the start): their rows and
-    error summaries per quantity."""
-    from .series import combined
-
-    result = run_sweep(combined(series, series.parts(settings, [fitted, starts])), store, pool)
-    rows = prediction_rows(series, result)
-    start_rows = prediction_rows(series, result, offset=len(series.shots))
-    return {
-        "rows": rows,
-        "summary": _per_quantity(rows),
-        "start_rows": start_rows,
-        "start_summary": _per_quantity(start_rows),
-    }
-
-
-def _per_quantity(rows: Sequence[dict[str, Any]]) -> dict[str, Any]:
-    quantities = dict.fromkeys(row["quantity"] for row in rows)
-    return {q: error_summary([r for r in rows if r["quantity"] == q]) for q in quantities}
-
-
-def _cross_validate(
-    series: Series,
-    settings: list[tuple[str, Any]],
-    parameters: Sequence[str],
-    store: RunStore,
-    pool: Pool | None,
-    folds: int,
-    seed: int,
-    step: float | None,
-    max_evaluations: int,
-) -> dict[str, Any]:
-    """k-fold cross-validation: each fold of the shots predicted by a fit to the others."""
-    order = np.random.default_rng(seed).permutation(len(series.shots))
-    assignment = {series.shots[int(i)].label: k % folds for k, i in enumerate(order)}
-    entries, rows = [], []
-    for fold in range(folds):
-        left_out = [label for label in series.labels if assignment[label] == fold]
-        kept = [label for label in series.labels if assignment[label] != fold]
-        try:
-            result = _fit_shots(series.subset(kept), settings, parameters, store, pool, step, max_evaluations)
-        except NotIdentifiable as exc:
-            raise NotIdentifiable(f"fold {fold + 1} of {folds} (left out: {', '.join(left_out)}): {exc}") from None
-        predicted = _predict(series.subset(left_out), settings, result.parameters, result.starts, store, pool)
-        fold_rows = [{"fold": fold + 1, **row} for row in predicted["rows"]]
-        rows += fold_rows
-        entries.append(
-            {
-                "fold": fold + 1,
-                "left_out": left_out,
-                "parameters": result.parameters,
-                "standard_errors": result.standard_errors,
-                "converged": result.converged,
-            }
-        )
-    return {"folds": entries, "rows": rows, "summary": _per_quantity(rows), "seed": seed}

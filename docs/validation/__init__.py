@@ -1,2 +1,1 @@
-"""The shipped test series against the tool and the closed forms, and the concrete calibration with its hold-out
-(docs/validation.md)."""
+"""The shipped test series against the model and the closed forms, and the concrete calibration checked by a scan."""

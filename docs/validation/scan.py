@@ -14,7 +14,7 @@ import numpy as np
 
 from cases.run import RunStore
 from cases.studies import Pool
-from cases.studies.fit import Holdout, fit_series
+from cases.studies.fit_series import Holdout, fit_series
 from cases.studies.series import read_series
 from cases.studies.validate import validate
 

@@ -19,7 +19,8 @@ from cases.cli import main
 from cases.run import RunStore
 from cases.scene import InputError
 from cases.studies.compare import compare_series
-from cases.studies.fit import Holdout, fit_series, parse_holdout, parse_observation, split_series
+from cases.studies.fit import parse_observation
+from cases.studies.fit_series import Holdout, fit_series, parse_holdout, split_series
 from cases.studies.pool import Pool
 from cases.studies.series import SERIES_DIR, read_series
 from cases.studies.validate import error_summary, validate
@@ -359,3 +360,15 @@ def test_a_set_over_several_observations_is_named(tmp_path):
     assert "applies to every observation's scene" in notes
     assert "observations 1 and 2 are the same quantity of the same run" in notes
     assert [row["impact_speed"] for row in result.observations] == [446.0, 446.0]
+
+
+def test_compare_flags_the_stress_of_a_state_a_run_never_reaches(tmp_path, capsys):
+    """At 200 m/s the concrete rod stops short of one body length: the stress one length in is flagged."""
+    code = main(
+        ["compare", str(scene_path("forrestal1996_concrete")), "--laws", "scene", "--set", "impact.speed=200"]
+        + ["--set", "numerics.mesh_size=0.012", "--store", str(tmp_path / "s"), "--out", str(tmp_path / "o")]
+        + ["--no-progress"]
+    )
+    assert code == 0
+    out = capsys.readouterr().out
+    assert "a state these runs never reach: scene stopped at" in out and "short of one body length (0.305 m)" in out
