@@ -269,13 +269,13 @@ def _rank(entry: Mapping[str, Any]) -> tuple[float, float]:
 
 
 def _series_markdown(comparison: SeriesComparison, series: Series) -> str:
+    from .validate import settings_lines
+
     name = Path(series.source).name
     laws = [entry["law"] for entry in comparison.ranking]
     lines = [f"# {name}: {len(series.shots)} shots under {len(laws)} resistance law{'s' if len(laws) != 1 else ''}"]
     lines.append("")
-    if comparison.settings:
-        shown = ", ".join(f"`{k}={json.dumps(v)}`" for k, v in comparison.settings)
-        lines += [f"Set on every shot: {shown} (a column of the series beats it for its own shot).", ""]
+    lines += settings_lines(comparison.settings)
     lines += [
         "| rank | law | measurements | mean abs error (%) | bias (%) | RMS (%) | chi-squared |",
         "|---|---|---|---|---|---|---|",

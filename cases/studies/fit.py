@@ -22,7 +22,6 @@ then stops with a message and no number, rather than return a value the data do 
 
 from __future__ import annotations
 
-import math
 import os
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
@@ -37,7 +36,7 @@ from .fit_model import DIGITS, STUDY_QUANTITIES, FitModel, Observation, Paramete
 # the report is written by its own module; fit.write_report stays its public name
 from .fit_report import FitResult, write_report
 from .pool import Pool, study_progress
-from .series import RUN_QUANTITIES
+from .series import RUN_QUANTITIES, finite_number
 
 __all__ = [
     "Parameter",
@@ -71,16 +70,6 @@ XTOL, FTOL, GTOL = 1e-4, 1e-8, 1e-10
 
 class NotIdentifiable(ValueError):
     """The observations do not determine a parameter (flat or collinear Jacobian); exit code 1."""
-
-
-def finite_number(text: str, what: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not math.isfinite(value):
-        raise InputError(f"{what}: {text!r}: must be a finite number")
-    return value
 
 
 def _scene_value(data: dict, key: str) -> Any:

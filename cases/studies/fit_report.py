@@ -52,7 +52,7 @@ class FitResult:
 
 def _prediction_lines(result: FitResult) -> list[str]:
     """The held-out predictions and the cross-validation, each apart from the fit and labelled so."""
-    from .validate import summary_table
+    from .validate import cell, signed_percent, summary_table
 
     lines: list[str] = []
     if result.predictions is not None:
@@ -70,8 +70,8 @@ def _prediction_lines(result: FitResult) -> list[str]:
         for row, start in zip(p["rows"], p["start_rows"]):
             lines.append(
                 f"| {row['label']} | {row['quantity']} | {row['impact_speed']:g} | {row['measured']:.4g} |"
-                f" {_number(row['predicted'])} | {_percent(row['error_percent'])} | {_number(start['predicted'])} |"
-                f" {_percent(start['error_percent'])} |"
+                f" {cell(row['predicted'])} | {signed_percent(row['error_percent'])} | {cell(start['predicted'])} |"
+                f" {signed_percent(start['error_percent'])} |"
             )
         lines += ["", "Held out, at the fitted values:", "", *summary_table(p["summary"], {})]
         lines += ["", "Held out, at the scenes' own values:", "", *summary_table(p["start_summary"], {})]
@@ -93,14 +93,6 @@ def _prediction_lines(result: FitResult) -> list[str]:
             lines.append(f"| {fold['fold']} | {', '.join(fold['left_out'])} | " + " | ".join(cells) + " |")
         lines += ["", "Each fold predicted by the fit to the others:", "", *summary_table(cv["summary"], {})]
     return lines
-
-
-def _number(value: float | None) -> str:
-    return "-" if value is None else f"{value:.4g}"
-
-
-def _percent(value: float | None) -> str:
-    return "-" if value is None else f"{value:+.1f}"
 
 
 def write_report(result: FitResult, out: Path, scene: str) -> None:

@@ -12,11 +12,11 @@ import numpy as np
 
 from ..run import RunStore
 from ..scene import InputError, Overrides
-from .fit import NotIdentifiable, finite_number, fit_bases
+from .fit import NotIdentifiable, fit_bases
 from .fit_model import Observation
 from .fit_report import FitResult
 from .pool import Pool
-from .series import Series, combined
+from .series import Series, combined, finite_number
 from .sweep import run_sweep
 from .validate import error_summary, prediction_rows
 

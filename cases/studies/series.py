@@ -43,6 +43,7 @@ __all__ = [
     "read_series",
     "parse_series",
     "run_value",
+    "finite_number",
     "RUN_QUANTITIES",
     "SERIES_DIR",
     "SHIPPED_SERIES",
@@ -220,7 +221,8 @@ def _scene_file(text: str, folder: Path, where: str) -> str:
     )
 
 
-def _number(text: str, where: str) -> float:
+def finite_number(text: str, where: str) -> float:
+    """``text`` as a finite float, else an :class:`InputError` naming ``where``."""
     try:
         value = float(text)
     except ValueError:
@@ -233,7 +235,7 @@ def _number(text: str, where: str) -> float:
 def _sigma(text: str, value: float, where: str) -> float:
     """An absolute sigma from ``text``: a number, or a percentage of ``value``."""
     relative = text.endswith("%")
-    sigma = _number(text.removesuffix("%").strip(), where)
+    sigma = finite_number(text.removesuffix("%").strip(), where)
     if not sigma > 0:
         raise InputError(f"{where}: {text!r}: must be > 0 (a standard deviation, or a percentage with %)")
     if relative:
@@ -308,7 +310,7 @@ def parse_series(text: str, folder: Path, source: str = "series") -> Series:
                 if sigma_raw:
                     raise InputError(f"{where}, column 'sigma.{quantity}': a sigma without a measured.{quantity}")
                 continue
-            value = _number(raw, f"{where}, column 'measured.{quantity}'")
+            value = finite_number(raw, f"{where}, column 'measured.{quantity}'")
             sigma = _sigma(sigma_raw, value, f"{where}, column 'sigma.{quantity}'") if sigma_raw else None
             measurements.append(Measurement(quantity, value, sigma))
         if not measurements:

@@ -216,7 +216,7 @@ def validate(
     return Validation(series, settings, rows, summary, groups, drawn, runs=len(set(sweep.keys())))
 
 
-def _cell(value: Any, digits: int = 4) -> str:
+def cell(value: Any, digits: int = 4) -> str:
     if value is None or (isinstance(value, float) and not math.isfinite(value)):
         return "-"
     if isinstance(value, float):
@@ -228,7 +228,7 @@ def _fixed(value: float | None) -> str:
     return "-" if value is None else f"{value:.1f}"
 
 
-def _percent(value: float | None) -> str:
+def signed_percent(value: float | None) -> str:
     return "-" if value is None else f"{value:+.1f}"
 
 
@@ -243,21 +243,27 @@ def summary_table(summary: Mapping[str, Any], groups: Mapping[str, Mapping[str, 
             failed = f" ({s['failed']} failed)" if s["failed"] else ""
             lines.append(
                 f"| {quantity}{'' if scope == 'all' else f', {scope}'} | {s['shots']}{failed} |"
-                f" {_fixed(s['mean_abs_error_percent'])} | {_percent(s['bias_percent'])} |"
-                f" {_fixed(s['rms_percent'])} | {_cell(s['chi2'], 3)} |"
+                f" {_fixed(s['mean_abs_error_percent'])} | {signed_percent(s['bias_percent'])} |"
+                f" {_fixed(s['rms_percent'])} | {cell(s['chi2'], 3)} |"
             )
         if len(groups) == 1:
             break  # one group: its lines would repeat the series'
     return lines
 
 
+def settings_lines(settings: Sequence[tuple[str, Any]]) -> list[str]:
+    """What a report says of ``--set``: applied to every shot, beaten by a column for its own shot."""
+    if not settings:
+        return []
+    shown = ", ".join(f"`{key}={json.dumps(value)}`" for key, value in settings)
+    return [f"Set on every shot: {shown} (a column of the series beats it for its own shot).", ""]
+
+
 def markdown(validation: Validation) -> str:
     """``validate.md``: the shots' table, the summary, the settings and the figure."""
     name = Path(validation.series.source).name
     lines = [f"# {name}: {len(validation.series.shots)} shots, predicted against measured", ""]
-    if validation.settings:
-        shown = ", ".join(f"`{k}={json.dumps(v)}`" for k, v in validation.settings)
-        lines += [f"Set on every shot: {shown} (a column of the series beats it for its own shot).", ""]
+    lines += settings_lines(validation.settings)
     lines += [
         "| shot | group | quantity | impact speed (m/s) | predicted | measured | error (%) | residual / sigma | end |",
         "|---|---|---|---|---|---|---|---|---|",
@@ -270,8 +276,8 @@ def markdown(validation: Validation) -> str:
             end += f" [{len(notes)}]"
         lines.append(
             f"| {row['label']} | {row['group']} | {row['quantity']} | {row['impact_speed']:g} |"
-            f" {_cell(row['predicted'])} | {_cell(row['measured'])} | {_percent(row['error_percent'])} |"
-            f" {_cell(row['residual_sigmas'], 3)} | {end} |"
+            f" {cell(row['predicted'])} | {cell(row['measured'])} | {signed_percent(row['error_percent'])} |"
+            f" {cell(row['residual_sigmas'], 3)} | {end} |"
         )
     lines += ["", "Units: SI (m, m/s, s, kg; angles in degrees). Error: (predicted - measured) / measured.", ""]
     lines += [*summary_table(validation.summary, validation.groups), ""]

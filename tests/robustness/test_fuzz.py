@@ -603,21 +603,22 @@ def test_random_toml_documents(scratch, data):
     outcome("random TOML documents", lambda: load_scene(path), path)
 
 
+def _edits(draw, text: str, pieces: list[str], edits: int, span: int) -> str:
+    """``text`` with 1 to ``edits`` random stretches of up to ``span`` characters replaced by random text or
+    one of ``pieces``."""
+    for _ in range(draw(st.integers(1, edits))):
+        start = draw(st.integers(0, len(text)))
+        end = draw(st.integers(start, min(len(text), start + span)))
+        insert = draw(st.one_of(st.text(max_size=span // 2), st.sampled_from(pieces)))
+        text = text[:start] + insert + text[end:]
+    return text
+
+
 @st.composite
 def edited_text(draw):
     """A shipped scene file with random characters deleted, inserted or replaced."""
     text = scene_path(draw(st.sampled_from(SHIPPED_SCENES))).read_text()
-    for _ in range(draw(st.integers(1, 5))):
-        start = draw(st.integers(0, len(text)))
-        end = draw(st.integers(start, min(len(text), start + 12)))
-        insert = draw(
-            st.one_of(
-                st.text(max_size=6),
-                st.sampled_from(["[", "]", "=", "\n", '"', "{", ".", "nan", "-", "1e999", "\\", "#", "'''"]),
-            )
-        )
-        text = text[:start] + insert + text[end:]
-    return text
+    return _edits(draw, text, ["[", "]", "=", "\n", '"', "{", ".", "nan", "-", "1e999", "\\", "#", "'''"], 5, 12)
 
 
 @fuzz(300)
@@ -655,17 +656,8 @@ def edited_series(draw):
     from cases.studies.series import SERIES_DIR, SHIPPED_SERIES
 
     text = (SERIES_DIR / f"{draw(st.sampled_from(SHIPPED_SERIES))}.csv").read_text()
-    for _ in range(draw(st.integers(1, 4))):
-        start = draw(st.integers(0, len(text)))
-        end = draw(st.integers(start, min(len(text), start + 10)))
-        insert = draw(
-            st.one_of(
-                st.text(max_size=5),
-                st.sampled_from([",", "\n", '"', "%", "-", "nan", "1e999", "#", "measured.", "sigma.depth", "."]),
-            )
-        )
-        text = text[:start] + insert + text[end:]
-    return text
+    pieces = [",", "\n", '"', "%", "-", "nan", "1e999", "#", "measured.", "sigma.depth", "."]
+    return _edits(draw, text, pieces, 4, 10)
 
 
 @fuzz(200)
