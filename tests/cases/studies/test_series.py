@@ -372,3 +372,21 @@ def test_compare_flags_the_stress_of_a_state_a_run_never_reaches(tmp_path, capsy
     assert code == 0
     out = capsys.readouterr().out
     assert "a state these runs never reach: scene stopped at" in out and "short of one body length (0.305 m)" in out
+
+
+@pytest.mark.slow
+def test_validate_on_a_dask_cluster_gives_the_local_predictions(tmp_path):
+    """Separate ``dask scheduler`` and ``dask worker`` processes (nothing shared with this one) and a LocalCluster
+    predict the shots as local workers do."""
+    distributed = pytest.importorskip("distributed")
+    from support import dask_cluster
+
+    series = read_series(CONCRETE).subset(["v405", "v1201"])
+    local = validate(series, COARSE, RunStore(tmp_path / "local"), SERIAL, curve_points=0)
+    with dask_cluster(tmp_path) as address:
+        remote = validate(series, COARSE, RunStore(tmp_path / "cluster"), Pool(scheduler=address, progress=False), 0)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        pool = Pool(scheduler=cluster.scheduler_address, progress=False)
+        in_process = validate(series, COARSE, RunStore(tmp_path / "localcluster"), pool, 0)
+    for other in (remote, in_process):
+        assert [r["predicted"] for r in other.rows] == pytest.approx([r["predicted"] for r in local.rows], rel=1e-12)
