@@ -99,6 +99,30 @@ def test_constant_force_parabola_and_located_stop():
     assert np.all(np.diff(tr.time) > 0) and tr.time[-2] < t_stop
 
 
+@pytest.mark.parametrize("method", [RK4, DormandPrince54])
+@pytest.mark.parametrize("step", [1e-4, 1e-3, 1e-2])
+def test_dry_friction_stops_at_its_exact_place_whatever_the_step(method, step):
+    """A braking force that reverses with the velocity (a static strength, dry friction): ``F = -F_s v/|v|``.
+    The body stops at ``t = m v0 / F_s`` after ``m v0^2 / (2 F_s)``.  Steps far longer than the stopping
+    time would let the stages see the body moving both ways and the forces cancel (the body creeps on); a
+    step may not reach past the stop, so the run ends where the exact solution reaches the stop speed."""
+    v0, brake, stop = 20.0, 3.0e5, 0.5
+    direction = np.array([0.0, 0.6, -0.8])
+
+    def loads(x, v, r, w):
+        speed = float(np.linalg.norm(v))
+        return (-brake * v / speed if speed > 0 else np.zeros(3)), np.zeros(3)
+
+    start = State(0.0, np.zeros(3), v0 * direction, np.array([1.0, 0, 0, 0]), np.zeros(3))
+    control = FixedStep(step) if method is RK4 else ErrorControl(1e-6, first_step=step)
+    tr = simulate(BODY, loads, start, method(), control, time_limit=1.0, events=[SpeedBelow("stopped", stop)])
+    deceleration = brake / BODY.mass
+    assert tr.end_reason == "stopped"
+    assert tr.time[-1] == pytest.approx((v0 - stop) / deceleration, rel=1e-9)
+    assert tr.path_length[-1] == pytest.approx((v0**2 - stop**2) / (2 * deceleration), rel=1e-9)
+    assert len(tr.time) <= max(30, (v0 - stop) / deceleration / step + 3)  # no creeping
+
+
 def test_rising_event_is_located():
     """A body thrown upward at 30 m/s under 9.81 m/s^2 reaches Z = 20 m at t = (30 - sqrt(900 - 392.4))/9.81."""
     g = np.array([0.0, 0.0, -9.81 * BODY.mass])

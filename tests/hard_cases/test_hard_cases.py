@@ -760,3 +760,35 @@ def test_each_contact_ramp_converges_to_its_own_limit_with_friction():
         assert steps[1] < steps[0] or steps.max() < 1e-4 * paths[-1], (contact, paths)
         gap = abs(paths[-1] - sharp) / sharp
         assert gap < 0.005 if contact == "centred" else gap > 0.3, (contact, paths, sharp)
+
+
+CONCRETE_FIXED = {
+    "numerics.integrator": "rk4",
+    "numerics.mesh_size": 0.003,
+    "numerics.quadrature_order": 2,
+    "numerics.kernel": "compiled",
+}
+
+
+@pytest.mark.parametrize("step", slow_except([5e-5, 1e-4, 2e-4], 1e-4))
+def test_a_strong_target_stops_the_body_at_any_fixed_step(step):
+    """The end of penetration in concrete (a static term near 500 MPa) at fixed RK4 steps of 5e-5, 1e-4 and
+    2e-4 s: the depth within 2 % of the 1-D integration with exact nose entry, the stop by 3.6 ms (twice the
+    converged stop time), and no warning.  A step longer than the time the body takes to stop once let the
+    stages straddle the reversal of the static resistance: the body crept on for 0.24 s, 10 % deeper."""
+    scene = load_scene(scene_path("forrestal1996_concrete"), {**CONCRETE_FIXED, "numerics.time_step": step})
+    result = run_scene(scene)
+    summary = summarise(result)
+    prepared = result.prepared
+    reference, _ = axial_depth_1d(
+        prepared.profile,
+        scene.target.build(),
+        prepared.mass.mass,
+        scene.impact.speed,
+        scene.numerics.stop_speed,
+        **scene.effects.contact_ramp,
+    )
+    assert summary.end_reason == "stopped" and not summary.warnings
+    assert abs(summary.depth / reference - 1) < 0.02, (summary.depth, reference)
+    assert summary.final_time < 3.6e-3
+    assert summary.path_length == pytest.approx(summary.depth, rel=1e-9)  # no creeping back and forth
