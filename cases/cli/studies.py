@@ -94,15 +94,15 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
     )
     accuracy.add_argument(
         "--sizes",
-        default="0.04,0.02,0.01,0.005",
         metavar="M,M,...",
-        help="mesh sizes of the mesh axis (default 0.04,0.02,0.01,0.005 m)",
+        help="mesh sizes of the mesh axis (default: four halvings from 0.42 diameters, to one significant digit;"
+        " 0.04,0.02,0.01,0.005 m for the 95.2 mm Forrestal-Luk projectile)",
     )
     accuracy.add_argument(
         "--steps",
-        default="2e-4,1e-4,5e-5,2.5e-5,1.25e-5,6.25e-6",
         metavar="S,S,...",
-        help="RK4 steps of the time axis (default 2e-4,1e-4,...,6.25e-6 s)",
+        help="RK4 steps of the time axis (default: six halvings from a 25th of the time the body takes to"
+        " travel its own length at the impact speed, to one significant digit; 2e-4,...,6.25e-6 s for test 2)",
     )
     accuracy.add_argument(
         "--rtols",
@@ -266,7 +266,10 @@ def accuracy_study(args: argparse.Namespace) -> int:
     orders = _numbers("--quadrature-orders", args.quadrature_orders)
     if not all(q == int(q) and 1 <= q <= 10 for q in orders):
         raise InputError(f"--quadrature-orders {args.quadrature_orders!r}: expected integers from 1 to 10")
-    sizes, steps, rtols = (_numbers(f"--{name}", getattr(args, name)) for name in ("sizes", "steps", "rtols"))
+    sizes, steps = (
+        _numbers(f"--{name}", getattr(args, name)) if getattr(args, name) else None for name in ("sizes", "steps")
+    )
+    rtols = _numbers("--rtols", args.rtols)
     with study(args) as pool:
         table, reference = accuracy(
             args.scene,

@@ -6,9 +6,14 @@ import argparse
 import json
 import shlex
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .options import Parser, add_pool_options, add_scene_options, out_file, overrides, study
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from ..studies import SweepResult
 
 __all__ = ["register"]
 
@@ -58,7 +63,7 @@ def sweep(args: argparse.Namespace) -> int:
     if args.json:
         print(table.to_json(orient="records"))
     else:
-        print(table[[c for c in (*columns, *SHOWN) if c in table]].to_string(index=False))
+        print(_shown(table, result, columns))
     failed = [i for i, run in enumerate(result.runs) if run.failed]
     if failed:
         print(
@@ -67,6 +72,21 @@ def sweep(args: argparse.Namespace) -> int:
         )
         return 1
     return 0
+
+
+def _shown(table: pd.DataFrame, result: SweepResult, columns: dict) -> str:
+    """The printed table: the varied keys, the headline figures, and each run's end with its warnings marked
+    and listed below (``--out`` and ``--json`` hold the warnings' texts per run)."""
+    from ..studies import end_cells
+
+    ends, notes = end_cells(
+        [(run.summary.end_reason, run.summary.warnings) if run.summary else ("failed", []) for run in result.runs]
+    )
+    shown = table[[c for c in (*columns, *SHOWN) if c in table]].copy()
+    shown["end_reason"] = ends
+    lines = [shown.to_string(index=False)]
+    lines += [f"[{i}] {note}" for i, note in enumerate(notes, 1)]
+    return "\n".join(lines)
 
 
 def _failure_line(args: argparse.Namespace, values: dict, failed: int, runs: int) -> str:

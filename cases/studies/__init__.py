@@ -15,7 +15,7 @@ from .speeds import (
     is_unstable,
     measure_convergent_velocity,
 )
-from .sweep import Sweep, SweepResult, Variation, grid, parse_grid, read_variations, run_sweep
+from .sweep import Sweep, SweepResult, Variation, end_cells, grid, parse_grid, read_variations, run_sweep
 
 __all__ = [
     "Pool",
@@ -26,6 +26,7 @@ __all__ = [
     "parse_grid",
     "read_variations",
     "run_sweep",
+    "end_cells",
     "find_critical_velocity",
     "find_critical_velocities",
     "CriticalSearch",

@@ -29,6 +29,7 @@ integration time.
 
 from __future__ import annotations
 
+import json
 import math
 import os
 from collections.abc import Sequence
@@ -40,24 +41,26 @@ import pandas as pd
 from fem_loads import ResistanceLaw
 
 from ..run import RunStore, atomic_write_text, convergence_speed, prepare_projectile
-from ..scene import Overrides, Scene
+from ..scene import InputError, Overrides, Scene
 from ..viz.figures import legend_outside, save_figure, subplots
 from .pool import Pool
 from .reference import axial_depth_1d, check_nose_alone_presses
 from .speeds import is_unstable
-from .sweep import Sweep, Variation, run_sweep
+from .sweep import Sweep, Variation, end_cells, run_sweep
 
 __all__ = [
     "accuracy_study",
     "time_convergence",
-    "DEFAULT_SIZES",
-    "DEFAULT_STEPS",
+    "default_ladders",
     "DEFAULT_RTOLS",
     "DEFAULT_QUADRATURE_ORDERS",
 ]
 
-DEFAULT_SIZES = (0.04, 0.02, 0.01, 0.005)
-DEFAULT_STEPS = (2e-4, 1e-4, 5e-5, 2.5e-5, 1.25e-5, 6.25e-6)
+#: the default mesh ladder starts at this many diameters and halves three times (0.04 m for a 95.2 mm body)
+SIZE_PER_DIAMETER = 0.42
+#: the default step ladder starts at this fraction of the time the body takes to travel its own length at the
+#: impact speed, and halves five times (2e-4 s for test 2's 1.4 m at 280 m/s)
+STEP_PER_TRANSIT = 1 / 25
 DEFAULT_RTOLS = (1e-3, 1e-4, 1e-5, 1e-6)
 DEFAULT_QUADRATURE_ORDERS = (4, 6)
 
@@ -84,6 +87,21 @@ def is_plain_normal_impact(scene: Scene) -> bool:
         except ValueError:
             return False
     return plain
+
+
+def _one_digit(value: float) -> float:
+    """``value`` to one significant digit."""
+    return float(f"{value:.0e}")
+
+
+def default_ladders(scene: Scene) -> tuple[list[float], list[float]]:
+    """The mesh sizes and RK4 steps of a study of ``scene`` scaled to it: four mesh sizes halving from
+    :data:`SIZE_PER_DIAMETER` diameters, six steps halving from :data:`STEP_PER_TRANSIT` of the time the body
+    takes to travel its own length at the impact speed (the first of each to one significant digit)."""
+    profile = prepare_projectile(scene).profile
+    size = _one_digit(SIZE_PER_DIAMETER * 2 * profile.radius)
+    step = _one_digit(STEP_PER_TRANSIT * profile.length / scene.impact.speed)
+    return [size / 2**k for k in range(4)], [step / 2**k for k in range(6)]
 
 
 def _settings(
@@ -160,18 +178,27 @@ def accuracy_study(
     overrides: Overrides | None,
     store: RunStore,
     out: str | os.PathLike,
-    sizes: Sequence[float] = DEFAULT_SIZES,
-    steps: Sequence[float] = DEFAULT_STEPS,
+    sizes: Sequence[float] | None = None,
+    steps: Sequence[float] | None = None,
     rtols: Sequence[float] = DEFAULT_RTOLS,
     pool: Pool | None = None,
     quadrature_orders: Sequence[int] = DEFAULT_QUADRATURE_ORDERS,
 ) -> tuple[pd.DataFrame, dict]:
-    """Run the grid, compare with the reference, write ``accuracy.md``, ``.csv`` and ``.png`` into ``out``."""
+    """Run the grid, compare with the reference, write ``accuracy.md``, ``.csv`` and ``.png`` into ``out``.
+
+    ``sizes`` and ``steps`` default to ladders scaled to the scene (:func:`default_ladders`).
+    """
+    if sizes is None or steps is None:
+        default_sizes, default_steps = default_ladders(Sweep.from_file(scene, overrides).scenes[0])
+        sizes, steps = sizes or default_sizes, steps or default_steps
     settings = _settings(sizes, steps, rtols, quadrature_orders)
     # the scene's own numerics as they are, to show where they sit against the front
     settings.append({"axis": "scene"})
     variations = [Variation({k: v for k, v in s.items() if k != "axis"}) for s in settings]
-    sweep = Sweep.from_file(scene, overrides, variations)
+    try:
+        sweep = Sweep.from_file(scene, overrides, variations)
+    except InputError as exc:
+        raise InputError(f"{exc} (the study's ladders: --sizes {_listed(sizes)}, --steps {_listed(steps)})") from None
     result = run_sweep(sweep, store, pool)
     table = result.table()
     table.insert(0, "axis", [s["axis"] for s in settings])
@@ -311,6 +338,10 @@ def _reference(sweep: Sweep, finest: pd.DataFrame) -> dict:
     return reference
 
 
+def _listed(values: Sequence[float]) -> str:
+    return ",".join(f"{v:g}" for v in values)
+
+
 def _pareto(error: np.ndarray, cost: np.ndarray) -> np.ndarray:
     """True where no other setting is both at least as accurate and at least as cheap (and better in one)."""
     front = np.zeros(len(error), dtype=bool)
@@ -363,16 +394,19 @@ def _markdown(table: pd.DataFrame, reference: dict, scene: Scene) -> str:
         )
         + ".",
         "",
-        "| axis | setting | surface points | steps | depth (m) | depth error | axis angle error (deg) |"
+        "| axis | setting | end | surface points | steps | depth (m) | depth error | axis angle error (deg) |"
         " convergence speed error (m/s) | integration (s) | wall (s) | Pareto |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for _, row in table.iterrows():
+    ends, notes = end_cells([(str(row["end_reason"]), json.loads(row["warnings"])) for _, row in table.iterrows()])
+    for (_, row), end in zip(table.iterrows(), ends):
         lines.append(
-            f"| {row['axis']} | {_label(row)} | {row['surface_points']} | {row['steps']} | {row['depth']:.6f} |"
+            f"| {row['axis']} | {_label(row)} | {end} | {row['surface_points']} | {row['steps']} | {row['depth']:.6f} |"
             f" {row['depth_error']:.2e} | {row['axis_angle_error']:.2e} | {row['convergence_speed_error']:.2g} |"
             f" {row['integration_time']:.2f} | {row['wall_time']:.2f} | {'yes' if row['pareto'] else ''} |"
         )
+    if notes:
+        lines += ["", "Warnings (the end column points to them):", "", *[f"{i}. {n}" for i, n in enumerate(notes, 1)]]
     lines += ["", "![depth error against integration time](accuracy.png)", ""]
     lines += _time_convergence_markdown(time_convergence(table))
     return "\n".join(lines)

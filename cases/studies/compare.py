@@ -25,7 +25,7 @@ from ..viz.figures import legend_outside, save_figure, subplots
 from .pool import Pool
 from .series import Series, combined
 from .speeds import find_critical_velocities, measure_convergent_velocity
-from .sweep import Sweep, SweepResult, Variation, run_sweep
+from .sweep import Sweep, SweepResult, Variation, end_cells, run_sweep
 
 __all__ = ["compare_laws", "compare_series", "LawComparison", "SeriesComparison", "law_values", "COLUMNS", "SCENE_LAW"]
 
@@ -136,7 +136,15 @@ def _markdown(comparison: LawComparison, name: str) -> str:
         "| " + " | ".join(shown) + " |",
         "|" + "---|" * len(shown),
     ]
-    for _, row in table.iterrows():
+    ends, notes = end_cells(
+        [
+            (str(row["end_reason"]), json.loads(row["warnings"]) if isinstance(row.get("warnings"), str) else [])
+            for _, row in table.iterrows()
+        ]
+    )
+    for (_, row), end in zip(table.iterrows(), ends):
+        row = row.copy()
+        row["end_reason"] = end
         cells = []
         for c in shown:
             value = row[c]
@@ -145,6 +153,7 @@ def _markdown(comparison: LawComparison, name: str) -> str:
             else:
                 cells.append("none found" if value is None else str(value))
         lines.append("| " + " | ".join(cells) + " |")
+    lines += ["", *[f"[{i}] {note}" for i, note in enumerate(notes, 1)]] if notes else []
     lines += ["", UNITS, "peak_nose_stress: the largest normal stress one body length in, at the impact speed.", ""]
     short = [
         f"{law} stopped at {depth:.3g} m, short of one body length ({length:.3g} m)"

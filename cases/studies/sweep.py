@@ -40,7 +40,17 @@ from .pool import Pool, run_missing
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["Variation", "grid", "parse_grid", "read_variations", "Sweep", "SweepResult", "run_sweep", "MAX_GRID_VALUES"]
+__all__ = [
+    "Variation",
+    "grid",
+    "parse_grid",
+    "read_variations",
+    "Sweep",
+    "SweepResult",
+    "run_sweep",
+    "end_cells",
+    "MAX_GRID_VALUES",
+]
 
 MAX_GRID_VALUES = 100_000  # values of one START:STOP:STEP range
 
@@ -198,6 +208,24 @@ class SweepResult:
         table = pd.DataFrame(rows)
         volatile = [c for c in ("wall_time", "integration_time") if c in table]
         return table[[c for c in table.columns if c not in volatile] + volatile]
+
+
+def end_cells(runs: Sequence[tuple[str, Sequence[str]]]) -> tuple[list[str], list[str]]:
+    """How a study table shows each run's end: ``(cells, notes)`` for ``(end_reason, warnings)`` pairs.
+
+    A cell is the end reason, with ``[k]`` pointing to note ``k`` when the run carries warnings; the notes
+    are the distinct warning texts, numbered once each, so that no row hides a run the numerics doubt.
+    """
+    notes: list[str] = []
+    cells = []
+    for end_reason, warnings in runs:
+        marks = []
+        for warning in (w for w in warnings if w):
+            if warning not in notes:
+                notes.append(warning)
+            marks.append(str(notes.index(warning) + 1))
+        cells.append(end_reason + (f" [{', '.join(dict.fromkeys(marks))}]" if marks else ""))
+    return cells, notes
 
 
 def run_sweep(sweep: Sweep, store: RunStore, pool: Pool | None = None) -> SweepResult:

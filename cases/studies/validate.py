@@ -23,7 +23,7 @@ from ..run import RunStore
 from ..scene import Overrides
 from .pool import Pool
 from .series import Series, Shot, combined, run_value
-from .sweep import SweepResult, run_sweep
+from .sweep import SweepResult, end_cells, run_sweep
 
 __all__ = [
     "Validation",
@@ -268,12 +268,8 @@ def markdown(validation: Validation) -> str:
         "| shot | group | quantity | impact speed (m/s) | predicted | measured | error (%) | residual / sigma | end |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
-    notes: list[str] = []
-    for row in validation.rows:
-        end = row["end_reason"]
-        if row["warnings"] and any(row["warnings"]):
-            notes.append(f"{row['label']}: " + "; ".join(w for w in row["warnings"] if w))
-            end += f" [{len(notes)}]"
+    ends, notes = end_cells([(row["end_reason"], row["warnings"]) for row in validation.rows])
+    for row, end in zip(validation.rows, ends):
         lines.append(
             f"| {row['label']} | {row['group']} | {row['quantity']} | {row['impact_speed']:g} |"
             f" {cell(row['predicted'])} | {cell(row['measured'])} | {signed_percent(row['error_percent'])} |"

@@ -14,12 +14,14 @@ skips them; errors are printed to two digits.
 from __future__ import annotations
 
 import argparse
+import json
 import math
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from cases.studies import end_cells
 from cases.studies.accuracy import time_convergence
 from docs.measure import stamp
 
@@ -104,25 +106,29 @@ def time(study: Path) -> None:
     print(f"{reference} On the {finest * 1e3:g} mm mesh (P2, exact normals, 3 points per facet):")
     print()
     print(
-        "| integrator | steps | energy retakes | depth error | "
+        "| integrator | end | steps | energy retakes | depth error | "
         + ("axis-turn error (deg) | " if turns else "")
         + ("convergence-speed error (m/s) | " if unstable else "")
         + "integration |"
     )
-    print("|---|---|---|---|" + ("---|" if turns else "") + ("---|" if unstable else "") + "---|")
-    for _, row in axis.iterrows():
+    print("|---|---|---|---|---|" + ("---|" if turns else "") + ("---|" if unstable else "") + "---|")
+    ends, notes = end_cells([(str(row["end_reason"]), json.loads(row["warnings"])) for _, row in axis.iterrows()])
+    for (_, row), end in zip(axis.iterrows(), ends):
         setting = (
             f"RK4 {row['numerics.time_step']:g} s"
             if row["numerics.integrator"] == "rk4"
             else f"Dormand-Prince rtol {row['numerics.rtol']:g}"
         )
-        cells = [setting, str(int(row["steps"])), str(int(row["energy_rejections"])), _error(row["depth_error"])]
+        cells = [setting, end, str(int(row["steps"])), str(int(row["energy_rejections"])), _error(row["depth_error"])]
         if turns:
             cells.append(_error(row["axis_angle_error"]))
         if unstable:
             cells.append(_error(row["convergence_speed_error"]))
         cells.append(f"{row['integration_time']:.2f} s")
         print("| " + " | ".join(cells) + " |")
+    if notes:
+        print()
+        print("Warnings: " + " ".join(f"[{i}] {note}." for i, note in enumerate(notes, 1)))
     convergence = time_convergence(table)
     steps = sorted(convergence["numerics.time_step"].unique(), reverse=True)
     print()
