@@ -35,6 +35,10 @@ __all__ = [
 
 # a share of steps above which retaken or forced steps mean the numerics do not suit the scene
 WARN_SHARE = 0.1
+# a Dormand-Prince tolerance above this is warned of: the integration error alone can reach per cents
+LOOSE_RTOL = 1e-3
+# a fixed-step run whose estimated time error in path length exceeds this is warned of (cases.run.runner)
+COARSE_ERROR = 0.01
 MAX_STORED_HISTORY_ROWS = 4000  # histories in a run store are thinned to about this many rows
 
 
@@ -139,20 +143,25 @@ def summarise(result: RunResult, history: pd.DataFrame | Mapping[str, np.ndarray
                 "load_evaluations",
             )
         },
-        warnings=run_warnings(result.trajectory.end_reason, stats) + surface_warnings(result.scene.numerics),
+        warnings=run_warnings(result.trajectory.end_reason, stats) + numerics_warnings(result.scene.numerics),
     )
 
 
-def surface_warnings(numerics: Numerics) -> list[str]:
-    """The statement a faceted surface comes with: flat facets with their own normals (first-order
-    geometry, mesh normals) tilt every normal by up to half the angle between neighbouring facets,
-    and the depth comes out short by several per cent (docs/geometry.md, faceted surfaces)."""
+def numerics_warnings(numerics: Numerics) -> list[str]:
+    """What a scene's numerics alone make doubtful: flat facets with their own normals (first-order geometry,
+    mesh normals) tilt every normal by up to half the angle between neighbouring facets, and the depth comes
+    out short by several per cent (docs/geometry.md, faceted surfaces); a loose Dormand-Prince tolerance."""
     if numerics.geometry_order == 1 and numerics.normals == "mesh":
         return [
             'flat facets with their own normals (numerics.geometry_order = 1, normals = "mesh"): test 2\'s'
             " depth comes out 7 % short at 20 mm facets, 2.4 % at 10 mm, 0.8 % at 5 mm; second-order"
             " tetrahedra give 0.3 %, 0.1 %, 0.03 % (against the exact 1-D integration; docs/geometry.md, faceted"
             " surfaces)"
+        ]
+    if numerics.integrator == "dopri54" and numerics.rtol > LOOSE_RTOL:
+        return [
+            f"numerics.rtol = {numerics.rtol:g} is loose: above {LOOSE_RTOL:g} the integration error alone can"
+            " reach per cents of the depth (docs/accuracy.md gives the settings that meet an accuracy)"
         ]
     return []
 
@@ -173,6 +182,18 @@ def run_warnings(end_reason: str, statistics: dict) -> list[str]:
         warnings.append(
             f"{retaken} retakes by the energy guard for {steps} steps: numerics.time_step is too coarse"
             " for this scene (docs/numerics.md, the energy guard)"
+        )
+    error = statistics.get("coarse_step_error")
+    if error is not None and error > COARSE_ERROR:
+        estimate = (
+            "cannot be estimated (a coarser run ends otherwise)"
+            if not math.isfinite(error)
+            else f"is about {error:.1%}"
+        )
+        warnings.append(
+            f"only {steps} fixed steps, and the path length's time error, from the same run at two and four times"
+            f" numerics.time_step, {estimate}: the step is too coarse to trust this run's figures (shorten it, or"
+            ' use numerics.integrator = "dopri54"; docs/numerics.md, the end of a run)'
         )
     forced = int(statistics.get("forced_steps") or 0)
     if forced > WARN_SHARE * steps:

@@ -788,7 +788,9 @@ def test_a_strong_target_stops_the_body_at_any_fixed_step(step):
         scene.numerics.stop_speed,
         **scene.effects.contact_ramp,
     )
-    assert summary.end_reason == "stopped" and not summary.warnings
+    assert summary.end_reason == "stopped"
+    # 18 and 9 steps of 1e-4 and 2e-4 s: the same run at twice the step moves by more than 1 %, which it says
+    assert not summary.warnings or step > 5e-5, summary.warnings
     assert abs(summary.depth / reference - 1) < 0.02, (summary.depth, reference)
     assert summary.final_time < 3.6e-3
     assert summary.path_length == pytest.approx(summary.depth, rel=1e-9)  # no creeping back and forth
