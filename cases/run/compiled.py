@@ -7,7 +7,8 @@ pitch-plane trajectory of ``penetrate predict`` (:mod:`.pitch_plane_step`) inlin
 :mod:`dynamics.pitch_plane` and calls the ring load of :mod:`fem_loads.revolved`.  numba keeps the
 machine code in the cache of the joining file and notices changes of that file alone, not of the
 modules it inlines and calls.  So numba's cache lives in a folder named for the digest of all
-these sources (:data:`COMPILED_SOURCES`) and numba's version, ``$PENETRATE_CACHE_DIR/numba/<digest>``
+these sources (:func:`compiled_sources`: the closure of the entry points' modules under their imports) and
+numba's version, ``$PENETRATE_CACHE_DIR/numba/<digest>``
 (``$NUMBA_CACHE_DIR/<digest>`` when that is set), set before any of them is imported: changed code gets a
 folder of its own and
 compiles afresh.
@@ -15,9 +16,9 @@ compiles afresh.
 
 from __future__ import annotations
 
+import ast
 import functools
 import hashlib
-import importlib.util
 import os
 import sys
 from collections.abc import Callable
@@ -42,41 +43,110 @@ __all__ = [
     "use_numba_cache",
     "needs_compiling",
     "announce_compiling",
-    "COMPILED_SOURCES",
+    "compiled_sources",
+    "ENTRY_MODULES",
     "ENTRY_POINTS",
 ]
 
-COMPILED_SOURCES = (
-    "dynamics.compiled",
-    "dynamics.quaternion",
-    "dynamics.integrators",
-    "fem_loads.compiled",
-    "fem_loads.compiled_point",
-    "fem_loads.exposure",
-    "fem_loads.kernel_layout",
-    "fem_loads.native",
-    "fem_loads.resistance",
-    "fem_loads.ramps",
-    "fem_loads.target",
-    "fem_loads.user_law",
-    "cases.run.dafl_step",
-    "dynamics.pitch_plane",
-    "fem_loads.revolved",
-    "cases.run.pitch_plane_step",
-)
+#: the modules that define each compiled entry point; what they inline and call is found from their imports
+ENTRY_MODULES = ("cases.run.dafl_step", "cases.run.pitch_plane_step")
+#: the packages of this project (imports of anything else are not followed)
+PROJECT_PACKAGES = ("mesh", "fem_loads", "dynamics", "cases")
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _module_file(name: str, root: Path) -> Path | None:
+    """The source file of project module ``name`` under ``root`` (found by path: importing a package to ask
+    would run its ``__init__``, which may import compiled modules before numba's cache is set)."""
+    base = root.joinpath(*name.split("."))
+    return next((p for p in (base.with_suffix(".py"), base / "__init__.py") if p.is_file()), None)
+
+
+def _imports(name: str, root: Path) -> list[tuple[str, list[str] | None]]:
+    """``(module, names)`` of every project import in module ``name`` at run time (``None``: ``import module``),
+    relative imports resolved, those under ``if TYPE_CHECKING:`` left out."""
+    path = _module_file(name, root)
+    assert path is not None
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    found: list[tuple[str, list[str] | None]] = []
+
+    class Visitor(ast.NodeVisitor):
+        def visit_If(self, node: ast.If) -> None:
+            if isinstance(node.test, ast.Name) and node.test.id == "TYPE_CHECKING":
+                for child in node.orelse:
+                    self.visit(child)
+                return
+            self.generic_visit(node)
+
+        def visit_Import(self, node: ast.Import) -> None:
+            found.extend((alias.name, None) for alias in node.names)
+
+        def visit_ImportFrom(self, node: ast.ImportFrom) -> None:
+            module = node.module or ""
+            if node.level:
+                parts = package.split(".")
+                module = ".".join([*parts[: len(parts) - node.level + 1], *([module] if module else [])])
+            found.append((module, [alias.name for alias in node.names]))
+
+    Visitor().visit(ast.parse(path.read_text()))
+    return [(module, names) for module, names in found if module.split(".")[0] in PROJECT_PACKAGES]
+
+
+def compiled_sources(root: Path = ROOT) -> list[str]:
+    """The project modules behind the compiled entry points: the closure of :data:`ENTRY_MODULES` under their
+    imports.  A module is followed whole; a name imported from a package is followed to the module its
+    ``__init__`` takes it from (the package's other modules are not what the compiled code uses)."""
+    modules: set[str] = set()
+    seen: set[tuple[str, tuple[str, ...] | None]] = set()
+    parsed: dict[str, list[tuple[str, list[str] | None]]] = {}
+
+    def imports(name: str) -> list[tuple[str, list[str] | None]]:
+        if name not in parsed:
+            parsed[name] = _imports(name, root)
+        return parsed[name]
+
+    todo: list[tuple[str, list[str] | None]] = [(name, None) for name in ENTRY_MODULES]
+    while todo:
+        module, names = todo.pop()
+        path = _module_file(module, root)
+        key = (module, None if names is None else tuple(names))
+        if path is None or key in seen:
+            continue
+        seen.add(key)
+        modules.add(module)
+        if names is not None and path.name == "__init__.py":
+            sources = {n: m for m, ns in imports(module) if ns for n in ns}
+            for name in names:
+                origin = sources.get(name)
+                if _module_file(f"{module}.{name}", root):
+                    todo.append((f"{module}.{name}", None))
+                elif origin is not None:
+                    whole = _module_file(f"{origin}.{name}", root) is not None
+                    todo.append((f"{origin}.{name}", None) if whole else (origin, [name]))
+                else:  # defined in the package's __init__ itself
+                    todo.append((module, None))
+            continue
+        for imported, imported_names in imports(module):
+            if imported_names is None:
+                todo.append((imported, None))
+                continue
+            for name in imported_names:
+                whole = _module_file(f"{imported}.{name}", root) is not None
+                todo.append((f"{imported}.{name}", None) if whole else (imported, [name]))
+    return sorted(modules)
 
 
 @functools.cache
-def _sources_digest() -> str:
-    """The digest of the compiled sources and numba's version, read once per process (the sources a
-    process has imported do not change under it)."""
+def _sources_digest(root: Path = ROOT) -> str:
+    """The digest of the compiled sources (:func:`compiled_sources`) and numba's version, read once per process
+    (the sources a process has imported do not change under it)."""
     import numba
 
     digest = hashlib.sha256(numba.__version__.encode())
-    for name in COMPILED_SOURCES:
-        spec = importlib.util.find_spec(name)
-        assert spec is not None and spec.origin is not None  # our own modules, each from its file
-        digest.update(Path(spec.origin).read_bytes())
+    for name in compiled_sources(root):
+        path = _module_file(name, root)
+        assert path is not None
+        digest.update(name.encode() + b"\0" + path.read_bytes())
     return digest.hexdigest()[:16]
 
 
@@ -89,7 +159,7 @@ def numba_cache_folder() -> Path:
 def use_numba_cache() -> None:
     """Point numba's cache at :func:`numba_cache_folder`, once per process, before any compiled module is
     imported (numba fixes a function's cache folder when its module defines it)."""
-    if not all(name in sys.modules for name in COMPILED_SOURCES):
+    if not all(name in sys.modules for name in compiled_sources()):
         from numba import config
 
         config.CACHE_DIR = str(numba_cache_folder())  # type: ignore[attr-defined]  # set from the environment at import: numba's stubs omit it

@@ -143,7 +143,9 @@ def summarise(result: RunResult, history: pd.DataFrame | Mapping[str, np.ndarray
                 "load_evaluations",
             )
         },
-        warnings=run_warnings(result.trajectory.end_reason, stats) + numerics_warnings(result.scene.numerics),
+        warnings=run_warnings(result.trajectory.end_reason, stats)
+        + numerics_warnings(result.scene.numerics)
+        + entry_warnings(result.scene, result.prepared.nose_length),
     )
 
 
@@ -166,6 +168,24 @@ def numerics_warnings(numerics: Numerics) -> list[str]:
     return []
 
 
+def entry_warnings(scene: Scene, nose_length: float) -> list[str]:
+    """A fixed step that carries the body further than its nose at the impact speed cannot follow the nose's
+    entry, where the load grows from nothing to its full value: the stages of the first steps see the body
+    far inside, or not yet in, and such runs can end many per cent off, however many steps follow."""
+    numerics = scene.numerics
+    if numerics.integrator != "rk4":
+        return []
+    travel = numerics.time_step * scene.impact.speed
+    if travel <= nose_length:
+        return []
+    return [
+        f"numerics.time_step = {numerics.time_step:g} s carries the body {travel:.3g} m in a step at the impact speed,"
+        f" more than its nose ({nose_length:.3g} m): the entry is not resolved; take at most"
+        f' {nose_length / scene.impact.speed:.2g} s, or numerics.integrator = "dopri54" (docs/numerics.md, the end'
+        " of a run)"
+    ]
+
+
 def run_warnings(end_reason: str, statistics: dict) -> list[str]:
     """Plain-language warnings about a run's numerics (empty when nothing needs saying).
 
@@ -185,15 +205,11 @@ def run_warnings(end_reason: str, statistics: dict) -> list[str]:
         )
     error = statistics.get("coarse_step_error")
     if error is not None and error > COARSE_ERROR:
-        estimate = (
-            "cannot be estimated (a coarser run ends otherwise)"
-            if not math.isfinite(error)
-            else f"is about {error:.1%}"
-        )
+        moved = "ends otherwise" if not math.isfinite(error) else f"moves the path length by {error:.1%}"
         warnings.append(
-            f"only {steps} fixed steps, and the path length's time error, from the same run at two and four times"
-            f" numerics.time_step, {estimate}: the step is too coarse to trust this run's figures (shorten it, or"
-            ' use numerics.integrator = "dopri54"; docs/numerics.md, the end of a run)'
+            f"only {steps} fixed steps, and the same run at twice numerics.time_step {moved}: the step may be too"
+            " coarse to trust this run's figures to better than that (shorten it, or use numerics.integrator ="
+            ' "dopri54"; docs/numerics.md, the end of a run)'
         )
     forced = int(statistics.get("forced_steps") or 0)
     if forced > WARN_SHARE * steps:
