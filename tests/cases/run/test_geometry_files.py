@@ -332,3 +332,15 @@ def test_a_fused_cone_runs_at_the_shipped_numerics_as_the_cone_scene(folder):
     got = summarise(run_scene(from_file({"file": str(path), "unit": "mm"})))
     _, depth, _ = analytic((("shape", "cone"), ("half_angle", 12.92)))
     assert got.depth == pytest.approx(depth, rel=1e-3)
+
+
+def test_a_body_declared_along_the_wrong_axis_is_warned_of(folder):
+    """A long body along +z in its file, run without ``axis`` (the default [1, 0, 0]), flies broadside: its run
+    says so and names the axis to give; with ``axis = [0, 0, 1]`` nothing is said."""
+    path = write_body(folder / "along_z.step", axis="z")
+    coarse = {"numerics.mesh_size": 0.04}
+    wrong = summarise(run_scene(from_file({"file": str(path)}, **coarse)))
+    assert any("projectile.geometry.axis = [1.0, 0.0, 0.0]" in w and "90.0 deg" in w for w in wrong.warnings)
+    assert any("say axis = [0, 0, 1]" in w for w in wrong.warnings), wrong.warnings
+    right = summarise(run_scene(from_file({"file": str(path), "axis": [0, 0, 1]}, **coarse)))
+    assert not any("geometry.axis" in w for w in right.warnings)
