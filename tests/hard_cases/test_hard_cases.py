@@ -108,7 +108,9 @@ def test_attack_decay_sharp_law_needs_forced_steps():
     assert stats["rejected_steps"] / milliseconds <= 10
     assert stats["forced_steps"] > 0
     steps = np.diff(result.trajectory.time)
-    assert steps[1:-1].min() >= 2e-5 * (1 - 1e-12)  # only the first step and the located end are shorter
+    # only the first step, the last one or two (limited to reach no further than the stop, docs/numerics.md)
+    # and the located end are shorter
+    assert steps[1:-2].min() >= 2e-5 * (1 - 1e-12)
 
 
 @pytest.mark.parametrize("rtol", slow_except([1e-4, 1e-6], 1e-6))

@@ -179,9 +179,11 @@ def test_rotating_the_scene_about_the_normal_rotates_the_trajectory():
 def test_energy_guard_keeps_coarse_steps_dissipative():
     """The sharp law at a 1e-4 s step: the shank's A sigma_0 switch (about 2 MN on 23 kg) overshoots every step.
 
-    Unguarded, RK4's stages pump kinetic energy in near rest and the run creeps on to the time limit;
-    with the guard no accepted step gains energy and the run stops.  (The continuous default law needs
-    no guard at this step: the next test.)
+    With the guard no accepted step gains energy and the run stops.  Unguarded, the run stops too, and no step
+    gains energy either: near rest, where RK4's stages used to straddle the switch, pump kinetic energy in and
+    creep on to the time limit, no step now reaches past the stop (docs/numerics.md, the end of a run), and the
+    guard has nothing left to retake here.  (The continuous default law needs no guard at this step: the next
+    test; the guard's own tests are in tests/dynamics.)
     """
     coarse = [("numerics.mesh_size", 0.03), ("numerics.integrator", "rk4"), ("numerics.time_step", 1e-4), *SHARP]
 
@@ -194,9 +196,9 @@ def test_energy_guard_keeps_coarse_steps_dissipative():
 
     raw, raw_run = energy(("numerics.energy_guard", False), ("numerics.time_limit", 0.2))
     guarded, guarded_run = energy()
-    assert np.diff(raw).max() > 0 and raw_run.end_reason == "time_limit"
-    assert np.max(np.diff(guarded) / guarded[:-1]) <= ENERGY_TOLERANCE and guarded_run.end_reason == "stopped"
-    assert guarded_run.statistics["energy_rejections"] > 0
+    for kinetic, run in ((raw, raw_run), (guarded, guarded_run)):
+        assert run.end_reason == "stopped"
+        assert np.max(np.diff(kinetic) / kinetic[:-1]) <= ENERGY_TOLERANCE
 
 
 def test_coarse_steps_stay_right_with_the_continuous_law():
