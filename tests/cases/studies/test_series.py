@@ -255,6 +255,7 @@ def test_compare_header_counts_one_law(tmp_path, capsys):
 # -- fit --series
 
 
+@pytest.mark.slow
 def test_fit_on_the_slowest_shots_agrees_with_a_scan_and_reports_the_rest_apart(tmp_path):
     """S fitted to the four slowest shots lies within its standard error of the minimum of the sum of squared
     residuals, found by a scan of S (a parabola through the three lowest points of a 0.25-step grid); the
@@ -285,6 +286,7 @@ def test_fit_on_the_slowest_shots_agrees_with_a_scan_and_reports_the_rest_apart(
     assert all(b > a for a, b in zip(after, before))  # a stronger target (S > Frew's 9.73) stops them sooner
 
 
+@pytest.mark.slow
 def test_k_fold_cross_validation_predicts_every_training_shot_once(tmp_path):
     series = read_series(CONCRETE).subset(["v405", "v446", "v545", "v651", "v804", "v821"])
     result = fit_series(series, COARSE, ["target.law.S=5:20"], RunStore(tmp_path / "s"), SERIAL, folds=3, seed=1)

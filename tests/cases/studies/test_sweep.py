@@ -239,16 +239,18 @@ def _cli_sweep(store, out, *extra):
 
 def test_killed_sweep_loses_nothing_and_resumes(tmp_path):
     store, out = tmp_path / "store", tmp_path / "table.csv"
-    proc = subprocess.Popen(
-        _cli_sweep(store, out), start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
-    )
+    log = tmp_path / "stderr.txt"
+    with log.open("w") as stderr:
+        proc = subprocess.Popen(
+            _cli_sweep(store, out), start_new_session=True, stdout=subprocess.DEVNULL, stderr=stderr
+        )
     deadline = time.time() + 240
-    while time.time() < deadline and len(_records(store)) < 2:
+    while time.time() < deadline and len(_records(store)) < 2 and proc.poll() is None:
         time.sleep(0.05)
     os.killpg(proc.pid, signal.SIGKILL)
     proc.wait()
     finished = {p: p.stat().st_mtime_ns for p in _records(store)}
-    assert 2 <= len(finished) < 6 and not out.exists()
+    assert 2 <= len(finished) < 6 and not out.exists(), (len(finished), log.read_text()[-2000:])
     for path in finished:  # every stored run is complete: a record and the history beside it
         assert "error" not in json.loads(path.read_text()) and path.with_suffix(".csv.gz").exists()
     done = subprocess.run(_cli_sweep(store, out), capture_output=True, text=True, timeout=600)
