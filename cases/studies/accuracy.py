@@ -38,13 +38,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from fem_loads import ResistanceLaw
-
 from ..run import RunStore, atomic_write_text, convergence_speed, prepare_projectile
 from ..scene import InputError, Overrides, Scene
 from ..viz.figures import legend_outside, save_figure, subplots
 from .pool import Pool
-from .reference import axial_depth_1d, check_nose_alone_presses
+from .reference import check_nose_alone_presses, scene_depth_1d
 from .speeds import is_unstable
 from .sweep import Sweep, Variation, end_cells, run_sweep
 
@@ -303,17 +301,7 @@ def _reference(sweep: Sweep, finest: pd.DataFrame) -> dict:
     """The exact 1-D reference of a plain normal impact, else the finest run with a Richardson estimate."""
     base = sweep.scenes[0]
     if is_plain_normal_impact(base):
-        prepared = prepare_projectile(base)
-        law = base.target.build()
-        assert isinstance(law, ResistanceLaw)  # a plain normal impact's target has no layers
-        depth, _ = axial_depth_1d(
-            prepared.profile,
-            law,
-            prepared.mass.mass,
-            base.impact.speed,
-            base.numerics.stop_speed,
-            **base.effects.contact_ramp,
-        )
+        depth = scene_depth_1d(base, prepare_projectile(base))
         return {
             "kind": "1-D integration with exact nose entry and the same contact width (exact)",
             "depth": depth,

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy import integrate
@@ -37,10 +37,15 @@ from fem_loads.ramps import smooth_step
 from fem_loads.resistance import ResistanceLaw
 from mesh.profile import ConeNose, OgiveNose, Profile
 
+if TYPE_CHECKING:
+    from ..run import PreparedProjectile
+    from ..scene import Scene
+
 __all__ = [
     "embedded_axial_force",
     "closed_form_depth",
     "axial_depth_1d",
+    "scene_depth_1d",
     "axial_force",
     "nose_factors",
     "check_nose_alone_presses",
@@ -194,6 +199,22 @@ def axial_depth_1d(
     # after embedding: P(V) in closed form between v1 and stop_speed
     rest = closed_form_depth(profile, law, mass, v1) - closed_form_depth(profile, law, mass, stop_speed)
     return ln + rest, v1
+
+
+def scene_depth_1d(scene: Scene, prepared: PreparedProjectile) -> float:
+    """:func:`axial_depth_1d` of a scene's normal impact: its projectile's profile and mass, its law, impact speed,
+    stop speed and contact ramp (the tip depth, m)."""
+    law = scene.target.build()
+    assert isinstance(law, ResistanceLaw)  # a normal impact into one built-in law, as axial_depth_1d takes
+    depth, _ = axial_depth_1d(
+        prepared.profile,
+        law,
+        prepared.mass.mass,
+        scene.impact.speed,
+        scene.numerics.stop_speed,
+        **scene.effects.contact_ramp,
+    )
+    return depth
 
 
 def _integrate(

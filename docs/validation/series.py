@@ -22,7 +22,7 @@ import numpy as np
 from cases import prepare_projectile
 from cases.run import RunStore
 from cases.studies import Pool
-from cases.studies.reference import axial_depth_1d, closed_form_depth
+from cases.studies.reference import closed_form_depth, scene_depth_1d
 from cases.studies.series import read_series
 from cases.studies.validate import validate
 
@@ -48,9 +48,7 @@ def main(name: str) -> None:
     for row, scene in zip(validation.rows, scenes):
         prepared = prepare_projectile(scene)
         law, mass, speed = scene.target.build(), prepared.mass.mass, scene.impact.speed
-        one_d, _ = axial_depth_1d(
-            prepared.profile, law, mass, speed, scene.numerics.stop_speed, **scene.effects.contact_ramp
-        )
+        one_d = scene_depth_1d(scene, prepared)
         profile = prepared.profile
         if concrete:
             closed = forrestal_concrete(2 * profile.radius, profile.nose_factor(), law, mass, speed)

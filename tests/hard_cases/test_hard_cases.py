@@ -21,7 +21,7 @@ from cases import history_table, load_scene, prepare_projectile, run_scene, scen
 from cases.run import convergence_speed
 from cases.scene import SceneError, parse_override, read_toml, scene_from_dict
 from cases.studies import is_unstable
-from cases.studies.reference import axial_depth_1d
+from cases.studies.reference import axial_depth_1d, scene_depth_1d
 from dynamics import (
     NON_FINITE,
     RK4,
@@ -781,15 +781,7 @@ def test_a_strong_target_stops_the_body_at_any_fixed_step(step):
     scene = load_scene(scene_path("forrestal1996_concrete"), {**CONCRETE_FIXED, "numerics.time_step": step})
     result = run_scene(scene)
     summary = summarise(result)
-    prepared = result.prepared
-    reference, _ = axial_depth_1d(
-        prepared.profile,
-        scene.target.build(),
-        prepared.mass.mass,
-        scene.impact.speed,
-        scene.numerics.stop_speed,
-        **scene.effects.contact_ramp,
-    )
+    reference = scene_depth_1d(scene, result.prepared)
     assert summary.end_reason == "stopped"
     # 18 and 9 steps of 1e-4 and 2e-4 s: the same run at twice the step moves by more than 1 %, which it says
     assert not summary.warnings or step > 5e-5, summary.warnings
