@@ -17,7 +17,7 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 from ..scene import Numerics, Scene
 from .history import ATTACK_ANGLE_SPEED_FRACTION, HISTORY_UNITS, attack_angle_peak, history_columns, history_csv
 from .persistence import atomic_write, atomic_write_text, json_safe
-from .runner import RunResult, run_scene
+from .runner import COARSE_ERROR, COARSE_TURN, RunResult, run_scene
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -41,8 +41,6 @@ WARN_SHARE = 0.1
 AXIS_TOLERANCE = 1.0
 # a Dormand-Prince tolerance above this is warned of: the integration error alone can reach per cents
 LOOSE_RTOL = 1e-3
-# a fixed-step run whose estimated time error in path length exceeds this is warned of (cases.run.runner)
-COARSE_ERROR = 0.01
 MAX_STORED_HISTORY_ROWS = 4000  # histories in a run store are thinned to about this many rows
 
 
@@ -237,10 +235,14 @@ def run_warnings(end_reason: str, statistics: dict) -> list[str]:
             " for this scene (docs/numerics.md, the energy guard)"
         )
     error = statistics.get("coarse_step_error")
-    if error is not None and error > COARSE_ERROR:
-        moved = "ends otherwise" if not math.isfinite(error) else f"moves the path length by {error:.1%}"
+    turn = statistics.get("coarse_step_turn") or 0.0
+    if error is not None and (error > COARSE_ERROR or turn > COARSE_TURN):
+        if not math.isfinite(error):
+            moved = "ends otherwise"
+        else:
+            moved = f"moves the path length by {error:.1%} and the final axis by {turn:.2g} deg"
         warnings.append(
-            f"only {steps} fixed steps, and the same run at twice numerics.time_step {moved}: the step may be too"
+            f"only {steps} fixed steps, and the same run at half numerics.time_step {moved}: the step is too"
             " coarse to trust this run's figures to better than that (shorten it, or use numerics.integrator ="
             ' "dopri54"; docs/numerics.md, the end of a run)'
         )

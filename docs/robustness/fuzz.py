@@ -41,6 +41,17 @@ PROPERTIES = {  # test -> (property, what is generated)
         "edited scene files",
         "shipped files with random characters deleted, inserted, replaced",
     ),
+    "test_edited_series_files": (
+        "edited series files",
+        "shipped series CSVs with random characters deleted, inserted, replaced (commas, quotes, newlines, `%`,"
+        " `nan`, `1e999`, comment marks, column prefixes); read with every shot valid, or refused in one line"
+        " naming the file and the row, line, header or column",
+    ),
+    "test_random_series_files": (
+        "random series files",
+        "1-6 columns (scene, label, group, scene keys, measured and sigma columns, unknown and empty names) and"
+        " up to 4 rows of numbers, NaN, inf, percentages, names and random text; read or refused as above",
+    ),
     "test_malformed_overrides": (
         "`--set` strings",
         "no `=`, empty keys, `a..b`, unknown paths, 5000-character keys"
