@@ -2,7 +2,7 @@
 
 What it may import is written once, in pyproject.toml's [tool.penetrate.rooms]."""
 
-from .files import build_file_mesh
+from .files import build_file_mesh, place_file_body
 from .geometry import BODY, COUNTERWEIGHT, OUTER, ProjectileMesh, build_mesh
 from .imported import BodyOutline, FileGeometry, GeometryError, body_frame
 from .io import read_mesh, write_mesh
@@ -40,6 +40,7 @@ __all__ = [
     "GeometryError",
     "BodyOutline",
     "build_file_mesh",
+    "place_file_body",
     "body_frame",
     "AxisymmetricMassProperties",
     "analytic_mass_properties",

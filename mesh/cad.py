@@ -33,13 +33,13 @@ from .imported import (
     components,
     model_frame,
     orient_by_volume,
+    place,
     regions,
-    rotation_to_x,
 )
 from .parameters import node_parameters, parameter_rule, straighten_inner_edges
 from .symmetry import mirror_planes
 
-__all__ = ["cad_mesh", "CadSurface", "load_cad", "HIGH_ORDER_OPTIMIZE"]
+__all__ = ["cad_mesh", "CadSurface", "load_cad", "place_cad", "HIGH_ORDER_OPTIMIZE"]
 
 #: gmsh's ``Mesh.HighOrderOptimize`` for a CAD body's curved elements: 1, optimise the poor ones
 HIGH_ORDER_OPTIMIZE = 1
@@ -61,11 +61,41 @@ def _declared_unit(path: str) -> str | None:
     return None
 
 
+def place_cad(geometry: FileGeometry) -> FileGeometry:
+    """``geometry`` with its axis and origin found from the CAD body (:func:`~mesh.imported.place`): its
+    centroid and inertia from OpenCASCADE, its ends along a direction from the bounding box of a turned copy."""
+    import gmsh
+
+    occ = gmsh.model.occ
+    with gmsh_session("place"):
+        volumes = list(_import(geometry))
+        masses = np.array([occ.getMass(3, v) for v in volumes])
+        centres = np.array([occ.getCenterOfMass(3, v) for v in volumes])
+        centroid = masses @ centres / masses.sum()
+        inertia = np.zeros((3, 3))
+        for v, m, c in zip(volumes, masses, centres):  # each about its own centroid, moved to the body's
+            d = c - centroid
+            inertia += np.reshape(occ.getMatrixOfInertia(3, v), (3, 3)) + m * ((d @ d) * np.eye(3) - np.outer(d, d))
+
+        def span(direction: np.ndarray) -> tuple[float, float]:
+            copy = occ.copy([(3, v) for v in volumes])
+            k = np.cross(direction, [1.0, 0.0, 0.0])
+            angle = math.atan2(float(np.linalg.norm(k)), float(direction[0]))
+            if np.linalg.norm(k) < 1e-12:  # along x already, or against it: a half turn about z
+                k = np.array([0.0, 0.0, 1.0])
+            occ.rotate(copy, 0.0, 0.0, 0.0, *(k / np.linalg.norm(k)).tolist(), angle)
+            boxes = np.array([occ.getBoundingBox(d, t) for d, t in copy])
+            occ.remove(copy, recursive=True)
+            return float(boxes[:, 0].min()), float(boxes[:, 3].max())
+
+        return place(geometry, centroid, inertia, span)
+
+
 def load_cad(geometry: FileGeometry) -> dict[int, str]:
     """Import the CAD solids into the current gmsh session as the file has them, and split them by the planes
     through the axis; the pieces' names by volume tag.
 
-    The solids are neither scaled nor turned here: OpenCASCADE's general transformation (gmsh's
+    The solids are neither moved, scaled nor turned here: OpenCASCADE's general transformation (gmsh's
     ``dilate``) would turn every plane, cylinder and surface of revolution into a B-spline; the
     mesh is scaled and turned instead (:func:`model_frame`), and :class:`CadSurface` maps back.
     """
@@ -113,8 +143,9 @@ def _split(geometry: FileGeometry, names: dict[int, str]) -> dict[int, str]:
     # (one conforming mesh).  gmsh meshes a whole cone badly at its apex, a pole of its parameters on the
     # seam (the triangles there fold over and the volume mesh loses the tip); split into quarters, the apex
     # is a corner of each piece, as in the analytic projectiles' meshes.
-    rotation = rotation_to_x(geometry.axis)
-    planes = [_plane(occ, rotation[k], 2.0 * _extent_of([(3, v) for v in volumes])) for k in (1, 2)]
+    rotation = geometry.rotation
+    half = 2.0 * _extent_of([(3, v) for v in volumes])
+    planes = [_plane(occ, rotation[k], half, geometry.centre) for k in (1, 2)]
     _, mapping = occ.fragment([(3, v) for v in volumes], [(2, p) for p in planes])
     names = {t: names[v] for v, pieces in zip(volumes, mapping) for d, t in pieces if d == 3}
     occ.synchronize()
@@ -154,21 +185,24 @@ def _sew_solid(geometry: FileGeometry, shapes: list[tuple[int, int]]) -> None:
         occ.synchronize()
 
 
-def _plane(occ: Any, normal: np.ndarray, half: float) -> int:
-    """A square of side ``2 half`` centred on the origin, normal to ``normal``."""
+def _plane(occ: Any, normal: np.ndarray, half: float, centre: np.ndarray) -> int:
+    """A square of side ``2 half`` centred on ``centre``, normal to ``normal``."""
     square = occ.addRectangle(-half, -half, 0.0, 2.0 * half, 2.0 * half)
     turn = np.cross([0.0, 0.0, 1.0], normal)
     if np.linalg.norm(turn) > 1e-12:
         angle = math.atan2(np.linalg.norm(turn), normal[2])
         occ.rotate([(2, square)], 0.0, 0.0, 0.0, *(turn / np.linalg.norm(turn)), angle)
+    if centre.any():
+        occ.translate([(2, square)], *centre.tolist())
     return square
 
 
 def cad_mesh(geometry: FileGeometry, size: float, order: int) -> ProjectileMesh:
-    """The mesh of a CAD body in its model frame: meshed whole, or on one side of its mirror planes
-    (:mod:`mesh.symmetry`) and mirrored."""
+    """The mesh of a CAD body in its model frame (``geometry`` placed first if it is not): meshed whole, or on
+    one side of its mirror planes (:mod:`mesh.symmetry`) and mirrored."""
     import gmsh
 
+    geometry = geometry if geometry.placed else place_cad(geometry)
     with gmsh_session("file"):
         names = _import(geometry)
         planes = mirror_planes(geometry, list(names))
@@ -218,12 +252,12 @@ def _fundamental_part(geometry: FileGeometry, names: dict[int, str], planes: tup
 
     if not planes:
         return names
-    rotation = rotation_to_x(geometry.axis)
+    rotation, centre = geometry.rotation, geometry.centre
     occ = gmsh.model.occ
     kept = {
         v: name
         for v, name in names.items()
-        if all(float(rotation[axis] @ occ.getCenterOfMass(3, v)) > 0.0 for axis in planes)
+        if all(float(rotation[axis] @ (np.asarray(occ.getCenterOfMass(3, v)) - centre)) > 0.0 for axis in planes)
     }
     occ.remove([(3, v) for v in names if v not in kept], recursive=True)
     occ.synchronize()
@@ -236,11 +270,11 @@ def _on_mirror_plane(geometry: FileGeometry, surface: int, planes: tuple[int, ..
 
     if not planes or gmsh.model.getType(2, surface) != "Plane":
         return False
-    rotation = rotation_to_x(geometry.axis)
+    rotation = geometry.rotation
     # three points of the plane: its parametrisation's corners (a plane's parameters span the plane itself)
     low, high = (np.asarray(b) for b in gmsh.model.getParametrizationBounds(2, surface))
     samples = np.array([low, [high[0], low[1]], [low[0], high[1]]])
-    points = np.asarray(gmsh.model.getValue(2, surface, samples.ravel().tolist())).reshape(3, 3)
+    points = np.asarray(gmsh.model.getValue(2, surface, samples.ravel().tolist())).reshape(3, 3) - geometry.centre
     extent = float(np.ptp(points, axis=0).max())
     return any(bool(np.abs(points @ rotation[axis]).max() <= 1e-9 * extent) for axis in planes)
 
@@ -327,13 +361,13 @@ class CadSurface:
     Parameters
     ----------
     geometry : FileGeometry
-        The CAD file, unit and axis the mesh was made from.
+        The CAD file, unit and axis the mesh was made from (placed here if it is not).
     tip : float
         The model frame's x of the tip (:func:`body_frame`): body-frame points are moved back by it.
     """
 
     def __init__(self, geometry: FileGeometry, tip: float) -> None:
-        self.geometry = geometry
+        self.geometry = geometry if geometry.placed else place_cad(geometry)
         self.tip = tip
 
     def quadrature(
@@ -379,7 +413,7 @@ class CadSurface:
 
         n, q = len(nodes), len(ref_weights)
         scale = UNITS[self.geometry.unit]
-        rotation = rotation_to_x(self.geometry.axis)
+        rotation, centre = self.geometry.rotation, self.geometry.centre
         shift = np.array([self.tip, 0.0, 0.0])
         points = np.zeros((n, q, 3))
         normals = np.zeros((n, q, 3))
@@ -398,7 +432,7 @@ class CadSurface:
                     planar[rows] = True
                     continue
                 # body frame -> the file's coordinates
-                in_file = ((nodes[rows] * signs + shift) @ rotation) / scale
+                in_file = ((nodes[rows] * signs + shift) @ rotation) / scale + centre
                 uv = node_parameters(entity, in_file)
                 if uv.shape[1] == 6:
                     straighten_inner_edges(uv, nodes[rows, 3:])
@@ -408,7 +442,7 @@ class CadSurface:
                 derivative = np.asarray(gmsh.model.getDerivative(2, entity, flat)).reshape(len(rows), q, 2, 3)
                 cross = np.cross(derivative[:, :, 0], derivative[:, :, 1])
                 jacobian = np.linalg.norm(cross, axis=2)
-                points[rows] = (scale * value @ rotation.T - shift) * signs
+                points[rows] = (scale * (value - centre) @ rotation.T - shift) * signs
                 normals[rows] = (cross / np.maximum(jacobian, np.finfo(float).tiny)[..., None]) @ rotation.T * signs
                 weights[rows] = weight * jacobian * scale**2
         return points.reshape(-1, 3), normals.reshape(-1, 3), weights.reshape(-1), planar

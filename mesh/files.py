@@ -7,16 +7,33 @@ from pathlib import Path
 
 import numpy as np
 
-from .cad import cad_mesh
+from .cad import cad_mesh, place_cad
 from .geometry import TET_EDGES, ProjectileMesh
 from .imported import FileGeometry, GeometryError
-from .volume_mesh import read_volume_mesh
+from .volume_mesh import place_volume_mesh, read_volume_mesh
 
-__all__ = ["build_file_mesh", "tangled"]
+__all__ = ["build_file_mesh", "place_file_body", "tangled"]
+
+
+def place_file_body(geometry: FileGeometry) -> FileGeometry:
+    """``geometry`` with the axis and origin its body gives (:func:`~mesh.imported.place`); as it is when placed.
+
+    Raises
+    ------
+    GeometryError
+        No such file, or one that cannot be read; an axis that cannot be found, or that the scene does not
+        give where the body needs it.
+    """
+    if geometry.placed:
+        return geometry
+    if not Path(geometry.path).is_file():
+        raise GeometryError(f"projectile.geometry.file = {geometry.path!r}: no such file")
+    return place_cad(geometry) if geometry.is_cad else place_volume_mesh(geometry)
 
 
 def build_file_mesh(geometry: FileGeometry, size: float, order: int = 2) -> ProjectileMesh:
-    """Mesh (a CAD file) or read (a mesh file) the projectile of ``geometry``, in its model frame.
+    """Mesh (a CAD file) or read (a mesh file) the projectile of ``geometry``, in its model frame (placed
+    first by :func:`place_file_body` when it is not).
 
     Raises
     ------
@@ -24,8 +41,7 @@ def build_file_mesh(geometry: FileGeometry, size: float, order: int = 2) -> Proj
         An unreadable file, no closed solid, several disjoint bodies, no tetrahedra,
         a body too large or small for its unit, a named material the file lacks.
     """
-    if not Path(geometry.path).is_file():
-        raise GeometryError(f"projectile.geometry.file = {geometry.path!r}: no such file")
+    geometry = place_file_body(geometry)
     mesh = cad_mesh(geometry, size, order) if geometry.is_cad else read_volume_mesh(geometry)
     extent = float(np.ptp(mesh.points, axis=0).max())
     folded = tangled(mesh)

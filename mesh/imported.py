@@ -1,11 +1,13 @@
 """Projectiles from files: CAD solids (STEP, BREP, IGES) meshed by gmsh, and volume meshes read by meshio.
 
-A file's projectile is any closed body.  Its coordinates are scaled from the
-file's length unit to metres and rotated so that the file's ``axis`` runs
-along +x, tail to tip; the mesh keeps that *model frame* (the tip is wherever
-the file put it), and :func:`body_frame` moves the origin to the tip (the
-body's largest x, on the axis ``y = z = 0``), as the analytic projectiles
-have it.
+A file's projectile is any closed body, wherever the file puts it.  Its axis
+is the line along the scene's ``axis`` (or, with ``"auto"``, the principal axis
+of least inertia) through the body's centroid (:func:`place`).  Its coordinates
+are moved so that this line passes through the origin, scaled from the file's
+length unit to metres and rotated so that the axis runs along +x, tail to tip;
+the mesh keeps that *model frame* (the tip is wherever the file put it along
+the axis), and :func:`body_frame` moves the origin to the tip (the body's
+largest x, on the axis ``y = z = 0``), as the analytic projectiles have it.
 
 Every tetrahedron carries a region: :data:`~mesh.geometry.BODY`, or
 ``MATERIAL_BASE + k`` for the ``k``-th of the named materials (a CAD solid's
@@ -24,7 +26,7 @@ from __future__ import annotations
 import hashlib
 import math
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TypeVar
@@ -43,6 +45,8 @@ __all__ = [
     "CAD_SUFFIXES",
     "MATERIAL_BASE",
     "file_digest",
+    "place",
+    "AXIS_TOLERANCE",
 ]
 
 UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
@@ -52,6 +56,15 @@ MATERIAL_BASE = 10  # region tag of the first named material
 SMALLEST_BODY, LARGEST_BODY = 0.002, 50.0
 TYPICAL_BODY = 0.3  # m
 DECLARED = {"metres": "m", "centimetres": "cm", "millimetres": "mm", "inches": "in"}
+#: deg: a body whose axis of least inertia lies further than this from the axis it is read along is warned of,
+#: or refused when the scene gives no axis
+AXIS_TOLERANCE = 1.0
+#: a body has a long axis when its smallest principal moment of inertia is below this share of the next
+LONG_AXIS = 0.9
+#: its tip is clear when one end lies this share of its length further from its centroid than the other
+CLEAR_TIP = 0.02
+#: a centroid this close to the file's own line (a share of the body's extent) lies on it: rounding, not a move
+ON_LINE = 1e-6
 
 
 class GeometryError(ValueError):
@@ -75,8 +88,9 @@ class FileGeometry:
         :func:`file_digest` of its contents (a changed file is meshed again).
     unit : str
         The length unit of the file's numbers: a key of :data:`UNITS`.
-    axis : tuple of float
-        The file's direction from tail to tip (rotated onto +x).
+    axis : tuple of float, "auto" or None
+        The file's direction from tail to tip (rotated onto +x); ``"auto"``: the body's axis of least
+        inertia; None: +x, checked against the body (:func:`place` resolves the last two).
     materials : tuple of str
         Names of the solids or groups that have their own density, in the order of
         their region tags (``MATERIAL_BASE``, ``MATERIAL_BASE + 1``, ...).
@@ -86,19 +100,41 @@ class FileGeometry:
     symmetry : str
         The mirror planes a CAD body is meshed by (:data:`mesh.symmetry.SYMMETRIES`): ``"auto"``
         (those it has), ``"none"``, or one it is declared to have and is checked for.
+    origin : tuple of float or None
+        A point of the axis in the file's coordinates and unit (the body's centroid, moved along the
+        axis to the file's origin's foot); None until :func:`place` finds it.
     """
 
     path: str
     digest: str
     unit: str = "m"
-    axis: tuple[float, float, float] = (1.0, 0.0, 0.0)
+    axis: tuple[float, float, float] | str | None = None
     materials: tuple[str, ...] = ()
     cell_field: str | None = None
     symmetry: str = "auto"
+    origin: tuple[float, float, float] | None = None
 
     @property
     def is_cad(self) -> bool:
         return Path(self.path).suffix.lower() in CAD_SUFFIXES
+
+    @property
+    def placed(self) -> bool:
+        """Whether the axis and origin are known (:func:`place`)."""
+        return self.origin is not None and isinstance(self.axis, tuple)
+
+    @property
+    def rotation(self) -> np.ndarray:
+        """The rotation from the file's directions to the model frame's: its rows are the model frame's axes in
+        the file's coordinates (the first the axis)."""
+        assert isinstance(self.axis, tuple), "place() the geometry first"
+        return rotation_to_x(self.axis)
+
+    @property
+    def centre(self) -> np.ndarray:
+        """A point of the axis in the file's coordinates and unit (:attr:`origin`)."""
+        assert self.origin is not None, "place() the geometry first"
+        return np.asarray(self.origin, dtype=float)
 
 
 @dataclass(frozen=True)
@@ -157,8 +193,109 @@ def components(n: int, pairs: list[tuple[int, int]]) -> np.ndarray:
 
 
 def model_frame(points: np.ndarray, geometry: FileGeometry) -> np.ndarray:
-    """File coordinates in metres, turned so that the file's axis is +x."""
-    return np.ascontiguousarray((points * UNITS[geometry.unit]) @ rotation_to_x(geometry.axis).T)
+    """File coordinates in metres, moved so that the axis passes through the origin and turned so that it is +x."""
+    return np.ascontiguousarray(((points - geometry.centre) * UNITS[geometry.unit]) @ geometry.rotation.T)
+
+
+def place(
+    geometry: FileGeometry,
+    centroid: np.ndarray,
+    inertia: np.ndarray,
+    span: Callable[[np.ndarray], tuple[float, float]],
+) -> FileGeometry:
+    """``geometry`` with its axis and origin found from the body, wherever the file puts it.
+
+    Parameters
+    ----------
+    geometry : FileGeometry
+        As the scene gives it.
+    centroid : ndarray, shape (3,)
+        The body's centroid (the file's coordinates and unit).
+    inertia : ndarray, shape (3, 3)
+        Its inertia tensor of unit density about the centroid (any unit: only its axes and ratios count).
+    span : callable
+        ``span(direction)``: the lowest and highest projections of the body onto a unit direction.
+
+    Returns
+    -------
+    FileGeometry
+        With ``axis`` a direction (the given one; with ``"auto"`` the axis of least inertia, tip at the
+        end further from the centroid, which is the smaller end of a body whose sections shrink
+        towards it; with None +x) and ``origin`` the centroid, moved along the axis to the foot of
+        the file's origin.  A centroid within :data:`ON_LINE` of the body's extent of the file's own
+        line (the axis through the file's origin) is taken as on it: a body drawn about its axis at the
+        origin is meshed exactly as the file draws it.
+
+    Raises
+    ------
+    GeometryError
+        ``"auto"`` for a body without a clear long axis or tip; no axis given for a body whose axis of
+        least inertia lies more than :data:`AXIS_TOLERANCE` from +x, or whose tip is clearly at -x.
+    """
+    moments, axes = np.linalg.eigh(inertia)
+    least = axes[:, 0]
+    long_axis = moments[0] < LONG_AXIS * moments[1]
+
+    def tip_end(direction: np.ndarray) -> float:
+        """Which way the tip lies along ``direction``: > 0 forwards, < 0 backwards, 0 unclear."""
+        low, high = span(direction)
+        at = float(centroid @ direction)
+        lean = (high - at) - (at - low)
+        return lean if abs(lean) > CLEAR_TIP * (high - low) else 0.0
+
+    axis = geometry.axis
+    if axis == "auto":
+        if not long_axis:
+            raise GeometryError(
+                f'projectile.geometry.axis = "auto": the body has no clear long axis (principal moments of'
+                f" inertia {moments[0]:.3g}, {moments[1]:.3g}, {moments[2]:.3g}: the least within"
+                f" {1 - LONG_AXIS:.0%} of the next); give the axis from tail to tip, axis = [x, y, z]"
+            )
+        lean = tip_end(least)
+        if lean == 0.0:
+            raise GeometryError(
+                f'projectile.geometry.axis = "auto": the body\'s ends along its long axis {_direction(least)} lie'
+                f" equally far from its centroid, so its tip cannot be told from its tail; give axis ="
+                f" {_direction(least)} or its opposite, from tail to tip"
+            )
+        chosen = _snapped(least if lean > 0 else -least)
+    elif axis is None:
+        x = np.array([1.0, 0.0, 0.0])
+        angle = math.degrees(math.acos(min(1.0, abs(float(least @ x)))))
+        if long_axis and angle > AXIS_TOLERANCE:
+            turned = least if tip_end(least) >= 0 else -least
+            raise GeometryError(
+                f"projectile.geometry.axis: not given, so the body is read along +x, but its long axis (of least"
+                f" inertia) lies {angle:.1f} deg from it, along {_direction(turned)} in the file: say axis ="
+                f' {_direction(turned)} (tail to tip), or axis = "auto"'
+            )
+        if tip_end(x) < 0:
+            raise GeometryError(
+                "projectile.geometry.axis: not given, so the body is read along +x, but its tip (the end further"
+                ' from its centroid) is at its -x end: say axis = [-1, 0, 0], or axis = "auto"'
+            )
+        chosen = x
+    else:
+        chosen = np.asarray(axis, dtype=float)
+    unit = chosen / np.linalg.norm(chosen)
+    frame = replace(geometry, axis=(float(unit[0]), float(unit[1]), float(unit[2])), origin=(0.0, 0.0, 0.0))
+    across = frame.rotation @ np.asarray(centroid, dtype=float)
+    across[0] = 0.0  # the axial place is the tip's, found on the mesh (body_frame)
+    low, high = span(frame.rotation[0])
+    across[np.abs(across) <= ON_LINE * (high - low)] = 0.0
+    origin = frame.rotation.T @ across
+    return replace(frame, origin=(float(origin[0]), float(origin[1]), float(origin[2])))
+
+
+def _snapped(direction: np.ndarray) -> np.ndarray:
+    """A direction within rounding of a coordinate axis, put on it: the body is then turned exactly."""
+    small = np.abs(direction) < 1e-9
+    return direction if small.all() else np.where(small, 0.0, direction)
+
+
+def _direction(vector: np.ndarray) -> str:
+    """A direction as a scene would write it."""
+    return "[" + ", ".join(f"{v:.4g}" if abs(v) > 5e-5 else "0" for v in vector.tolist()) + "]"
 
 
 Key = TypeVar("Key")  # what names a solid: a volume tag (CAD), a group's name (a volume mesh)

@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
-from .imported import FileGeometry, GeometryError, rotation_to_x
+from .imported import FileGeometry, GeometryError
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -79,14 +79,16 @@ def mirror_planes(geometry: FileGeometry, volumes: list[int]) -> tuple[int, ...]
     declared = geometry.symmetry
     if declared == "none":
         return ()
-    rotation = rotation_to_x(geometry.axis)  # its rows: the body frame's axes in the file's coordinates
+    rotation = geometry.rotation  # its rows: the body frame's axes in the file's coordinates
+    centre = geometry.centre  # a point of the axis, where the planes meet
     occ = gmsh.model.occ
     differences = {}
     for axis in (1, 2) if declared == "auto" else SYMMETRIES[declared]:
         a, b, c = rotation[axis].tolist()
+        d = -float(rotation[axis] @ centre)  # the plane a x + b y + c z + d = 0 through the axis
 
-        def mirror(image: list[tuple[int, int]], a: float = a, b: float = b, c: float = c) -> None:
-            occ.mirror(image, a, b, c, 0.0)
+        def mirror(image: list[tuple[int, int]], a: float = a, b: float = b, c: float = c, d: float = d) -> None:
+            occ.mirror(image, a, b, c, d)
 
         differences[axis] = _difference(volumes, mirror)
     if declared == "auto":
@@ -101,7 +103,7 @@ def mirror_planes(geometry: FileGeometry, volumes: list[int]) -> tuple[int, ...]
         u, v, w = rotation[0].tolist()  # the file's axis
 
         def turn(image: list[tuple[int, int]]) -> None:
-            occ.rotate(image, 0.0, 0.0, 0.0, u, v, w, _TURN)
+            occ.rotate(image, *centre.tolist(), u, v, w, _TURN)
 
         d = _difference(volumes, turn)
         if d > SYMMETRY_TOLERANCE:

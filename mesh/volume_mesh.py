@@ -21,13 +21,14 @@ from .imported import (
     face_table,
     model_frame,
     orient_by_volume,
+    place,
     regions,
 )
 
 if TYPE_CHECKING:
     import meshio  # slow to import: at run time only where a file is read
 
-__all__ = ["read_volume_mesh"]
+__all__ = ["read_volume_mesh", "place_volume_mesh"]
 
 
 def _boundary_faces(tetra: np.ndarray) -> np.ndarray:
@@ -45,7 +46,33 @@ def _boundary_faces(tetra: np.ndarray) -> np.ndarray:
     return tris
 
 
-def read_volume_mesh(geometry: FileGeometry) -> ProjectileMesh:
+def place_volume_mesh(geometry: FileGeometry) -> FileGeometry:
+    """``geometry`` with its axis and origin found from the mesh's body (:func:`~mesh.imported.place`): the
+    centroid and inertia of its straight-sided tetrahedra, its ends from its nodes."""
+    points, tetra, _, _ = _read(geometry)
+    corners = points[tetra[:, :4]]  # (n, 4, 3)
+    edges = corners[:, 1:] - corners[:, :1]
+    volume = np.abs(np.linalg.det(edges)) / 6.0
+    centroid = volume @ corners.mean(axis=1) / volume.sum()
+    # second moments of each tetrahedron about the centroid: V/20 (sum r_i r_i^T + (sum r_i)(sum r_i)^T)
+    r = corners - centroid
+    total = r.sum(axis=1)
+    second = np.einsum(
+        "n,nij->ij", volume / 20.0, np.einsum("nki,nkj->nij", r, r) + np.einsum("ni,nj->nij", total, total)
+    )
+    inertia = np.trace(second) * np.eye(3) - second
+    used = points[np.unique(tetra)]
+
+    def span(direction: np.ndarray) -> tuple[float, float]:
+        along = used @ direction
+        return float(along.min()), float(along.max())
+
+    return place(geometry, centroid, inertia, span)
+
+
+def _read(geometry: FileGeometry) -> tuple[np.ndarray, np.ndarray, list[int], meshio.Mesh]:
+    """The file's points (its coordinates and unit), its tetrahedra, the indices of their cell blocks and the
+    mesh meshio read."""
     import meshio
 
     try:
@@ -66,14 +93,22 @@ def read_volume_mesh(geometry: FileGeometry) -> ProjectileMesh:
         raise GeometryError(
             f"projectile.geometry.file = {geometry.path!r}: mixes 4- and 10-node tetrahedra; give one order"
         )
-    order = 2 if kinds == {"tetra10"} else 1
     tetra = np.concatenate([b.data for _, b in blocks]).astype(np.int64)
-    names = _mesh_region_names(geometry, m, [k for k, _ in blocks])
+    points = np.asarray(m.points, dtype=float)
+    if points.ndim != 2 or points.shape[1] != 3:
+        raise GeometryError(f"projectile.geometry.file = {geometry.path!r}: the points are not 3-D")
+    if tetra.size and (tetra.min() < 0 or tetra.max() >= len(points)):
+        raise GeometryError(f"projectile.geometry.file = {geometry.path!r}: a tetrahedron names a point it lacks")
+    return points, tetra, [k for k, _ in blocks], m
+
+
+def read_volume_mesh(geometry: FileGeometry) -> ProjectileMesh:
+    """The body of a volume mesh file in its model frame (``geometry`` placed)."""
+    points, tetra, block_indices, m = _read(geometry)
+    order = 2 if tetra.shape[1] == 10 else 1
+    names = _mesh_region_names(geometry, m, block_indices)
     region_of = regions(geometry, {n: n for n in set(names.tolist())})
     region = np.array([region_of[n] for n in names.tolist()], dtype=np.int64)
-    points = np.asarray(m.points, dtype=float)
-    if points.shape[1] != 3:
-        raise GeometryError(f"projectile.geometry.file = {geometry.path!r}: the points are not 3-D")
     used, index = np.unique(tetra, return_inverse=True)
     tetra = index.reshape(tetra.shape)
     points = model_frame(points[used], geometry)

@@ -27,6 +27,7 @@ from mesh import Profile, ProjectileGeometry, ProjectileMesh, build_mesh, read_m
 from mesh.cad import CadSurface
 from mesh.files import build_file_mesh
 from mesh.geometry import outer_triangles
+from mesh.files import place_file_body
 from mesh.imported import BodyOutline, FileGeometry, GeometryError, body_frame, outline
 
 from ..scene import InputError, Numerics, Projectile, Scene
@@ -165,6 +166,13 @@ def _load(path: Path, spec: Projectile) -> PreparedProjectile | None:
             )
             sizes = data["outline"]
             body = BodyOutline(*(float(v) for v in sizes)) if sizes.size else None
+            if isinstance(geometry, FileGeometry):  # placed as when this entry was computed
+                axis, origin = (data[k].astype(float) for k in ("file_axis", "file_origin"))
+                geometry = dataclasses.replace(
+                    geometry,
+                    axis=(float(axis[0]), float(axis[1]), float(axis[2])),
+                    origin=(float(origin[0]), float(origin[1]), float(origin[2])),
+                )
             return PreparedProjectile(geometry, mass, quadrature, int(data["n_tetra"]), body)
     except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile):
         path.unlink(missing_ok=True)  # a corrupt entry: compute again
@@ -179,6 +187,8 @@ def _save(path: Path, prepared: PreparedProjectile) -> None:
         "mirror_images": q.mirror_images if q.mirror_images is not None else np.empty(0, dtype=np.int64),
         **_exposure_arrays(q.exposure),
     }
+    if isinstance(prepared.geometry, FileGeometry):
+        arrays.update(file_axis=np.array(prepared.geometry.axis), file_origin=np.array(prepared.geometry.centre))
     np.savez(
         buffer,
         mass=m.mass,
@@ -232,6 +242,8 @@ def _compute(spec: Projectile, numerics: Numerics, geometry: ProjectileGeometry 
     size = f"numerics.mesh_size = {numerics.mesh_size:g}"
     from_file = isinstance(geometry, FileGeometry)
     try:
+        if isinstance(geometry, FileGeometry):  # its axis and origin from the body, wherever the file puts it
+            geometry = place_file_body(geometry)
         mesh, tip = body_mesh(geometry, numerics.mesh_size, numerics.geometry_order)
     except GeometryError as exc:  # the file, not the numerics: bad input
         raise InputError(str(exc)) from None

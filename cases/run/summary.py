@@ -37,8 +37,6 @@ __all__ = [
 
 # a share of steps above which retaken or forced steps mean the numerics do not suit the scene
 WARN_SHARE = 0.1
-# a file's body whose axis of least inertia lies further than this (deg) from the declared axis is warned of
-AXIS_TOLERANCE = 1.0
 # a Dormand-Prince tolerance above this is warned of: the integration error alone can reach per cents
 LOOSE_RTOL = 1e-3
 MAX_STORED_HISTORY_ROWS = 4000  # histories in a run store are thinned to about this many rows
@@ -172,30 +170,32 @@ def numerics_warnings(numerics: Numerics) -> list[str]:
 
 
 def axis_warnings(prepared: PreparedProjectile) -> list[str]:
-    """A body from a file whose axis of least inertia lies more than :data:`AXIS_TOLERANCE` degrees from the axis
-    the scene declares (``projectile.geometry.axis``, default ``[1, 0, 0]``): a long body declared along the
+    """A body from a file whose axis of least inertia lies more than :data:`~mesh.imported.AXIS_TOLERANCE`
+    degrees from the axis the scene declares (``projectile.geometry.axis``): a long body declared along the
     wrong direction flies broadside.  Bodies without a clear long axis (the two smallest moments within 10 %)
-    are not judged."""
-    from mesh.imported import FileGeometry, rotation_to_x
+    are not judged; a body read without an axis was refused before meshing if its axis was off."""
+    from mesh.imported import AXIS_TOLERANCE, LONG_AXIS, FileGeometry
 
     geometry = prepared.geometry
     if not isinstance(geometry, FileGeometry):
         return []
     moments, axes = np.linalg.eigh(prepared.mass.inertia)
-    if not moments[0] < 0.9 * moments[1]:
+    if not moments[0] < LONG_AXIS * moments[1]:
         return []
     angle = math.degrees(math.acos(min(1.0, abs(float(axes[0, 0]) / float(np.linalg.norm(axes[:, 0]))))))
     if angle <= AXIS_TOLERANCE:
         return []
-    # the body frame is the file's turned by rotation_to_x(axis): back to the file's coordinates
-    in_file = rotation_to_x(geometry.axis).T @ axes[:, 0]
+    # the body frame is the file's turned by the geometry's rotation: back to the file's coordinates
+    in_file = geometry.rotation.T @ axes[:, 0]
     in_file = in_file * np.sign(in_file[np.argmax(np.abs(in_file))])
     in_file = np.where(np.abs(in_file) < 1e-4, 0.0, in_file)  # the mesh's round-off in the components
     shown = "[" + ", ".join(f"{v:.3g}" for v in in_file + 0.0) + "]"
+    declared = "[" + ", ".join(f"{v:.4g}" for v in geometry.rotation[0] + 0.0) + "]"
     return [
-        f"projectile.geometry.axis = {list(geometry.axis)}: the body's axis of least inertia lies {angle:.1f} deg"
+        f"projectile.geometry.axis = {declared}: the body's axis of least inertia lies {angle:.1f} deg"
         f" from it, along {shown} in the file: a long body declared along another direction flies sideways;"
-        f" say axis = {shown}, the direction from tail to tip (its opposite if the tip is at the other end)"
+        f" say axis = {shown}, the direction from tail to tip (its opposite if the tip is at the other end), or"
+        ' axis = "auto"'
     ]
 
 

@@ -179,7 +179,12 @@ class GeometryFileSpec(Strict):
 
     file: Label = field(description="the CAD or mesh file")
     unit: Literal["m", "cm", "mm", "in"] = field("m", description="what a length of 1 in the file means")
-    axis: tuple[Number, Number, Number] = field((1.0, 0.0, 0.0), description="the file's direction from tail to tip")
+    axis: tuple[Number, Number, Number] | Literal["auto"] | None = field(
+        None,
+        description="the file's direction from tail to tip, through the body's centroid wherever the file puts it;"
+        ' "auto": the axis of least inertia, tip at the end further from the centroid; default +x, refused'
+        " when the body's long axis or tip lie elsewhere (docs/geometry.md)",
+    )
     cell_field: Label | None = field(
         None, description="a mesh's cell-data field that names the materials (default: the physical groups)"
     )
@@ -227,7 +232,7 @@ class GeometryFileSpec(Strict):
                 f"file = {self.file!r}: changed since this scene was resolved (sha256 {digest[:12]}...,"
                 f" the scene holds {self.sha256[:12]}...); drop sha256 to use the file as it is now"
             )
-        if not any(self.axis) or math.hypot(*self.axis) < 1e-12:
+        if isinstance(self.axis, tuple) and (not any(self.axis) or math.hypot(*self.axis) < 1e-12):
             raise ValueError(f"axis = {list(self.axis)}: must be a non-zero direction")
         self.sha256 = digest
         return self
@@ -464,7 +469,13 @@ class Projectile(Strict):
             g = self.geometry
             assert g.sha256 is not None  # filled in when the file is read (GeometryFileSpec._readable)
             return FileGeometry(
-                str(g.file), g.sha256, g.unit, (*g.axis,), tuple(self.materials or {}), g.cell_field, g.symmetry
+                str(g.file),
+                g.sha256,
+                g.unit,
+                (*g.axis,) if isinstance(g.axis, tuple) else g.axis,
+                tuple(self.materials or {}),
+                g.cell_field,
+                g.symmetry,
             )
         profile = self.profile()
         if self.interior is None:

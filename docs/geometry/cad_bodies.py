@@ -78,9 +78,11 @@ def write_body(
     scale: float = 1.0,
     counterweight: tuple[float, float, float] | None = None,
     axis: str = "x",
+    offset: tuple[float, float, float] = (0.0, 0.0, 0.0),
 ) -> Path:
     """Write a nosed cylinder as STEP, BREP or IGES (by the suffix); ``counterweight = (start, end, radius)``
-    (m from the tail) adds a second solid inside; ``axis = "z"`` turns the body to run along +z."""
+    (m from the tail) adds a second solid inside; ``axis = "z"`` turns the body to run along +z, and then
+    ``offset`` (m) moves it."""
     path = Path(path)
     with _gmsh() as gmsh:
         occ = gmsh.model.occ
@@ -89,11 +91,18 @@ def write_body(
             start, end, radius = (v / scale for v in counterweight)
             weight = occ.addCylinder(start, 0, 0, end - start, 0, 0, radius)
             occ.fragment([(3, body)], [(3, weight)])
-        if axis == "z":
-            occ.rotate(occ.getEntities(3), 0, 0, 0, 0, 1, 0, -0.5 * math.pi)  # +x onto +z
+        _place(occ, axis, offset, scale)
         occ.synchronize()
         _write(gmsh, path)
     return path
+
+
+def _place(occ, axis: str, offset: tuple[float, float, float], scale: float) -> None:
+    """Turn the model's solids from +x onto ``axis`` ("x" or "z"), then move them by ``offset`` (m)."""
+    if axis == "z":
+        occ.rotate(occ.getEntities(3), 0, 0, 0, 0, 1, 0, -0.5 * math.pi)  # +x onto +z
+    if any(offset):
+        occ.translate(occ.getEntities(3), *(v / scale for v in offset))
 
 
 def write_fused_cone(path: str | os.PathLike, half_angle: float = 12.92, scale: float = 1e-3) -> Path:

@@ -243,3 +243,63 @@ def test_folded_curved_tetrahedra_are_refused(folder):
     meshio.write(bad, meshio.Mesh(points, [("tetra10", block.data)]))
     with pytest.raises(GeometryError, match=r"\d+ curved tetrahedra fold over.*HighOrderOptimize"):
         build_file_mesh(FileGeometry(str(bad), "", "m"), 0.02)
+
+
+def _rod(points: int = 4000, seed: int = 0) -> np.ndarray:
+    """Points filling a rod along +x from 0 to 1 with a cone tip beyond, radius 0.1: its centroid lies
+    behind the middle of its length, so the tip is the end further from it."""
+    rng = np.random.default_rng(seed)
+    x = rng.uniform(0.0, 1.3, points * 3)
+    r = 0.1 * np.sqrt(rng.uniform(0.0, 1.0, points * 3))
+    keep = r <= 0.1 * np.clip((1.3 - x) / 0.3, 0.0, 1.0)
+    angle = rng.uniform(0.0, 2.0 * math.pi, points * 3)
+    return np.column_stack([x, r * np.cos(angle), r * np.sin(angle)])[keep][:points]
+
+
+def _placed(points: np.ndarray, axis) -> FileGeometry:
+    from mesh.imported import place
+
+    centroid = points.mean(axis=0)
+    r = points - centroid
+    second = r.T @ r
+    inertia = np.trace(second) * np.eye(3) - second
+
+    def span(direction: np.ndarray) -> tuple[float, float]:
+        along = points @ direction
+        return float(along.min()), float(along.max())
+
+    return place(FileGeometry("body.step", "", "m", axis), centroid, inertia, span)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_placing_a_turned_and_moved_body_turns_and_moves_its_axis(seed):
+    """Rotating a scene rotates its result: a rod turned by a random rotation and moved is read along the
+    turned axis by "auto", its origin on the moved axis; without an axis it is refused, naming the turned axis."""
+    from scipy.spatial.transform import Rotation
+
+    rod = _rod()
+    turn = Rotation.random(random_state=seed).as_matrix()
+    offset = np.random.default_rng(seed).uniform(-1.0, 1.0, 3)
+    moved = rod @ turn.T + offset
+    at_origin, placed = _placed(rod, "auto"), _placed(moved, "auto")
+    assert np.allclose(placed.axis, turn @ np.asarray(at_origin.axis), atol=1e-12)
+    # in the model frame the two are the same body, up to a shift along the axis and a roll about it
+    from mesh.imported import model_frame
+
+    a, b = model_frame(rod, at_origin), model_frame(moved, placed)
+    assert np.allclose(b[:, 0] - a[:, 0], (b[:, 0] - a[:, 0]).mean(), atol=1e-12)
+    assert np.allclose(np.hypot(b[:, 1], b[:, 2]), np.hypot(a[:, 1], a[:, 2]), atol=1e-12)
+    angle = math.degrees(math.acos(abs(float(np.asarray(placed.axis)[0]))))
+    if angle > 1.0:
+        with pytest.raises(GeometryError, match=r"axis: not given.*say axis = \[.*\] \(tail to tip\)"):
+            _placed(moved, None)
+
+
+def test_a_body_drawn_about_its_axis_keeps_the_files_line():
+    """A centroid within rounding of the file's x line (1e-6 of the length) is on it: the origin stays the
+    file's, and the body is meshed exactly as drawn; one 1e-4 off moves the axis onto it."""
+    rod = _rod()
+    rod[:, 1:] -= rod[:, 1:].mean(axis=0)  # the centroid on the x line exactly
+    assert _placed(rod + [0.3, 1e-9, 0.0], None).origin == (0.0, 0.0, 0.0)
+    off = _placed(rod + [0.3, 0.0, 1e-4], None)
+    assert off.origin == pytest.approx((0.0, 0.0, 1e-4), abs=1e-12)
