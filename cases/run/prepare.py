@@ -25,9 +25,8 @@ from fem_loads.exposure import Exposure
 from fem_loads.quadrature import with_exposure
 from mesh import Profile, ProjectileGeometry, ProjectileMesh, build_mesh, read_mesh, write_mesh
 from mesh.cad import CadSurface
-from mesh.files import build_file_mesh
+from mesh.files import build_file_mesh, place_file_body
 from mesh.geometry import outer_triangles
-from mesh.files import place_file_body
 from mesh.imported import BodyOutline, FileGeometry, GeometryError, body_frame, outline
 
 from ..scene import InputError, Numerics, Projectile, Scene
