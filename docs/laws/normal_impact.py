@@ -7,7 +7,7 @@ of the same law over the exact profile: the table of docs/laws.md.  Run from the
 from __future__ import annotations
 
 from cases import history_table, load_scene, run_scene, scene_path
-from cases.studies.reference import axial_depth_1d
+from cases.studies.reference import scene_depth_1d
 from docs.measure import stamp
 
 LAWS = {
@@ -32,14 +32,7 @@ def main() -> None:
             result = run_scene(scene)
             depth = float(history_table(result)["tip_depth"].max())
             prepared = result.prepared
-            reference, _ = axial_depth_1d(
-                prepared.profile,
-                scene.target.build(),
-                prepared.mass.mass,
-                scene.impact.speed,
-                scene.numerics.stop_speed,
-                **scene.effects.contact_ramp,
-            )
+            reference = scene_depth_1d(scene, prepared)
             print(f"| {label} | {contact} | {depth:.5f} | {reference:.5f} | {100 * (depth / reference - 1):+.3f} % |")
     print()
     print(stamp())

@@ -21,7 +21,7 @@ from cases import history_table, load_scene, prepare_projectile, run_scene, scen
 from cases.run import convergence_speed
 from cases.scene import SceneError, parse_override, read_toml, scene_from_dict
 from cases.studies import is_unstable
-from cases.studies.reference import axial_depth_1d, scene_depth_1d
+from cases.studies.reference import scene_depth_1d
 from dynamics import (
     NON_FINITE,
     RK4,
@@ -285,14 +285,7 @@ def _normal_impact_error(*overrides: str) -> float:
     independent 1-D integration with exact nose entry and the same contact width (no mesh)."""
     result, _, record = _run(FL2, *overrides)
     scene = result.scene
-    reference, _ = axial_depth_1d(
-        result.prepared.profile,
-        scene.target.build(),
-        result.prepared.mass.mass,
-        scene.impact.speed,
-        scene.numerics.stop_speed,
-        **scene.effects.contact_ramp,
-    )
+    reference = scene_depth_1d(scene, result.prepared)
     assert record.end_reason == "stopped"
     return record.depth / reference - 1.0
 

@@ -416,14 +416,22 @@ def test_a_volume_mesh_turned_and_moved_in_its_file_is_the_mesh_at_the_origin(fo
 
 
 @pytest.mark.parametrize(
-    ("shape", "axis", "message"),
+    ("shape", "axis", "message", "fix"),
     [
-        ("sphere", "auto", r'axis = "auto": the body has no clear long axis'),
-        ("cylinder", "auto", r'axis = "auto": the body\'s ends .* lie equally far from its centroid'),
-        ("backwards", None, r"its tip .* is at its -x end: say axis = \[-1, 0, 0\]"),
+        ("sphere", "auto", r'axis = "auto": the body has no clear long axis.*give the axis', [1, 0, 0]),
+        (
+            "cylinder",
+            "auto",
+            r'axis = "auto": the body\'s ends along its long axis \[0.8018, 0.5345, 0.2673\] lie equally far from its'
+            r" centroid.*give axis = \[0.8018, 0.5345, 0.2673\]",
+            [0.8018, 0.5345, 0.2673],
+        ),
+        ("backwards", None, r"its tip .* is at its -x end: say axis = \[-1, 0, 0\]", [-1, 0, 0]),
     ],
 )
-def test_an_axis_that_cannot_be_found_is_refused_in_one_line(folder, shape, axis, message):
+def test_an_axis_that_cannot_be_found_is_refused_in_one_line_that_names_a_fix_that_works(
+    folder, shape, axis, message, fix
+):
     import gmsh
 
     path = folder / f"{shape}.step"
@@ -458,3 +466,5 @@ def test_an_axis_that_cannot_be_found_is_refused_in_one_line(folder, shape, axis
     with pytest.raises(InputError, match=message) as refused:
         prepare_projectile(from_file(geometry, **{"numerics.mesh_size": 0.04}))
     assert "\n" not in str(refused.value)
+    fixed = prepare_projectile(from_file({**geometry, "axis": fix}, **{"numerics.mesh_size": 0.04}))
+    assert fixed.mass.mass > 0.0

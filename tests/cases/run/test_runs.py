@@ -8,7 +8,7 @@ import pytest
 
 from cases import history_table, load_scene, prepare_projectile, run_scene, scene_path, summarise
 from cases.run import initial_state
-from cases.studies.reference import axial_depth_1d, closed_form_depth
+from cases.studies.reference import axial_depth_1d, closed_form_depth, scene_depth_1d
 from dynamics import ENERGY_TOLERANCE, State
 from dynamics.quaternion import from_rotation_matrix, multiply
 
@@ -33,11 +33,7 @@ def _run(name, *overrides):
 def test_normal_impact_matches_the_1d_integration():
     """The shipped test 2 against the independent 1-D integration with the same contact width (no mesh)."""
     result, history = _run("forrestal_luk_test2")
-    scene = result.scene
-    profile, law, mass = result.prepared.profile, scene.target.build(), result.prepared.mass.mass
-    reference, _ = axial_depth_1d(
-        profile, law, mass, scene.impact.speed, scene.numerics.stop_speed, **scene.effects.contact_ramp
-    )
+    reference = scene_depth_1d(result.scene, result.prepared)
     assert result.trajectory.end_reason == "stopped"
     assert history["tip_depth"].max() == pytest.approx(reference, rel=1e-3)
 
@@ -60,11 +56,8 @@ def test_normal_impact_under_every_law_matches_the_1d_integration(law, contact):
     integration of the same law over the exact profile (no mesh): within 0.1 %."""
     overrides = {"target.law": LAWS[law], "effects.contact": contact, "numerics.mesh_size": 0.01}
     result = run_scene(load_scene(scene_path("forrestal_luk_test2"), {**overrides, "numerics.kernel": "compiled"}))
-    history, scene = history_table(result), result.scene
-    profile, mass = result.prepared.profile, result.prepared.mass.mass
-    reference, _ = axial_depth_1d(
-        profile, scene.target.build(), mass, scene.impact.speed, scene.numerics.stop_speed, **scene.effects.contact_ramp
-    )
+    history = history_table(result)
+    reference = scene_depth_1d(result.scene, result.prepared)
     assert result.trajectory.end_reason == "stopped"
     assert history["tip_depth"].max() == pytest.approx(reference, rel=1e-3)
 
