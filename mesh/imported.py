@@ -63,8 +63,10 @@ AXIS_TOLERANCE = 1.0
 LONG_AXIS = 0.9
 #: its tip is clear when one end lies this share of its length further from its centroid than the other
 CLEAR_TIP = 0.02
-#: a centroid this close to the file's own line (a share of the body's extent) lies on it: rounding, not a move
-ON_LINE = 1e-6
+#: a centroid this close to the file's own line (a share of the body's length) lies on it: the body was drawn about
+#: that line (an eroded nose's centroid lies off its shank's axis by 1e-6 to 1e-4 of its length), and planes cut
+#: through it, not a hair beside the edges drawn on it (which leaves slivers that gmsh cannot mesh)
+ON_LINE = 1e-3
 
 
 class GeometryError(ValueError):
@@ -222,7 +224,7 @@ def place(
         With ``axis`` a direction (the given one; with ``"auto"`` the axis of least inertia, tip at the
         end further from the centroid, which is the smaller end of a body whose sections shrink
         towards it; with None +x) and ``origin`` the centroid, moved along the axis to the foot of
-        the file's origin.  A centroid within :data:`ON_LINE` of the body's extent of the file's own
+        the file's origin.  A centroid within :data:`ON_LINE` of the body's length of the file's own
         line (the axis through the file's origin) is taken as on it: a body drawn about its axis at the
         origin is meshed exactly as the file draws it.
 
