@@ -278,6 +278,7 @@ def test_placing_a_turned_and_moved_body_turns_and_moves_its_axis(seed):
     from scipy.spatial.transform import Rotation
 
     rod = _rod()
+    rod -= rod.mean(axis=0)  # its centroid at the file's origin: on every line through it
     turn = Rotation.random(random_state=seed).as_matrix()
     offset = np.random.default_rng(seed).uniform(-1.0, 1.0, 3)
     moved = rod @ turn.T + offset
