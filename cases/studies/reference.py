@@ -35,6 +35,8 @@ from scipy.interpolate import BarycentricInterpolator
 
 from fem_loads.ramps import smooth_step
 from fem_loads.resistance import ResistanceLaw
+from fem_loads.target import LayeredTarget
+from fem_loads.user_law import UserLaw
 from mesh.profile import ConeNose, OgiveNose, Profile
 
 if TYPE_CHECKING:
@@ -151,7 +153,7 @@ def closed_form_depth(profile: Profile, law: ResistanceLaw, mass: float, speed: 
 
 def axial_depth_1d(
     profile: Profile,
-    law: ResistanceLaw,
+    law: ResistanceLaw | UserLaw,
     mass: float,
     speed: float,
     stop_speed: float = 0.0,
@@ -177,7 +179,7 @@ def axial_depth_1d(
     """
     check_nose_alone_presses(profile)
     cavity = isinstance(law, ResistanceLaw) and law.linear == law.power == 0.0 and not law.depth_dependent
-    if contact_width > 0.0 or contact_incidence > 0.0 or not cavity:
+    if contact_width > 0.0 or contact_incidence > 0.0 or not isinstance(law, ResistanceLaw) or not cavity:
         ramp = (contact_width, contact_incidence, contact)
         return _axial_depth_contact(profile, law, mass, speed, stop_speed, rtol, *ramp)
     ln = profile.nose_length
@@ -205,7 +207,7 @@ def scene_depth_1d(scene: Scene, prepared: PreparedProjectile) -> float:
     """:func:`axial_depth_1d` of a scene's normal impact: its projectile's profile and mass, its law, impact speed,
     stop speed and contact ramp (the tip depth, m)."""
     law = scene.target.build()
-    assert isinstance(law, ResistanceLaw)  # a normal impact into one built-in law, as axial_depth_1d takes
+    assert not isinstance(law, LayeredTarget)  # a normal impact into one law (built-in or a user's)
     depth, _ = axial_depth_1d(
         prepared.profile,
         law,
@@ -248,7 +250,7 @@ _GAUSS = np.polynomial.legendre.leggauss(2000)
 
 def axial_force(
     profile: Profile,
-    law: ResistanceLaw,
+    law: ResistanceLaw | UserLaw,
     depth: float,
     speed: float,
     contact_width: float,
@@ -284,7 +286,7 @@ def axial_force(
 
 def _axial_depth_contact(
     profile: Profile,
-    law: ResistanceLaw,
+    law: ResistanceLaw | UserLaw,
     mass: float,
     speed: float,
     stop_speed: float,
