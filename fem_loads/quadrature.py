@@ -388,10 +388,8 @@ def with_exposure(
         How far off the surface the rays start (m); see :func:`~fem_loads.exposure.exposure_table`.
     """
     part = quadrature.mirror_images[0] if quadrature.mirror_images is not None else np.arange(len(quadrature))
-    columns, table, refined = exposure_table(
-        quadrature.points[part], quadrature.normals[part], triangles, lift, resolution
-    )
-    exposure = Exposure(columns, table, refined) if len(columns) else None
+    columns, table = exposure_table(quadrature.points[part], quadrature.normals[part], triangles, lift, resolution)
+    exposure = Exposure(columns, table) if len(columns) else None
     return SurfaceQuadrature(
         quadrature.points, quadrature.normals, quadrature.weights, quadrature.mirror_images, exposure
     )
