@@ -35,6 +35,7 @@ from .imported import (
     orient_by_volume,
     place,
     regions,
+    rotation_to_x,
 )
 from .parameters import node_parameters, parameter_rule, straighten_inner_edges
 from .symmetry import mirror_planes
@@ -78,12 +79,13 @@ def place_cad(geometry: FileGeometry) -> FileGeometry:
             inertia += np.reshape(occ.getMatrixOfInertia(3, v), (3, 3)) + m * ((d @ d) * np.eye(3) - np.outer(d, d))
 
         def span(direction: np.ndarray) -> tuple[float, float]:
+            from scipy.spatial.transform import Rotation
+
             copy = occ.copy([(3, v) for v in volumes])
-            k = np.cross(direction, [1.0, 0.0, 0.0])
-            angle = math.atan2(float(np.linalg.norm(k)), float(direction[0]))
-            if np.linalg.norm(k) < 1e-12:  # along x already, or against it: a half turn about z
-                k = np.array([0.0, 0.0, 1.0])
-            occ.rotate(copy, 0.0, 0.0, 0.0, *(k / np.linalg.norm(k)).tolist(), angle)
+            turn = Rotation.from_matrix(rotation_to_x(tuple(direction))).as_rotvec()  # the body frame's turn
+            angle = float(np.linalg.norm(turn))
+            if angle > 1e-12:
+                occ.rotate(copy, 0.0, 0.0, 0.0, *(turn / angle).tolist(), angle)
             boxes = np.array([occ.getBoundingBox(d, t) for d, t in copy])
             occ.remove(copy, recursive=True)
             return float(boxes[:, 0].min()), float(boxes[:, 3].max())
