@@ -26,6 +26,7 @@ from .kernel_layout import (
     DATA_CONSTANTS,
     DATA_EXPOSURE_COLUMNS,
     DATA_EXPOSURE_CORNERS,
+    DATA_EXPOSURE_FINE,
     DATA_EXPOSURE_ROWS,
     DATA_EXPOSURE_START,
     DATA_HALF_ENTRY_LENGTH,
@@ -40,7 +41,7 @@ from .kernel_layout import (
     DATA_USER_LAW_ADDRESS,
     DATA_WEIGHTS,
 )
-from .native import builtin_stress, call_user_law, cube_cell, slip_factor, smooth_step
+from .native import builtin_stress, call_user_law, cell_exposure, cube_cell, slip_factor, smooth_step
 
 __all__ = [
     "layered_stress",
@@ -295,12 +296,11 @@ def exposure_correction(
     SIMD lanes).
 
     The direction is the body's velocity ``v`` (body frame), in each image's own signs; the points to correct are
-    those hidden at a corner of its cell of the cube map (:attr:`Exposure.cell_rows`), each with ``e``
-    interpolated as :meth:`Exposure.factor <fem_loads.exposure.Exposure.factor>` does (0 exactly when hidden at
-    all four).
+    those hidden at a corner of its cell of the cube map, or inside a refined one (:attr:`Exposure.cell_rows`), each
+    with ``e`` from :func:`~fem_loads.exposure.cell_exposure_scalars`, as the numpy path has it.
     """
     columns, start = data[DATA_EXPOSURE_COLUMNS], data[DATA_EXPOSURE_START]
-    rows, masks = data[DATA_EXPOSURE_ROWS], data[DATA_EXPOSURE_CORNERS]
+    rows, masks, fine = data[DATA_EXPOSURE_ROWS], data[DATA_EXPOSURE_CORNERS], data[DATA_EXPOSURE_FINE]
     if v[0] == 0.0 and v[1] == 0.0 and v[2] == 0.0:
         return  # no direction of motion, no shadow
     n = round(math.sqrt((start.shape[0] - 1) / 6.0))  # 6 N^2 cells
@@ -315,17 +315,12 @@ def exposure_correction(
     for k in range(sums.shape[0]):
         sy, sz = point_signs[k, 1], point_signs[k, 2]
         face, i, j, fx, fy = cube_cell(n, v[0], sy * v[1], sz * v[2])  # the direction in the part's frame
-        shares = ((1.0 - fx) * (1.0 - fy), fx * (1.0 - fy), (1.0 - fx) * fy, fx * fy)
         cell = (face * n + i) * n + j
         for entry in range(start[cell], start[cell + 1]):
-            row, mask = rows[entry], masks[entry]
-            if mask == 15:
-                exposure = 0.0  # hidden at all four corners: exactly
-            else:
-                exposure = 1.0
-                for bit in range(4):
-                    if mask & (1 << bit):
-                        exposure -= shares[bit]
+            row = rows[entry]
+            exposure = cell_exposure(masks[entry], fine[entry], fx, fy)
+            if exposure == 1.0:
+                continue  # exposed here (inside a refined cell hidden elsewhere)
             p = columns[row]
             n0, n1, n2, n3, n4, n5, normal_velocity, z = point_motion(
                 normal_arm, points, g, up, k, p, height, needs_depth or not embedded

@@ -55,6 +55,7 @@ __all__ = [
     "DATA_EXPOSURE_START",
     "DATA_EXPOSURE_ROWS",
     "DATA_EXPOSURE_CORNERS",
+    "DATA_EXPOSURE_FINE",
 ]
 
 #: the positions of the scalars in the data's "constants" array
@@ -99,6 +100,7 @@ KERNEL_ARRAYS = (
     "exposure_start",  # (6 N^2 + 1,), int: where each cell's hidden rows start (Exposure.cell_start)
     "exposure_rows",  # (h,), int: the rows hidden at a corner of each cell, cell after cell (Exposure.cell_rows)
     "exposure_corners",  # (h,), int: at which of its corners, a bit each (Exposure.cell_corners)
+    "exposure_fine",  # (h,), int: a refined cell's sub-nodes hidden, a bit each, or -1 (Exposure.cell_fine)
 )
 (
     DATA_NORMAL_ARM,
@@ -118,6 +120,7 @@ KERNEL_ARRAYS = (
     DATA_EXPOSURE_START,
     DATA_EXPOSURE_ROWS,
     DATA_EXPOSURE_CORNERS,
+    DATA_EXPOSURE_FINE,
 ) = range(len(KERNEL_ARRAYS))
 
 
@@ -219,8 +222,8 @@ def kernel_data(loads: DAFLLoads) -> tuple[np.ndarray, ...]:
 
 
 def _exposure_arrays(loads: DAFLLoads) -> tuple[np.ndarray, ...]:
-    """``exposure_columns``, ``exposure_start``, ``exposure_rows`` and ``exposure_corners`` of :func:`kernel_data`
-    (empty without)."""
+    """``exposure_columns``, ``exposure_start``, ``exposure_rows``, ``exposure_corners`` and ``exposure_fine`` of
+    :func:`kernel_data` (empty without)."""
     exposure = loads.exposure
     if exposure is None:
         return (
@@ -228,8 +231,15 @@ def _exposure_arrays(loads: DAFLLoads) -> tuple[np.ndarray, ...]:
             np.zeros(1, dtype=np.int64),
             np.zeros(0, dtype=np.int64),
             np.zeros(0, dtype=np.int64),
+            np.zeros(0, dtype=np.int64),
         )
     return tuple(
         np.ascontiguousarray(array, dtype=np.int64)
-        for array in (exposure.columns, exposure.cell_start, exposure.cell_rows, exposure.cell_corners)
+        for array in (
+            exposure.columns,
+            exposure.cell_start,
+            exposure.cell_rows,
+            exposure.cell_corners,
+            exposure.cell_fine,
+        )
     )

@@ -1,11 +1,11 @@
 """The compiled forms of the scalar definitions the numpy path shares, and the call into a user's law.
 
-Each of :data:`smooth_step`, :data:`slip_factor`, :data:`builtin_stress`, :data:`polynomial_stress` and
-:data:`cube_cell` is numba's compilation of the one definition the numpy path evaluates
+Each of :data:`smooth_step`, :data:`slip_factor`, :data:`builtin_stress`, :data:`polynomial_stress`,
+:data:`cube_cell` and :data:`cell_exposure` is numba's compilation of the one definition the numpy path evaluates
 (:func:`fem_loads.ramps.smooth_step_scalars`, :func:`fem_loads.target.slip_factor_scalars`,
 :func:`fem_loads.resistance.normal_stress_scalars` and its polynomial part,
-:func:`fem_loads.exposure.cube_cell_scalars`), for the compiled kernels
-(:mod:`fem_loads.compiled`, :mod:`fem_loads.revolved`) to inline.
+:func:`fem_loads.exposure.cube_cell_scalars`, :func:`fem_loads.exposure.cell_exposure_scalars`), for the compiled
+kernels (:mod:`fem_loads.compiled`, :mod:`fem_loads.revolved`) to inline.
 
 :func:`call_user_law` calls a user's law, a C call through the address of its numba ``cfunc``
 (:meth:`fem_loads.user_law.UserLaw.compiled`).  The kernels take the address as data, so they are compiled
@@ -22,13 +22,21 @@ from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic, register_jitable
 
-from .exposure import cube_cell_scalars
+from .exposure import cell_exposure_scalars, corner_exposure, cube_cell_scalars, fine_exposure
 from .ramps import smooth_step_scalars
 from .resistance import normal_stress_scalars, polynomial_stress_scalars
 from .target import slip_factor_scalars
 from .user_law import MAX_PARAMETERS
 
-__all__ = ["call_user_law", "smooth_step", "slip_factor", "builtin_stress", "polynomial_stress", "cube_cell"]
+__all__ = [
+    "call_user_law",
+    "smooth_step",
+    "slip_factor",
+    "builtin_stress",
+    "polynomial_stress",
+    "cube_cell",
+    "cell_exposure",
+]
 
 smooth_step = njit(inline="always", error_model="numpy")(smooth_step_scalars)
 slip_factor = njit(inline="always", error_model="numpy")(slip_factor_scalars)
@@ -38,6 +46,10 @@ polynomial_stress = njit(inline="always", error_model="numpy")(polynomial_stress
 register_jitable(error_model="numpy")(polynomial_stress_scalars)
 builtin_stress = njit(inline="always", error_model="numpy")(normal_stress_scalars)
 cube_cell = njit(inline="always", error_model="numpy")(cube_cell_scalars)
+# the cell's exposure and the two forms it calls, as numba sees them inside it (the plain functions stay plain)
+register_jitable(error_model="numpy")(corner_exposure)
+register_jitable(error_model="numpy")(fine_exposure)
+cell_exposure = njit(inline="always", error_model="numpy")(cell_exposure_scalars)
 
 
 @intrinsic

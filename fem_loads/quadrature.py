@@ -375,7 +375,11 @@ def surface_quadrature(
 
 
 def with_exposure(
-    quadrature: SurfaceQuadrature, triangles: np.ndarray, lift: float, resolution: int = DEFAULT_RESOLUTION
+    quadrature: SurfaceQuadrature,
+    triangles: np.ndarray,
+    lift: float,
+    resolution: int = DEFAULT_RESOLUTION,
+    least_lift: float | None = None,
 ) -> SurfaceQuadrature:
     """``quadrature`` with the exposure of its points (:mod:`fem_loads.exposure`): a table for each point of its
     fundamental part (or each point) that the body can hide, none for a convex body.
@@ -384,12 +388,15 @@ def with_exposure(
     ----------
     triangles : ndarray, shape (t, 3, 3)
         The outer surface as flat triangles, in the quadrature's frame (about the centre of mass, m).
-    lift : float
-        How far off the surface the rays start (m); see :func:`~fem_loads.exposure.exposure_table`.
+    lift, least_lift : float, optional
+        How far off the surface the rays start at most and at least (m); see
+        :func:`~fem_loads.exposure.exposure_table`.
     """
     part = quadrature.mirror_images[0] if quadrature.mirror_images is not None else np.arange(len(quadrature))
-    columns, table = exposure_table(quadrature.points[part], quadrature.normals[part], triangles, lift, resolution)
-    exposure = Exposure(columns, table) if len(columns) else None
+    columns, table, refined = exposure_table(
+        quadrature.points[part], quadrature.normals[part], triangles, lift, resolution, least_lift
+    )
+    exposure = Exposure(columns, table, refined) if len(columns) else None
     return SurfaceQuadrature(
         quadrature.points, quadrature.normals, quadrature.weights, quadrature.mirror_images, exposure
     )

@@ -213,6 +213,7 @@ def _exposure_arrays(exposure: Exposure | None) -> dict[str, np.ndarray]:
         "exposure_columns": exposure.columns,
         "exposure_shape": np.array(exposure.table.shape),
         "exposure_bits": np.packbits(exposure.table.ravel()),
+        "exposure_refined": exposure.refined,
     }
 
 
@@ -223,7 +224,7 @@ def _exposure(data: Any) -> Exposure | None:
         return None
     shape = tuple(int(n) for n in data["exposure_shape"])
     table = np.unpackbits(data["exposure_bits"], count=int(np.prod(shape))).reshape(shape)
-    return Exposure(columns, table)
+    return Exposure(columns, table, data["exposure_refined"])
 
 
 def _compute(spec: Projectile, numerics: Numerics, geometry: ProjectileGeometry | FileGeometry) -> PreparedProjectile:
@@ -276,8 +277,12 @@ def _compute(spec: Projectile, numerics: Numerics, geometry: ProjectileGeometry 
             f"{size}: the elements of this mesh are too distorted to integrate ({exc});"
             " a finer numerics.mesh_size, or numerics.geometry_order = 1, usually works"
         ) from exc
-    # rays start a twentieth of an element off the surface: beyond the split facets' sag from it
-    quadrature = with_exposure(quadrature, outer_triangles(mesh) - mass.centre, 0.05 * numerics.mesh_size)
+    # rays start at most a twentieth of an element off the surface (beyond the split facets' sag from it), each
+    # point's by its own sag; flat facets have no sag but dents between them, and take the whole twentieth
+    lift = 0.05 * numerics.mesh_size
+    quadrature = with_exposure(
+        quadrature, outer_triangles(mesh) - mass.centre, lift, least_lift=lift if mesh.order == 1 else None
+    )
     return PreparedProjectile(
         geometry, _scaled_inertia(spec, mass), quadrature, len(mesh.tetra), outline(mesh) if from_file else None
     )

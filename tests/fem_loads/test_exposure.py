@@ -205,6 +205,29 @@ def test_a_base_recess_the_soil_cannot_reach_does_not_change_the_shot(tmp_path_f
     assert abs(everything.axis_angle_change - reference.axis_angle_change) > 1.0
 
 
+@pytest.mark.slow
+def test_a_convex_body_of_flat_facets_hides_little_of_itself(tmp_path):
+    """A triangulated convex body has slight dents where its facets meet.  Its rays start a twentieth of an
+    element off (not its points' sag, which is zero on flat facets), so that the facets do not hide their
+    neighbours: test 2's body as 4-node tetrahedra at 20 mm runs with exposure within 1 % of the run without it
+    (measured 0.6 %: some grazing rays still meet a dent; with the flat facets' rays started at the least lift,
+    a hundredth of that, 2028 points hid and the depth moved by 5 %)."""
+    from docs.geometry.cad_bodies import write_volume_mesh
+
+    path = write_volume_mesh(tmp_path / "faceted.msh", 0.02, order=1)
+    shot = {
+        "projectile.geometry": {"file": str(path)},
+        "numerics.normals": "mesh",
+        "numerics.geometry_order": 1,
+        "numerics.mesh_size": 0.02,
+    }
+    on, off = (
+        summarise(run_scene(load_scene(scene_path("forrestal_luk_test2"), {**shot, "effects.exposure": flag})))
+        for flag in (True, False)
+    )
+    assert abs(on.depth / off.depth - 1.0) < 1e-2
+
+
 def test_one_direction_s_hidden_rows_are_the_factor_below_one():
     exposure = _random_exposure(5, count=40)
     rng = np.random.default_rng(6)
@@ -215,3 +238,81 @@ def test_one_direction_s_hidden_rows_are_the_factor_below_one():
         assert set(expected.tolist()) <= set(rows.tolist())
         np.testing.assert_allclose(values, dense[rows], rtol=0, atol=1e-12)
         assert np.array_equal(values == 0.0, dense[rows] == 0.0)
+
+
+def test_a_refined_cell_is_its_sub_nodes_at_theirs_and_the_same_on_both_paths():
+    """A refined cell's value at each of its 49 sub-nodes is that sub-node's bit, and :meth:`Exposure.hidden`
+    (the loads' path, one direction) gives :meth:`Exposure.factor`'s values (the dense form) everywhere."""
+    from fem_loads.exposure import SUB_CELLS, _sub_nodes
+
+    base = _random_exposure(3)
+    rng = np.random.default_rng(4)
+    n, count = RESOLUTION, len(base.columns)
+    rows, cells = rng.integers(0, count, 40), rng.choice(6 * n * n, 40, replace=False)
+    bits = rng.integers(0, 2, (40, (SUB_CELLS + 1) ** 2))
+    faces, i, j = np.unravel_index(cells, (6, n, n))
+    for corner_i, corner_j in ((0, 0), (1, 0), (0, 1), (1, 1)):  # the corners are the table's
+        bit = (SUB_CELLS * corner_j) * (SUB_CELLS + 1) + SUB_CELLS * corner_i
+        bits[:, bit] = 1 - base.table[rows, faces, i + corner_i, j + corner_j]
+    packed = (bits << np.arange(bits.shape[1])).sum(axis=1)
+    exposure = Exposure(base.columns, base.table, np.column_stack([rows, cells, packed]))
+    sub = _sub_nodes(n, faces, i, j)  # (40, 49, 3)
+    inside = sub * (1.0 - 1e-12) + sub.mean(axis=1, keepdims=True) * 1e-12  # on the node, just inside the cell
+    for k in range(40):
+        directions = np.broadcast_to(inside[k][:, None, :], (sub.shape[1], count, 3))
+        value = exposure.factor(directions)[:, rows[k]]
+        np.testing.assert_allclose(value, 1 - bits[k], atol=1e-9)
+    for d in rng.normal(size=(300, 3)):
+        hidden, values = exposure.hidden(d)
+        dense = exposure.factor(np.broadcast_to(d, (count, 3)))
+        np.testing.assert_allclose(values, dense[hidden], atol=1e-12)
+        assert np.all(np.delete(dense, hidden) == 1.0)
+
+
+@pytest.fixture(scope="module")
+def groove_wall(tmp_path_factory):
+    """The rear wall of a 10 mm wide, 10 mm deep ring groove around the 105 mm body's shank (20 mm mesh): 1400
+    points across it, their exposure as the tool computes it, the ray tracer of the body's surface, and each
+    point's area."""
+    import trimesh
+    from trimesh.ray.ray_pyembree import RayMeshIntersector
+
+    from cases.run.prepare import body_mesh
+    from fem_loads.exposure import exposure_table
+    from mesh.geometry import outer_triangles
+
+    path = write_changed_body(tmp_path_factory.mktemp("groove") / "groove.step", groove=(0.3, 0.01, 0.01))
+    scene = load_scene(
+        scene_path("forrestal_luk_test2"),
+        {"projectile": {"geometry": {"file": str(path), "unit": "mm"}, "body_density": 7850.0}},
+    )
+    prepared = prepare_projectile(scene)
+    mesh, _ = body_mesh(prepared.geometry, scene.numerics.mesh_size, scene.numerics.geometry_order)
+    triangles = outer_triangles(mesh) - prepared.mass.centre
+    q = prepared.quadrature
+    radius = np.hypot(q.points[:, 1], q.points[:, 2])
+    wall_x = float(np.median(q.points[(q.normals[:, 0] > 0.99) & (radius < 0.052) & (radius > 0.043), 0]))
+    r, theta = np.meshgrid(np.linspace(0.0425 + 1e-4, 0.0525 - 1e-5, 200), np.radians([0, 30, 60, 90, 120, 150, 180]))
+    probes = np.column_stack([np.full(r.size, wall_x), (r * np.cos(theta)).ravel(), (r * np.sin(theta)).ravel()])
+    normals = np.tile([1.0, 0.0, 0.0], (len(probes), 1))
+    exposure = Exposure(*exposure_table(probes, normals, triangles, 0.05 * scene.numerics.mesh_size))
+    surface = trimesh.Trimesh(triangles.reshape(-1, 3), np.arange(triangles.size // 3).reshape(-1, 3))
+    return probes, normals, exposure, RayMeshIntersector(surface), r.ravel()
+
+
+@pytest.mark.parametrize("attack", [3.0, 5.0, 8.0])
+def test_a_groove_s_rear_wall_is_exposed_as_exact_rays_expose_it(groove_wall, attack):
+    """At 3, 5 and 8 degrees of attack in every roll, the area of the groove's rear wall (facing forward) that the
+    exposure leaves loaded is that of exact rays from the same points within 2 % (measured: +0.8, +0.3, +0.1 %;
+    bilinear between the coarse nodes alone gave +5 to +8 %, and rays lifted a twentieth of an element, which
+    start inside the groove, -1 to -4 %)."""
+    probes, normals, exposure, tracer, area = groove_wall
+    tabled = exact = 0.0
+    for roll in np.radians(np.arange(0.0, 360.0, 10.0)):
+        a = math.radians(attack)
+        d = np.array([math.cos(a), math.sin(a) * math.cos(roll), math.sin(a) * math.sin(roll)])
+        e = np.ones(len(probes))
+        e[exposure.columns] = exposure.factor(np.broadcast_to(d, (len(exposure.columns), 3)))
+        tabled += float(area @ e)
+        exact += float(area @ ~tracer.intersects_any(probes + 1e-6 * normals, np.broadcast_to(d, probes.shape)))
+    assert tabled == pytest.approx(exact, rel=0.02)
