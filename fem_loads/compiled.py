@@ -55,7 +55,7 @@ from .kernel_layout import (
     kernel_data,
     supports,
 )
-from .native import polynomial_stress, smooth_step
+from .native import contact_factor, entry_factor, polynomial_stress, surface_factor
 from .user_law import user_law_signature
 
 __all__ = ["dafl_kernel", "lowest_height_kernel", "kernel_data", "supports", "KERNEL_ARRAYS", "USER_LAW_SIGNATURE"]
@@ -92,12 +92,12 @@ def _smooth_sums(
     and ``with_surface`` are constants in each of the two functions that inline this one
     (:func:`_frictionless_sums`, the shipped scenes' load; :func:`_friction_sums`, with friction or a free
     surface): each compiles to a loop of its own without the other's branches."""
-    points, normal_arm, point_signs, weights, inverse_entry, _, needs_depth, rule = point_setup(data, width, v)
+    points, normal_arm, point_signs, weights, inverse_entry, needs_depth, rule = point_setup(data, width, v)
     constants = data[DATA_CONSTANTS]
     offset = constants[CONSTANT_CONTACT_OFFSET]
     surface_depth = constants[CONSTANT_SURFACE_DEPTH]
     inverse_surface = 1.0 / surface_depth if surface_depth > 0.0 else 0.0
-    # without a free surface the factor is f0 + (1 - f0) S(.) with f0 = 1: exactly 1
+    # without a free surface the factor with f0 = 1 is exactly 1
     fraction = constants[CONSTANT_SURFACE_FRACTION] if surface_depth > 0.0 else 1.0
     inverse_width = 1.0 / width if width > 0.0 else 0.0
     c = data[DATA_LAWS][0]
@@ -115,11 +115,11 @@ def _smooth_sums(
             if needs_depth or not embedded:
                 z = height + (up0 * points[0, j] + up1 * points[1, j] + up2 * points[2, j])
             stress = polynomial_stress(max(normal_velocity, 0.0), -z, c0, c1, c2, c3)
-            stress *= smooth_step(normal_velocity * inverse_width + offset) * weights[j]
+            stress *= contact_factor(normal_velocity, True, inverse_width, offset, 0.0) * weights[j]
             if with_surface:
-                stress *= fraction + (1.0 - fraction) * smooth_step(-z * inverse_surface)
+                stress *= surface_factor(-z, inverse_surface, fraction)
             if not embedded:
-                stress *= smooth_step(0.5 - z * inverse_entry[j])
+                stress *= entry_factor(z, True, inverse_entry[j])
             a0 += stress * n0
             a1 += stress * n1
             a2 += stress * n2
@@ -195,9 +195,7 @@ def _sums(
     Everything the points share is read from ``data`` before the loop: inside it, only array elements and
     floats (an array view made per point costs its reference counting, more than the law itself).
     """
-    points, normal_arm, point_signs, weights, inverse_entry, half_entry_length, needs_depth, rule = point_setup(
-        data, width, v
-    )
+    points, normal_arm, point_signs, weights, inverse_entry, needs_depth, rule = point_setup(data, width, v)
     layered, user, address, law, depths, stresses, switches = law_setup(data, width)
     mu = rule[0]
     for k in range(sums.shape[0]):
@@ -208,7 +206,7 @@ def _sums(
             )
             stress = point_stress(
                 data, j, normal_velocity, z, embedded, guard, layered, user, address, law, depths, stresses, switches,
-                weights, inverse_entry, half_entry_length,
+                weights, inverse_entry,
             )  # fmt: skip
             a0 += stress * n0
             a1 += stress * n1

@@ -29,7 +29,6 @@ from .kernel_layout import (
     DATA_EXPOSURE_FINE,
     DATA_EXPOSURE_ROWS,
     DATA_EXPOSURE_START,
-    DATA_HALF_ENTRY_LENGTH,
     DATA_INTERFACES,
     DATA_INVERSE_ENTRY,
     DATA_LAWS,
@@ -41,7 +40,17 @@ from .kernel_layout import (
     DATA_USER_LAW_ADDRESS,
     DATA_WEIGHTS,
 )
-from .native import builtin_stress, call_user_law, cell_exposure, cube_cell, slip_factor, smooth_step
+from .native import (
+    builtin_stress,
+    call_user_law,
+    cell_exposure,
+    contact_factor,
+    cube_cell,
+    entry_factor,
+    friction_stress,
+    slip_factor,
+    surface_factor,
+)
 
 __all__ = [
     "layered_stress",
@@ -55,20 +64,20 @@ __all__ = [
 
 
 @njit(cache=True, error_model="numpy")
-def layered_stress(data: tuple[np.ndarray, ...], normal_velocity: float, depth: float, entry_length: float) -> float:
-    """The layers' laws blended over ``entry_length`` (m) across each interface
-    (:class:`~fem_loads.target.LayeredTarget`), at ``Vn`` (m/s) and depth (m)."""
+def layered_stress(
+    data: tuple[np.ndarray, ...], normal_velocity: float, depth: float, smooth: bool, inverse_length: float
+) -> float:
+    """The layers' laws blended across each interface (:class:`~fem_loads.target.LayeredTarget`), at ``Vn`` (m/s)
+    and depth (m): a point enters the layer below as it enters the target (``smooth``, over the length
+    ``1 / inverse_length``, m), by the same entry factor."""
     interfaces, p, rows, tables = data[DATA_INTERFACES], data[DATA_LAWS], data[DATA_TABLE_ROWS], data[DATA_TABLES]
     user = data[DATA_CONSTANTS][CONSTANT_USER_LAW] != 0.0
     stress = 0.0
-    above = 1.0  # the share of this layer and those below it: S((z - d)/l + 1/2) of its top interface d
+    above = 1.0  # the share of this layer and those below it: the entry factor at its top interface d
     for layer in range(interfaces.shape[0] + 1):
         below = 0.0
         if layer < interfaces.shape[0]:
-            if entry_length > 0.0:
-                below = smooth_step((depth - interfaces[layer]) / entry_length + 0.5)
-            elif depth >= interfaces[layer]:
-                below = 1.0
+            below = entry_factor(interfaces[layer] - depth, smooth, inverse_length)
         share = above - below
         if share != 0.0:
             q = p[layer]
@@ -110,10 +119,7 @@ def point_friction(
     s0 = v[0] + w[1] * r2 - w[2] * r1 - normal_velocity * m0
     s1 = v[1] + w[2] * r0 - w[0] * r2 - normal_velocity * m1
     s2 = v[2] + w[0] * r1 - w[1] * r0 - normal_velocity * m2
-    tau = mu * stress
-    if cap > 0.0:
-        tau = min(tau, cap * weight)
-    t = tau * slip_factor(s0 * s0 + s1 * s1 + s2 * s2, width, speed2)
+    t = friction_stress(stress, mu, cap * weight) * slip_factor(s0 * s0 + s1 * s1 + s2 * s2, width, speed2)
     return -t * s0, -t * s1, -t * s2, -t * (r1 * s2 - r2 * s1), -t * (r2 * s0 - r0 * s2), -t * (r0 * s1 - r1 * s0)
 
 
@@ -150,11 +156,9 @@ def law_setup(
 @njit(cache=True, inline="always", error_model="numpy")
 def point_setup(
     data: tuple[np.ndarray, ...], width: float, v: np.ndarray
-) -> tuple[
-    np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, bool, tuple[float, float, float, float]
-]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, bool, tuple[float, float, float, float]]:
     """What every loop over the points reads from ``data`` before it starts: ``(points, normal_arm, point_signs,
-    weights, inverse_entry, half_entry_length, needs_depth, rule)``, with ``needs_depth`` whether the stress needs
+    weights, inverse_entry, needs_depth, rule)``, with ``needs_depth`` whether the stress needs
     each point's depth and ``rule`` the friction's ``(mu, cap, W, |v|^2)`` for :func:`image_friction` (``v``: the
     body's velocity, body frame; ``W``: the contact width, m/s).  The general law's own share is
     :func:`law_setup`."""
@@ -168,7 +172,6 @@ def point_setup(
         data[DATA_POINT_SIGNS],
         data[DATA_WEIGHTS],
         data[DATA_INVERSE_ENTRY],
-        data[DATA_HALF_ENTRY_LENGTH],
         needs_depth,
         rule,
     )
@@ -191,7 +194,6 @@ def point_stress(
     switches: tuple[bool, bool, float, float, float, float, bool],
     weights: np.ndarray,
     inverse_entry: np.ndarray,
-    half_entry_length: np.ndarray,
 ) -> float:
     """The normal stress of point ``j`` times its weight (N/m^0: Pa m^2) at ``Vn`` (m/s) and height ``z`` (m): the
     law, the contact ramp (or the sharp switch, ``Vn > guard``), the free surface and the entry, as
@@ -200,16 +202,13 @@ def point_stress(
     # branch-free where the points differ (the factors are selects, not jumps): the loop then runs in
     # SIMD lanes, and the points on either side of a switch cost the same
     if separation:
-        if smooth_contact:
-            contact = smooth_step(normal_velocity * inverse_width + offset)
-        else:
-            contact = 1.0 if normal_velocity > guard else 0.0
+        contact = contact_factor(normal_velocity, smooth_contact, inverse_width, offset, guard)
         law_velocity = max(normal_velocity, 0.0)
     else:
         contact = 1.0
         law_velocity = normal_velocity
     if layered:
-        stress = layered_stress(data, law_velocity, -z, 2.0 * half_entry_length[j])
+        stress = layered_stress(data, law_velocity, -z, smooth_entry, inverse_entry[j])
     elif user:
         stress = call_user_law(
             address, law_velocity, -z, law[0], law[1], law[2], law[3], law[4], law[5], law[6], law[7]
@@ -218,12 +217,9 @@ def point_stress(
         stress = builtin_stress(law_velocity, -z, law[0], law[1], law[2], law[3], law[4], law[5], depths, stresses)
     stress = stress * contact if separation else max(stress, 0.0)
     if surface_depth > 0.0:
-        stress *= surface_fraction + (1.0 - surface_fraction) * smooth_step(-z / surface_depth)
+        stress *= surface_factor(-z, 1.0 / surface_depth, surface_fraction)
     if not embedded:
-        if smooth_entry:
-            stress *= smooth_step(0.5 - z * inverse_entry[j])
-        else:
-            stress = stress if z < 0.0 else 0.0
+        stress *= entry_factor(z, smooth_entry, inverse_entry[j])
     return stress * weights[j]
 
 
@@ -304,7 +300,7 @@ def exposure_correction(
     if v[0] == 0.0 and v[1] == 0.0 and v[2] == 0.0:
         return  # no direction of motion, no shadow
     n = round(math.sqrt((start.shape[0] - 1) / 6.0))  # 6 N^2 cells
-    points, normal_arm, point_signs, weights, inverse_entry, half_entry, needs_depth, rule = point_setup(data, width, v)
+    points, normal_arm, point_signs, weights, inverse_entry, needs_depth, rule = point_setup(data, width, v)
     layered, user, address, law, depths, stresses, switches = law_setup(data, width)
     mu = rule[0]
     separation, smooth_contact, inverse_width, offset = switches[0], switches[1], switches[2], switches[3]
@@ -329,7 +325,7 @@ def exposure_correction(
                 continue  # below the contact ramp (or where it is below 1e-14), or the sharp switch: nothing to hide
             stress = point_stress(
                 data, p, normal_velocity, z, embedded, guard, layered, user, address, law, depths, stresses, switches,
-                weights, inverse_entry, half_entry,
+                weights, inverse_entry,
             )  # fmt: skip
             if stress == 0.0:
                 continue

@@ -52,9 +52,9 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .factors import contact_factor_scalars, entry_factor_scalars
 from .images import MirrorImages
 from .quadrature import SurfaceQuadrature
-from .ramps import smooth_step_scalars
 from .resistance import ResistanceLaw
 from .target import FreeSurface, Friction, LayeredTarget, slip_factor_scalars
 from .user_law import UserLaw
@@ -180,6 +180,10 @@ class DAFLLoads:
             self._images = MirrorImages(q.mirror_images, q.mirror_signs, self._normal_arm_t, self._points_t)
             self._hot_weights = self._images.quarter(self._weights)
             self._hot_entry = self._images.quarter(self._entry_length)
+        # 1 / l in the layout of the sums (the entry factor's argument; 0 with sharp entry)
+        self._hot_inverse_entry = np.divide(
+            1.0, self._hot_entry, out=np.zeros_like(self._hot_entry), where=self._hot_entry > 0
+        )
         # the points that can be hidden: their positions in the part (or in every point), and each image's signs
         self.exposure = q.exposure if exposure and q.exposure is not None and len(q.exposure.columns) else None
         if self.exposure is not None:
@@ -259,20 +263,19 @@ class DAFLLoads:
 
     def _contact_factor(self, normal_velocity: np.ndarray, speed_scale: float) -> np.ndarray:
         """The contact factor ``c(Vn)`` at every point (any layout)."""
-        if self._smooth_contact:
-            factor = normal_velocity * self._inverse_width(speed_scale)
-            if self._contact_offset:
-                factor += self._contact_offset
-            return np.asarray(smooth_step_scalars(factor))
-        return (normal_velocity > self.normal_velocity_guard * speed_scale).astype(float)
+        return np.asarray(
+            contact_factor_scalars(
+                normal_velocity,
+                self._smooth_contact,
+                self._inverse_width(speed_scale),
+                self._contact_offset,
+                self.normal_velocity_guard * speed_scale,
+            )
+        )
 
     def _entry(self, heights: np.ndarray) -> np.ndarray:
         """The entry factor ``e(Z)`` at every point (the layout of the sums)."""
-        if self.entry_smoothing:
-            factor = heights / self._hot_entry
-            np.subtract(0.5, factor, out=factor)
-            return np.asarray(smooth_step_scalars(factor))
-        return (heights < 0.0).astype(float)
+        return np.asarray(entry_factor_scalars(heights, bool(self.entry_smoothing), self._hot_inverse_entry))
 
     def _target_stress(self, normal_velocity: np.ndarray, depth: np.ndarray | float) -> np.ndarray:
         """The target's law at every point (a new array): one law, or the layers blended across their interfaces."""

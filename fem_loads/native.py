@@ -1,11 +1,13 @@
 """The compiled forms of the scalar definitions the numpy path shares, and the call into a user's law.
 
 Each of :data:`smooth_step`, :data:`slip_factor`, :data:`builtin_stress`, :data:`polynomial_stress`,
-:data:`cube_cell` and :data:`cell_exposure` is numba's compilation of the one definition the numpy path evaluates
+:data:`contact_factor`, :data:`entry_factor`, :data:`surface_factor`, :data:`friction_stress`, :data:`cube_cell`
+and :data:`cell_exposure` is numba's compilation of the one definition the numpy path evaluates
 (:func:`fem_loads.ramps.smooth_step_scalars`, :func:`fem_loads.target.slip_factor_scalars`,
-:func:`fem_loads.resistance.normal_stress_scalars` and its polynomial part,
-:func:`fem_loads.exposure.cube_cell_scalars`, :func:`fem_loads.exposure.cell_exposure_scalars`), for the compiled
-kernels (:mod:`fem_loads.compiled`, :mod:`fem_loads.revolved`) to inline.
+:func:`fem_loads.resistance.normal_stress_scalars` and its polynomial part, the factors of
+:mod:`fem_loads.factors`, :func:`fem_loads.exposure.cube_cell_scalars`,
+:func:`fem_loads.exposure.cell_exposure_scalars`), for the compiled kernels (:mod:`fem_loads.compiled`,
+:mod:`fem_loads.revolved`) to inline.
 
 :func:`call_user_law` calls a user's law, a C call through the address of its numba ``cfunc``
 (:meth:`fem_loads.user_law.UserLaw.compiled`).  The kernels take the address as data, so they are compiled
@@ -23,6 +25,7 @@ from numba import njit, types
 from numba.extending import intrinsic, register_jitable
 
 from .exposure import cell_exposure_scalars, corner_exposure, cube_cell_scalars, fine_exposure
+from .factors import contact_factor_scalars, entry_factor_scalars, friction_stress_scalars, surface_factor_scalars
 from .ramps import smooth_step_scalars
 from .resistance import normal_stress_scalars, polynomial_stress_scalars
 from .target import slip_factor_scalars
@@ -34,11 +37,21 @@ __all__ = [
     "slip_factor",
     "builtin_stress",
     "polynomial_stress",
+    "contact_factor",
+    "entry_factor",
+    "surface_factor",
+    "friction_stress",
     "cube_cell",
     "cell_exposure",
 ]
 
 smooth_step = njit(inline="always", error_model="numpy")(smooth_step_scalars)
+# the smooth step as numba sees it inside the factors (the plain function stays plain)
+register_jitable(error_model="numpy")(smooth_step_scalars)
+contact_factor = njit(inline="always", error_model="numpy")(contact_factor_scalars)
+entry_factor = njit(inline="always", error_model="numpy")(entry_factor_scalars)
+surface_factor = njit(inline="always", error_model="numpy")(surface_factor_scalars)
+friction_stress = njit(inline="always", error_model="numpy")(friction_stress_scalars)
 slip_factor = njit(inline="always", error_model="numpy")(slip_factor_scalars)
 polynomial_stress = njit(inline="always", error_model="numpy")(polynomial_stress_scalars)
 # the polynomial part as numba sees it inside normal_stress_scalars (the plain function stays plain; not

@@ -36,7 +36,7 @@ from numba import njit
 
 from mesh import Profile
 
-from .native import builtin_stress, call_user_law, slip_factor, smooth_step
+from .native import builtin_stress, call_user_law, contact_factor, entry_factor, friction_stress, slip_factor
 from .resistance import ResistanceLaw
 from .user_law import MAX_PARAMETERS, UserLaw
 
@@ -229,19 +229,14 @@ def _law_stress(law: np.ndarray, normal_velocity: float, depth: float) -> float:
 @njit(cache=True, inline="always", error_model="numpy")
 def _entering(height: float, entry: float) -> float:
     """The entry factor at ``height`` (m above the surface): the smooth ramp over ``entry`` (m), or sharp."""
-    if entry > 0.0:
-        return smooth_step(0.5 - height / entry)
-    return 1.0 if height < 0.0 else 0.0
+    return entry_factor(height, entry > 0.0, 1.0 / entry if entry > 0.0 else 0.0)
 
 
 @njit(cache=True, inline="always", error_model="numpy")
 def _pressing_stress(law: np.ndarray, normal_velocity: float, depth: float, width: float) -> float:
     """``f(max(Vn, 0), z) c(Vn)``: the law times the contact factor (the smooth ramp, one-sided or centred, or
     the sharp switch at ``Vn = 0``)."""
-    if width > 0.0:
-        contact = smooth_step(normal_velocity / width + law[_OFFSET])
-    else:
-        contact = 1.0 if normal_velocity > 0.0 else 0.0
+    contact = contact_factor(normal_velocity, width > 0.0, 1.0 / width if width > 0.0 else 0.0, law[_OFFSET], 0.0)
     if contact == 0.0:
         return 0.0
     return _law_stress(law, max(normal_velocity, 0.0), depth) * contact
@@ -348,7 +343,7 @@ def _gauss_arc(
         j0 += sigma * weight
         j1 += sigma * c * weight
         if mu > 0.0:
-            tau = min(mu * sigma, cap) if cap > 0.0 else mu * sigma
+            tau = friction_stress(sigma, mu, cap)
             # the slip: the point's velocity u = (vx + q rho c, 0, vz - q x) less its normal part
             sx = vx + q * rho * c - vn * n_axial
             sy = -vn * n_radial * math.sin(phi)
@@ -372,7 +367,7 @@ def _uniform_ring(
         return 0.0, 0.0
     jx = 0.0
     if mu > 0.0:
-        tau = min(mu * sigma, cap) if cap > 0.0 else mu * sigma
+        tau = friction_stress(sigma, mu, cap)
         sx = vx - a * n_axial
         jx = math.pi * tau * slip_factor(sx * sx + (a * n_radial) ** 2, width, vx * vx) * sx
     return math.pi * sigma, jx

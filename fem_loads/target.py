@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from .ramps import smooth_step
+from .factors import entry_factor_scalars, friction_stress_scalars, surface_factor_scalars
 from .resistance import ResistanceLaw
 from .user_law import UserLaw
 
@@ -74,18 +74,20 @@ class LayeredTarget:
         """The stress (Pa) at each point: its layer's law, blended with the next layer's across each interface.
 
         ``lengths`` (m, one per point, or None): the width over which each point's stress blends from one
-        layer to the next, centred on the interface (``S((z - d_k)/l + 1/2)``); zero or None is the sharp
-        switch.  Each layer's law is evaluated only where it has a share.
+        layer to the next, centred on the interface (the entry factor,
+        :func:`~fem_loads.factors.entry_factor_scalars`, of its height ``d_k - z`` above it); zero or None is
+        the sharp switch.  Each layer's law is evaluated only where it has a share.
         """
         stress = np.zeros(np.shape(normal_velocity))
         above = np.ones(np.shape(normal_velocity))
+        smooth = lengths is not None and bool(np.any(lengths))
+        inverse = 1.0 / np.asarray(lengths) if smooth else 0.0
         for layer, law in enumerate(self.laws):
             if layer < len(self.thicknesses):
-                interface = self.interfaces[layer]
-                if lengths is None or not np.any(lengths):
-                    below = (depth >= interface).astype(float)
-                else:
-                    below = smooth_step((depth - interface) / lengths + 0.5)
+                # a point enters the layer below as it enters the target: its entry factor at the interface
+                below = np.broadcast_to(
+                    entry_factor_scalars(self.interfaces[layer] - depth, smooth, inverse), stress.shape
+                )
             else:
                 below = np.zeros(np.shape(normal_velocity))
             share = above - below
@@ -112,8 +114,11 @@ class FreeSurface:
     surface_fraction: float = 0.0
 
     def factor(self, depth: np.ndarray) -> np.ndarray:
-        """``f0 + (1 - f0) S(depth / D)``: ``f0`` at and above the surface, 1 below ``D``."""
-        return self.surface_fraction + (1.0 - self.surface_fraction) * smooth_step(np.asarray(depth) / self.depth)
+        """``f0 + (1 - f0) S(depth / D)`` (:func:`~fem_loads.factors.surface_factor_scalars`): ``f0`` at and above the
+        surface, 1 below ``D``."""
+        return np.asarray(
+            surface_factor_scalars(np.asarray(depth, dtype=float), 1.0 / self.depth, self.surface_fraction)
+        )
 
 
 @dataclass(frozen=True)
@@ -124,9 +129,8 @@ class Friction:
     cap: float | None = None
 
     def stress(self, sigma: np.ndarray) -> np.ndarray:
-        """``mu sigma_n``, capped at ``cap`` (Pa)."""
-        tau = self.coefficient * sigma
-        return tau if self.cap is None else np.minimum(tau, self.cap)
+        """``mu sigma_n``, capped at ``cap`` (Pa) (:func:`~fem_loads.factors.friction_stress_scalars`)."""
+        return np.asarray(friction_stress_scalars(sigma, self.coefficient, self.cap or 0.0))
 
 
 def slip_factor_scalars(slip2: Any, width: float, speed2: float) -> Any:

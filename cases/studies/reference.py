@@ -33,7 +33,7 @@ import numpy as np
 from scipy import integrate
 from scipy.interpolate import BarycentricInterpolator
 
-from fem_loads.ramps import smooth_step
+from fem_loads.factors import contact_factor_scalars
 from fem_loads.resistance import ResistanceLaw
 from fem_loads.target import LayeredTarget
 from fem_loads.user_law import UserLaw
@@ -274,7 +274,9 @@ def axial_force(
     sine = slope / np.sqrt(1.0 + slope**2)
 
     def factor(normal_velocity: np.ndarray) -> np.ndarray:
-        return smooth_step(normal_velocity / width + offset) if width > 0.0 else (normal_velocity > 0.0) * 1.0
+        return np.asarray(
+            contact_factor_scalars(normal_velocity, width > 0.0, 1.0 / width if width > 0.0 else 0.0, offset, 0.0)
+        )
 
     stress = law.normal_stress(speed * sine, depth - s) * factor(speed * sine)
     force = 0.5 * extent * float(np.sum(weights * 2 * np.pi * profile.radius_at(s) * slope * stress))

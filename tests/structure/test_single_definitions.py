@@ -1,11 +1,14 @@
-"""One formula, one place: the resistance law, the smooth step, the slip factor and Newton-Euler are each defined
+"""One formula, one place: the resistance law, each factor of a point's stress (the smooth step, the contact, entry
+and free-surface factors, the friction stress and its slip factor, the exposure) and Newton-Euler are each defined
 once, as a scalar function that the numpy path evaluates and numba compiles, and no module reads another's
 private attributes.
 
 How this is kept: every compiled form is checked to *be* numba's compilation of the one definition (its
-``py_func`` is that function object), so a compiled module that wrote its own copy would fail here; the smooth
-step's coefficients (6, 15, 10) may appear in one function only; and no ``x._name`` is read outside ``self`` and
-``cls``.
+``py_func`` is that function object), made in one module and imported from there by every kernel, so a compiled
+module that wrote its own copy would fail here; the smooth step may be called only by the factors (a ramp
+written anywhere else is another copy of one); a friction cap is taken in one function; the smooth step's
+coefficients (6, 15, 10) may appear in one function only; and no ``x._name`` is read outside ``self`` and
+``cls``.  Each structural check has a control that it finds a copy.
 """
 
 from __future__ import annotations
@@ -21,44 +24,76 @@ ROOT = Path(__file__).resolve().parents[2]
 PACKAGES = ("mesh", "fem_loads", "dynamics", "cases", "docs")
 compiled_modules()  # numba's cache in the folder named for the compiled code
 
+#: the compiled forms :mod:`fem_loads.native` makes, and the module of each one definition
+NATIVE = {
+    "smooth_step": ("ramps", "smooth_step_scalars"),
+    "slip_factor": ("target", "slip_factor_scalars"),
+    "builtin_stress": ("resistance", "normal_stress_scalars"),
+    "polynomial_stress": ("resistance", "polynomial_stress_scalars"),
+    "contact_factor": ("factors", "contact_factor_scalars"),
+    "entry_factor": ("factors", "entry_factor_scalars"),
+    "surface_factor": ("factors", "surface_factor_scalars"),
+    "friction_stress": ("factors", "friction_stress_scalars"),
+    "cube_cell": ("exposure", "cube_cell_scalars"),
+    "cell_exposure": ("exposure", "cell_exposure_scalars"),
+}
+#: the functions that may call the smooth step: its array wrapper and the factors
+RAMP_CALLERS = [
+    "fem_loads/factors.py:contact_factor_scalars",
+    "fem_loads/factors.py:entry_factor_scalars",
+    "fem_loads/factors.py:surface_factor_scalars",
+    "fem_loads/ramps.py:smooth_step",
+]
+
 
 def _definitions() -> list[tuple[object, object]]:
     """(compiled form, the one definition) pairs."""
+    import importlib
+
     from dynamics import compiled as compiled_step
     from dynamics import pitch_plane, rigid_body
-    from fem_loads import compiled, compiled_point, exposure, native, ramps, resistance, revolved, target
+    from fem_loads import native
 
-    return [
-        (native.smooth_step, ramps.smooth_step_scalars),
-        (native.slip_factor, target.slip_factor_scalars),
-        (native.builtin_stress, resistance.normal_stress_scalars),
-        (native.polynomial_stress, resistance.polynomial_stress_scalars),
-        (compiled.smooth_step, ramps.smooth_step_scalars),
-        (compiled_point.slip_factor, target.slip_factor_scalars),
-        (compiled_point.builtin_stress, resistance.normal_stress_scalars),
-        (compiled.polynomial_stress, resistance.polynomial_stress_scalars),
-        (revolved.smooth_step, ramps.smooth_step_scalars),
-        (revolved.slip_factor, target.slip_factor_scalars),
-        (revolved.builtin_stress, resistance.normal_stress_scalars),
-        (native.cube_cell, exposure.cube_cell_scalars),
+    pairs = [
+        (getattr(native, name), getattr(importlib.import_module(f"fem_loads.{module}"), function))
+        for name, (module, function) in NATIVE.items()
+    ]
+    return pairs + [
         (compiled_step._euler_scalars, rigid_body.euler_scalars),
         (pitch_plane._euler_scalars, rigid_body.euler_scalars),
     ]
 
 
-@pytest.mark.parametrize("index", range(14))
+@pytest.mark.parametrize("index", range(len(NATIVE) + 2))
 def test_each_compiled_form_is_the_one_definition(index):
     compiled, definition = _definitions()[index]
     assert getattr(compiled, "py_func", None) is definition, (compiled, definition)
 
 
+@pytest.mark.parametrize("module", ["compiled", "compiled_point", "revolved"])
+def test_the_kernels_take_every_compiled_form_from_one_module(module):
+    """A kernel's ``contact_factor`` (and every other name :mod:`fem_loads.native` makes) is native's own object."""
+    import importlib
+
+    from fem_loads import native
+
+    kernel = importlib.import_module(f"fem_loads.{module}")
+    shared = [name for name in NATIVE if hasattr(kernel, name)]
+    assert shared, module
+    assert all(getattr(kernel, name) is getattr(native, name) for name in shared)
+
+
 def test_the_numpy_path_calls_the_same_definitions():
     """The numpy path's names are the definitions themselves (or thin array wrappers around them)."""
     from dynamics import rigid_body
-    from fem_loads import dafl, ramps, resistance, target
+    from fem_loads import dafl, factors, resistance, target
 
-    assert dafl.smooth_step_scalars is ramps.smooth_step_scalars
+    assert dafl.contact_factor_scalars is factors.contact_factor_scalars
+    assert dafl.entry_factor_scalars is factors.entry_factor_scalars
     assert dafl.slip_factor_scalars is target.slip_factor_scalars
+    assert target.entry_factor_scalars is factors.entry_factor_scalars
+    assert target.surface_factor_scalars is factors.surface_factor_scalars
+    assert target.friction_stress_scalars is factors.friction_stress_scalars
     assert "normal_stress_scalars(" in Path(resistance.__file__).read_text().split("def normal_stress(", 1)[1]
     assert "euler_scalars(" in Path(rigid_body.__file__).read_text().split("def accelerations(", 1)[1]
 
@@ -79,6 +114,78 @@ def test_the_smooth_step_s_coefficients_appear_in_one_function():
                 if {6.0, 15.0, 10.0} <= numbers:
                     holders.append(f"{path.relative_to(ROOT)}:{node.name}")
     assert holders == ["fem_loads/ramps.py:smooth_step_scalars"], holders
+
+
+def _functions_calling(tree: ast.AST, names: set[str]) -> list[ast.FunctionDef]:
+    """The innermost functions of ``tree`` that call one of ``names`` (a bare name or an attribute)."""
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+            nested = [n for child in node.body for n in ast.walk(child) if isinstance(n, ast.FunctionDef)]
+            inner = {id(n) for function in nested for n in ast.walk(function)}
+            calls = [
+                n
+                for child in node.body
+                for n in ast.walk(child)
+                if isinstance(n, ast.Call) and id(n) not in inner and _called_name(n) in names
+            ]
+            if calls:
+                found.append(node)
+    return found
+
+
+def _called_name(call: ast.Call) -> str:
+    function = call.func
+    return function.attr if isinstance(function, ast.Attribute) else getattr(function, "id", "")
+
+
+def _ramp_callers(source: str) -> list[str]:
+    return [f.name for f in _functions_calling(ast.parse(source), {"smooth_step", "smooth_step_scalars"})]
+
+
+def _cap_takers(source: str) -> list[str]:
+    """Functions taking a minimum with a name that holds ``cap``: a friction cap."""
+    found = []
+    for function in _functions_calling(ast.parse(source), {"min", "minimum"}):
+        for call in ast.walk(function):
+            if isinstance(call, ast.Call) and _called_name(call) in ("min", "minimum"):
+                names = {n.id for a in call.args for n in ast.walk(a) if isinstance(n, ast.Name)}
+                names |= {n.attr for a in call.args for n in ast.walk(a) if isinstance(n, ast.Attribute)}
+                if any("cap" in name for name in names):
+                    found.append(function.name)
+                    break
+    return found
+
+
+def test_only_the_factors_call_the_smooth_step():
+    """A ramp (contact, entry, interface, free surface) is a factor of :mod:`fem_loads.factors`; a call of the smooth
+    step anywhere else writes one of them again."""
+    holders = []
+    for path in _modules():
+        holders += [f"{path.relative_to(ROOT)}:{name}" for name in _ramp_callers(path.read_text())]
+    assert sorted(holders) == RAMP_CALLERS, holders
+
+
+def test_a_friction_cap_is_taken_in_one_function():
+    holders = []
+    for path in _modules():
+        holders += [f"{path.relative_to(ROOT)}:{name}" for name in _cap_takers(path.read_text())]
+    assert holders == ["fem_loads/factors.py:friction_stress_scalars"], holders
+
+
+def test_the_factor_checks_find_a_copy():
+    """Control: a contact ramp, an entry ramp, a free-surface factor and a friction cap written in a kernel are
+    each found."""
+    copies = {
+        "contact": "def load(vn, w):\n    return smooth_step(vn / w) * 2.0\n",
+        "entry": "def load(z, l):\n    return native.smooth_step(0.5 - z / l)\n",
+        "surface": "def load(z, d, f):\n    return f + (1.0 - f) * smooth_step_scalars(z / d)\n",
+    }
+    for source in copies.values():
+        assert _ramp_callers(source) == ["load"]
+    assert _cap_takers("def tau(s, mu, cap):\n    return min(mu * s, cap)\n") == ["tau"]
+    assert _cap_takers("def tau(s, f):\n    return np.minimum(f.coefficient * s, f.cap)\n") == ["tau"]
+    assert _ramp_callers("def load(vn):\n    return contact_factor(vn, True, 1.0, 0.0, 0.0)\n") == []
 
 
 def test_no_module_reads_another_s_private_attributes():
