@@ -33,18 +33,7 @@ from numba import njit
 
 from .compiled_point import exposure_correction, image_friction, law_setup, point_motion, point_setup, point_stress
 from .kernel_layout import (
-    CONSTANT_CONTACT_INCIDENCE,
-    CONSTANT_CONTACT_OFFSET,
-    CONSTANT_CONTACT_WIDTH,
-    CONSTANT_FRICTION,
-    CONSTANT_GUARD,
-    CONSTANT_HALF_ENTRY,
-    CONSTANT_MAX_RADIUS,
-    CONSTANT_PLAIN,
-    CONSTANT_SMOOTH_CONTACT,
-    CONSTANT_SURFACE_DEPTH,
-    CONSTANT_SURFACE_FRACTION,
-    DATA_CONSTANTS,
+    DATA_EFFECTS,
     DATA_EXPOSURE_COLUMNS,
     DATA_HALF_ENTRY_LENGTH,
     DATA_IMAGE_SIGNS,
@@ -93,18 +82,18 @@ def _smooth_sums(
     (:func:`_frictionless_sums`, the shipped scenes' load; :func:`_friction_sums`, with friction or a free
     surface): each compiles to a loop of its own without the other's branches."""
     points, normal_arm, point_signs, weights, inverse_entry, needs_depth, rule = point_setup(data, width, v)
-    constants = data[DATA_CONSTANTS]
-    offset = constants[CONSTANT_CONTACT_OFFSET]
-    surface_depth = constants[CONSTANT_SURFACE_DEPTH]
+    effects = data[DATA_EFFECTS][0]
+    offset = effects.contact_offset
+    surface_depth = effects.surface_depth
     inverse_surface = 1.0 / surface_depth if surface_depth > 0.0 else 0.0
     # without a free surface the factor with f0 = 1 is exactly 1
-    fraction = constants[CONSTANT_SURFACE_FRACTION] if surface_depth > 0.0 else 1.0
+    fraction = effects.surface_fraction if surface_depth > 0.0 else 1.0
     inverse_width = 1.0 / width if width > 0.0 else 0.0
-    c = data[DATA_LAWS][0]
-    c0, c1, c2, c3 = c[0], c[1], c[2], c[3]
-    for k in range(sums.shape[0]):
-        g0, g1, g2, g3, g4, g5 = g[k, 0], g[k, 1], g[k, 2], g[k, 3], g[k, 4], g[k, 5]
-        up0, up1, up2 = up[k, 0], up[k, 1], up[k, 2]
+    law = data[DATA_LAWS][0]
+    c0, k, c1, c2 = law.c0, law.k, law.c1, law.c2
+    for image in range(sums.shape[0]):
+        g0, g1, g2, g3, g4, g5 = g[image, 0], g[image, 1], g[image, 2], g[image, 3], g[image, 4], g[image, 5]
+        up0, up1, up2 = up[image, 0], up[image, 1], up[image, 2]
         a0 = a1 = a2 = a3 = a4 = a5 = 0.0
         f0 = f1 = f2 = f3 = f4 = f5 = 0.0
         for j in range(weights.shape[0]):
@@ -114,7 +103,7 @@ def _smooth_sums(
             z = 0.0
             if needs_depth or not embedded:
                 z = height + (up0 * points[0, j] + up1 * points[1, j] + up2 * points[2, j])
-            stress = polynomial_stress(max(normal_velocity, 0.0), -z, c0, c1, c2, c3)
+            stress = polynomial_stress(max(normal_velocity, 0.0), -z, c0, k, c1, c2)
             stress *= contact_factor(normal_velocity, True, inverse_width, offset, 0.0) * weights[j]
             if with_surface:
                 stress *= surface_factor(-z, inverse_surface, fraction)
@@ -128,10 +117,10 @@ def _smooth_sums(
             a5 += stress * n5
             if with_friction:
                 d0, d1, d2, d3, d4, d5 = image_friction(
-                    points, point_signs, k, j, normal_arm, v, w, normal_velocity, stress, weights[j], rule
+                    points, point_signs, image, j, normal_arm, v, w, normal_velocity, stress, weights[j], rule
                 )
                 f0, f1, f2, f3, f4, f5 = f0 + d0, f1 + d1, f2 + d2, f3 + d3, f4 + d4, f5 + d5
-        sums[k, 0], sums[k, 1], sums[k, 2], sums[k, 3], sums[k, 4], sums[k, 5] = a0, a1, a2, a3, a4, a5
+        sums[image, 0], sums[image, 1], sums[image, 2], sums[image, 3], sums[image, 4], sums[image, 5] = a0, a1, a2, a3, a4, a5
         friction[0] += f0
         friction[1] += f1
         friction[2] += f2
@@ -196,7 +185,7 @@ def _sums(
     floats (an array view made per point costs its reference counting, more than the law itself).
     """
     points, normal_arm, point_signs, weights, inverse_entry, needs_depth, rule = point_setup(data, width, v)
-    layered, user, address, law, depths, stresses, switches = law_setup(data, width)
+    layered, address, law, depths, stresses, switches = law_setup(data, width)
     mu = rule[0]
     for k in range(sums.shape[0]):
         a0 = a1 = a2 = a3 = a4 = a5 = 0.0
@@ -205,7 +194,7 @@ def _sums(
                 normal_arm, points, g, up, k, j, height, needs_depth or not embedded
             )
             stress = point_stress(
-                data, j, normal_velocity, z, embedded, guard, layered, user, address, law, depths, stresses, switches,
+                data, j, normal_velocity, z, embedded, guard, layered, address, law, depths, stresses, switches,
                 weights, inverse_entry,
             )  # fmt: skip
             a0 += stress * n0
@@ -236,8 +225,8 @@ def dafl_kernel(
 
     ``data`` from :func:`kernel_data`; the state as for :class:`~fem_loads.dafl.DAFLLoads`.
     """
-    image_signs, point_signs, constants = data[DATA_IMAGE_SIGNS], data[DATA_POINT_SIGNS], data[DATA_CONSTANTS]
-    max_radius, half_entry = constants[CONSTANT_MAX_RADIUS], constants[CONSTANT_HALF_ENTRY]
+    image_signs, point_signs, effects = data[DATA_IMAGE_SIGNS], data[DATA_POINT_SIGNS], data[DATA_EFFECTS][0]
+    max_radius, half_entry = effects.max_radius, effects.half_entry
     for c in range(6):
         out[c] = 0.0
     height = position[2]
@@ -260,17 +249,15 @@ def dafl_kernel(
     speed = math.sqrt(velocity[0] * velocity[0] + velocity[1] * velocity[1] + velocity[2] * velocity[2])
     spin = math.sqrt(angular_velocity[0] ** 2 + angular_velocity[1] ** 2 + angular_velocity[2] ** 2)
     speed_scale = speed + spin * max_radius
-    width = constants[CONSTANT_CONTACT_WIDTH] + constants[CONSTANT_CONTACT_INCIDENCE] * speed_scale
-    if constants[CONSTANT_SMOOTH_CONTACT] == 0.0:
+    width = effects.contact_width + effects.contact_incidence * speed_scale
+    if not effects.smooth_contact:
         width = 0.0
     sums = np.zeros((images, 6))
     friction = np.zeros(6)
-    guard = constants[CONSTANT_GUARD] * speed_scale
-    if constants[CONSTANT_PLAIN] != 0.0 and (
-        constants[CONSTANT_FRICTION] > 0.0 or constants[CONSTANT_SURFACE_DEPTH] > 0.0
-    ):
+    guard = effects.guard * speed_scale
+    if effects.plain and (effects.friction > 0.0 or effects.surface_depth > 0.0):
         _friction_sums(data, g, up, v, angular_velocity, height, width, embedded, sums, friction)
-    elif constants[CONSTANT_PLAIN] != 0.0:
+    elif effects.plain:
         _frictionless_sums(data, g, up, v, angular_velocity, height, width, embedded, sums, friction)
     else:
         _sums(data, g, up, v, angular_velocity, height, width, guard, embedded, sums, friction)
@@ -301,7 +288,7 @@ def lowest_height_kernel(data: tuple[np.ndarray, ...], position: np.ndarray, up:
     of every point at every step cost as much as a load evaluation.
     """
     points, half_entry_length, point_signs = data[DATA_POINTS], data[DATA_HALF_ENTRY_LENGTH], data[DATA_POINT_SIGNS]
-    top = position[2] + data[DATA_CONSTANTS][CONSTANT_MAX_RADIUS]
+    top = position[2] + data[DATA_EFFECTS][0].max_radius
     if top < 0.0:
         return top
     up0, up1, up2 = up[0], up[1], up[2]

@@ -8,22 +8,13 @@ and the correction of the hidden ones compute each point's stress with the same 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numba import njit
 
 from .kernel_layout import (
-    CONSTANT_CONTACT_OFFSET,
-    CONSTANT_FRICTION,
-    CONSTANT_FRICTION_CAP,
-    CONSTANT_NEEDS_DEPTH,
-    CONSTANT_SEPARATION,
-    CONSTANT_SMOOTH_CONTACT,
-    CONSTANT_SMOOTH_ENTRY,
-    CONSTANT_SURFACE_DEPTH,
-    CONSTANT_SURFACE_FRACTION,
-    CONSTANT_USER_LAW,
-    DATA_CONSTANTS,
+    DATA_EFFECTS,
     DATA_EXPOSURE_COLUMNS,
     DATA_EXPOSURE_CORNERS,
     DATA_EXPOSURE_FINE,
@@ -35,19 +26,16 @@ from .kernel_layout import (
     DATA_NORMAL_ARM,
     DATA_POINT_SIGNS,
     DATA_POINTS,
-    DATA_TABLE_ROWS,
     DATA_TABLES,
-    DATA_USER_LAW_ADDRESS,
     DATA_WEIGHTS,
 )
 from .native import (
-    builtin_stress,
-    call_user_law,
     cell_exposure,
     contact_factor,
     cube_cell,
     entry_factor,
     friction_stress,
+    law_stress,
     slip_factor,
     surface_factor,
 )
@@ -70,8 +58,8 @@ def layered_stress(
     """The layers' laws blended across each interface (:class:`~fem_loads.target.LayeredTarget`), at ``Vn`` (m/s)
     and depth (m): a point enters the layer below as it enters the target (``smooth``, over the length
     ``1 / inverse_length``, m), by the same entry factor."""
-    interfaces, p, rows, tables = data[DATA_INTERFACES], data[DATA_LAWS], data[DATA_TABLE_ROWS], data[DATA_TABLES]
-    user = data[DATA_CONSTANTS][CONSTANT_USER_LAW] != 0.0
+    interfaces, laws, tables = data[DATA_INTERFACES], data[DATA_LAWS], data[DATA_TABLES]
+    address = data[DATA_EFFECTS][0].user_law
     stress = 0.0
     above = 1.0  # the share of this layer and those below it: the entry factor at its top interface d
     for layer in range(interfaces.shape[0] + 1):
@@ -80,16 +68,10 @@ def layered_stress(
             below = entry_factor(interfaces[layer] - depth, smooth, inverse_length)
         share = above - below
         if share != 0.0:
-            q = p[layer]
-            q0, q1, q2, q3, q4, q5, q6, q7 = q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7]
-            if user:
-                address = data[DATA_USER_LAW_ADDRESS][0]
-                law = call_user_law(address, normal_velocity, depth, q0, q1, q2, q3, q4, q5, q6, q7)
-            else:
-                first, count = rows[layer, 0], rows[layer, 1]
-                depths, stresses = tables[0, first : first + count], tables[1, first : first + count]
-                law = builtin_stress(normal_velocity, depth, q0, q1, q2, q3, q4, q5, depths, stresses)
-            stress += share * law
+            law = laws[layer]
+            first, count = law.table_first, law.table_count
+            depths, stresses = tables[0, first : first + count], tables[1, first : first + count]
+            stress += share * law_stress(law, address, normal_velocity, depth, depths, stresses)
         above = below
         if above == 0.0:
             break
@@ -126,29 +108,28 @@ def point_friction(
 @njit(cache=True, inline="always", error_model="numpy")
 def law_setup(
     data: tuple[np.ndarray, ...], width: float
-) -> tuple[bool, bool, int, np.ndarray, np.ndarray, np.ndarray, tuple[bool, bool, float, float, float, float, bool]]:
-    """What every point's stress shares, read once before a loop over the points: ``(layered, user, address, law,
-    depths, stresses, switches)``, the law's coefficients ``law`` (the first layer's), its strength table, and the
-    switches ``(separation, smooth_contact, 1 / W, contact offset, free surface depth and fraction, smooth_entry)``
-    at the contact width ``W`` (m/s)."""
-    constants = data[DATA_CONSTANTS]
-    count = data[DATA_TABLE_ROWS][0, 1]
+) -> tuple[bool, int, Any, np.ndarray, np.ndarray, tuple[bool, bool, float, float, float, float, bool]]:
+    """What every point's stress shares, read once before a loop over the points: ``(layered, address, law, depths,
+    stresses, switches)``: the user law's address (0: none), the first layer's law (a :data:`~fem_loads.law_record.LAW`
+    record), its strength table, and the switches ``(separation, smooth_contact, 1 / W, contact offset, free surface
+    depth and fraction, smooth_entry)`` at the contact width ``W`` (m/s)."""
+    effects, law = data[DATA_EFFECTS][0], data[DATA_LAWS][0]
+    first, count = law.table_first, law.table_count
     switches = (
-        constants[CONSTANT_SEPARATION] != 0.0,
-        constants[CONSTANT_SMOOTH_CONTACT] != 0.0,
+        effects.separation,
+        effects.smooth_contact,
         1.0 / width if width > 0.0 else 0.0,
-        constants[CONSTANT_CONTACT_OFFSET],
-        constants[CONSTANT_SURFACE_DEPTH],
-        constants[CONSTANT_SURFACE_FRACTION],
-        constants[CONSTANT_SMOOTH_ENTRY] != 0.0,
+        effects.contact_offset,
+        effects.surface_depth,
+        effects.surface_fraction,
+        effects.smooth_entry,
     )
     return (
         data[DATA_INTERFACES].shape[0] > 0,
-        constants[CONSTANT_USER_LAW] != 0.0,
-        data[DATA_USER_LAW_ADDRESS][0],
-        data[DATA_LAWS][0].copy(),
-        data[DATA_TABLES][0, :count].copy(),
-        data[DATA_TABLES][1, :count].copy(),
+        effects.user_law,
+        law,
+        data[DATA_TABLES][0, first : first + count].copy(),
+        data[DATA_TABLES][1, first : first + count].copy(),
         switches,
     )
 
@@ -162,10 +143,10 @@ def point_setup(
     each point's depth and ``rule`` the friction's ``(mu, cap, W, |v|^2)`` for :func:`image_friction` (``v``: the
     body's velocity, body frame; ``W``: the contact width, m/s).  The general law's own share is
     :func:`law_setup`."""
-    constants = data[DATA_CONSTANTS]
-    needs_depth = constants[CONSTANT_NEEDS_DEPTH] != 0.0 or constants[CONSTANT_SURFACE_DEPTH] > 0.0
+    effects = data[DATA_EFFECTS][0]
+    needs_depth = effects.needs_depth or effects.surface_depth > 0.0
     speed2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
-    rule = (constants[CONSTANT_FRICTION], constants[CONSTANT_FRICTION_CAP], width, speed2)
+    rule = (effects.friction, effects.friction_cap, width, speed2)
     return (
         data[DATA_POINTS],
         data[DATA_NORMAL_ARM],
@@ -186,9 +167,8 @@ def point_stress(
     embedded: bool,
     guard: float,
     layered: bool,
-    user: bool,
     address: int,
-    law: np.ndarray,
+    law: Any,
     depths: np.ndarray,
     stresses: np.ndarray,
     switches: tuple[bool, bool, float, float, float, float, bool],
@@ -209,12 +189,8 @@ def point_stress(
         law_velocity = normal_velocity
     if layered:
         stress = layered_stress(data, law_velocity, -z, smooth_entry, inverse_entry[j])
-    elif user:
-        stress = call_user_law(
-            address, law_velocity, -z, law[0], law[1], law[2], law[3], law[4], law[5], law[6], law[7]
-        )
     else:
-        stress = builtin_stress(law_velocity, -z, law[0], law[1], law[2], law[3], law[4], law[5], depths, stresses)
+        stress = law_stress(law, address, law_velocity, -z, depths, stresses)
     stress = stress * contact if separation else max(stress, 0.0)
     if surface_depth > 0.0:
         stress *= surface_factor(-z, 1.0 / surface_depth, surface_fraction)
@@ -301,7 +277,7 @@ def exposure_correction(
         return  # no direction of motion, no shadow
     n = round(math.sqrt((start.shape[0] - 1) / 6.0))  # 6 N^2 cells
     points, normal_arm, point_signs, weights, inverse_entry, needs_depth, rule = point_setup(data, width, v)
-    layered, user, address, law, depths, stresses, switches = law_setup(data, width)
+    layered, address, law, depths, stresses, switches = law_setup(data, width)
     mu = rule[0]
     separation, smooth_contact, inverse_width, offset = switches[0], switches[1], switches[2], switches[3]
     # the smooth ramp is zero at and below -offset W; the sharp switch at and below the guard
@@ -324,7 +300,7 @@ def exposure_correction(
             if separation and (normal_velocity * inverse_width + offset <= _RAMP_FLOOR or normal_velocity <= limit):
                 continue  # below the contact ramp (or where it is below 1e-14), or the sharp switch: nothing to hide
             stress = point_stress(
-                data, p, normal_velocity, z, embedded, guard, layered, user, address, law, depths, stresses, switches,
+                data, p, normal_velocity, z, embedded, guard, layered, address, law, depths, stresses, switches,
                 weights, inverse_entry,
             )  # fmt: skip
             if stress == 0.0:

@@ -7,37 +7,18 @@ compiled code.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 from . import images
 from .dafl import DAFLLoads
+from .law_record import compilable, pack_effects, pack_laws
 from .resistance import ResistanceLaw
-from .target import LayeredTarget
-from .user_law import MAX_PARAMETERS, UserLaw
 
 __all__ = [
     "KERNEL_ARRAYS",
     "kernel_data",
     "supports",
-    "CONSTANT_MAX_RADIUS",
-    "CONSTANT_HALF_ENTRY",
-    "CONSTANT_CONTACT_WIDTH",
-    "CONSTANT_CONTACT_INCIDENCE",
-    "CONSTANT_CONTACT_OFFSET",
-    "CONSTANT_GUARD",
-    "CONSTANT_SMOOTH_CONTACT",
-    "CONSTANT_SMOOTH_ENTRY",
-    "CONSTANT_SEPARATION",
-    "CONSTANT_USER_LAW",
-    "CONSTANT_NEEDS_DEPTH",
-    "CONSTANT_FRICTION",
-    "CONSTANT_FRICTION_CAP",
-    "CONSTANT_SURFACE_DEPTH",
-    "CONSTANT_SURFACE_FRACTION",
-    "CONSTANT_PLAIN",
-    "N_CONSTANTS",
+    "law_and_effects",
     "DATA_NORMAL_ARM",
     "DATA_POINTS",
     "DATA_WEIGHTS",
@@ -45,12 +26,10 @@ __all__ = [
     "DATA_HALF_ENTRY_LENGTH",
     "DATA_IMAGE_SIGNS",
     "DATA_POINT_SIGNS",
-    "DATA_CONSTANTS",
+    "DATA_EFFECTS",
     "DATA_LAWS",
     "DATA_TABLES",
-    "DATA_TABLE_ROWS",
     "DATA_INTERFACES",
-    "DATA_USER_LAW_ADDRESS",
     "DATA_EXPOSURE_COLUMNS",
     "DATA_EXPOSURE_START",
     "DATA_EXPOSURE_ROWS",
@@ -58,30 +37,8 @@ __all__ = [
     "DATA_EXPOSURE_FINE",
 ]
 
-#: the positions of the scalars in the data's "constants" array
-(
-    CONSTANT_MAX_RADIUS,
-    CONSTANT_HALF_ENTRY,
-    CONSTANT_CONTACT_WIDTH,
-    CONSTANT_CONTACT_INCIDENCE,
-    CONSTANT_CONTACT_OFFSET,
-    CONSTANT_GUARD,
-    CONSTANT_SMOOTH_CONTACT,
-    CONSTANT_SMOOTH_ENTRY,
-    CONSTANT_SEPARATION,
-    CONSTANT_USER_LAW,
-    CONSTANT_NEEDS_DEPTH,
-    CONSTANT_FRICTION,
-    CONSTANT_FRICTION_CAP,
-    CONSTANT_SURFACE_DEPTH,
-    CONSTANT_SURFACE_FRACTION,
-    CONSTANT_PLAIN,
-    N_CONSTANTS,
-) = range(17)
-
-
 #: the arrays of the kernel's data, in order (:func:`kernel_data`): a plain tuple of arrays, which numba's
-#: dispatcher types in C (a named tuple, or a function object in it, costs 100-200 us per call from Python)
+#: dispatcher types in C (a named tuple, or a function object in it, costs more per call from Python)
 KERNEL_ARRAYS = (
     "normal_arm",  # (6, m): [n | r x n] of the fundamental part's (or every) point
     "points",  # (3, m), m
@@ -90,12 +47,10 @@ KERNEL_ARRAYS = (
     "half_entry_length",  # (m,): l / 2 (m)
     "image_signs",  # (k, 6)
     "point_signs",  # (k, 3)
-    "constants",  # the scalars, indexed as above
-    "laws",  # (layers, 8): each layer's built-in coefficients (c0, k, c1, c2, c, n) or user law's parameters
-    "tables",  # (2, rows): the layers' strength tables one after the other, depth (m) and stress (Pa)
-    "table_rows",  # (layers, 2), int: each layer's first row in tables and its count
+    "effects",  # (1,) EFFECTS record: the ramps, friction, free surface, user law (law_record)
+    "laws",  # (layers,) LAW records: each layer's coefficients or user parameters (law_record)
+    "tables",  # (2, columns): the layers' strength tables one after the other, depth (m) and stress (Pa)
     "interfaces",  # (layers - 1,): the layers' interfaces (m below the surface)
-    "user_law",  # (1,), int: the address of a user law's cfunc (USER_LAW_SIGNATURE), 0 without one
     "exposure_columns",  # (c,), int: the points that can be hidden (Exposure.columns); empty for a convex body
     "exposure_start",  # (6 N^2 + 1,), int: where each cell's hidden rows start (Exposure.cell_start)
     "exposure_rows",  # (h,), int: the rows hidden at a corner of each cell, cell after cell (Exposure.cell_rows)
@@ -110,12 +65,10 @@ KERNEL_ARRAYS = (
     DATA_HALF_ENTRY_LENGTH,
     DATA_IMAGE_SIGNS,
     DATA_POINT_SIGNS,
-    DATA_CONSTANTS,
+    DATA_EFFECTS,
     DATA_LAWS,
     DATA_TABLES,
-    DATA_TABLE_ROWS,
     DATA_INTERFACES,
-    DATA_USER_LAW_ADDRESS,
     DATA_EXPOSURE_COLUMNS,
     DATA_EXPOSURE_START,
     DATA_EXPOSURE_ROWS,
@@ -125,41 +78,48 @@ KERNEL_ARRAYS = (
 
 
 def supports(loads: DAFLLoads) -> bool:
-    """Whether :func:`dafl_kernel` computes ``loads``: every law and effect, except layers of more than
-    one user function (the kernel calls one)."""
-    laws = loads.law.laws if isinstance(loads.law, LayeredTarget) else (loads.law,)
-    users = {law.source for law in laws if isinstance(law, UserLaw)}
-    return len(users) == 0 or (len(users) == 1 and all(isinstance(law, UserLaw) for law in laws))
+    """Whether :func:`dafl_kernel` computes ``loads``: :func:`~fem_loads.law_record.compilable` of its target."""
+    return compilable(loads.law)
 
 
-def _law_rows(loads: DAFLLoads) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, Any]:
-    """``(laws, tables, table_rows, interfaces, user law's cfunc or None)`` of :func:`kernel_data`."""
-    layered = isinstance(loads.law, LayeredTarget)
-    laws = loads.law.laws if isinstance(loads.law, LayeredTarget) else (loads.law,)
-    rows = np.zeros((len(laws), MAX_PARAMETERS))
-    table_rows = np.zeros((len(laws), 2), dtype=np.int64)
-    tables: list[np.ndarray] = [np.zeros((2, 0))]
-    user = None
-    for i, law in enumerate(laws):
-        if isinstance(law, UserLaw):
-            rows[i] = law.parameter_values
-            user = law.compiled()
-        else:
-            assert isinstance(law, ResistanceLaw)
-            rows[i, :6] = law.coefficients
-            depths, stresses = law.table
-            table_rows[i] = (sum(t.shape[1] for t in tables), len(depths))
-            tables.append(np.stack([depths, stresses]))
-    interfaces = loads.law.interfaces if isinstance(loads.law, LayeredTarget) else np.zeros(0)
-    assert layered or len(interfaces) == 0
-    return rows, np.ascontiguousarray(np.concatenate(tables, axis=1)), table_rows, np.asarray(interfaces, float), user
+def law_and_effects(loads: DAFLLoads) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(laws, tables, interfaces, effects)`` of ``loads``: its target packed by
+    :func:`~fem_loads.law_record.pack_laws` and its effects by :func:`~fem_loads.law_record.pack_effects` (the
+    mesh kernel's and, with the rings' own entry length and radius, the ring model's)."""
+    laws, tables, interfaces, address = pack_laws(loads.law)
+    smooth_contact = loads.contact_width > 0.0 or loads.contact_incidence > 0.0
+    smooth_entry = loads.entry_smoothing > 0.0
+    entry_length = loads.point_arrays()["entry_length"]
+    friction, surface = loads.friction, loads.free_surface
+    effects = pack_effects(
+        contact_width=loads.contact_width,
+        contact_incidence=loads.contact_incidence,
+        contact_offset=0.5 if loads.contact == "centred" else 0.0,
+        smooth_contact=smooth_contact,
+        guard=loads.normal_velocity_guard,
+        separation=loads.separation,
+        smooth_entry=smooth_entry,
+        friction=friction.coefficient if friction is not None else 0.0,
+        friction_cap=(friction.cap or 0.0) if friction is not None else 0.0,
+        surface_depth=surface.depth if surface is not None else 0.0,
+        surface_fraction=surface.surface_fraction if surface is not None else 0.0,
+        user_law=address,
+        max_radius=loads.max_radius,
+        half_entry=0.5 * float(entry_length.max()) if len(entry_length) else 0.0,
+        needs_depth=loads.depth_dependent,
+        plain=isinstance(loads.law, ResistanceLaw)
+        and loads.law.power == 0.0
+        and not loads.law.strength_table
+        and loads.separation
+        and smooth_contact
+        and smooth_entry,
+    )
+    return laws, tables, interfaces, effects
 
 
 def kernel_data(loads: DAFLLoads) -> tuple[np.ndarray, ...]:
-    """The arrays and constants of :func:`dafl_kernel` for ``loads`` (see :func:`supports`), in the order of
+    """The arrays and records of :func:`dafl_kernel` for ``loads`` (see :func:`supports`), in the order of
     :data:`KERNEL_ARRAYS`."""
-    if not supports(loads):
-        raise ValueError("the compiled load calls one user function: layers of different user laws run on numpy")
     quadrature = loads.quadrature
     if quadrature.mirror_images is not None:
         index = quadrature.mirror_images[0]
@@ -172,33 +132,7 @@ def kernel_data(loads: DAFLLoads) -> tuple[np.ndarray, ...]:
         image_signs, point_signs = np.ones((1, 6)), np.ones((1, 3))
     arrays = loads.point_arrays()
     entry_length = arrays["entry_length"][index]
-    laws, tables, table_rows, interfaces, user = _law_rows(loads)
-    constants = np.zeros(N_CONSTANTS)
-    constants[CONSTANT_MAX_RADIUS] = loads.max_radius
-    constants[CONSTANT_HALF_ENTRY] = 0.5 * float(arrays["entry_length"].max()) if len(loads) else 0.0
-    constants[CONSTANT_CONTACT_WIDTH] = loads.contact_width
-    constants[CONSTANT_CONTACT_INCIDENCE] = loads.contact_incidence
-    constants[CONSTANT_CONTACT_OFFSET] = 0.5 if loads.contact == "centred" else 0.0
-    constants[CONSTANT_GUARD] = loads.normal_velocity_guard
-    constants[CONSTANT_SMOOTH_CONTACT] = float(loads.contact_width > 0.0 or loads.contact_incidence > 0.0)
-    constants[CONSTANT_SMOOTH_ENTRY] = float(loads.entry_smoothing > 0.0)
-    constants[CONSTANT_SEPARATION] = float(loads.separation)
-    constants[CONSTANT_USER_LAW] = float(user is not None)
-    constants[CONSTANT_NEEDS_DEPTH] = float(loads.depth_dependent)
-    if loads.friction is not None:
-        constants[CONSTANT_FRICTION] = loads.friction.coefficient
-        constants[CONSTANT_FRICTION_CAP] = loads.friction.cap or 0.0
-    constants[CONSTANT_PLAIN] = float(
-        isinstance(loads.law, ResistanceLaw)
-        and loads.law.power == 0.0
-        and not loads.law.strength_table
-        and loads.separation
-        and constants[CONSTANT_SMOOTH_CONTACT] != 0.0
-        and constants[CONSTANT_SMOOTH_ENTRY] != 0.0
-    )
-    if loads.free_surface is not None:
-        constants[CONSTANT_SURFACE_DEPTH] = loads.free_surface.depth
-        constants[CONSTANT_SURFACE_FRACTION] = loads.free_surface.surface_fraction
+    laws, tables, interfaces, effects = law_and_effects(loads)
 
     def contiguous(array: np.ndarray) -> np.ndarray:
         return np.ascontiguousarray(array, dtype=float)
@@ -211,12 +145,10 @@ def kernel_data(loads: DAFLLoads) -> tuple[np.ndarray, ...]:
         contiguous(0.5 * entry_length),
         contiguous(image_signs),
         contiguous(point_signs),
-        constants,
-        contiguous(laws),
+        effects,
+        laws,
         tables,
-        table_rows,
         contiguous(interfaces),
-        np.array([0 if user is None else user.address], dtype=np.int64),
         *_exposure_arrays(loads),
     )
 

@@ -20,6 +20,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+import numpy as np
 from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic, register_jitable
@@ -43,6 +44,7 @@ __all__ = [
     "friction_stress",
     "cube_cell",
     "cell_exposure",
+    "law_stress",
 ]
 
 smooth_step = njit(inline="always", error_model="numpy")(smooth_step_scalars)
@@ -94,3 +96,16 @@ def _call_user_law_intrinsic(
 
 #: the intrinsic as the kernels call it, (address, Vn, z, p0 .. p7) -> sigma (numba passes the typing context)
 call_user_law: Callable[..., float] = _call_user_law_intrinsic
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def law_stress(
+    law: Any, address: int, normal_velocity: float, depth: float, depths: np.ndarray, stresses: np.ndarray
+) -> float:
+    """The stress (Pa) of one layer's law, a :data:`~fem_loads.law_record.LAW` record, at ``Vn`` (m/s) and depth (m):
+    the user's function at ``address`` with the record's parameters, or (``address`` 0) the built-in law with its
+    coefficients and the strength table ``depths``, ``stresses`` (empty: none)."""
+    if address != 0:
+        u = law.user
+        return call_user_law(address, normal_velocity, depth, u[0], u[1], u[2], u[3], u[4], u[5], u[6], u[7])
+    return builtin_stress(normal_velocity, depth, law.c0, law.k, law.c1, law.c2, law.c, law.n, depths, stresses)

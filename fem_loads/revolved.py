@@ -30,45 +30,30 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numba import njit
 
 from mesh import Profile
 
-from .native import builtin_stress, call_user_law, contact_factor, entry_factor, friction_stress, slip_factor
+from .dafl import DAFLLoads
+from .kernel_layout import law_and_effects
+from .law_record import pack_effects, pack_laws
+from .native import contact_factor, entry_factor, friction_stress, law_stress, slip_factor
 from .resistance import ResistanceLaw
-from .user_law import MAX_PARAMETERS, UserLaw
+from .user_law import UserLaw
 
 __all__ = [
     "RevolvedSurface",
     "revolved_surface",
     "law_data",
+    "ring_data",
     "pitch_plane_load",
     "lowest_height",
     "PitchPlaneLoad",
-    "LAW_FIELDS",
 ]
 
-#: the layout of the law array the kernel takes (:func:`law_data`)
-LAW_FIELDS = (
-    "static_stress",
-    "dynamic_density",
-    "contact_width",
-    "contact_incidence",
-    "entry_length",
-    "friction_coefficient",
-    "friction_cap",
-    "max_radius",
-    "linear",
-    "power",
-    "exponent",
-    "depth_gradient",
-    "contact_offset",
-    "user_law_address",
-    *(f"user_parameter_{k}" for k in range(MAX_PARAMETERS)),
-)
-_LINEAR, _POWER, _EXPONENT, _GRADIENT, _OFFSET, _ADDRESS, _USER = 8, 9, 10, 11, 12, 13, 14
 _RAMP_X, _RAMP_W = np.polynomial.legendre.leggauss(4)  # arcs of a ramp: the integrand is a smooth polynomial
 _FRICTION_X, _FRICTION_W = np.polynomial.legendre.leggauss(6)  # arcs with friction: its slip direction too
 OUTLINE_POINTS = 257  # samples of the profile where the lowest point is sought: 4 mm apart on a 1 m body
@@ -173,57 +158,49 @@ def law_data(
     friction_coefficient: float = 0.0,
     friction_cap: float | None = None,
     contact: str = "one_sided",
-) -> np.ndarray:
-    """The law, its switches and friction as the kernel takes them (:data:`LAW_FIELDS`; SI units).
+) -> tuple[np.ndarray, np.ndarray]:
+    """The law and its effects as the kernel takes them: a :data:`~fem_loads.law_record.LAW` record and an
+    :data:`~fem_loads.law_record.EFFECTS` record (shape (1,) each; SI units).
 
     ``contact_width`` ``w`` (m/s) and ``contact_incidence`` ``delta`` give the contact ramp's width
     ``W = w + delta (|V| + |q| max_radius)``, ``contact`` where it lies (``"one_sided"``, ``"centred"``);
-    ``entry_length`` ``l`` (m) the entry ramp's (0: sharp).  A built-in law's strength table is not taken
-    (the caller refuses it); a user law enters by its cfunc's address (exact in a float below 2^53).
+    ``entry_length`` ``l`` (m) the entry ramp's (0: sharp).  A built-in law's strength table is refused (the
+    rings integrate no table).
     """
-    data = np.zeros(len(LAW_FIELDS))
-    data[2:8] = contact_width, contact_incidence, entry_length, friction_coefficient, friction_cap or 0.0, max_radius
-    data[_OFFSET] = 0.5 if contact == "centred" else 0.0
-    if isinstance(law, UserLaw):
-        address = law.compiled().address
-        if address >= 2**53:
-            raise ValueError("the user law's address does not fit the law array")
-        data[_ADDRESS] = float(address)
-        data[_USER : _USER + MAX_PARAMETERS] = law.parameter_values
-    else:
-        if law.strength_table:
-            raise ValueError("the ring model takes no strength table")
-        data[0], data[1] = law.static_stress, law.dynamic_density
-        data[_LINEAR], data[_POWER], data[_EXPONENT], data[_GRADIENT] = (
-            law.linear,
-            law.power,
-            law.exponent,
-            law.depth_gradient,
-        )
-    return data
+    if isinstance(law, ResistanceLaw) and law.strength_table:
+        raise ValueError("the ring model takes no strength table")
+    laws, _, _, address = pack_laws(law)
+    effects = pack_effects(
+        contact_width=contact_width,
+        contact_incidence=contact_incidence,
+        contact_offset=0.5 if contact == "centred" else 0.0,
+        smooth_contact=contact_width > 0.0 or contact_incidence > 0.0,
+        separation=True,
+        smooth_entry=entry_length > 0.0,
+        entry_length=entry_length,
+        friction=friction_coefficient,
+        friction_cap=friction_cap or 0.0,
+        user_law=address,
+        max_radius=max_radius,
+    )
+    return laws, effects
+
+
+def ring_data(loads: DAFLLoads, surface: RevolvedSurface) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`law_data` of a mesh load's own law and effects (:func:`~fem_loads.kernel_layout.law_and_effects`, the
+    records the mesh kernel takes), with the rings' radius and one entry length for every ring: the mesh's at its
+    median point (``entry_smoothing`` times the square root of its weight)."""
+    if isinstance(loads.law, ResistanceLaw) and loads.law.strength_table:
+        raise ValueError("the ring model takes no strength table")
+    if not isinstance(loads.law, ResistanceLaw | UserLaw):
+        raise ValueError("the ring model takes one law, not layers")
+    laws, _, _, effects = law_and_effects(loads)
+    effects["entry_length"] = loads.entry_smoothing * math.sqrt(float(np.median(loads.quadrature.weights)))
+    effects["max_radius"] = surface.max_radius
+    return laws, effects
 
 
 _NO_TABLE = np.zeros(0)
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def _law_stress(law: np.ndarray, normal_velocity: float, depth: float) -> float:
-    """The law at ``Vn >= 0`` (m/s) and depth (m): the built-in function, or the user's through its address."""
-    if law[_ADDRESS] != 0.0:
-        u = law[_USER : _USER + MAX_PARAMETERS]
-        return call_user_law(int(law[_ADDRESS]), normal_velocity, depth, u[0], u[1], u[2], u[3], u[4], u[5], u[6], u[7])
-    return builtin_stress(
-        normal_velocity,
-        depth,
-        law[0],
-        law[_GRADIENT],
-        law[_LINEAR],
-        law[1],
-        law[_POWER],
-        law[_EXPONENT],
-        _NO_TABLE,
-        _NO_TABLE,
-    )
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -233,13 +210,14 @@ def _entering(height: float, entry: float) -> float:
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _pressing_stress(law: np.ndarray, normal_velocity: float, depth: float, width: float) -> float:
+def _pressing_stress(law: Any, effects: Any, normal_velocity: float, depth: float, width: float) -> float:
     """``f(max(Vn, 0), z) c(Vn)``: the law times the contact factor (the smooth ramp, one-sided or centred, or
     the sharp switch at ``Vn = 0``)."""
-    contact = contact_factor(normal_velocity, width > 0.0, 1.0 / width if width > 0.0 else 0.0, law[_OFFSET], 0.0)
+    inverse_width = 1.0 / width if width > 0.0 else 0.0
+    contact = contact_factor(normal_velocity, width > 0.0, inverse_width, effects.contact_offset, 0.0)
     if contact == 0.0:
         return 0.0
-    return _law_stress(law, max(normal_velocity, 0.0), depth) * contact
+    return law_stress(law, effects.user_law, max(normal_velocity, 0.0), depth, _NO_TABLE, _NO_TABLE) * contact
 
 
 @njit(cache=True, inline="always")
@@ -316,13 +294,14 @@ def _gauss_arc(
     vx: float,
     vz: float,
     q: float,
-    law: np.ndarray,
+    law: Any,
+    effects: Any,
     width: float,
 ) -> tuple[float, float, float, float, float]:
     """Integrals over the arc ``low < cos phi < high`` by Gauss-Legendre panels of at most 45 degrees (6 points
     integrate cos^4 over one to 1e-9, where over a half ring they would err by 1e-4): ``sigma``,
     ``sigma cos phi``, and the friction stress's x and z components and its moment arm."""
-    entry, mu, cap = law[4], law[5], law[6]
+    entry, mu, cap = effects.entry_length, effects.friction, effects.friction_cap
     j0 = j1 = jx = jz = jm = 0.0
     phi_low, phi_high = math.acos(high), math.acos(low)
     panels = int(math.ceil((phi_high - phi_low) / _PANEL))
@@ -336,7 +315,7 @@ def _gauss_arc(
         entering = _entering(height, entry)
         if entering == 0.0:
             continue
-        sigma = _pressing_stress(law, vn, -height, width) * entering
+        sigma = _pressing_stress(law, effects, vn, -height, width) * entering
         if sigma == 0.0:
             continue
         weight = half * weights[g % nodes.shape[0]]
@@ -357,12 +336,12 @@ def _gauss_arc(
 
 @njit(cache=True, inline="always")
 def _uniform_ring(
-    a: float, h0: float, vx: float, n_axial: float, n_radial: float, law: np.ndarray, width: float
+    a: float, h0: float, vx: float, n_axial: float, n_radial: float, law: Any, effects: Any, width: float
 ) -> tuple[float, float]:
     """A ring loaded the same all round (``b = 0``, ``h1 = 0``: axial motion, the axis vertical): ``sigma`` over
     the half ring, and the friction's axial part (the slip along the meridian); no side load, exactly."""
-    entry, mu, cap = law[4], law[5], law[6]
-    sigma = _pressing_stress(law, a, -h0, width) * _entering(h0, entry)
+    entry, mu, cap = effects.entry_length, effects.friction, effects.friction_cap
+    sigma = _pressing_stress(law, effects, a, -h0, width) * _entering(h0, entry)
     if sigma == 0.0:
         return 0.0, 0.0
     jx = 0.0
@@ -376,7 +355,8 @@ def _uniform_ring(
 @njit(cache=True)
 def pitch_plane_load(
     rings: np.ndarray,
-    law: np.ndarray,
+    laws: np.ndarray,
+    effects_record: np.ndarray,
     height: float,
     sin_theta: float,
     cos_theta: float,
@@ -391,12 +371,16 @@ def pitch_plane_load(
     ``theta`` the body's rotation about the world Y axis (body x in the world: ``(cos, -sin)`` in X, Z),
     ``vx``, ``vz`` the velocity in the body frame (m/s), ``q`` the pitch rate (rad/s).
     """
-    static, dynamic, entry, mu, cap = law[0], law[1], law[4], law[5], law[6]
-    width = law[2] + law[3] * (math.sqrt(vx * vx + vz * vz) + abs(q) * law[7])
+    law, effects = laws[0], effects_record[0]
+    static, dynamic = law.c0, law.c2
+    entry, mu, cap = effects.entry_length, effects.friction, effects.friction_cap
+    width = effects.contact_width + effects.contact_incidence * (
+        math.sqrt(vx * vx + vz * vz) + abs(q) * effects.max_radius
+    )
     # the contact ramp runs from Vn = start to Vn = full (0 and W one-sided, -W/2 and W/2 centred)
-    start, full = -law[_OFFSET] * width, (1.0 - law[_OFFSET]) * width
+    start, full = -effects.contact_offset * width, (1.0 - effects.contact_offset) * width
     # the law exactly c0 + c2 Vn^2: the closed forms below are its integrals (else Gauss-Legendre throughout)
-    quadratic = law[_ADDRESS] == 0.0 and law[_LINEAR] == 0.0 and law[_POWER] == 0.0 and law[_GRADIENT] == 0.0
+    quadratic = effects.user_law == 0 and law.c1 == 0.0 and law.c == 0.0 and law.k == 0.0
     cap_speed = 2.0  # a normal velocity beyond any: no cap
     if quadratic and mu > 0.0 and cap > mu * static and dynamic > 0.0:
         cap_speed = math.sqrt((cap / mu - static) / dynamic)
@@ -416,7 +400,7 @@ def pitch_plane_load(
             j0 = math.pi * (static + dynamic * (a * a + 0.5 * b * b))
             j1 = math.pi * dynamic * a * b
         elif b == 0.0 and h1 == 0.0 and (mu == 0.0 or q == 0.0):
-            j0, jx = _uniform_ring(a, h0, vx, n_axial, n_radial, law, width)
+            j0, jx = _uniform_ring(a, h0, vx, n_axial, n_radial, law, effects, width)
         else:
             count = _switches(switches, a, b, h0, h1, start, full, entry, cap_speed)
             for m in range(count - 1):
@@ -431,7 +415,7 @@ def pitch_plane_load(
                     j1 += d1
                 else:
                     d0, d1, dx, dz, dm = _gauss_arc(
-                        low, high, a, b, h0, h1, x, rho, n_axial, n_radial, vx, vz, q, law, width
+                        low, high, a, b, h0, h1, x, rho, n_axial, n_radial, vx, vz, q, law, effects, width
                     )
                     j0, j1, jx, jz, jm = j0 + d0, j1 + d1, jx + dx, jz + dz, jm + dm
         # both halves of the ring: dF = -(sigma n + tau t) w dphi, dM = r x dF
@@ -461,12 +445,12 @@ class PitchPlaneLoad:
     Parameters
     ----------
     surface : RevolvedSurface
-    law : ndarray
-        :func:`law_data`.
+    law : tuple of ndarray
+        The law and effects records of :func:`law_data` (or :func:`ring_data`).
     """
 
-    def __init__(self, surface: RevolvedSurface, law: np.ndarray) -> None:
-        self.surface, self.law = surface, np.asarray(law, dtype=float)
+    def __init__(self, surface: RevolvedSurface, law: tuple[np.ndarray, np.ndarray]) -> None:
+        self.surface, (self.laws, self.effects) = surface, law
 
     def __call__(
         self, height: float, theta: float, velocity_body: tuple[float, float], pitch_rate: float
@@ -476,7 +460,8 @@ class PitchPlaneLoad:
         out = np.empty(3)
         pitch_plane_load(
             self.surface.rings,
-            self.law,
+            self.laws,
+            self.effects,
             float(height),
             math.sin(theta),
             math.cos(theta),

@@ -24,18 +24,19 @@ def _load(
     q: float,
     out: np.ndarray,
 ) -> None:
-    pitch_plane_load(data[0], data[1], height, sin_theta, cos_theta, vx, vz, q, out)
+    pitch_plane_load(data[0], data[1], data[2], height, sin_theta, cos_theta, vx, vz, q, out)
 
 
 @njit(cache=True, inline="always")
 def _lowest(data: tuple[np.ndarray, ...], height: float, sin_theta: float, cos_theta: float) -> float:
-    return lowest_height(data[2], height, sin_theta, cos_theta)
+    return lowest_height(data[3], height, sin_theta, cos_theta)
 
 
 @njit(cache=True, error_model="numpy")
 def pitch_plane_trajectory(
     rings: np.ndarray,
-    law: np.ndarray,
+    laws: np.ndarray,
+    effects: np.ndarray,
     outline: np.ndarray,
     y0: np.ndarray,
     mass: float,
@@ -55,11 +56,12 @@ def pitch_plane_trajectory(
     b_error: np.ndarray,
 ) -> tuple[int, float, float, float, float, float, float, int, int, int]:
     """:func:`dynamics.pitch_plane.trajectory` with the load :func:`fem_loads.revolved.pitch_plane_load` on ``rings``
-    under ``law`` (and the lowest point on ``outline``); returns its :data:`~dynamics.pitch_plane.OUTCOME_FIELDS`."""
+    under the records ``laws`` and ``effects`` (:func:`fem_loads.revolved.law_data`; the lowest point on
+    ``outline``); returns its :data:`~dynamics.pitch_plane.OUTCOME_FIELDS`."""
     return trajectory(
         _load,
         _lowest,
-        (rings, law, outline),
+        (rings, laws, effects, outline),
         y0,
         mass,
         inertia,

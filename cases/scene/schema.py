@@ -145,13 +145,11 @@ class Scene(Strict):
 
     @property
     def compilable(self) -> bool:
-        """Whether the compiled kernel computes this scene's load: every law and effect, except layers whose
-        laws are not all built in or all one user function (the kernel calls one)."""
-        if self.target.layers is None:
-            return True
-        laws = [layer.law for layer in self.target.layers]
-        functions = {law.function for law in laws if isinstance(law, UserLawSpec)}
-        return not functions or (len(functions) == 1 and all(isinstance(law, UserLawSpec) for law in laws))
+        """Whether the compiled kernel computes this scene's load (:func:`fem_loads.law_record.compilable` of its
+        target): every law and effect, except layers whose laws are not all built in or all one user function."""
+        from fem_loads.law_record import compilable
+
+        return compilable(self.target.build())
 
     def with_kernel(self, many_runs: bool) -> Scene:
         """This scene with ``numerics.kernel`` resolved: ``auto`` is ``compiled`` in a process that runs

@@ -95,8 +95,7 @@ class ReducedModel:
         announce_compiling("pitch_plane_step")
         use_numba_cache()
         from dynamics.pitch_plane import TABLEAU
-        from fem_loads.revolved import law_data, revolved_surface
-        from fem_loads.target import LayeredTarget
+        from fem_loads.revolved import revolved_surface, ring_data
 
         from ..run.pitch_plane_step import pitch_plane_trajectory
 
@@ -104,21 +103,9 @@ class ReducedModel:
         self._trajectory, self._tableau = pitch_plane_trajectory, TABLEAU
         self.rtol = rtol
         self.surface = revolved_surface(prepared.profile, float(prepared.tip[0]), **(rings or RINGS))
-        law, effects, numerics = scene.target.build(), scene.effects, scene.numerics
-        assert not isinstance(law, LayeredTarget)  # check_supported refused layers
-        friction = effects.friction.build()
-        # the mesh's entry ramp: each point enters over entry_smoothing times the square root of its weight
-        entry = numerics.entry_smoothing * math.sqrt(float(np.median(prepared.quadrature.weights)))
-        self.law = law_data(
-            law,
-            effects.contact_width,
-            effects.contact_incidence,
-            entry,
-            self.surface.max_radius,
-            friction.coefficient if friction else 0.0,
-            friction.cap if friction else None,
-            effects.contact,
-        )
+        effects = scene.effects
+        # the mesh load's own law and effects, on the rings (check_supported refused layers and tables)
+        self.laws, self.effects = ring_data(scene.loads(prepared.quadrature), self.surface)
         self.mass = float(prepared.mass.mass)
         self.inertia = float(prepared.mass.inertia[1, 1])
         self.gravity = effects.gravity_acceleration if effects.gravity else 0.0
@@ -181,7 +168,8 @@ class ReducedModel:
         scales = np.array([length, length, 0.01, speed, speed, 0.01 * speed / length])
         outcome = self._trajectory(
             self.surface.rings,
-            self.law,
+            self.laws,
+            self.effects,
             self.surface.outline,
             self.start(speed) if start is None else start,
             self.mass,

@@ -1,0 +1,119 @@
+"""The law and its effects as the compiled kernels take them: typed records, packed in one place.
+
+Every compiled kernel (the mesh's, :mod:`fem_loads.compiled`, and the rings', :mod:`fem_loads.revolved`) reads the
+target's law and the load's effects from numpy structured arrays whose fields say what they are, and numba reads
+them by name (``law.c1``, ``effects.contact_width``):
+
+* :data:`LAW`, one record per layer: the coefficients of :func:`~fem_loads.resistance.normal_stress_scalars`
+  (``c0`` Pa, ``k`` Pa/m, ``c1`` Pa s/m, ``c2`` kg/m^3, ``c`` Pa (s/m)^n, ``n``), a user law's parameters
+  (``user``, :class:`~fem_loads.user_law.UserLaw`), and where its strength table lies in the tables' array;
+* :data:`EFFECTS`, one record: the contact and entry ramps, friction, the free surface, the user law's address,
+  and what the mesh kernel derives from them once (its bounding sphere, whether the depth is needed, whether
+  the law is the plain polynomial its SIMD loop handles).
+
+:func:`pack_laws` and :func:`pack_effects` build them; :func:`compilable` is the one rule of which targets the
+compiled kernels take.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .resistance import ResistanceLaw
+from .target import LayeredTarget
+from .user_law import MAX_PARAMETERS, UserLaw
+
+__all__ = ["LAW", "EFFECTS", "pack_laws", "pack_effects", "compilable"]
+
+#: one layer's law (SI units)
+LAW = np.dtype(
+    [
+        ("c0", "f8"),  # Pa: the strength at the surface
+        ("k", "f8"),  # Pa/m: its growth with depth
+        ("c1", "f8"),  # Pa s/m: the coefficient of Vn
+        ("c2", "f8"),  # kg/m^3: of Vn |Vn|
+        ("c", "f8"),  # Pa (s/m)^n: of sign(Vn) |Vn|^n
+        ("n", "f8"),
+        ("user", "f8", (MAX_PARAMETERS,)),  # a user law's parameters, in its order
+        ("table_first", "i8"),  # the strength table's first column in the tables' array
+        ("table_count", "i8"),  # and its count (0: none)
+    ]
+)
+
+#: the load's effects (SI units; flags as booleans)
+EFFECTS = np.dtype(
+    [
+        ("contact_width", "f8"),  # w (m/s): the fixed part of the contact width W = w + delta U
+        ("contact_incidence", "f8"),  # delta: the part of W proportional to the speed scale U
+        ("contact_offset", "f8"),  # 0 one-sided, 1/2 centred
+        ("smooth_contact", "b1"),  # W > 0 (else the sharp switch at Vn > guard U)
+        ("guard", "f8"),  # the sharp switch's relative guard
+        ("separation", "b1"),  # no stress below the contact ramp (else contact everywhere)
+        ("smooth_entry", "b1"),  # points enter over their own extent (else sharply)
+        ("entry_length", "f8"),  # m: the rings' entry length (the mesh's is per point)
+        ("friction", "f8"),  # mu (0: none)
+        ("friction_cap", "f8"),  # tau_s (Pa; 0: none)
+        ("surface_depth", "f8"),  # D (m) of the free-surface reduction (0: none)
+        ("surface_fraction", "f8"),  # f0 of the free-surface reduction
+        ("user_law", "i8"),  # the address of a user law's cfunc (0: the built-in law)
+        ("max_radius", "f8"),  # m: the farthest point from the centre of mass
+        ("half_entry", "f8"),  # m: half the longest entry length
+        ("needs_depth", "b1"),  # the stress depends on each point's depth (beyond entering)
+        ("plain", "b1"),  # a polynomial law with both smooth ramps and separation: the SIMD loop
+    ]
+)
+
+
+def _laws(law: ResistanceLaw | UserLaw | LayeredTarget) -> tuple[ResistanceLaw | UserLaw, ...]:
+    return law.laws if isinstance(law, LayeredTarget) else (law,)
+
+
+def compilable(law: ResistanceLaw | UserLaw | LayeredTarget) -> bool:
+    """Whether the compiled kernels take this target's law: every law, except layers of more than one user function
+    or of user and built-in laws together (a kernel calls one function through one address)."""
+    laws = _laws(law)
+    users = {each.source for each in laws if isinstance(each, UserLaw)}
+    return not users or (len(users) == 1 and all(isinstance(each, UserLaw) for each in laws))
+
+
+def pack_laws(law: ResistanceLaw | UserLaw | LayeredTarget) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """``(laws, tables, interfaces, address)``: one :data:`LAW` record per layer; their strength tables one after
+    the other, shape (2, columns), depth (m) and stress (Pa); the interfaces (m below the surface, one fewer than
+    the layers); and the user law's cfunc address (0: none).  Refuses what :func:`compilable` refuses."""
+    if not compilable(law):
+        raise ValueError("the compiled load calls one user function: layers of different user laws run on numpy")
+    laws = _laws(law)
+    records = np.zeros(len(laws), dtype=LAW)
+    tables: list[np.ndarray] = [np.zeros((2, 0))]
+    address = 0
+    for record, each in zip(records, laws):
+        if isinstance(each, UserLaw):
+            record["user"] = each.parameter_values
+            address = each.compiled().address
+        else:
+            assert isinstance(each, ResistanceLaw)
+            record["c0"], record["k"], record["c1"], record["c2"] = (
+                each.static_stress,
+                each.depth_gradient,
+                each.linear,
+                each.dynamic_density,
+            )
+            record["c"], record["n"] = each.power, each.exponent
+            depths, stresses = each.table
+            record["table_first"], record["table_count"] = sum(t.shape[1] for t in tables), len(depths)
+            tables.append(np.stack([depths, stresses]))
+    interfaces = law.interfaces if isinstance(law, LayeredTarget) else np.zeros(0)
+    return records, np.ascontiguousarray(np.concatenate(tables, axis=1)), np.asarray(interfaces, float), address
+
+
+def pack_effects(**values: Any) -> np.ndarray:
+    """One :data:`EFFECTS` record (shape (1,)) with the fields given, the rest 0 (False); an unknown field raises
+    ValueError."""
+    record, names = np.zeros(1, dtype=EFFECTS), EFFECTS.names or ()
+    for name, value in values.items():
+        if name not in names:
+            raise ValueError(f"{name}: not a field of the effects record ({', '.join(names)})")
+        record[name] = value
+    return record
