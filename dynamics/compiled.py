@@ -16,8 +16,8 @@ each other).
 
 numba compiles the functions on their first call and keeps the machine code in its cache
 (``cache=True``, beside this module or in ``NUMBA_CACHE_DIR``): the first process compiles
-(about 10 s per load kernel); later processes load the code in about 0.4 s (importing numba and
-its compiled-code registry, mostly), once per process.  That is why a single short run is faster
+(docs/numerics.md, "The compiled step", gives the times); later processes load the code, importing numba and its
+compiled-code registry mostly, once per process.  That is why a single short run is faster
 on the numpy path, and a study's worker processes, which load it once for many runs, on this one.
 """
 
@@ -66,7 +66,7 @@ class CompiledLoad:
         :func:`rk_step` is inlined into it, and the kernel is a global there, so numba can keep the
         machine code in its cache; a step that took the kernel as an argument from Python would be
         compiled anew by every process (numba keys such code on the kernel object's identity) and
-        would cost about 10 us per call to type the kernel argument.
+        would pay for typing the kernel argument on every call.
     constant_force : ndarray, shape (3,), optional
         A force added to the kernel's (world frame, N): the weight of the body.
     """

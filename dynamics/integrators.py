@@ -104,8 +104,8 @@ def _path_increment(chord: np.ndarray, before: np.ndarray, after: np.ndarray) ->
     inside a step across the shank's ``Vn = 0`` switch (a jump of about 2 MN
     on 23 kg) the stage velocities swing sideways by ``h a`` times the
     tableau's coefficients (up to 11.6 for Dormand-Prince), and the weighted
-    sum of their lengths, with a negative weight, then undercounts the path:
-    0.35 % over Forrestal-Luk test 5 at a 1e-5 s step (docs/numerics.md, Hard cases).
+    sum of their lengths, with a negative weight, then undercounts the path
+    (docs/numerics.md, Hard cases, measures it on Forrestal-Luk test 5).
     """
     return path_increment_scalars(*chord.tolist(), *before.tolist(), *after.tolist())
 

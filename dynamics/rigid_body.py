@@ -98,7 +98,7 @@ class RigidBody:
         object.__setattr__(self, "inertia", inertia)
         object.__setattr__(self, "_inertia_inverse", np.linalg.inv(inertia))
         # the same matrices as Python floats: called several times per step on 3-vectors, where
-        # numpy's per-call overhead (~1 us) is most of the cost
+        # numpy's per-call overhead is most of the cost
         object.__setattr__(self, "_inertia_rows", tuple(tuple(row) for row in inertia.tolist()))
         object.__setattr__(self, "_inertia_flat", tuple(inertia.ravel().tolist()))
         object.__setattr__(self, "_inverse_flat", tuple(self._inertia_inverse.ravel().tolist()))

@@ -84,8 +84,8 @@ class SpeedBelow(Event):
     velocity: over a step longer than the time it takes to stop the body, the
     stages of an explicit method see the body moving one way and the other, their
     loads cancel, and the body creeps on at a nearly constant speed for thousands
-    of steps instead of stopping (a concrete target at a fixed step of 5e-5 s: 0.24 s
-    and 10 % more depth).  Limiting the step to the time the deceleration at its
+    of steps instead of stopping (docs/numerics.md, the end of a run, measures it in
+    concrete).  Limiting the step to the time the deceleration at its
     start takes to bring the speed to half the threshold keeps every stage moving
     forwards, and the step ends below the threshold, where the event is located.
     """
@@ -323,8 +323,8 @@ def find_root(
     bracket fails to halve: superlinear on smooth functions, never slower than
     bisection, and the bracket always holds a sign change.  Returns when the
     bracket is narrower than ``xtol``.  (scipy's ``brentq`` would do, but
-    importing ``scipy.optimize`` costs about 0.4 s, the better half of a short
-    run's wall time, and every run ends with an event.)
+    importing ``scipy.optimize`` costs a large part of a short run's wall time,
+    and every run ends with an event.)
     """
     if not (fa < 0.0 < fb or fb < 0.0 < fa):
         raise ValueError(f"no sign change on [{a}, {b}]: f = {fa}, {fb}")

@@ -120,7 +120,8 @@ def _smooth_sums(
                     points, point_signs, image, j, normal_arm, v, w, normal_velocity, stress, weights[j], rule
                 )
                 f0, f1, f2, f3, f4, f5 = f0 + d0, f1 + d1, f2 + d2, f3 + d3, f4 + d4, f5 + d5
-        sums[image, 0], sums[image, 1], sums[image, 2], sums[image, 3], sums[image, 4], sums[image, 5] = a0, a1, a2, a3, a4, a5
+        row = sums[image]
+        row[0], row[1], row[2], row[3], row[4], row[5] = a0, a1, a2, a3, a4, a5
         friction[0] += f0
         friction[1] += f1
         friction[2] += f2

@@ -4,7 +4,11 @@ For each surface quadrature point with outward normal ``n`` at ``r`` from the
 centre of mass, moving with ``u = V + omega x r``:
 
 * ``Vn = u . n`` (positive when the element pushes into the target);
-* ``sigma_n = f(Vn) c(Vn) e(Z)`` with ``f(Vn) = A sigma_0 + B rho_0 Vn^2``: the
+* ``sigma_n = f(Vn, z) c(Vn) g(z) e(Z) x``, each factor one function of :mod:`fem_loads.factors`, with ``f``
+  the target's law at the point's depth ``z`` (:func:`~fem_loads.resistance.normal_stress_scalars`, of which
+  the paper's cavity expansion ``A sigma_0 + B rho_0 Vn^2`` is one case; a user's law; or the layers' laws
+  blended across their interfaces), ``g`` the optional free-surface reduction and ``x`` the exposure
+  (:mod:`fem_loads.exposure`, 1 on a convex body): the
   contact factor ``c`` is 0 for ``Vn <= 0`` (the target separates from surfaces
   that move away from it) and 1 from ``Vn >= W``, the contact width
   ``W = w + delta U`` (``contact_width`` ``w``, ``contact_incidence`` ``delta``,
@@ -440,7 +444,7 @@ class DAFLLoads:
     ) -> np.ndarray:
         """Force and moment (body frame) of the tangential stress, opposite to the local slip.
 
-        With ``c_i = tau_i k_i w_i`` (:meth:`_slip`) and the slip ``s_i``, ``F = -sum c_i s_i`` and
+        With ``c_i = tau_i k_i w_i`` (:meth:`slip`) and the slip ``s_i``, ``F = -sum c_i s_i`` and
         ``M = -sum c_i r_i x s_i`` expand into weighted sums (``sum c``, ``sum c r``, ``sum c |r|^2``,
         ``sum c r (r . omega)``, ``sum c Vn n``, ``sum c Vn r x n``): matrix-vector products over
         cached arrays, no per-point cross products.

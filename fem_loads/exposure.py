@@ -33,8 +33,8 @@ Computed once per body, from the geometry (:func:`exposure_table`), and kept wit
   ``(SUB_CELLS + 1)^2`` sub-nodes traced too (a 7 x 7 grid: the table's resolution six times over where
   the shadow's edge lies, and only there).  Bilinear interpolation between the coarse nodes alone smears
   the edge over a whole cell, and where the edges of many points crowd near one node (a groove's rear
-  wall, whose shadows all start at the lip) that smear does not average out: the wall's exposed band came
-  out 5-8 % too large at 3-8 degrees of attack, against 0.1-0.8 % refined;
+  wall, whose shadows all start at the lip) that smear does not average out (docs/geometry.md measures the
+  wall's load both ways against exact rays);
 * between the nodes (the sub-nodes of a refined cell) ``e`` is interpolated bilinearly: a number in
   [0, 1], continuous in the direction, so that an adaptive step sees no jump when a shadow's edge crosses
   a point; a cell (sub-cell) whose four nodes agree gives their value exactly.

@@ -60,7 +60,7 @@ if [tuple(s) for s in MIRROR_SIGNS] != [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-
 def _generic_factors(count: int, start: int) -> np.ndarray:
     """``count`` numbers spread over [-1, 1) with full mantissas: the fractional parts of the multiples
     ``start + 1, start + 2, ...`` of the golden ratio.  Factors for the check below that need no
-    ``numpy.random`` (importing it took 4-8 ms of every run's start)."""
+    ``numpy.random``, whose import would lengthen every run's start."""
     return 2.0 * ((np.arange(start + 1, start + count + 1) * 0.6180339887498949) % 1.0) - 1.0
 
 

@@ -12,7 +12,7 @@ and :data:`cell_exposure` is numba's compilation of the one definition the numpy
 :func:`call_user_law` calls a user's law, a C call through the address of its numba ``cfunc``
 (:meth:`fem_loads.user_law.UserLaw.compiled`).  The kernels take the address as data, so they are compiled
 and cached once for every law; a function object passed instead would be typed anew on every call from
-Python (100-200 us) and compiled anew in every process.
+Python and compiled anew in every process.
 """
 
 from __future__ import annotations

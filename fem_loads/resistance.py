@@ -199,7 +199,7 @@ def locking_cavity_expansion(
     * ``B = [3/2 - 2 eta*^(1/3) + eta*^(4/3)/2] / (1 - eta*) + eta*^(1/3)``.
 
     The brief's dynamic-cavity-expansion rows (which also use the elastic
-    modulus ``E``) have ``B`` about 9 % higher (docs/effects.md).
+    modulus ``E``) have a higher ``B``; docs/effects.md compares the two.
     """
     if not (0.0 < locking_strain < 1.0):
         raise ValueError(f"locking_strain = {locking_strain}: must lie in (0, 1)")

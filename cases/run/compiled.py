@@ -165,8 +165,8 @@ def use_numba_cache() -> None:
         config.CACHE_DIR = str(numba_cache_folder())  # type: ignore[attr-defined]  # set from the environment at import: numba's stubs omit it
 
 
-#: what each compiled entry point is, and about how long numba takes to compile it on 2 cores (s; it
-#: depends on the machine and on what else runs: measured 16-30 s for the step, 10-20 s for the model)
+#: what each compiled entry point is, and about how long numba takes to compile it (s, as measured on 2 cores; the
+#: time depends on the machine and on what else runs), for the message a first compilation prints
 ENTRY_POINTS = {
     "dafl_step": ("the compiled step (the DAFL load inside the Runge-Kutta step)", "15-30"),
     "pitch_plane_step": ("the reduced pitch-plane model (penetrate predict)", "10-20"),
