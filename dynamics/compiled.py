@@ -31,7 +31,7 @@ from numba import njit
 
 from .integrators import Evaluation, RungeKutta, StepResult, path_increment_scalars
 from .quaternion import dexp_inverse_scalars, exp_scalars, hamilton_scalars, rotation_scalars
-from .rigid_body import RigidBody, State, euler_scalars
+from .rigid_body import LoadFunction, RigidBody, State, euler_scalars
 
 __all__ = ["CompiledLoad", "CompiledRungeKutta", "rk_step"]
 
@@ -43,6 +43,13 @@ _OUT = 51
 
 # ``kernel(data, position, velocity, rotation, angular_velocity, out)`` of a CompiledLoad (a numba dispatcher)
 LoadKernel = Callable[[tuple[np.ndarray, ...], np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], None]
+#: the body as the step takes it: constant force (N, world frame), mass (kg), inertia tensor and its inverse
+#: (kg m^2, body frame)
+Body = tuple[np.ndarray, float, np.ndarray, np.ndarray]
+#: the method's tableau: ``A``, ``b``, ``b_error`` (zeros without an estimate), first-same-as-last
+Tableau = tuple[np.ndarray, np.ndarray, np.ndarray, bool]
+#: the state at a step's start: position, velocity, unit attitude quaternion, angular velocity
+Start = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
 
 class CompiledLoad:
@@ -60,8 +67,8 @@ class CompiledLoad:
         :func:`rk_step` with this kernel, made in a module of its own by::
 
             @njit(cache=True, error_model="numpy")
-            def step(data, constant_force, ..., out):  # every argument of rk_step after load
-                rk_step(kernel, data, constant_force, ..., out)
+            def step(data, body, method, start, h, given, has_given, out):
+                rk_step(kernel, data, body, method, start, h, given, has_given, out)
 
         :func:`rk_step` is inlined into it, and the kernel is a global there, so numba can keep the
         machine code in its cache; a step that took the kernel as an argument from Python would be
@@ -89,27 +96,39 @@ class CompiledLoad:
         return out[:3] + self.constant_force, out[3:]
 
 
-class CompiledRungeKutta(RungeKutta):
-    """The compiled step of a Runge-Kutta method: its tableau, stepped by :func:`rk_step`.
+class CompiledRungeKutta:
+    """The compiled step of a Runge-Kutta method: the method's tableau, stepped by :func:`rk_step`.
+
+    It wraps ``method`` and is a :class:`~dynamics.integrators.Stepper` as the method is (the same order, error
+    estimate and contract), but its :meth:`step` takes a :class:`CompiledLoad`: that load's own compiled step
+    runs the kernel.
 
     Parameters
     ----------
     method : RungeKutta
         The method whose tableau to use (:class:`~dynamics.integrators.RK4`, ...).
-
-    :meth:`step` takes a :class:`CompiledLoad` as its load function.
     """
 
     def __init__(self, method: RungeKutta) -> None:
-        self.A = np.ascontiguousarray(method.A, dtype=float)
-        self.b = np.ascontiguousarray(method.b, dtype=float)
-        self.c = np.ascontiguousarray(method.c, dtype=float)
-        self.b_error = None if method.b_error is None else np.ascontiguousarray(method.b_error, dtype=float)
-        self._b_error = np.zeros_like(self.b) if self.b_error is None else self.b_error
-        self.order, self.error_order, self.fsal = method.order, method.error_order, method.fsal
+        self.method = method
+        b_error = np.zeros_like(method.b) if method.b_error is None else method.b_error
+        self._tableau: Tableau = (
+            np.ascontiguousarray(method.A, dtype=float),
+            np.ascontiguousarray(method.b, dtype=float),
+            np.ascontiguousarray(b_error, dtype=float),
+            bool(method.fsal),
+        )
         self._body: RigidBody | None = None
         self._inertia: np.ndarray | None = None
         self._inverse: np.ndarray | None = None
+
+    @property
+    def adaptive(self) -> bool:
+        return self.method.adaptive
+
+    @property
+    def error_order(self) -> int:
+        return self.method.error_order
 
     def _matrices(self, body: RigidBody) -> tuple[np.ndarray, np.ndarray]:
         if body is not self._body:
@@ -119,12 +138,13 @@ class CompiledRungeKutta(RungeKutta):
         assert self._inertia is not None and self._inverse is not None  # set with self._body
         return self._inertia, self._inverse
 
-    # takes only a CompiledLoad (its step runs the kernel), not any LoadFunction: a narrower argument than
-    # RungeKutta.step's, as the class docstring says
-    def step(  # type: ignore[override]
-        self, body: RigidBody, loads: CompiledLoad, state: State, h: float, first: Evaluation | None = None
+    def step(
+        self, body: RigidBody, loads: LoadFunction, state: State, h: float, first: Evaluation | None = None
     ) -> StepResult:
-        """Advance ``state`` by ``h`` seconds (see :class:`~dynamics.integrators.RungeKutta`)."""
+        """Advance ``state`` by ``h`` seconds (see :class:`~dynamics.integrators.RungeKutta`); ``loads`` is a
+        :class:`CompiledLoad`."""
+        if not isinstance(loads, CompiledLoad):
+            raise TypeError("a compiled step takes a CompiledLoad, whose own step runs its kernel")
         inertia, inverse = self._matrices(body)
         given = np.empty(12)
         if first is not None:
@@ -137,28 +157,19 @@ class CompiledRungeKutta(RungeKutta):
         out = np.empty(_OUT)
         loads.step(
             loads.data,
-            loads.constant_force,
-            body.mass,
-            inertia,
-            inverse,
-            self.A,
-            self.b,
-            self._b_error,
-            self.fsal,
-            state.position,
-            state.velocity,
-            state.attitude,
-            state.angular_velocity,
+            (loads.constant_force, body.mass, inertia, inverse),
+            self._tableau,
+            (state.position, state.velocity, state.attitude, state.angular_velocity),
             h,
             given,
             first is not None,
             out,
         )
         new = State(state.time + h, out[_X], out[_V], out[_Q], out[_W], state.path_length + out[_S])
-        error = out[_ERROR] if self.b_error is not None else None
+        error = out[_ERROR] if self.method.adaptive else None
         # without a first-same-as-last stage the step evaluates the end state too: the driver needs it for
         # the next step and the history, and it costs less here than from Python
-        evaluations = self.stages - (first is not None) + (not self.fsal)
+        evaluations = self.method.stages - (first is not None) + (not self.method.fsal)
         start = first if first is not None else _evaluation(out, _FIRST)
         return StepResult(new, error, start, _evaluation(out, _LAST), evaluations)
 
@@ -207,10 +218,7 @@ def _rate(u: np.ndarray, w: np.ndarray, out: np.ndarray) -> None:
 def _evaluate(
     load: LoadKernel,
     data: tuple[np.ndarray, ...],
-    constant_force: np.ndarray,
-    mass: float,
-    inertia: np.ndarray,
-    inverse: np.ndarray,
+    body: Body,
     x: np.ndarray,
     v: np.ndarray,
     q: np.ndarray,
@@ -221,6 +229,7 @@ def _evaluate(
     at: int,
 ) -> None:
     """One load evaluation and Newton-Euler; ``out[at:at + 12]`` = (a, alpha, F, M)."""
+    constant_force, mass, inertia, inverse = body
     _rotation(q, rotation)
     load(data, x, v, rotation, w, loads)
     for c in range(3):
@@ -240,33 +249,26 @@ def _evaluate(
 def rk_step(
     load: LoadKernel,
     data: tuple[np.ndarray, ...],
-    constant_force: np.ndarray,
-    mass: float,
-    inertia: np.ndarray,
-    inverse: np.ndarray,
-    A: np.ndarray,
-    b: np.ndarray,
-    b_error: np.ndarray,
-    fsal: bool,
-    x0: np.ndarray,
-    v0: np.ndarray,
-    q0: np.ndarray,
-    w0: np.ndarray,
+    body: Body,
+    method: Tableau,
+    start: Start,
     h: float,
     given: np.ndarray,
     has_given: bool,
     out: np.ndarray,
 ) -> None:
-    """One explicit Runge-Kutta-Munthe-Kaas step from ``(x0, v0, q0, w0)`` by ``h`` seconds.
+    """One explicit Runge-Kutta-Munthe-Kaas step from ``start`` = ``(x0, v0, q0, w0)`` by ``h`` seconds.
 
     Inlined into the step of each load kernel (:class:`CompiledLoad`, ``step``), never called alone.
-    ``load(data, x, v, R, omega, loads6)`` is the compiled load kernel;
-    ``given`` holds the first stage's evaluation when ``has_given``.  Fills ``out``: the new
-    position, velocity, unit attitude, angular velocity and path increment, the error estimate
+    ``load(data, x, v, R, omega, loads6)`` is the compiled load kernel, ``body`` the :data:`Body` and
+    ``method`` the :data:`Tableau`; ``given`` holds the first stage's evaluation when ``has_given``.
+    Fills ``out``: the new position, velocity, unit attitude, angular velocity and path increment, the error estimate
     ``h (b_error . k)`` of the increments ``(x, v, u, omega, s)``, and the first and last
     evaluations (acceleration, angular acceleration, force, moment); the last is that of the end state
     (the last stage's when ``fsal``, an extra evaluation otherwise).
     """
+    A, b, b_error, fsal = method
+    x0, v0, q0, w0 = start
     stages = b.shape[0]
     k = np.zeros((stages, 13))
     z = np.empty(13)
@@ -279,9 +281,7 @@ def rk_step(
             if has_given:
                 out[_FIRST : _FIRST + 12] = given
             else:
-                _evaluate(
-                    load, data, constant_force, mass, inertia, inverse, x0, v0, q0, w0, rotation, loads, out, _FIRST
-                )
+                _evaluate(load, data, body, x0, v0, q0, w0, rotation, loads, out, _FIRST)
             for j in range(3):
                 k[0, j] = v0[j]
                 k[0, 3 + j] = out[_FIRST + j]
@@ -302,10 +302,7 @@ def rk_step(
         _evaluate(
             load,
             data,
-            constant_force,
-            mass,
-            inertia,
-            inverse,
+            body,
             z[0:3],
             z[3:6],
             q,
@@ -347,10 +344,7 @@ def rk_step(
         _evaluate(
             load,
             data,
-            constant_force,
-            mass,
-            inertia,
-            inverse,
+            body,
             out[_X],
             out[_V],
             out[_Q],

@@ -16,7 +16,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .integrators import RungeKutta, StepResult
+from .integrators import Stepper, StepResult
 from .rigid_body import RigidBody, State
 
 __all__ = [
@@ -67,7 +67,7 @@ class StepControl:
     min_step: float
     forced_steps: int = 0
 
-    def start(self, method: RungeKutta) -> float:
+    def start(self, method: Stepper) -> float:
         raise NotImplementedError
 
     def judge(self, result: StepResult, state: State, size: float) -> tuple[str, float | str]:
@@ -99,13 +99,23 @@ class FixedStep(StepControl):
         self.min_step = _positive("min_step", min_step)
         self.forced_steps = 0
 
-    def start(self, method: RungeKutta) -> float:
+    def start(self, method: Stepper) -> float:
         return self.time_step
 
     def judge(self, result: StepResult, state: State, size: float) -> tuple[str, float | str]:
         if not result.state.is_finite():
             return END, NON_FINITE
         return ACCEPT, self.time_step
+
+
+def step_factor_scalars(norm: float, exponent: float) -> float:
+    """The next step (or the retaken one) over this one, from the error norm of this one: ``0.9 norm^exponent``
+    within 0.2 to 5 (``exponent = -1/(p + 1)``, p the order of the estimate); 5 for a zero norm, 0.2 for one
+    that is infinite or not a number.  The one definition: :class:`ErrorControl` calls it, and the compiled
+    pitch-plane driver (:mod:`dynamics.pitch_plane`) compiles it."""
+    if 0.0 < norm < math.inf:
+        return min(5.0, max(0.2, 0.9 * norm**exponent))
+    return 5.0 if norm == 0.0 else 0.2
 
 
 class ErrorControl(StepControl):
@@ -154,7 +164,7 @@ class ErrorControl(StepControl):
         self.forced_steps = 0
         self._exponent = math.nan
 
-    def start(self, method: RungeKutta) -> float:
+    def start(self, method: Stepper) -> float:
         if not method.adaptive:
             raise ValueError(f"{type(method).__name__} has no error estimate: use a fixed time step")
         self._exponent = -1.0 / (method.error_order + 1)
@@ -183,16 +193,15 @@ class ErrorControl(StepControl):
         norm = self.norm(result, state) if finite else math.inf
         if not norm <= 1.0 and (size > self.forced_step or not finite):
             # reject: shorten by the usual factor (a fifth for a non-finite trial)
-            factor = 0.9 * norm**self._exponent if math.isfinite(norm) else 0.2
-            shorter = size * min(1.0, max(0.2, factor))
+            shorter = size * min(1.0, step_factor_scalars(norm, self._exponent))
             if finite:
                 shorter = max(shorter, self.forced_step)
             if shorter < self.min_step:
                 return END, (STEP_FLOOR if finite else NON_FINITE)
             return RETAKE, shorter
         self.forced_steps += norm > 1.0
-        factor = 0.9 * norm**self._exponent if norm > 0 else 5.0
-        return ACCEPT, min(self.max_step, max(self.min_step, self.forced_step, size * min(5.0, max(0.2, factor))))
+        factor = step_factor_scalars(norm, self._exponent)
+        return ACCEPT, min(self.max_step, max(self.min_step, self.forced_step, size * factor))
 
 
 class EnergyGuard:

@@ -21,14 +21,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import NamedTuple, Protocol
 
 import numpy as np
 
 from .quaternion import compose, normalize, right_jacobian_inverse, rotation_matrix
 from .rigid_body import LoadFunction, RigidBody, State
 
-__all__ = ["RungeKutta", "RK4", "DormandPrince54", "Evaluation", "StepResult", "METHODS"]
+__all__ = ["Stepper", "RungeKutta", "RK4", "DormandPrince54", "Evaluation", "StepResult", "METHODS"]
 
 # layout of the increment vector z = (x, v, u, omega, s) used inside a step
 POSITION, VELOCITY, ROTATION, ANGULAR_VELOCITY, PATH = (
@@ -119,6 +119,21 @@ def path_increment_scalars(
     cross2 = (ay * bz - az * by) ** 2 + (az * bx - ax * bz) ** 2 + (ax * by - ay * bx) ** 2
     theta = math.atan2(math.sqrt(cross2), dot) if dot != 0.0 or cross2 != 0.0 else 0.0
     return length * (1.0 + theta * theta / 24.0)
+
+
+class Stepper(Protocol):
+    """What the driver (:func:`~dynamics.simulate.simulate`) and the step control ask of a method: a
+    :class:`RungeKutta`, or the compiled step that wraps one (:class:`~dynamics.compiled.CompiledRungeKutta`)."""
+
+    @property
+    def adaptive(self) -> bool: ...
+
+    @property
+    def error_order(self) -> int: ...
+
+    def step(
+        self, body: RigidBody, loads: LoadFunction, state: State, h: float, first: Evaluation | None = None
+    ) -> StepResult: ...
 
 
 class RungeKutta:

@@ -21,12 +21,14 @@ with ``lowest(data, height, sin_theta, cos_theta)`` the height of the body's low
 function of the caller's module that names them as globals, so numba can cache the machine code.
 
 :func:`trajectory` only steps and watches events, like :func:`dynamics.simulate`: the Dormand-Prince
-tableau is :class:`~dynamics.integrators.DormandPrince54`'s, the step control the same
-error-per-step rule as :class:`~dynamics.control.ErrorControl` (root mean square of the error over
-``atol + rtol |y|``, next step ``0.9 error^(-1/5)``, within a factor 0.2 to 5).  It ends when the
-body stops (speed below ``stop_speed``), leaves the target (lowest point back above the surface
-after having been in), its axis has turned by ``turn_limit``, the time limit passes, or, when asked,
-the attack angle has converged (fallen below ``threshold`` after its peak).
+tableau is :class:`~dynamics.integrators.DormandPrince54`'s, and the step control
+:class:`~dynamics.control.ErrorControl`'s rule, compiled from its one definition
+(:func:`~dynamics.control.step_factor_scalars`, on the root mean square of the error over
+``atol + rtol |y|``).  It ends when the body stops (speed below ``stop_speed``), leaves the target
+(lowest point back above the surface after having been in), its axis has turned by ``turn_limit``,
+the time limit passes, or, when asked, the attack angle has converged (fallen below ``threshold`` after
+its peak, the crossing's speed by :func:`~dynamics.convergence.crossing_speed_scalars`, as the full
+model's history finds it).
 """
 
 from __future__ import annotations
@@ -37,6 +39,8 @@ from collections.abc import Callable
 import numpy as np
 from numba import njit
 
+from .control import step_factor_scalars
+from .convergence import crossing_speed_scalars
 from .integrators import DormandPrince54
 from .rigid_body import euler_scalars
 
@@ -77,6 +81,9 @@ LowestPoint = Callable[[tuple[np.ndarray, ...], float, float, float], float]
 
 
 _euler_scalars = njit(inline="always", error_model="numpy")(euler_scalars)
+# the full model's step control and convergence rule, compiled from the same source
+_step_factor = njit(inline="always", error_model="numpy")(step_factor_scalars)
+_crossing_speed = njit(inline="always", error_model="numpy")(crossing_speed_scalars)
 
 
 @njit(cache=True, inline="always")
@@ -194,13 +201,13 @@ def trajectory(
         error = math.sqrt(error / _STATES)
         if not error <= 1.0:  # NaN fails too
             rejected += 1
-            h *= max(0.2, 0.9 * error**-0.2) if error == error else 0.2
+            h *= _step_factor(error, -0.2)
             continue
         t += h
         steps += 1
         y[:] = trial  # the last stage is the solution (first same as last)
         k[0, :] = k[6, :]
-        h = min(h * (min(5.0, 0.9 * error**-0.2) if error > 0.0 else 5.0), max_step)
+        h = min(h * _step_factor(error, -0.2), max_step)
         h = min(h, time_limit - t) if time_limit > t else h
         previous_attack, previous_speed = attack, speed
         speed = math.hypot(y[3], y[4])
@@ -208,9 +215,7 @@ def trajectory(
         if attack > peak and speed >= peak_floor:
             peak, speed_at_peak, converged_at = attack, speed, -1.0
         elif converged_at < 0.0 and peak >= threshold and attack < threshold <= previous_attack:
-            converged_at = previous_speed + (speed - previous_speed) * (threshold - previous_attack) / (
-                attack - previous_attack
-            )
+            converged_at = _crossing_speed(previous_attack, attack, previous_speed, speed, threshold)
         low = lowest(data, y[1], math.cos(y[2]), math.sin(y[2]))
         if low < 0.0:
             entered = True

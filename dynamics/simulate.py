@@ -18,7 +18,7 @@ from typing import Any, cast
 import numpy as np
 
 from .control import END, NON_FINITE, RETAKE, STEP_FLOOR, EnergyGuard, StepControl
-from .integrators import Evaluation, RungeKutta, evaluate
+from .integrators import Evaluation, Stepper, evaluate
 from .rigid_body import LoadFunction, RigidBody, State
 
 __all__ = [
@@ -190,7 +190,7 @@ def simulate(
     body: RigidBody,
     loads: LoadFunction,
     initial: State,
-    method: RungeKutta,
+    method: Stepper,
     control: StepControl,
     *,
     time_limit: float,
@@ -212,7 +212,7 @@ def simulate(
         Resultant force (world) and moment (body) for a state.
     initial : State
         The start.
-    method : RungeKutta
+    method : Stepper
         The Runge-Kutta method.
     control : StepControl
         The step-size control.
@@ -365,7 +365,7 @@ def find_root(
 def _locate(
     body: RigidBody,
     loads: LoadFunction,
-    method: RungeKutta,
+    method: Stepper,
     state: State,
     first: Evaluation | None,
     size: float,

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from dynamics.compiled import rk_step
+from dynamics.compiled import Body, Start, Tableau, rk_step
 from fem_loads.compiled import dafl_kernel
 
 __all__ = ["dafl_step"]
@@ -15,41 +15,13 @@ __all__ = ["dafl_step"]
 @njit(cache=True, error_model="numpy")
 def dafl_step(
     data: tuple[np.ndarray, ...],
-    constant_force: np.ndarray,
-    mass: float,
-    inertia: np.ndarray,
-    inverse: np.ndarray,
-    A: np.ndarray,
-    b: np.ndarray,
-    b_error: np.ndarray,
-    fsal: bool,
-    x0: np.ndarray,
-    v0: np.ndarray,
-    q0: np.ndarray,
-    w0: np.ndarray,
+    body: Body,
+    method: Tableau,
+    start: Start,
     h: float,
     given: np.ndarray,
     has_given: bool,
     out: np.ndarray,
 ) -> None:
     """:func:`dynamics.compiled.rk_step` with the load :func:`fem_loads.compiled.dafl_kernel`."""
-    rk_step(
-        dafl_kernel,
-        data,
-        constant_force,
-        mass,
-        inertia,
-        inverse,
-        A,
-        b,
-        b_error,
-        fsal,
-        x0,
-        v0,
-        q0,
-        w0,
-        h,
-        given,
-        has_given,
-        out,
-    )
+    rk_step(dafl_kernel, data, body, method, start, h, given, has_given, out)

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from dynamics.convergence import crossing_speed_scalars
 from dynamics.quaternion import rotation_matrix
 
 from .runner import RunResult
@@ -188,7 +189,6 @@ def convergence_speed(
     if len(below) == 0:
         return None
     i = peak + int(below[0])
-    if i == 0 or angle[i - 1] == angle[i]:
+    if i == 0:
         return float(speed[i])
-    w = (angle[i - 1] - threshold) / (angle[i - 1] - angle[i])
-    return float(speed[i - 1] + w * (speed[i] - speed[i - 1]))
+    return crossing_speed_scalars(float(angle[i - 1]), float(angle[i]), float(speed[i - 1]), float(speed[i]), threshold)

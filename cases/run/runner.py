@@ -37,6 +37,7 @@ from dynamics import (
     Trajectory,
     simulate,
 )
+from dynamics.integrators import Stepper
 from dynamics.quaternion import multiply, rotation_matrix
 
 from ..scene import Scene
@@ -221,7 +222,7 @@ def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
     numerics, effects = scene.numerics, scene.effects
     loads = scene.loads(prepared.quadrature)
     body = RigidBody(prepared.mass.mass, prepared.mass.inertia)
-    method = METHODS[numerics.integrator]()
+    method: Stepper = METHODS[numerics.integrator]()
 
     def numpy_lowest_height(position: np.ndarray, attitude: np.ndarray) -> float:
         return loads.lowest_height(position, rotation_matrix(attitude))
@@ -230,7 +231,7 @@ def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
     lowest_height: Callable[[np.ndarray, np.ndarray], float] = numpy_lowest_height
     driving: LoadFunction
     if numerics.kernel == "compiled":
-        driving, method, lowest_height = compiled_driving(scene, loads, body, method)
+        driving, method, lowest_height = compiled_driving(scene, loads, body, METHODS[numerics.integrator]())
     else:
         driving = WithGravity(loads, body.mass, effects.gravity_acceleration) if effects.gravity else loads
     control = step_control(scene, prepared.length)

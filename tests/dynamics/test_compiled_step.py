@@ -32,29 +32,8 @@ def _spring_and_vane(data, position, velocity, rotation, angular_velocity, out):
 
 
 @njit(cache=True, error_model="numpy")
-def _spring_and_vane_step(
-    data, constant_force, mass, inertia, inverse, A, b, b_error, fsal, x0, v0, q0, w0, h, given, has_given, out
-):
-    step.rk_step(
-        _spring_and_vane,
-        data,
-        constant_force,
-        mass,
-        inertia,
-        inverse,
-        A,
-        b,
-        b_error,
-        fsal,
-        x0,
-        v0,
-        q0,
-        w0,
-        h,
-        given,
-        has_given,
-        out,
-    )
+def _spring_and_vane_step(data, body, method, start, h, given, has_given, out):
+    step.rk_step(_spring_and_vane, data, body, method, start, h, given, has_given, out)
 
 
 def _load(k=4.0e5, d=0.0, c=0.0, s=0.0):
