@@ -25,7 +25,10 @@ from .resistance import ResistanceLaw
 from .target import LayeredTarget
 from .user_law import MAX_PARAMETERS, UserLaw
 
-__all__ = ["LAW", "EFFECTS", "pack_laws", "pack_effects", "compilable"]
+__all__ = ["LAW", "EFFECTS", "COEFFICIENTS", "pack_laws", "pack_effects", "compilable"]
+
+#: the built-in law's coefficients in the record, in the order ResistanceLaw.coefficients gives them
+COEFFICIENTS = ("c0", "k", "c1", "c2", "c", "n")
 
 #: one layer's law (SI units)
 LAW = np.dtype(
@@ -94,13 +97,8 @@ def pack_laws(law: ResistanceLaw | UserLaw | LayeredTarget) -> tuple[np.ndarray,
             address = each.compiled().address
         else:
             assert isinstance(each, ResistanceLaw)
-            record["c0"], record["k"], record["c1"], record["c2"] = (
-                each.static_stress,
-                each.depth_gradient,
-                each.linear,
-                each.dynamic_density,
-            )
-            record["c"], record["n"] = each.power, each.exponent
+            for name, value in zip(COEFFICIENTS, each.coefficients):
+                record[name] = value
             depths, stresses = each.table
             record["table_first"], record["table_count"] = sum(t.shape[1] for t in tables), len(depths)
             tables.append(np.stack([depths, stresses]))
