@@ -31,7 +31,8 @@ import math
 import numpy as np
 from numba import njit
 
-from .compiled_point import exposure_correction, image_friction, law_setup, point_motion, point_setup, point_stress
+from .compiled_point import exposure_correction, image_friction, law_setup, point_law_stress, point_motion, point_setup
+from .factors import Switches
 from .kernel_layout import (
     DATA_EFFECTS,
     DATA_EXPOSURE_COLUMNS,
@@ -44,7 +45,7 @@ from .kernel_layout import (
     kernel_data,
     supports,
 )
-from .native import contact_factor, entry_factor, polynomial_stress, surface_factor
+from .native import point_stress, polynomial_stress
 from .user_law import user_law_signature
 
 __all__ = ["dafl_kernel", "lowest_height_kernel", "kernel_data", "supports", "KERNEL_ARRAYS", "USER_LAW_SIGNATURE"]
@@ -83,12 +84,20 @@ def _smooth_sums(
     surface): each compiles to a loop of its own without the other's branches."""
     points, normal_arm, point_signs, weights, inverse_entry, needs_depth, rule = point_setup(data, width, v)
     effects = data[DATA_EFFECTS][0]
-    offset = effects.contact_offset
     surface_depth = effects.surface_depth
-    inverse_surface = 1.0 / surface_depth if surface_depth > 0.0 else 0.0
-    # without a free surface the factor with f0 = 1 is exactly 1
-    fraction = effects.surface_fraction if surface_depth > 0.0 else 1.0
-    inverse_width = 1.0 / width if width > 0.0 else 0.0
+    # the switches as constants where this loop fixes them; without a free surface the factor with f0 = 1 is 1
+    switches = Switches(
+        True,
+        True,
+        1.0 / width if width > 0.0 else 0.0,
+        effects.contact_offset,
+        0.0,
+        with_surface,
+        1.0 / surface_depth if surface_depth > 0.0 else 0.0,
+        effects.surface_fraction if surface_depth > 0.0 else 1.0,
+        not embedded,
+        True,
+    )
     law = data[DATA_LAWS][0]
     c0, k, c1, c2 = law.c0, law.k, law.c1, law.c2
     for image in range(sums.shape[0]):
@@ -104,11 +113,7 @@ def _smooth_sums(
             if needs_depth or not embedded:
                 z = height + (up0 * points[0, j] + up1 * points[1, j] + up2 * points[2, j])
             stress = polynomial_stress(max(normal_velocity, 0.0), -z, c0, k, c1, c2)
-            stress *= contact_factor(normal_velocity, True, inverse_width, offset, 0.0) * weights[j]
-            if with_surface:
-                stress *= surface_factor(-z, inverse_surface, fraction)
-            if not embedded:
-                stress *= entry_factor(z, True, inverse_entry[j])
+            stress = point_stress(stress, normal_velocity, -z, z, weights[j], inverse_entry[j], switches)
             a0 += stress * n0
             a1 += stress * n1
             a2 += stress * n2
@@ -186,7 +191,7 @@ def _sums(
     floats (an array view made per point costs its reference counting, more than the law itself).
     """
     points, normal_arm, point_signs, weights, inverse_entry, needs_depth, rule = point_setup(data, width, v)
-    layered, address, law, depths, stresses, switches = law_setup(data, width)
+    layered, address, law, depths, stresses, switches = law_setup(data, width, guard, embedded)
     mu = rule[0]
     for k in range(sums.shape[0]):
         a0 = a1 = a2 = a3 = a4 = a5 = 0.0
@@ -194,10 +199,9 @@ def _sums(
             n0, n1, n2, n3, n4, n5, normal_velocity, z = point_motion(
                 normal_arm, points, g, up, k, j, height, needs_depth or not embedded
             )
-            stress = point_stress(
-                data, j, normal_velocity, z, embedded, guard, layered, address, law, depths, stresses, switches,
-                weights, inverse_entry,
-            )  # fmt: skip
+            stress = point_law_stress(
+                data, j, normal_velocity, z, layered, address, law, depths, stresses, switches, weights, inverse_entry
+            )
             a0 += stress * n0
             a1 += stress * n1
             a2 += stress * n2

@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
+from .factors import Switches
 from .kernel_layout import (
     DATA_EFFECTS,
     DATA_EXPOSURE_COLUMNS,
@@ -29,16 +30,7 @@ from .kernel_layout import (
     DATA_TABLES,
     DATA_WEIGHTS,
 )
-from .native import (
-    cell_exposure,
-    contact_factor,
-    cube_cell,
-    entry_factor,
-    friction_stress,
-    law_stress,
-    slip_factor,
-    surface_factor,
-)
+from .native import cell_exposure, cube_cell, entry_factor, friction_stress, law_stress, point_stress, slip_factor
 
 __all__ = [
     "layered_stress",
@@ -46,7 +38,7 @@ __all__ = [
     "image_friction",
     "law_setup",
     "point_motion",
-    "point_stress",
+    "point_law_stress",
     "exposure_correction",
 ]
 
@@ -107,21 +99,25 @@ def point_friction(
 
 @njit(cache=True, inline="always", error_model="numpy")
 def law_setup(
-    data: tuple[np.ndarray, ...], width: float
-) -> tuple[bool, int, Any, np.ndarray, np.ndarray, tuple[bool, bool, float, float, float, float, bool]]:
+    data: tuple[np.ndarray, ...], width: float, guard: float, embedded: bool
+) -> tuple[bool, int, Any, np.ndarray, np.ndarray, Switches]:
     """What every point's stress shares, read once before a loop over the points: ``(layered, address, law, depths,
     stresses, switches)``: the user law's address (0: none), the first layer's law (a :data:`~fem_loads.law_record.LAW`
-    record), its strength table, and the switches ``(separation, smooth_contact, 1 / W, contact offset, free surface
-    depth and fraction, smooth_entry)`` at the contact width ``W`` (m/s)."""
+    record), its strength table, and the factors' :class:`~fem_loads.factors.Switches` at the contact width ``W``
+    (m/s) and the sharp switch's ``guard`` (m/s)."""
     effects, law = data[DATA_EFFECTS][0], data[DATA_LAWS][0]
     first, count = law.table_first, law.table_count
-    switches = (
+    surface_depth = effects.surface_depth
+    switches = Switches(
         effects.separation,
         effects.smooth_contact,
         1.0 / width if width > 0.0 else 0.0,
         effects.contact_offset,
-        effects.surface_depth,
+        guard,
+        surface_depth > 0.0,
+        1.0 / surface_depth if surface_depth > 0.0 else 0.0,
         effects.surface_fraction,
+        not embedded,
         effects.smooth_entry,
     )
     return (
@@ -159,44 +155,29 @@ def point_setup(
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def point_stress(
+def point_law_stress(
     data: tuple[np.ndarray, ...],
     j: int,
     normal_velocity: float,
     z: float,
-    embedded: bool,
-    guard: float,
     layered: bool,
     address: int,
     law: Any,
     depths: np.ndarray,
     stresses: np.ndarray,
-    switches: tuple[bool, bool, float, float, float, float, bool],
+    switches: Switches,
     weights: np.ndarray,
     inverse_entry: np.ndarray,
 ) -> float:
-    """The normal stress of point ``j`` times its weight (N/m^0: Pa m^2) at ``Vn`` (m/s) and height ``z`` (m): the
-    law, the contact ramp (or the sharp switch, ``Vn > guard``), the free surface and the entry, as
-    :meth:`DAFLLoads._stress <fem_loads.dafl.DAFLLoads._stress>` multiplies them."""
-    separation, smooth_contact, inverse_width, offset, surface_depth, surface_fraction, smooth_entry = switches
-    # branch-free where the points differ (the factors are selects, not jumps): the loop then runs in
-    # SIMD lanes, and the points on either side of a switch cost the same
-    if separation:
-        contact = contact_factor(normal_velocity, smooth_contact, inverse_width, offset, guard)
-        law_velocity = max(normal_velocity, 0.0)
-    else:
-        contact = 1.0
-        law_velocity = normal_velocity
+    """The normal stress of point ``j`` times its weight (Pa m^2) at ``Vn`` (m/s) and height ``z`` (m): its law (one,
+    or the layers blended) through :func:`~fem_loads.factors.point_stress_scalars`, as the numpy path has it."""
+    # without separation the law's odd extension to Vn < 0 (cut at 0 by the pipeline)
+    law_velocity = max(normal_velocity, 0.0) if switches.separation else normal_velocity
     if layered:
-        stress = layered_stress(data, law_velocity, -z, smooth_entry, inverse_entry[j])
+        stress = layered_stress(data, law_velocity, -z, switches.smooth_entry, inverse_entry[j])
     else:
         stress = law_stress(law, address, law_velocity, -z, depths, stresses)
-    stress = stress * contact if separation else max(stress, 0.0)
-    if surface_depth > 0.0:
-        stress *= surface_factor(-z, 1.0 / surface_depth, surface_fraction)
-    if not embedded:
-        stress *= entry_factor(z, smooth_entry, inverse_entry[j])
-    return stress * weights[j]
+    return point_stress(stress, normal_velocity, -z, z, weights[j], inverse_entry[j], switches)
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -277,9 +258,10 @@ def exposure_correction(
         return  # no direction of motion, no shadow
     n = round(math.sqrt((start.shape[0] - 1) / 6.0))  # 6 N^2 cells
     points, normal_arm, point_signs, weights, inverse_entry, needs_depth, rule = point_setup(data, width, v)
-    layered, address, law, depths, stresses, switches = law_setup(data, width)
+    layered, address, law, depths, stresses, switches = law_setup(data, width, guard, embedded)
     mu = rule[0]
-    separation, smooth_contact, inverse_width, offset = switches[0], switches[1], switches[2], switches[3]
+    separation, smooth_contact = switches.separation, switches.smooth_contact
+    inverse_width, offset = switches.inverse_width, switches.contact_offset
     # the smooth ramp is zero at and below -offset W; the sharp switch at and below the guard
     limit = -math.inf if smooth_contact else guard
     if not smooth_contact:
@@ -299,10 +281,9 @@ def exposure_correction(
             )
             if separation and (normal_velocity * inverse_width + offset <= _RAMP_FLOOR or normal_velocity <= limit):
                 continue  # below the contact ramp (or where it is below 1e-14), or the sharp switch: nothing to hide
-            stress = point_stress(
-                data, p, normal_velocity, z, embedded, guard, layered, address, law, depths, stresses, switches,
-                weights, inverse_entry,
-            )  # fmt: skip
+            stress = point_law_stress(
+                data, p, normal_velocity, z, layered, address, law, depths, stresses, switches, weights, inverse_entry
+            )
             if stress == 0.0:
                 continue
             change = (exposure - 1.0) * stress

@@ -56,7 +56,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .factors import contact_factor_scalars, entry_factor_scalars
+from .factors import Switches, point_stress_scalars
 from .images import MirrorImages
 from .quadrature import SurfaceQuadrature
 from .resistance import ResistanceLaw
@@ -265,21 +265,21 @@ class DAFLLoads:
         width = self.contact_width + self.contact_incidence * speed_scale
         return 1.0 / width if width > 0.0 else 0.0
 
-    def _contact_factor(self, normal_velocity: np.ndarray, speed_scale: float) -> np.ndarray:
-        """The contact factor ``c(Vn)`` at every point (any layout)."""
-        return np.asarray(
-            contact_factor_scalars(
-                normal_velocity,
-                self._smooth_contact,
-                self._inverse_width(speed_scale),
-                self._contact_offset,
-                self.normal_velocity_guard * speed_scale,
-            )
+    def _switches(self, speed_scale: float, entering: bool) -> Switches:
+        """The factors' :class:`~fem_loads.factors.Switches` at the speed scale ``U`` (m/s)."""
+        surface = self.free_surface
+        return Switches(
+            separation=self.separation,
+            smooth_contact=self._smooth_contact,
+            inverse_width=self._inverse_width(speed_scale),
+            contact_offset=self._contact_offset,
+            threshold=self.normal_velocity_guard * speed_scale,
+            surface=surface is not None,
+            inverse_surface=1.0 / surface.depth if surface is not None else 0.0,
+            surface_fraction=surface.surface_fraction if surface is not None else 1.0,
+            entering=entering,
+            smooth_entry=bool(self.entry_smoothing),
         )
-
-    def _entry(self, heights: np.ndarray) -> np.ndarray:
-        """The entry factor ``e(Z)`` at every point (the layout of the sums)."""
-        return np.asarray(entry_factor_scalars(heights, bool(self.entry_smoothing), self._hot_inverse_entry))
 
     def _target_stress(self, normal_velocity: np.ndarray, depth: np.ndarray | float) -> np.ndarray:
         """The target's law at every point (a new array): one law, or the layers blended across their interfaces."""
@@ -300,19 +300,12 @@ class DAFLLoads:
         if needs_depth or not self.fully_embedded(position):
             heights = self._heights(position, rotation)
         depth: np.ndarray | float = -heights if needs_depth and heights is not None else 0.0
-        if self.separation:
-            # the law at max(Vn, 0); a built-in law is finite everywhere, and below the one-sided ramp its
-            # value is multiplied by zero, so there it is evaluated at Vn itself
-            exact = isinstance(self.law, ResistanceLaw) and not self._contact_offset
-            stress = self._target_stress(normal_velocity if exact else np.maximum(normal_velocity, 0.0), depth)
-            stress *= self._contact_factor(normal_velocity, speed_scale)
-        else:
-            # contact everywhere: receding surfaces feel the strength less the dynamic terms
-            stress = np.maximum(self._target_stress(normal_velocity, depth), 0.0)
-        if self.free_surface is not None:
-            stress *= self.free_surface.factor(np.asarray(depth))
-        if heights is not None:
-            stress *= self._entry(heights)
+        # the law at max(Vn, 0) with separation; a built-in law is finite everywhere, and below the one-sided
+        # ramp its value is multiplied by zero, so there it is evaluated at Vn itself
+        exact = not self.separation or (isinstance(self.law, ResistanceLaw) and not self._contact_offset)
+        stress = self._target_stress(normal_velocity if exact else np.maximum(normal_velocity, 0.0), depth)
+        switches = self._switches(speed_scale, heights is not None)
+        stress = point_stress_scalars(stress, normal_velocity, depth, heights, 1.0, self._hot_inverse_entry, switches)
         if self.exposure is not None:
             self._expose(stress, velocity @ rotation)
         return stress, normal_velocity, speed_scale

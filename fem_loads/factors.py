@@ -17,17 +17,67 @@ Each is written on floats and numpy arrays alike, with the smooth step of :mod:`
 path evaluates it on every point at once, and :mod:`fem_loads.native` compiles the very same function for the
 compiled kernels (the mesh's and the rings').  A flag such as ``smooth`` is one value for all the points, so a
 compiled loop that passes a constant keeps no branch.
+
+:func:`point_stress_scalars` is the pipeline: it multiplies a point's law value by the factors, and every load
+(the numpy path, the compiled mesh kernel and its SIMD loop, the rings) calls it.  A new factor is one function
+here (named ``*_scalars``: :mod:`fem_loads.native` compiles every such function of this module) and one line in
+the pipeline.
 """
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from .ramps import smooth_step_scalars
 
-__all__ = ["contact_factor_scalars", "entry_factor_scalars", "surface_factor_scalars", "friction_stress_scalars"]
+__all__ = [
+    "Switches",
+    "point_stress_scalars",
+    "contact_factor_scalars",
+    "entry_factor_scalars",
+    "surface_factor_scalars",
+    "friction_stress_scalars",
+]
+
+
+class Switches(NamedTuple):
+    """What the factors of every point share in one load evaluation (:func:`point_stress_scalars`)."""
+
+    separation: bool  #: no stress below the contact ramp (else ``max(f, 0)`` everywhere)
+    smooth_contact: bool  #: the contact ramp (else the sharp switch at ``Vn > threshold``)
+    inverse_width: float  #: ``1 / W`` (s/m; 0 for a body at rest without a fixed width)
+    contact_offset: float  #: 0 one-sided, 1/2 centred
+    threshold: float  #: m/s: the sharp switch's ``Vn`` (the guard times the speed scale)
+    surface: bool  #: the free-surface factor applies (its factor is exactly 1 at ``f0 = 1``)
+    inverse_surface: float  #: ``1 / D`` (1/m)
+    surface_fraction: float  #: ``f0``
+    entering: bool  #: the entry factor applies (some point may be outside the target)
+    smooth_entry: bool  #: points enter over their own extent (else sharply)
+
+
+def point_stress_scalars(
+    stress: Any, normal_velocity: Any, depth: Any, height: Any, weight: Any, inverse_entry: Any, switches: Switches
+) -> Any:
+    """``f c w g e``: a point's law value ``stress`` (Pa) times its contact factor and ``weight`` (1, or the
+    quadrature weight in m^2), its free-surface factor at ``depth`` (m below the free surface) and its entry
+    factor at ``height`` (m above the face it enters through; ``inverse_entry`` ``1 / l``, 1/m).  Without
+    separation the law's negative values are cut at 0 instead of the contact factor.  ``stress`` may be updated
+    in place (an array the caller owns)."""
+    s = switches
+    if s.separation:
+        stress *= (
+            contact_factor_scalars(normal_velocity, s.smooth_contact, s.inverse_width, s.contact_offset, s.threshold)
+            * weight
+        )
+    else:
+        stress = np.maximum(stress, 0.0) * weight
+    if s.surface:
+        stress *= surface_factor_scalars(depth, s.inverse_surface, s.surface_fraction)
+    if s.entering:
+        stress *= entry_factor_scalars(height, s.smooth_entry, inverse_entry)
+    return stress
 
 
 def contact_factor_scalars(

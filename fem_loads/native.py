@@ -1,8 +1,8 @@
 """The compiled forms of the scalar definitions the numpy path shares, and the call into a user's law.
 
 Each of :data:`smooth_step`, :data:`slip_factor`, :data:`builtin_stress`, :data:`polynomial_stress`,
-:data:`contact_factor`, :data:`entry_factor`, :data:`surface_factor`, :data:`friction_stress`, :data:`cube_cell`
-and :data:`cell_exposure` is numba's compilation of the one definition the numpy path evaluates
+:data:`contact_factor`, :data:`entry_factor`, :data:`surface_factor`, :data:`friction_stress`, :data:`point_stress`,
+:data:`cube_cell` and :data:`cell_exposure` is numba's compilation of the one definition the numpy path evaluates
 (:func:`fem_loads.ramps.smooth_step_scalars`, :func:`fem_loads.target.slip_factor_scalars`,
 :func:`fem_loads.resistance.normal_stress_scalars` and its polynomial part, the factors of
 :mod:`fem_loads.factors`, :func:`fem_loads.exposure.cube_cell_scalars`,
@@ -25,8 +25,15 @@ from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic, register_jitable
 
+from . import factors
 from .exposure import cell_exposure_scalars, corner_exposure, cube_cell_scalars, fine_exposure
-from .factors import contact_factor_scalars, entry_factor_scalars, friction_stress_scalars, surface_factor_scalars
+from .factors import (
+    contact_factor_scalars,
+    entry_factor_scalars,
+    friction_stress_scalars,
+    point_stress_scalars,
+    surface_factor_scalars,
+)
 from .ramps import smooth_step_scalars
 from .resistance import normal_stress_scalars, polynomial_stress_scalars
 from .target import slip_factor_scalars
@@ -42,6 +49,7 @@ __all__ = [
     "entry_factor",
     "surface_factor",
     "friction_stress",
+    "point_stress",
     "cube_cell",
     "cell_exposure",
     "law_stress",
@@ -50,6 +58,12 @@ __all__ = [
 smooth_step = njit(inline="always", error_model="numpy")(smooth_step_scalars)
 # the smooth step as numba sees it inside the factors (the plain function stays plain)
 register_jitable(error_model="numpy")(smooth_step_scalars)
+# every factor of fem_loads.factors (its *_scalars functions) as numba sees it inside the pipeline, so that a new
+# factor needs no line here
+for _name, _function in vars(factors).items():
+    if _name.endswith("_scalars") and callable(_function) and _function is not smooth_step_scalars:
+        register_jitable(error_model="numpy")(_function)
+point_stress = njit(inline="always", error_model="numpy")(point_stress_scalars)
 contact_factor = njit(inline="always", error_model="numpy")(contact_factor_scalars)
 entry_factor = njit(inline="always", error_model="numpy")(entry_factor_scalars)
 surface_factor = njit(inline="always", error_model="numpy")(surface_factor_scalars)

@@ -38,9 +38,10 @@ from numba import njit
 from mesh import Profile
 
 from .dafl import DAFLLoads
+from .factors import Switches
 from .kernel_layout import law_and_effects
 from .law_record import pack_effects, pack_laws
-from .native import contact_factor, entry_factor, friction_stress, law_stress, slip_factor
+from .native import entry_factor, friction_stress, law_stress, point_stress, slip_factor
 from .resistance import ResistanceLaw
 from .user_law import UserLaw
 
@@ -210,14 +211,25 @@ def _entering(height: float, entry: float) -> float:
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _pressing_stress(law: Any, effects: Any, normal_velocity: float, depth: float, width: float) -> float:
-    """``f(max(Vn, 0), z) c(Vn)``: the law times the contact factor (the smooth ramp, one-sided or centred, or
-    the sharp switch at ``Vn = 0``)."""
-    inverse_width = 1.0 / width if width > 0.0 else 0.0
-    contact = contact_factor(normal_velocity, width > 0.0, inverse_width, effects.contact_offset, 0.0)
-    if contact == 0.0:
-        return 0.0
-    return law_stress(law, effects.user_law, max(normal_velocity, 0.0), depth, _NO_TABLE, _NO_TABLE) * contact
+def _ring_stress(law: Any, effects: Any, normal_velocity: float, height: float, width: float) -> float:
+    """A ring point's stress (Pa) at ``Vn`` (m/s) and ``height`` (m above the surface) through the points' pipeline
+    (:func:`~fem_loads.factors.point_stress_scalars`): the law at ``max(Vn, 0)`` and depth ``-height``, times the
+    contact factor (the smooth ramp, one-sided or centred, or the sharp switch at ``Vn = 0``) and the entry factor."""
+    entry = effects.entry_length
+    switches = Switches(
+        True,
+        width > 0.0,
+        1.0 / width if width > 0.0 else 0.0,
+        effects.contact_offset,
+        0.0,
+        False,
+        0.0,
+        1.0,
+        True,
+        entry > 0.0,
+    )
+    stress = law_stress(law, effects.user_law, max(normal_velocity, 0.0), -height, _NO_TABLE, _NO_TABLE)
+    return point_stress(stress, normal_velocity, -height, height, 1.0, 1.0 / entry if entry > 0.0 else 0.0, switches)
 
 
 @njit(cache=True, inline="always")
@@ -312,10 +324,9 @@ def _gauss_arc(
         c = math.cos(phi)
         vn = a + b * c
         height = h0 + h1 * c
-        entering = _entering(height, entry)
-        if entering == 0.0:
+        if _entering(height, entry) == 0.0:
             continue
-        sigma = _pressing_stress(law, effects, vn, -height, width) * entering
+        sigma = _ring_stress(law, effects, vn, height, width)
         if sigma == 0.0:
             continue
         weight = half * weights[g % nodes.shape[0]]
@@ -340,8 +351,8 @@ def _uniform_ring(
 ) -> tuple[float, float]:
     """A ring loaded the same all round (``b = 0``, ``h1 = 0``: axial motion, the axis vertical): ``sigma`` over
     the half ring, and the friction's axial part (the slip along the meridian); no side load, exactly."""
-    entry, mu, cap = effects.entry_length, effects.friction, effects.friction_cap
-    sigma = _pressing_stress(law, effects, a, -h0, width) * _entering(h0, entry)
+    mu, cap = effects.friction, effects.friction_cap
+    sigma = _ring_stress(law, effects, a, h0, width)
     if sigma == 0.0:
         return 0.0, 0.0
     jx = 0.0

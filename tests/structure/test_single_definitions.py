@@ -34,6 +34,7 @@ NATIVE = {
     "entry_factor": ("factors", "entry_factor_scalars"),
     "surface_factor": ("factors", "surface_factor_scalars"),
     "friction_stress": ("factors", "friction_stress_scalars"),
+    "point_stress": ("factors", "point_stress_scalars"),
     "cube_cell": ("exposure", "cube_cell_scalars"),
     "cell_exposure": ("exposure", "cell_exposure_scalars"),
 }
@@ -90,8 +91,7 @@ def test_the_numpy_path_calls_the_same_definitions():
     from dynamics import rigid_body
     from fem_loads import dafl, factors, resistance, target
 
-    assert dafl.contact_factor_scalars is factors.contact_factor_scalars
-    assert dafl.entry_factor_scalars is factors.entry_factor_scalars
+    assert dafl.point_stress_scalars is factors.point_stress_scalars
     assert dafl.slip_factor_scalars is target.slip_factor_scalars
     assert target.entry_factor_scalars is factors.entry_factor_scalars
     assert target.surface_factor_scalars is factors.surface_factor_scalars
