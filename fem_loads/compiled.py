@@ -45,7 +45,7 @@ from .kernel_layout import (
     kernel_data,
     supports,
 )
-from .native import point_stress, polynomial_stress
+from .native import face_frame, face_height, point_stress, polynomial_stress
 from .user_law import user_law_signature
 
 __all__ = ["dafl_kernel", "lowest_height_kernel", "kernel_data", "supports", "KERNEL_ARRAYS", "USER_LAW_SIGNATURE"]
@@ -234,12 +234,12 @@ def dafl_kernel(
     max_radius, half_entry = effects.max_radius, effects.half_entry
     for c in range(6):
         out[c] = 0.0
-    height = position[2]
+    height, up0, up1, up2 = face_frame(position, rotation, effects.face_normal, effects.face_offset)
     if height - max_radius - half_entry >= 0.0:
         return  # wholly above the surface
     embedded = height + max_radius + half_entry < 0.0
     images = image_signs.shape[0]
-    # each image's generalised velocity (R^T V, omega) and up vector R[2] with its signs: exact sign changes,
+    # each image's generalised velocity (R^T V, omega) and up vector R^T n with its signs: exact sign changes,
     # so an image's Vn and height are the quarter's sums with those signs, in the same order
     g = np.empty((images, 6))
     up = np.empty((images, 3))
@@ -250,7 +250,7 @@ def dafl_kernel(
         for c in range(3):
             g[k, c] = v[c] * image_signs[k, c]
             g[k, 3 + c] = angular_velocity[c] * image_signs[k, 3 + c]
-            up[k, c] = rotation[2, c] * point_signs[k, c]
+        up[k, 0], up[k, 1], up[k, 2] = up0 * point_signs[k, 0], up1 * point_signs[k, 1], up2 * point_signs[k, 2]
     speed = math.sqrt(velocity[0] * velocity[0] + velocity[1] * velocity[1] + velocity[2] * velocity[2])
     spin = math.sqrt(angular_velocity[0] ** 2 + angular_velocity[1] ** 2 + angular_velocity[2] ** 2)
     speed_scale = speed + spin * max_radius
@@ -284,23 +284,24 @@ def dafl_kernel(
 
 
 @njit(cache=True, error_model="numpy")
-def lowest_height_kernel(data: tuple[np.ndarray, ...], position: np.ndarray, up: np.ndarray) -> float:
-    """``min(Z - l/2)`` over the points (m): :meth:`DAFLLoads.lowest_height` on the kernel's arrays, for
-    ``up = R[2]`` (the world's up direction in the body frame, the last row of the rotation matrix).
+def lowest_height_kernel(data: tuple[np.ndarray, ...], position: np.ndarray, rotation: np.ndarray) -> float:
+    """``min(H - l/2)`` over the points (m, ``H`` the height above the front face): :meth:`DAFLLoads.lowest_height`
+    on the kernel's arrays.
 
-    While every point is below the surface (the bounding sphere's top is) it returns that top,
-    ``Z_c + r_max``, a negative upper bound: the exit event needs only the sign there, and the heights
+    While every point is inside the target (the bounding sphere's top is) it returns that top,
+    ``h + r_max``, a negative upper bound: the exit event needs only the sign there, and the heights
     of every point at every step cost as much as a load evaluation.
     """
     points, half_entry_length, point_signs = data[DATA_POINTS], data[DATA_HALF_ENTRY_LENGTH], data[DATA_POINT_SIGNS]
-    top = position[2] + data[DATA_EFFECTS][0].max_radius
+    effects = data[DATA_EFFECTS][0]
+    top = face_height(position, effects.face_normal, effects.face_offset) + effects.max_radius
     if top < 0.0:
         return top
-    up0, up1, up2 = up[0], up[1], up[2]
+    height, up0, up1, up2 = face_frame(position, rotation, effects.face_normal, effects.face_offset)
     lowest = math.inf
     for j in range(points.shape[1]):
         p0, p1, p2 = up0 * points[0, j], up1 * points[1, j], up2 * points[2, j]
         for k in range(point_signs.shape[0]):
-            z = position[2] + ((p0 + point_signs[k, 1] * p1) + point_signs[k, 2] * p2) - half_entry_length[j]
+            z = height + ((p0 + point_signs[k, 1] * p1) + point_signs[k, 2] * p2) - half_entry_length[j]
             lowest = min(lowest, z)
     return lowest

@@ -28,7 +28,9 @@ point carries stress only when ``Vn > guard (|V| + |omega| r_max)``, see
 ``normal_velocity_guard``).  docs/model.md argues both widths and the
 convergence to the sharp law as they go to zero.
 
-The target is the half-space ``Z < 0`` of the world frame (``Z`` up).  All
+The target lies behind its front face (:class:`~fem_loads.target.FrontFace`; by default the level half-space
+``Z < 0`` of the world frame, ``Z`` up): a point's height above it is :func:`~fem_loads.target.face_frame_scalars`'s
+``h + u . r``.  All
 per-point work is a few passes over arrays cached at construction, so nothing
 is reassembled per evaluation.
 
@@ -60,7 +62,16 @@ from .factors import Switches, point_stress_scalars
 from .images import MirrorImages
 from .quadrature import SurfaceQuadrature
 from .resistance import ResistanceLaw
-from .target import FreeSurface, Friction, LayeredTarget, slip_factor_scalars
+from .target import (
+    LEVEL,
+    FreeSurface,
+    Friction,
+    FrontFace,
+    LayeredTarget,
+    face_frame_scalars,
+    face_height_scalars,
+    slip_factor_scalars,
+)
 from .user_law import UserLaw
 
 __all__ = ["DAFLLoads", "SurfaceStress", "CONTACT_MODELS"]
@@ -136,6 +147,8 @@ class DAFLLoads:
         True (default): a point the target cannot reach, the ray from it along the body's velocity meeting
         the body (``SurfaceQuadrature.exposure``, :mod:`fem_loads.exposure`), carries no stress.  False: every
         point with a positive ``Vn`` does.  A quadrature without a table (a convex body) is unaffected.
+    front_face : FrontFace
+        The plane through which the body enters the target; the level face ``Z = 0`` by default.
     """
 
     def __init__(
@@ -152,6 +165,7 @@ class DAFLLoads:
         contact: str = "one_sided",
         entry_smoothing: float = 0.0,
         exposure: bool = True,
+        front_face: FrontFace = LEVEL,
     ) -> None:
         if not (contact_width >= 0.0 and contact_incidence >= 0.0 and entry_smoothing >= 0.0):
             raise ValueError("contact_width, contact_incidence and entry_smoothing must be >= 0")
@@ -162,6 +176,7 @@ class DAFLLoads:
         self.friction, self.separation, self.free_surface = friction, separation, free_surface
         self.contact_width, self.entry_smoothing = float(contact_width), float(entry_smoothing)
         self.contact_incidence, self.contact = float(contact_incidence), contact
+        self.front_face = front_face
         self._smooth_contact = self.contact_width > 0.0 or self.contact_incidence > 0.0
         self._contact_offset = 0.5 if contact == "centred" else 0.0
         q = quadrature
@@ -230,25 +245,30 @@ class DAFLLoads:
     # -- geometry ---------------------------------------------------------------------------------
 
     def heights(self, position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
-        """World height ``Z`` (m) of every quadrature point; negative inside the target."""
+        """Height (m) of every quadrature point above the front face; negative inside the target."""
         return self._scatter(self._heights(position, rotation))
 
     def _heights(self, position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
         """The heights in the layout of the sums (the images' rows, or point order)."""
+        height, *up = face_frame_scalars(position, rotation, self.front_face.normal, self.front_face.offset)
         if self._images is None:
-            return position[2] + rotation[2] @ self._points_t
-        return self._images.heights(position[2], rotation[2], np.empty(self._images.shape))
+            return height + np.array(up) @ self._points_t
+        return self._images.heights(height, np.array(up), np.empty(self._images.shape))
+
+    def _face_height(self, position: np.ndarray) -> float:
+        """The centre of mass's height (m) above the front face."""
+        return float(face_height_scalars(position, self.front_face.normal, self.front_face.offset))
 
     def _scatter(self, values: np.ndarray) -> np.ndarray:
         return values if self._images is None else self._images.scatter(values)
 
     def fully_embedded(self, position: np.ndarray) -> bool:
         """Whether every point carries its full load as far as depth goes (bounding sphere alone)."""
-        return position[2] + self._max_radius + self._half_entry < 0.0
+        return self._face_height(position) + self._max_radius + self._half_entry < 0.0
 
     def fully_outside(self, position: np.ndarray) -> bool:
         """Whether no point can carry load (bounding sphere)."""
-        return position[2] - self._max_radius - self._half_entry >= 0.0
+        return self._face_height(position) - self._max_radius - self._half_entry >= 0.0
 
     def lowest_height(self, position: np.ndarray, rotation: np.ndarray) -> float:
         """Height (m) of the lowest point of the loaded band, ``min(Z - l/2)``; negative once any point

@@ -107,6 +107,8 @@ def law_and_effects(loads: DAFLLoads) -> tuple[np.ndarray, np.ndarray, np.ndarra
         max_radius=loads.max_radius,
         half_entry=0.5 * float(entry_length.max()) if len(entry_length) else 0.0,
         needs_depth=loads.depth_dependent,
+        face_normal=loads.front_face.normal,
+        face_offset=loads.front_face.offset,
         plain=isinstance(loads.law, ResistanceLaw)
         and loads.law.power == 0.0
         and not loads.law.strength_table

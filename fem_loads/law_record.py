@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from .resistance import ResistanceLaw
-from .target import LayeredTarget
+from .target import LEVEL, LayeredTarget
 from .user_law import MAX_PARAMETERS, UserLaw
 
 __all__ = ["LAW", "EFFECTS", "COEFFICIENTS", "pack_laws", "pack_effects", "compilable"]
@@ -65,6 +65,8 @@ EFFECTS = np.dtype(
         ("half_entry", "f8"),  # m: half the longest entry length
         ("needs_depth", "b1"),  # the stress depends on each point's depth (beyond entering)
         ("plain", "b1"),  # a polynomial law with both smooth ramps and separation: the SIMD loop
+        ("face_normal", "f8", (3,)),  # n: the front face n . X = d (world frame; target.FrontFace)
+        ("face_offset", "f8"),  # d (m)
     ]
 )
 
@@ -107,9 +109,10 @@ def pack_laws(law: ResistanceLaw | UserLaw | LayeredTarget) -> tuple[np.ndarray,
 
 
 def pack_effects(**values: Any) -> np.ndarray:
-    """One :data:`EFFECTS` record (shape (1,)) with the fields given, the rest 0 (False); an unknown field raises
-    ValueError."""
+    """One :data:`EFFECTS` record (shape (1,)) with the fields given, the front face level and the rest 0 (False);
+    an unknown field raises ValueError."""
     record, names = np.zeros(1, dtype=EFFECTS), EFFECTS.names or ()
+    record["face_normal"], record["face_offset"] = LEVEL.normal, LEVEL.offset
     for name, value in values.items():
         if name not in names:
             raise ValueError(f"{name}: not a field of the effects record ({', '.join(names)})")

@@ -1,13 +1,10 @@
 """The compiled forms of the scalar definitions the numpy path shares, and the call into a user's law.
 
-Each of :data:`smooth_step`, :data:`slip_factor`, :data:`builtin_stress`, :data:`polynomial_stress`,
-:data:`contact_factor`, :data:`entry_factor`, :data:`surface_factor`, :data:`friction_stress`, :data:`point_stress`,
-:data:`cube_cell` and :data:`cell_exposure` is numba's compilation of the one definition the numpy path evaluates
-(:func:`fem_loads.ramps.smooth_step_scalars`, :func:`fem_loads.target.slip_factor_scalars`,
-:func:`fem_loads.resistance.normal_stress_scalars` and its polynomial part, the factors of
-:mod:`fem_loads.factors`, :func:`fem_loads.exposure.cube_cell_scalars`,
-:func:`fem_loads.exposure.cell_exposure_scalars`), for the compiled kernels (:mod:`fem_loads.compiled`,
-:mod:`fem_loads.revolved`) to inline.
+Each compiled form here (:data:`smooth_step`, :data:`contact_factor`, :data:`point_stress`, :data:`face_frame`,
+...) is numba's compilation of the one ``*_scalars`` definition the numpy path evaluates (in
+:mod:`fem_loads.ramps`, :mod:`fem_loads.factors`, :mod:`fem_loads.resistance`, :mod:`fem_loads.target` and
+:mod:`fem_loads.exposure`), for the compiled kernels (:mod:`fem_loads.compiled`, :mod:`fem_loads.revolved`) to
+inline.
 
 :func:`call_user_law` calls a user's law, a C call through the address of its numba ``cfunc``
 (:meth:`fem_loads.user_law.UserLaw.compiled`).  The kernels take the address as data, so they are compiled
@@ -36,7 +33,7 @@ from .factors import (
 )
 from .ramps import smooth_step_scalars
 from .resistance import normal_stress_scalars, polynomial_stress_scalars
-from .target import slip_factor_scalars
+from .target import face_frame_scalars, face_height_scalars, slip_factor_scalars
 from .user_law import MAX_PARAMETERS
 
 __all__ = [
@@ -50,6 +47,8 @@ __all__ = [
     "surface_factor",
     "friction_stress",
     "point_stress",
+    "face_height",
+    "face_frame",
     "cube_cell",
     "cell_exposure",
     "law_stress",
@@ -69,6 +68,10 @@ entry_factor = njit(inline="always", error_model="numpy")(entry_factor_scalars)
 surface_factor = njit(inline="always", error_model="numpy")(surface_factor_scalars)
 friction_stress = njit(inline="always", error_model="numpy")(friction_stress_scalars)
 slip_factor = njit(inline="always", error_model="numpy")(slip_factor_scalars)
+face_height = njit(inline="always", error_model="numpy")(face_height_scalars)
+# the centre's height as numba sees it inside the face's frame (the plain function stays plain)
+register_jitable(error_model="numpy")(face_height_scalars)
+face_frame = njit(inline="always", error_model="numpy")(face_frame_scalars)
 polynomial_stress = njit(inline="always", error_model="numpy")(polynomial_stress_scalars)
 # the polynomial part as numba sees it inside normal_stress_scalars (the plain function stays plain; not
 # inlined at numba's level, whose renaming of its augmented assignments trips a pedantic SSA check)

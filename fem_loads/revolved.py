@@ -43,6 +43,7 @@ from .kernel_layout import law_and_effects
 from .law_record import pack_effects, pack_laws
 from .native import entry_factor, friction_stress, law_stress, point_stress, slip_factor
 from .resistance import ResistanceLaw
+from .target import LEVEL
 from .user_law import UserLaw
 
 __all__ = [
@@ -195,6 +196,8 @@ def ring_data(loads: DAFLLoads, surface: RevolvedSurface) -> tuple[np.ndarray, n
         raise ValueError("the ring model takes no strength table")
     if not isinstance(loads.law, ResistanceLaw | UserLaw):
         raise ValueError("the ring model takes one law, not layers")
+    if loads.front_face != LEVEL:
+        raise ValueError("the ring model takes a level target face")
     laws, _, _, effects = law_and_effects(loads)
     effects["entry_length"] = loads.entry_smoothing * math.sqrt(float(np.median(loads.quadrature.weights)))
     effects["max_radius"] = surface.max_radius

@@ -1,10 +1,15 @@
-"""Targets and optional load effects: layers, free-surface reduction, friction.
+"""Targets and optional load effects: the front face, layers, free-surface reduction, friction.
 
 Every effect here is optional; :class:`~fem_loads.dafl.DAFLLoads` takes the
 cheap path when an effect is absent, so a scene pays only for what it asks.
 
 Equations (docs/effects.md):
 
+* **Front face**: the plane ``n . X = d`` (world frame) through which the body enters, the target on its far
+  side.  A point's height above it is ``H = (n . X_c - d) + (R^T n) . r`` for the point ``r`` (body frame) of a
+  body at ``X_c`` turned by ``R``; its depth is ``-H``.  :func:`face_frame_scalars` gives the two numbers every
+  kernel needs for that, the centre's height and the face normal in the body frame.  The level half-space
+  ``Z < 0`` is ``n = (0, 0, 1)``, ``d = 0``.
 * **Layers**: interfaces at depths ``d_1 < d_2 < ...`` below the surface;
   a point at depth ``d`` uses the law of the layer containing it, its stress blended
   smoothly with the next layer's across each interface over the point's own extent ``l``
@@ -37,7 +42,53 @@ from .factors import entry_factor_scalars, friction_stress_scalars, surface_fact
 from .resistance import ResistanceLaw
 from .user_law import UserLaw
 
-__all__ = ["LayeredTarget", "FreeSurface", "Friction", "slip_factor_scalars"]
+__all__ = [
+    "FrontFace",
+    "LEVEL",
+    "face_height_scalars",
+    "face_frame_scalars",
+    "LayeredTarget",
+    "FreeSurface",
+    "Friction",
+    "slip_factor_scalars",
+]
+
+
+@dataclass(frozen=True)
+class FrontFace:
+    """The target's front face, the plane ``normal . X = offset`` (world frame; ``offset`` in m): the target lies
+    on the side the unit ``normal`` points away from."""
+
+    normal: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    offset: float = 0.0
+
+    def __post_init__(self) -> None:
+        normal = np.asarray(self.normal, dtype=float)
+        if normal.shape != (3,) or not np.all(np.isfinite(normal)) or abs(float(normal @ normal) - 1.0) > 1e-12:
+            raise ValueError(f"front face normal = {self.normal}: must be a unit vector of 3 finite numbers")
+        if not math.isfinite(self.offset):
+            raise ValueError(f"front face offset = {self.offset}: must be a finite number (m)")
+
+
+#: the level half-space Z < 0
+LEVEL = FrontFace()
+
+
+def face_height_scalars(position: Any, normal: Any, offset: float) -> Any:
+    """``n . X - d``: the height (m) of ``position`` (world frame) above the face ``normal . X = offset``."""
+    return normal[0] * position[0] + normal[1] * position[1] + normal[2] * position[2] - offset
+
+
+def face_frame_scalars(position: Any, rotation: Any, normal: Any, offset: float) -> tuple[Any, Any, Any, Any]:
+    """``(h, u0, u1, u2)``: the height ``h`` (m, :func:`face_height_scalars`) of the centre of mass ``position``
+    above the face ``normal . X = offset``, and ``u = R^T n``, the face's normal in the body frame (``rotation``
+    ``R``, body to world).  A point ``r`` of the body (m, body frame) lies ``h + u . r`` above the face.  For the
+    level face ``n = (0, 0, 1)``, ``d = 0`` they are exactly ``Z_c`` and the last row of ``R``."""
+    n0, n1, n2 = normal[0], normal[1], normal[2]
+    up0 = n0 * rotation[0, 0] + n1 * rotation[1, 0] + n2 * rotation[2, 0]
+    up1 = n0 * rotation[0, 1] + n1 * rotation[1, 1] + n2 * rotation[2, 1]
+    up2 = n0 * rotation[0, 2] + n1 * rotation[1, 2] + n2 * rotation[2, 2]
+    return face_height_scalars(position, normal, offset), up0, up1, up2
 
 
 @dataclass(frozen=True)

@@ -233,6 +233,8 @@ def compiled_step(
     """
     announce_compiling("dafl_step")
     step, load = _import_compiled()
+    from dynamics.quaternion import rotation_matrix
+
     data = load.kernel_data(loads)
     compiled_load = step.CompiledLoad(load.dafl_kernel, data, _dafl_step(), weight)
     compiled_method = step.CompiledRungeKutta(method)
@@ -240,15 +242,8 @@ def compiled_step(
     return (
         compiled_load,
         compiled_method,
-        lambda position, attitude: load.lowest_height_kernel(data, position, _up(attitude)),
+        lambda position, attitude: load.lowest_height_kernel(data, position, rotation_matrix(attitude)),
     )
-
-
-def _up(attitude: np.ndarray) -> np.ndarray:
-    """The last row of :func:`dynamics.quaternion.rotation_matrix` (same expressions): the exit event's
-    heights need no more of the matrix."""
-    w, x, y, z = attitude.tolist()
-    return np.array([2 * (x * z - w * y), 2 * (y * z + w * x), (w * w + z * z) - (x * x + y * y)])
 
 
 def _warm(
@@ -264,7 +259,7 @@ def _warm(
 
     far = State(0.0, np.array([0.0, 0.0, 1e6]), np.array([0.0, 0.0, -1.0]), np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3))
     method.step(body, load, far, 1e-9)
-    lowest_height(data, far.position, far.rotation[2])
+    lowest_height(data, far.position, far.rotation)
 
 
 def precompile() -> None:

@@ -116,7 +116,7 @@ def test_lowest_height_equals_the_numpy_one(quadrature, mode):
     rng = np.random.default_rng(4)
     for _ in range(20):
         position, _, rotation, _ = _random_state(rng, -0.3)
-        assert compiled.lowest_height_kernel(data, position, rotation[2]) == pytest.approx(
+        assert compiled.lowest_height_kernel(data, position, rotation) == pytest.approx(
             loads.lowest_height(position, rotation), abs=1e-14
         )
 
