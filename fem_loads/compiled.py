@@ -31,21 +31,19 @@ import math
 import numpy as np
 from numba import njit
 
-from .compiled_point import exposure_correction, image_friction, law_setup, point_law_stress, point_motion, point_setup
-from .factors import Switches
+from .compiled_point import Motion, exposure_correction, image_friction, point_law_stress, point_motion, setup
 from .kernel_layout import (
     DATA_EFFECTS,
     DATA_EXPOSURE_COLUMNS,
     DATA_HALF_ENTRY_LENGTH,
     DATA_IMAGE_SIGNS,
-    DATA_LAWS,
     DATA_POINT_SIGNS,
     DATA_POINTS,
     KERNEL_ARRAYS,
     kernel_data,
     supports,
 )
-from .native import face_frame, face_height, point_stress, polynomial_stress
+from .native import face_frame, face_height
 from .user_law import user_law_signature
 
 __all__ = ["dafl_kernel", "lowest_height_kernel", "kernel_data", "supports", "KERNEL_ARRAYS", "USER_LAW_SIGNATURE"]
@@ -61,72 +59,40 @@ _FAST = {"reassoc", "contract"}
 
 
 @njit(cache=True, error_model="numpy", fastmath=_FAST, inline="always")
-def _smooth_sums(
+def _sums(
     data: tuple[np.ndarray, ...],
-    g: np.ndarray,
-    up: np.ndarray,
-    v: np.ndarray,
-    w: np.ndarray,
-    height: float,
-    width: float,
-    embedded: bool,
+    motion: Motion,
     sums: np.ndarray,
     friction: np.ndarray,
+    plain: bool,
     with_friction: bool,
-    with_surface: bool,
 ) -> None:
-    """:func:`_sums` for one built-in law without a power term or a table (its
-    :func:`~fem_loads.resistance.polynomial_stress_scalars` is the whole law), both smooth ramps, with separation,
-    and friction and the free surface or not (the shipped scenes' load, and their friction variants): no calls
-    and no branches that differ from point to point, so the loop runs in SIMD lanes.  ``with_friction`` is a
-    and ``with_surface`` are constants in each of the two functions that inline this one
-    (:func:`_frictionless_sums`, the shipped scenes' load; :func:`_friction_sums`, with friction or a free
-    surface): each compiles to a loop of its own without the other's branches."""
-    points, normal_arm, point_signs, weights, inverse_entry, needs_depth, rule = point_setup(data, width, v)
-    effects = data[DATA_EFFECTS][0]
-    surface_depth = effects.surface_depth
-    # the switches as constants where this loop fixes them; without a free surface the factor with f0 = 1 is 1
-    switches = Switches(
-        True,
-        True,
-        1.0 / width if width > 0.0 else 0.0,
-        effects.contact_offset,
-        0.0,
-        with_surface,
-        1.0 / surface_depth if surface_depth > 0.0 else 0.0,
-        effects.surface_fraction if surface_depth > 0.0 else 1.0,
-        not embedded,
-        True,
-    )
-    law = data[DATA_LAWS][0]
-    c0, k, c1, c2 = law.c0, law.k, law.c1, law.c2
-    for image in range(sums.shape[0]):
-        g0, g1, g2, g3, g4, g5 = g[image, 0], g[image, 1], g[image, 2], g[image, 3], g[image, 4], g[image, 5]
-        up0, up1, up2 = up[image, 0], up[image, 1], up[image, 2]
+    """Each image's ``sum sigma w [n | r x n]`` into ``sums``; the friction's force and moment (body frame) into
+    ``friction``.  ``plain`` and ``with_friction`` (:func:`~fem_loads.compiled_point.setup`) are constants in each
+    of the three functions that inline this one, each a loop of its own without the others' branches: the plain
+    law with its SIMD lanes (no calls, and no branches that differ from point to point), with friction and the
+    free surface or not, and every other law."""
+    s = setup(data, motion, plain, with_friction)
+    g, up, v, w = motion.g, motion.up, motion.v, motion.w
+    mu = s.friction[0]
+    for k in range(sums.shape[0]):
+        gk = (g[k, 0], g[k, 1], g[k, 2], g[k, 3], g[k, 4], g[k, 5])
+        upk = (up[k, 0], up[k, 1], up[k, 2])
         a0 = a1 = a2 = a3 = a4 = a5 = 0.0
         f0 = f1 = f2 = f3 = f4 = f5 = 0.0
-        for j in range(weights.shape[0]):
-            n0, n1, n2 = normal_arm[0, j], normal_arm[1, j], normal_arm[2, j]
-            n3, n4, n5 = normal_arm[3, j], normal_arm[4, j], normal_arm[5, j]
-            normal_velocity = g0 * n0 + g1 * n1 + g2 * n2 + g3 * n3 + g4 * n4 + g5 * n5
-            z = 0.0
-            if needs_depth or not embedded:
-                z = height + (up0 * points[0, j] + up1 * points[1, j] + up2 * points[2, j])
-            stress = polynomial_stress(max(normal_velocity, 0.0), -z, c0, k, c1, c2)
-            stress = point_stress(stress, normal_velocity, -z, z, weights[j], inverse_entry[j], switches)
+        for j in range(s.weights.shape[0]):
+            n0, n1, n2, n3, n4, n5, normal_velocity, z = point_motion(s, gk, upk, j, motion.height)
+            stress = point_law_stress(data, s, j, normal_velocity, z, plain)
             a0 += stress * n0
             a1 += stress * n1
             a2 += stress * n2
             a3 += stress * n3
             a4 += stress * n4
             a5 += stress * n5
-            if with_friction:
-                d0, d1, d2, d3, d4, d5 = image_friction(
-                    points, point_signs, image, j, normal_arm, v, w, normal_velocity, stress, weights[j], rule
-                )
+            if with_friction and (plain or (mu > 0.0 and stress != 0.0)):
+                d0, d1, d2, d3, d4, d5 = image_friction(s, k, j, v, w, normal_velocity, stress)
                 f0, f1, f2, f3, f4, f5 = f0 + d0, f1 + d1, f2 + d2, f3 + d3, f4 + d4, f5 + d5
-        row = sums[image]
-        row[0], row[1], row[2], row[3], row[4], row[5] = a0, a1, a2, a3, a4, a5
+        sums[k, 0], sums[k, 1], sums[k, 2], sums[k, 3], sums[k, 4], sums[k, 5] = a0, a1, a2, a3, a4, a5
         friction[0] += f0
         friction[1] += f1
         friction[2] += f2
@@ -136,85 +102,22 @@ def _smooth_sums(
 
 
 @njit(cache=True, error_model="numpy", fastmath=_FAST)
-def _frictionless_sums(
-    data: tuple[np.ndarray, ...],
-    g: np.ndarray,
-    up: np.ndarray,
-    v: np.ndarray,
-    w: np.ndarray,
-    height: float,
-    width: float,
-    embedded: bool,
-    sums: np.ndarray,
-    friction: np.ndarray,
-) -> None:
-    """:func:`_smooth_sums` without friction or free surface."""
-    _smooth_sums(data, g, up, v, w, height, width, embedded, sums, friction, False, False)
+def _plain_sums(data: tuple[np.ndarray, ...], motion: Motion, sums: np.ndarray, friction: np.ndarray) -> None:
+    """:func:`_sums` of the plain law without friction or free surface (the shipped scenes' load)."""
+    _sums(data, motion, sums, friction, True, False)
 
 
 @njit(cache=True, error_model="numpy", fastmath=_FAST)
-def _friction_sums(
-    data: tuple[np.ndarray, ...],
-    g: np.ndarray,
-    up: np.ndarray,
-    v: np.ndarray,
-    w: np.ndarray,
-    height: float,
-    width: float,
-    embedded: bool,
-    sums: np.ndarray,
-    friction: np.ndarray,
-) -> None:
-    """:func:`_smooth_sums` with friction or a free surface (a coefficient of 0 leaves no friction; without a free
-    surface its factor is exactly 1)."""
-    _smooth_sums(data, g, up, v, w, height, width, embedded, sums, friction, True, True)
+def _plain_friction_sums(data: tuple[np.ndarray, ...], motion: Motion, sums: np.ndarray, friction: np.ndarray) -> None:
+    """:func:`_sums` of the plain law with friction or a free surface (a coefficient of 0 leaves no friction; without
+    a free surface its factor is exactly 1)."""
+    _sums(data, motion, sums, friction, True, True)
 
 
 @njit(cache=True, error_model="numpy", fastmath=_FAST)
-def _sums(
-    data: tuple[np.ndarray, ...],
-    g: np.ndarray,
-    up: np.ndarray,
-    v: np.ndarray,
-    w: np.ndarray,
-    height: float,
-    width: float,
-    guard: float,
-    embedded: bool,
-    sums: np.ndarray,
-    friction: np.ndarray,
-) -> None:
-    """Each image's ``sum sigma w [n | r x n]`` into ``sums``; the friction's force and moment (body frame) into
-    ``friction``.
-
-    Everything the points share is read from ``data`` before the loop: inside it, only array elements and
-    floats (an array view made per point costs its reference counting, more than the law itself).
-    """
-    points, normal_arm, point_signs, weights, inverse_entry, needs_depth, rule = point_setup(data, width, v)
-    layered, address, law, depths, stresses, switches = law_setup(data, width, guard, embedded)
-    mu = rule[0]
-    for k in range(sums.shape[0]):
-        a0 = a1 = a2 = a3 = a4 = a5 = 0.0
-        for j in range(weights.shape[0]):
-            n0, n1, n2, n3, n4, n5, normal_velocity, z = point_motion(
-                normal_arm, points, g, up, k, j, height, needs_depth or not embedded
-            )
-            stress = point_law_stress(
-                data, j, normal_velocity, z, layered, address, law, depths, stresses, switches, weights, inverse_entry
-            )
-            a0 += stress * n0
-            a1 += stress * n1
-            a2 += stress * n2
-            a3 += stress * n3
-            a4 += stress * n4
-            a5 += stress * n5
-            if mu > 0.0 and stress != 0.0:
-                d = image_friction(
-                    points, point_signs, k, j, normal_arm, v, w, normal_velocity, stress, weights[j], rule
-                )
-                for c in range(6):
-                    friction[c] += d[c]
-        sums[k, 0], sums[k, 1], sums[k, 2], sums[k, 3], sums[k, 4], sums[k, 5] = a0, a1, a2, a3, a4, a5
+def _general_sums(data: tuple[np.ndarray, ...], motion: Motion, sums: np.ndarray, friction: np.ndarray) -> None:
+    """:func:`_sums` of every other law and switch."""
+    _sums(data, motion, sums, friction, False, True)
 
 
 @njit(cache=True, error_model="numpy")
@@ -236,8 +139,7 @@ def dafl_kernel(
         out[c] = 0.0
     height, up0, up1, up2 = face_frame(position, rotation, effects.face_normal, effects.face_offset)
     if height - max_radius - half_entry >= 0.0:
-        return  # wholly above the surface
-    embedded = height + max_radius + half_entry < 0.0
+        return  # wholly outside the target
     images = image_signs.shape[0]
     # each image's generalised velocity (R^T V, omega) and up vector R^T n with its signs: exact sign changes,
     # so an image's Vn and height are the quarter's sums with those signs, in the same order
@@ -254,20 +156,19 @@ def dafl_kernel(
     speed = math.sqrt(velocity[0] * velocity[0] + velocity[1] * velocity[1] + velocity[2] * velocity[2])
     spin = math.sqrt(angular_velocity[0] ** 2 + angular_velocity[1] ** 2 + angular_velocity[2] ** 2)
     speed_scale = speed + spin * max_radius
-    width = effects.contact_width + effects.contact_incidence * speed_scale
-    if not effects.smooth_contact:
-        width = 0.0
+    width = effects.contact_width + effects.contact_incidence * speed_scale if effects.smooth_contact else 0.0
+    embedded = height + max_radius + half_entry < 0.0
+    motion = Motion(g, up, v, angular_velocity, height, width, effects.guard * speed_scale, embedded)
     sums = np.zeros((images, 6))
     friction = np.zeros(6)
-    guard = effects.guard * speed_scale
     if effects.plain and (effects.friction > 0.0 or effects.surface_depth > 0.0):
-        _friction_sums(data, g, up, v, angular_velocity, height, width, embedded, sums, friction)
+        _plain_friction_sums(data, motion, sums, friction)
     elif effects.plain:
-        _frictionless_sums(data, g, up, v, angular_velocity, height, width, embedded, sums, friction)
+        _plain_sums(data, motion, sums, friction)
     else:
-        _sums(data, g, up, v, angular_velocity, height, width, guard, embedded, sums, friction)
+        _general_sums(data, motion, sums, friction)
     if data[DATA_EXPOSURE_COLUMNS].shape[0] > 0:
-        exposure_correction(data, g, up, v, angular_velocity, height, width, guard, embedded, sums, friction)
+        exposure_correction(data, motion, effects.plain, sums, friction)
     body = np.empty(6)
     for c in range(6):
         if images == 4:
