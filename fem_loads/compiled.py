@@ -31,7 +31,15 @@ import math
 import numpy as np
 from numba import njit
 
-from .compiled_point import Motion, exposure_correction, image_friction, point_law_stress, point_motion, setup
+from .compiled_point import (
+    Motion,
+    exposure_correction,
+    image_friction,
+    plain_stress,
+    point_law_stress,
+    point_motion,
+    setup,
+)
 from .kernel_layout import (
     DATA_EFFECTS,
     DATA_EXPOSURE_COLUMNS,
@@ -72,25 +80,34 @@ def _sums(
     of the three functions that inline this one, each a loop of its own without the others' branches: the plain
     law with its SIMD lanes (no calls, and no branches that differ from point to point), with friction and the
     free surface or not, and every other law."""
-    s = setup(data, motion, plain, with_friction)
-    g, up, v, w = motion.g, motion.up, motion.v, motion.w
-    mu = s.friction[0]
+    s, (points, normal_arm, point_signs, weights, inverse_entry, depths, stresses) = setup(
+        data, motion, plain, with_friction
+    )
+    g, up, v, w, height = motion.g, motion.up, motion.v, motion.w, motion.height
+    with_height, rule, polynomial, switches = s.with_height, s.friction, s.polynomial, s.switches
+    vt, wt = (v[0], v[1], v[2]), (w[0], w[1], w[2])
+    mu = rule[0]
     for k in range(sums.shape[0]):
         gk = (g[k, 0], g[k, 1], g[k, 2], g[k, 3], g[k, 4], g[k, 5])
         upk = (up[k, 0], up[k, 1], up[k, 2])
+        sy, sz = point_signs[k, 1], point_signs[k, 2]
         a0 = a1 = a2 = a3 = a4 = a5 = 0.0
         f0 = f1 = f2 = f3 = f4 = f5 = 0.0
-        for j in range(s.weights.shape[0]):
-            n0, n1, n2, n3, n4, n5, normal_velocity, z = point_motion(s, gk, upk, j, motion.height)
-            stress = point_law_stress(data, s, j, normal_velocity, z, plain)
-            a0 += stress * n0
-            a1 += stress * n1
-            a2 += stress * n2
-            a3 += stress * n3
-            a4 += stress * n4
-            a5 += stress * n5
+        for j in range(weights.shape[0]):
+            n, r, normal_velocity, z = point_motion(normal_arm, points, j, gk, upk, height, with_height)
+            weight, inverse = weights[j], inverse_entry[j]
+            if plain:
+                stress = plain_stress(polynomial, switches, weight, inverse, normal_velocity, z)
+            else:
+                stress = point_law_stress(data, s, depths, stresses, weight, inverse, normal_velocity, z)
+            a0 += stress * n[0]
+            a1 += stress * n[1]
+            a2 += stress * n[2]
+            a3 += stress * n[3]
+            a4 += stress * n[4]
+            a5 += stress * n[5]
             if with_friction and (plain or (mu > 0.0 and stress != 0.0)):
-                d0, d1, d2, d3, d4, d5 = image_friction(s, k, j, v, w, normal_velocity, stress)
+                d0, d1, d2, d3, d4, d5 = image_friction(n, r, sy, sz, weight, rule, vt, wt, normal_velocity, stress)
                 f0, f1, f2, f3, f4, f5 = f0 + d0, f1 + d1, f2 + d2, f3 + d3, f4 + d4, f5 + d5
         sums[k, 0], sums[k, 1], sums[k, 2], sums[k, 3], sums[k, 4], sums[k, 5] = a0, a1, a2, a3, a4, a5
         friction[0] += f0

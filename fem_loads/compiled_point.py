@@ -41,7 +41,16 @@ from .native import (
     slip_factor,
 )
 
-__all__ = ["Motion", "Setup", "setup", "point_motion", "point_law_stress", "image_friction", "exposure_correction"]
+__all__ = [
+    "Motion",
+    "Setup",
+    "setup",
+    "point_motion",
+    "plain_stress",
+    "point_law_stress",
+    "image_friction",
+    "exposure_correction",
+]
 
 
 class Motion(NamedTuple):
@@ -58,30 +67,31 @@ class Motion(NamedTuple):
 
 
 class Setup(NamedTuple):
-    """What every point of a loop shares, read from the kernel's data once before the loop: inside it only array
-    elements and floats (an array view made per point costs its reference counting, more than the law itself)."""
+    """What every point of a loop shares besides the arrays (:func:`setup`): scalars, tuples and the law's record
+    only, so that reading a field inside the loop costs no reference counting."""
 
-    points: np.ndarray
-    normal_arm: np.ndarray
-    point_signs: np.ndarray
-    weights: np.ndarray
-    inverse_entry: np.ndarray
     with_height: bool  #: the stress needs each point's height (a depth-dependent law, the free surface, entering)
     friction: tuple[float, float, float, float]  #: ``(mu, cap, W, |v|^2)`` for :func:`image_friction`
     layered: bool
     address: int  #: the user law's cfunc (0: the built-in law)
     law: Any  #: the first layer's :data:`~fem_loads.law_record.LAW` record
-    depths: np.ndarray  #: its strength table (empty: none)
-    stresses: np.ndarray
+    polynomial: tuple[float, float, float, float]  #: its ``(c0, k, c1, c2)``, the plain law's
     switches: Switches
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def setup(data: tuple[np.ndarray, ...], motion: Motion, plain: bool, with_friction: bool) -> Setup:
-    """The :class:`Setup` of a loop over the points.  ``plain``: the law is the polynomial of the shipped scenes with
-    both smooth ramps and separation (:data:`~fem_loads.law_record.EFFECTS`'s ``plain``), and ``with_friction``
-    whether the loop adds friction or a free surface; both constants in the loop that passes them, so that its
-    switches are constants too and the loop keeps no branch that differs from point to point."""
+def setup(
+    data: tuple[np.ndarray, ...], motion: Motion, plain: bool, with_friction: bool
+) -> tuple[Setup, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+    """What a loop over the points reads from the kernel's data once before it starts: its :class:`Setup`, and the
+    arrays ``(points, normal_arm, point_signs, weights, inverse_entry, depths, stresses)`` (``depths``,
+    ``stresses``: the first layer's strength table), to unpack into the loop's own variables (an array read from a
+    tuple per point costs its reference counting, more than the law itself).
+
+    ``plain``: the law is the polynomial of the shipped scenes with both smooth ramps and separation
+    (:data:`~fem_loads.law_record.EFFECTS`'s ``plain``), and ``with_friction`` whether the loop adds friction or a
+    free surface; both constants in the loop that passes them, so that its switches are constants too and the loop
+    keeps no branch that differs from point to point."""
     effects, law = data[DATA_EFFECTS][0], data[DATA_LAWS][0]
     first, count = law.table_first, law.table_count
     width, surface_depth = motion.width, effects.surface_depth
@@ -100,37 +110,48 @@ def setup(data: tuple[np.ndarray, ...], motion: Motion, plain: bool, with_fricti
             surface_depth > 0.0, inverse_surface, effects.surface_fraction, not motion.embedded, effects.smooth_entry,
         )  # fmt: skip
     v = motion.v
-    return Setup(
-        data[DATA_POINTS],
-        data[DATA_NORMAL_ARM],
-        data[DATA_POINT_SIGNS],
-        data[DATA_WEIGHTS],
-        data[DATA_INVERSE_ENTRY],
+    shared = Setup(
         effects.needs_depth or surface_depth > 0.0 or not motion.embedded,
         (effects.friction, effects.friction_cap, width, v[0] * v[0] + v[1] * v[1] + v[2] * v[2]),
         data[DATA_INTERFACES].shape[0] > 0,
         effects.user_law,
         law,
-        data[DATA_TABLES][0, first : first + count].copy(),
-        data[DATA_TABLES][1, first : first + count].copy(),
+        (law.c0, law.k, law.c1, law.c2),
         switches,
     )
+    arrays = (
+        data[DATA_POINTS],
+        data[DATA_NORMAL_ARM],
+        data[DATA_POINT_SIGNS],
+        data[DATA_WEIGHTS],
+        data[DATA_INVERSE_ENTRY],
+        data[DATA_TABLES][0, first : first + count].copy(),
+        data[DATA_TABLES][1, first : first + count].copy(),
+    )
+    return shared, arrays
 
 
 @njit(cache=True, inline="always", error_model="numpy")
 def point_motion(
-    s: Setup, g: tuple[float, ...], up: tuple[float, float, float], j: int, height: float
-) -> tuple[float, float, float, float, float, float, float, float]:
-    """Point ``j`` in one image: the part's ``[n | r x n]`` (6 numbers), ``Vn`` (m/s) from the image's generalised
-    velocity ``g``, and the height ``z`` above the front face (m; 0 unless the stress needs it) from its ``up``."""
-    normal_arm, points = s.normal_arm, s.points
-    n0, n1, n2 = normal_arm[0, j], normal_arm[1, j], normal_arm[2, j]
-    n3, n4, n5 = normal_arm[3, j], normal_arm[4, j], normal_arm[5, j]
-    normal_velocity = g[0] * n0 + g[1] * n1 + g[2] * n2 + g[3] * n3 + g[4] * n4 + g[5] * n5
+    normal_arm: np.ndarray,
+    points: np.ndarray,
+    j: int,
+    g: tuple[float, ...],
+    up: tuple[float, float, float],
+    height: float,
+    with_height: bool,
+) -> tuple[tuple[float, ...], tuple[float, float, float], float, float]:
+    """Point ``j`` in one image: the part's ``[n | r x n]`` (6 numbers) and point ``r`` (m), ``Vn`` (m/s) from the
+    image's generalised velocity ``g``, and the height ``z`` above the front face (m; 0 unless ``with_height``)
+    from its ``up``.  The loops read the arrays here and pass on the numbers: an array passed to an inlined
+    function per point costs its reference counting, several times the point's arithmetic."""
+    n = (normal_arm[0, j], normal_arm[1, j], normal_arm[2, j], normal_arm[3, j], normal_arm[4, j], normal_arm[5, j])
+    r = (points[0, j], points[1, j], points[2, j])
+    normal_velocity = g[0] * n[0] + g[1] * n[1] + g[2] * n[2] + g[3] * n[3] + g[4] * n[4] + g[5] * n[5]
     z = 0.0  # the height; the depth below the face is -z
-    if s.with_height:
-        z = height + (up[0] * points[0, j] + up[1] * points[1, j] + up[2] * points[2, j])
-    return n0, n1, n2, n3, n4, n5, normal_velocity, z
+    if with_height:
+        z = height + (up[0] * r[0] + up[1] * r[1] + up[2] * r[2])
+    return n, r, normal_velocity, z
 
 
 @njit(cache=True, error_model="numpy")
@@ -161,40 +182,68 @@ def layered_stress(
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def point_law_stress(
-    data: tuple[np.ndarray, ...], s: Setup, j: int, normal_velocity: float, z: float, plain: bool
+def plain_stress(
+    polynomial: tuple[float, float, float, float],
+    switches: Switches,
+    weight: float,
+    inverse_entry: float,
+    normal_velocity: float,
+    z: float,
 ) -> float:
-    """The normal stress of point ``j`` times its weight (Pa m^2) at ``Vn`` (m/s) and height ``z`` (m): its law (the
-    plain polynomial, one law, or the layers blended) through :func:`~fem_loads.factors.point_stress_scalars`, as
-    the numpy path has it."""
+    """A point's normal stress times its ``weight`` (Pa m^2) under the plain law (:func:`setup`; its ``polynomial``
+    ``(c0, k, c1, c2)``) at ``Vn`` (m/s) and height ``z`` (m) through
+    :func:`~fem_loads.factors.point_stress_scalars` (``inverse_entry``: ``1 / l``)."""
+    c0, k, c1, c2 = polynomial
+    stress = polynomial_stress(max(normal_velocity, 0.0), -z, c0, k, c1, c2)
+    return point_stress(stress, normal_velocity, -z, z, inverse_entry, switches) * weight
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def point_law_stress(
+    data: tuple[np.ndarray, ...],
+    s: Setup,
+    depths: np.ndarray,
+    stresses: np.ndarray,
+    weight: float,
+    inverse_entry: float,
+    normal_velocity: float,
+    z: float,
+) -> float:
+    """:func:`plain_stress` under any law: one law with its strength table ``depths``, ``stresses``, or the layers
+    blended.  A loop calls it only where its law is not plain: its arguments (``data``, arrays) cost reference
+    counting per point that the plain loop would not keep its SIMD lanes with."""
     # without separation the law's odd extension to Vn < 0 (cut at 0 by the pipeline)
     law_velocity = max(normal_velocity, 0.0) if s.switches.separation else normal_velocity
-    if plain:
-        law = s.law
-        stress = polynomial_stress(law_velocity, -z, law.c0, law.k, law.c1, law.c2)
-    elif s.layered:
-        stress = layered_stress(data, law_velocity, -z, s.switches.smooth_entry, s.inverse_entry[j])
+    if s.layered:
+        stress = layered_stress(data, law_velocity, -z, s.switches.smooth_entry, inverse_entry)
     else:
-        stress = law_stress(s.law, s.address, law_velocity, -z, s.depths, s.stresses)
-    return point_stress(stress, normal_velocity, -z, z, s.weights[j], s.inverse_entry[j], s.switches)
+        stress = law_stress(s.law, s.address, law_velocity, -z, depths, stresses)
+    return point_stress(stress, normal_velocity, -z, z, inverse_entry, s.switches) * weight
 
 
 @njit(cache=True, inline="always", error_model="numpy")
 def image_friction(
-    s: Setup, k: int, j: int, v: np.ndarray, w: np.ndarray, normal_velocity: float, stress: float
+    n: tuple[float, ...],
+    r: tuple[float, float, float],
+    sy: float,
+    sz: float,
+    weight: float,
+    rule: tuple[float, float, float, float],
+    v: tuple[float, float, float],
+    w: tuple[float, float, float],
+    normal_velocity: float,
+    stress: float,
 ) -> tuple[float, float, float, float, float, float]:
-    """The friction force and moment (body frame) of point ``j`` in image ``k`` (its point ``r`` and normal ``m`` by
-    the image's signs) carrying ``stress`` (its normal stress times its weight): ``-tau k s`` against the slip
-    ``s = u - Vn m``, ``u = v + w x r``."""
-    sy, sz = s.point_signs[k, 1], s.point_signs[k, 2]
-    points, normal_arm = s.points, s.normal_arm
-    r0, r1, r2 = points[0, j], sy * points[1, j], sz * points[2, j]
-    m0, m1, m2 = normal_arm[0, j], sy * normal_arm[1, j], sz * normal_arm[2, j]
-    mu, cap, width, speed2 = s.friction
+    """The friction force and moment (body frame) of a point of the part (``[n | r x n]`` and point ``r``, m) in the
+    image of signs ``(1, sy, sz)``, carrying ``stress`` (its normal stress times its ``weight``) under the ``rule``
+    ``(mu, cap, W, |v|^2)``: ``-tau k s`` against the slip ``s = u - Vn m``, ``u = v + w x r``."""
+    r0, r1, r2 = r[0], sy * r[1], sz * r[2]
+    m0, m1, m2 = n[0], sy * n[1], sz * n[2]
+    mu, cap, width, speed2 = rule
     s0 = v[0] + w[1] * r2 - w[2] * r1 - normal_velocity * m0
     s1 = v[1] + w[2] * r0 - w[0] * r2 - normal_velocity * m1
     s2 = v[2] + w[0] * r1 - w[1] * r0 - normal_velocity * m2
-    t = friction_stress(stress, mu, cap * s.weights[j]) * slip_factor(s0 * s0 + s1 * s1 + s2 * s2, width, speed2)
+    t = friction_stress(stress, mu, cap * weight) * slip_factor(s0 * s0 + s1 * s1 + s2 * s2, width, speed2)
     return -t * s0, -t * s1, -t * s2, -t * (r1 * s2 - r2 * s1), -t * (r2 * s0 - r0 * s2), -t * (r0 * s1 - r1 * s0)
 
 
@@ -220,17 +269,18 @@ def exposure_correction(
     v, w, g, up = motion.v, motion.w, motion.g, motion.up
     if v[0] == 0.0 and v[1] == 0.0 and v[2] == 0.0:
         return  # no direction of motion, no shadow
-    n = round(math.sqrt((start.shape[0] - 1) / 6.0))  # 6 N^2 cells
-    s = setup(data, motion, plain, True)
+    resolution = round(math.sqrt((start.shape[0] - 1) / 6.0))  # 6 N^2 cells
+    s, (points, normal_arm, point_signs, weights, inverse_entry, depths, stresses) = setup(data, motion, plain, True)
     switches = s.switches
+    vt, wt = (v[0], v[1], v[2]), (w[0], w[1], w[2])
     # the smooth ramp is zero at and below -offset W; the sharp switch at and below the guard
     inverse_width, offset, limit = switches.inverse_width, switches.contact_offset, -math.inf
     if not switches.smooth_contact:
         inverse_width, offset, limit = 0.0, 1.0, motion.guard
     for k in range(sums.shape[0]):
-        sy, sz = s.point_signs[k, 1], s.point_signs[k, 2]
-        face, i, j, fx, fy = cube_cell(n, v[0], sy * v[1], sz * v[2])  # the direction in the part's frame
-        cell = (face * n + i) * n + j
+        sy, sz = point_signs[k, 1], point_signs[k, 2]
+        face, i, j, fx, fy = cube_cell(resolution, v[0], sy * v[1], sz * v[2])  # the direction in the part's frame
+        cell = (face * resolution + i) * resolution + j
         gk = (g[k, 0], g[k, 1], g[k, 2], g[k, 3], g[k, 4], g[k, 5])
         upk = (up[k, 0], up[k, 1], up[k, 2])
         for entry in range(start[cell], start[cell + 1]):
@@ -238,24 +288,24 @@ def exposure_correction(
             if exposure == 1.0:
                 continue  # exposed here (inside a refined cell hidden elsewhere)
             p = columns[rows[entry]]
-            n0, n1, n2, n3, n4, n5, normal_velocity, z = point_motion(s, gk, upk, p, motion.height)
+            n, r, normal_velocity, z = point_motion(normal_arm, points, p, gk, upk, motion.height, s.with_height)
             if switches.separation and (
                 normal_velocity * inverse_width + offset <= _RAMP_FLOOR or normal_velocity <= limit
             ):
                 continue  # below the contact ramp (or where it is below 1e-14), or the sharp switch: nothing to hide
-            stress = point_law_stress(data, s, p, normal_velocity, z, plain)
+            weight, inverse = weights[p], inverse_entry[p]
+            if plain:
+                stress = plain_stress(s.polynomial, s.switches, weight, inverse, normal_velocity, z)
+            else:
+                stress = point_law_stress(data, s, depths, stresses, weight, inverse, normal_velocity, z)
             if stress == 0.0:
                 continue
             change = (exposure - 1.0) * stress
-            sums[k, 0] += change * n0
-            sums[k, 1] += change * n1
-            sums[k, 2] += change * n2
-            sums[k, 3] += change * n3
-            sums[k, 4] += change * n4
-            sums[k, 5] += change * n5
+            for c in range(6):
+                sums[k, c] += change * n[c]
             if s.friction[0] > 0.0:
                 # the friction at the exposed stress less that at the full one (a cap makes it nonlinear)
-                full = image_friction(s, k, p, v, w, normal_velocity, stress)
-                part = image_friction(s, k, p, v, w, normal_velocity, exposure * stress)
+                full = image_friction(n, r, sy, sz, weight, s.friction, vt, wt, normal_velocity, stress)
+                part = image_friction(n, r, sy, sz, weight, s.friction, vt, wt, normal_velocity, exposure * stress)
                 for c in range(6):
                     friction[c] += part[c] - full[c]

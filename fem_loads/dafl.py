@@ -250,14 +250,15 @@ class DAFLLoads:
 
     def _heights(self, position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
         """The heights in the layout of the sums (the images' rows, or point order)."""
-        height, *up = face_frame_scalars(position, rotation, self.front_face.normal, self.front_face.offset)
+        face = self.front_face
+        height, *up = face_frame_scalars(position.tolist(), rotation.tolist(), face.normal, face.offset)
         if self._images is None:
             return height + np.array(up) @ self._points_t
         return self._images.heights(height, np.array(up), np.empty(self._images.shape))
 
     def _face_height(self, position: np.ndarray) -> float:
         """The centre of mass's height (m) above the front face."""
-        return float(face_height_scalars(position, self.front_face.normal, self.front_face.offset))
+        return float(face_height_scalars(position.tolist(), self.front_face.normal, self.front_face.offset))
 
     def _scatter(self, values: np.ndarray) -> np.ndarray:
         return values if self._images is None else self._images.scatter(values)
@@ -289,16 +290,16 @@ class DAFLLoads:
         """The factors' :class:`~fem_loads.factors.Switches` at the speed scale ``U`` (m/s)."""
         surface = self.free_surface
         return Switches(
-            separation=self.separation,
-            smooth_contact=self._smooth_contact,
-            inverse_width=self._inverse_width(speed_scale),
-            contact_offset=self._contact_offset,
-            threshold=self.normal_velocity_guard * speed_scale,
-            surface=surface is not None,
-            inverse_surface=1.0 / surface.depth if surface is not None else 0.0,
-            surface_fraction=surface.surface_fraction if surface is not None else 1.0,
-            entering=entering,
-            smooth_entry=bool(self.entry_smoothing),
+            self.separation,
+            self._smooth_contact,
+            self._inverse_width(speed_scale),
+            self._contact_offset,
+            self.normal_velocity_guard * speed_scale,
+            surface is not None,
+            1.0 / surface.depth if surface is not None else 0.0,
+            surface.surface_fraction if surface is not None else 1.0,
+            entering,
+            bool(self.entry_smoothing),
         )
 
     def _target_stress(self, normal_velocity: np.ndarray, depth: np.ndarray | float) -> np.ndarray:
@@ -325,7 +326,7 @@ class DAFLLoads:
         exact = not self.separation or (isinstance(self.law, ResistanceLaw) and not self._contact_offset)
         stress = self._target_stress(normal_velocity if exact else np.maximum(normal_velocity, 0.0), depth)
         switches = self._switches(speed_scale, heights is not None)
-        stress = point_stress_scalars(stress, normal_velocity, depth, heights, 1.0, self._hot_inverse_entry, switches)
+        stress = point_stress_scalars(stress, normal_velocity, depth, heights, self._hot_inverse_entry, switches)
         if self.exposure is not None:
             self._expose(stress, velocity @ rotation)
         return stress, normal_velocity, speed_scale

@@ -58,21 +58,19 @@ class Switches(NamedTuple):
 
 
 def point_stress_scalars(
-    stress: Any, normal_velocity: Any, depth: Any, height: Any, weight: Any, inverse_entry: Any, switches: Switches
+    stress: Any, normal_velocity: Any, depth: Any, height: Any, inverse_entry: Any, switches: Switches
 ) -> Any:
-    """``f c w g e``: a point's law value ``stress`` (Pa) times its contact factor and ``weight`` (1, or the
-    quadrature weight in m^2), its free-surface factor at ``depth`` (m below the free surface) and its entry
-    factor at ``height`` (m above the face it enters through; ``inverse_entry`` ``1 / l``, 1/m).  Without
-    separation the law's negative values are cut at 0 instead of the contact factor.  ``stress`` may be updated
-    in place (an array the caller owns)."""
+    """``f c g e``: a point's law value ``stress`` (Pa) times its contact factor, its free-surface factor at ``depth``
+    (m below the free surface) and its entry factor at ``height`` (m above the face it enters through;
+    ``inverse_entry`` ``1 / l``, 1/m).  Without separation the law's negative values are cut at 0 instead of the
+    contact factor.  ``stress`` may be updated in place (an array the caller owns)."""
     s = switches
     if s.separation:
-        stress *= (
-            contact_factor_scalars(normal_velocity, s.smooth_contact, s.inverse_width, s.contact_offset, s.threshold)
-            * weight
+        stress *= contact_factor_scalars(
+            normal_velocity, s.smooth_contact, s.inverse_width, s.contact_offset, s.threshold
         )
     else:
-        stress = np.maximum(stress, 0.0) * weight
+        stress = np.maximum(stress, 0.0)
     if s.surface:
         stress *= surface_factor_scalars(depth, s.inverse_surface, s.surface_fraction)
     if s.entering:

@@ -7,12 +7,13 @@ compiled code.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from . import images
 from .dafl import DAFLLoads
-from .law_record import compilable, pack_effects, pack_laws
-from .resistance import ResistanceLaw
+from .law_record import compilable, pack
 
 __all__ = [
     "KERNEL_ARRAYS",
@@ -82,41 +83,24 @@ def supports(loads: DAFLLoads) -> bool:
     return compilable(loads.law)
 
 
-def law_and_effects(loads: DAFLLoads) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(laws, tables, interfaces, effects)`` of ``loads``: its target packed by
-    :func:`~fem_loads.law_record.pack_laws` and its effects by :func:`~fem_loads.law_record.pack_effects` (the
-    mesh kernel's and, with the rings' own entry length and radius, the ring model's)."""
-    laws, tables, interfaces, address = pack_laws(loads.law)
-    smooth_contact = loads.contact_width > 0.0 or loads.contact_incidence > 0.0
-    smooth_entry = loads.entry_smoothing > 0.0
+def law_and_effects(loads: DAFLLoads, **given: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(laws, tables, interfaces, effects)`` of ``loads``: its target and effects packed by
+    :func:`~fem_loads.law_record.pack`, the arguments ``given`` (the rings': their ``entry_length`` and
+    ``max_radius``) replacing the load's own."""
     entry_length = loads.point_arrays()["entry_length"]
-    friction, surface = loads.friction, loads.free_surface
-    effects = pack_effects(
-        contact_width=loads.contact_width,
-        contact_incidence=loads.contact_incidence,
-        contact_offset=0.5 if loads.contact == "centred" else 0.0,
-        smooth_contact=smooth_contact,
-        guard=loads.normal_velocity_guard,
-        separation=loads.separation,
-        smooth_entry=smooth_entry,
-        friction=friction.coefficient if friction is not None else 0.0,
-        friction_cap=(friction.cap or 0.0) if friction is not None else 0.0,
-        surface_depth=surface.depth if surface is not None else 0.0,
-        surface_fraction=surface.surface_fraction if surface is not None else 0.0,
-        user_law=address,
-        max_radius=loads.max_radius,
-        half_entry=0.5 * float(entry_length.max()) if len(entry_length) else 0.0,
-        needs_depth=loads.depth_dependent,
-        face_normal=loads.front_face.normal,
-        face_offset=loads.front_face.offset,
-        plain=isinstance(loads.law, ResistanceLaw)
-        and loads.law.power == 0.0
-        and not loads.law.strength_table
-        and loads.separation
-        and smooth_contact
-        and smooth_entry,
-    )
-    return laws, tables, interfaces, effects
+    effects: dict[str, Any] = {
+        "contact_width": loads.contact_width,
+        "contact_incidence": loads.contact_incidence,
+        "contact": loads.contact,
+        "guard": loads.normal_velocity_guard,
+        "separation": loads.separation,
+        "entry_length": float(entry_length.max()) if len(entry_length) else 0.0,
+        "friction": loads.friction,
+        "free_surface": loads.free_surface,
+        "max_radius": loads.max_radius,
+        "front_face": loads.front_face,
+    }
+    return pack(loads.law, **(effects | given))
 
 
 def kernel_data(loads: DAFLLoads) -> tuple[np.ndarray, ...]:

@@ -11,21 +11,19 @@ them by name (``law.c1``, ``effects.contact_width``):
   and what the mesh kernel derives from them once (its bounding sphere, whether the depth is needed, whether
   the law is the plain polynomial its SIMD loop handles).
 
-:func:`pack_laws` and :func:`pack_effects` build them; :func:`compilable` is the one rule of which targets the
+:func:`pack` builds them; :func:`compilable` is the one rule of which targets the
 compiled kernels take.
 """
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 from .resistance import ResistanceLaw
-from .target import LEVEL, LayeredTarget
+from .target import LEVEL, FreeSurface, Friction, FrontFace, LayeredTarget
 from .user_law import MAX_PARAMETERS, UserLaw
 
-__all__ = ["LAW", "EFFECTS", "COEFFICIENTS", "pack_laws", "pack_effects", "compilable"]
+__all__ = ["LAW", "EFFECTS", "COEFFICIENTS", "pack", "pack_laws", "compilable"]
 
 #: the built-in law's coefficients in the record, in the order ResistanceLaw.coefficients gives them
 COEFFICIENTS = ("c0", "k", "c1", "c2", "c", "n")
@@ -108,13 +106,54 @@ def pack_laws(law: ResistanceLaw | UserLaw | LayeredTarget) -> tuple[np.ndarray,
     return records, np.ascontiguousarray(np.concatenate(tables, axis=1)), np.asarray(interfaces, float), address
 
 
-def pack_effects(**values: Any) -> np.ndarray:
-    """One :data:`EFFECTS` record (shape (1,)) with the fields given, the front face level and the rest 0 (False);
-    an unknown field raises ValueError."""
-    record, names = np.zeros(1, dtype=EFFECTS), EFFECTS.names or ()
-    record["face_normal"], record["face_offset"] = LEVEL.normal, LEVEL.offset
+def pack(
+    law: ResistanceLaw | UserLaw | LayeredTarget,
+    *,
+    contact_width: float = 0.0,
+    contact_incidence: float = 0.0,
+    contact: str = "one_sided",
+    guard: float = 0.0,
+    separation: bool = True,
+    entry_length: float = 0.0,
+    friction: Friction | None = None,
+    free_surface: FreeSurface | None = None,
+    max_radius: float = 0.0,
+    front_face: FrontFace = LEVEL,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(laws, tables, interfaces, effects)``: the target's law by :func:`pack_laws` and one :data:`EFFECTS` record
+    (shape (1,)) of the load's effects, named as :class:`~fem_loads.dafl.DAFLLoads` names them: the one place both
+    the mesh kernel (:func:`~fem_loads.kernel_layout.law_and_effects`) and the rings
+    (:func:`~fem_loads.revolved.ring_data`) pack them.  ``entry_length`` (m): the longest point's (the rings': every
+    ring's); 0 is sharp.  ``max_radius`` (m): the farthest point from the centre of mass."""
+    laws, tables, interfaces, address = pack_laws(law)
+    smooth_contact = contact_width > 0.0 or contact_incidence > 0.0
+    effects = np.zeros(1, dtype=EFFECTS)
+    values = {
+        "contact_width": contact_width,
+        "contact_incidence": contact_incidence,
+        "contact_offset": 0.5 if contact == "centred" else 0.0,
+        "smooth_contact": smooth_contact,
+        "guard": guard,
+        "separation": separation,
+        "smooth_entry": entry_length > 0.0,
+        "entry_length": entry_length,
+        "friction": friction.coefficient if friction is not None else 0.0,
+        "friction_cap": (friction.cap or 0.0) if friction is not None else 0.0,
+        "surface_depth": free_surface.depth if free_surface is not None else 0.0,
+        "surface_fraction": free_surface.surface_fraction if free_surface is not None else 0.0,
+        "user_law": address,
+        "max_radius": max_radius,
+        "half_entry": 0.5 * entry_length,
+        "needs_depth": bool(law.depth_dependent),
+        "plain": isinstance(law, ResistanceLaw)
+        and law.power == 0.0
+        and not law.strength_table
+        and separation
+        and smooth_contact
+        and entry_length > 0.0,
+        "face_normal": front_face.normal,
+        "face_offset": front_face.offset,
+    }
     for name, value in values.items():
-        if name not in names:
-            raise ValueError(f"{name}: not a field of the effects record ({', '.join(names)})")
-        record[name] = value
-    return record
+        effects[name] = value
+    return laws, tables, interfaces, effects

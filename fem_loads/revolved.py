@@ -40,7 +40,6 @@ from mesh import Profile
 from .dafl import DAFLLoads
 from .factors import Switches
 from .kernel_layout import law_and_effects
-from .law_record import pack_effects, pack_laws
 from .native import entry_factor, friction_stress, law_stress, point_stress, slip_factor
 from .resistance import ResistanceLaw
 from .target import LEVEL
@@ -49,7 +48,6 @@ from .user_law import UserLaw
 __all__ = [
     "RevolvedSurface",
     "revolved_surface",
-    "law_data",
     "ring_data",
     "pitch_plane_load",
     "lowest_height",
@@ -151,56 +149,22 @@ def revolved_surface(
     return RevolvedSurface(np.ascontiguousarray(np.concatenate(rows)), np.ascontiguousarray(outline))
 
 
-def law_data(
-    law: ResistanceLaw | UserLaw,
-    contact_width: float,
-    contact_incidence: float,
-    entry_length: float,
-    max_radius: float,
-    friction_coefficient: float = 0.0,
-    friction_cap: float | None = None,
-    contact: str = "one_sided",
-) -> tuple[np.ndarray, np.ndarray]:
-    """The law and its effects as the kernel takes them: a :data:`~fem_loads.law_record.LAW` record and an
-    :data:`~fem_loads.law_record.EFFECTS` record (shape (1,) each; SI units).
-
-    ``contact_width`` ``w`` (m/s) and ``contact_incidence`` ``delta`` give the contact ramp's width
-    ``W = w + delta (|V| + |q| max_radius)``, ``contact`` where it lies (``"one_sided"``, ``"centred"``);
-    ``entry_length`` ``l`` (m) the entry ramp's (0: sharp).  A built-in law's strength table is refused (the
-    rings integrate no table).
-    """
+def ring_data(loads: DAFLLoads, surface: RevolvedSurface) -> tuple[np.ndarray, np.ndarray]:
+    """The law and effects records (:func:`~fem_loads.law_record.pack`) of a mesh load's own law and effects, with
+    the rings' radius and one entry length for every ring: the mesh's at its median point (``entry_smoothing`` times
+    the square root of its weight).  Refuses what the rings do not integrate: a strength table, layers, a free
+    surface, contact without separation, and a face that is not level."""
+    law = loads.law
     if isinstance(law, ResistanceLaw) and law.strength_table:
         raise ValueError("the ring model takes no strength table")
-    laws, _, _, address = pack_laws(law)
-    effects = pack_effects(
-        contact_width=contact_width,
-        contact_incidence=contact_incidence,
-        contact_offset=0.5 if contact == "centred" else 0.0,
-        smooth_contact=contact_width > 0.0 or contact_incidence > 0.0,
-        separation=True,
-        smooth_entry=entry_length > 0.0,
-        entry_length=entry_length,
-        friction=friction_coefficient,
-        friction_cap=friction_cap or 0.0,
-        user_law=address,
-        max_radius=max_radius,
-    )
-    return laws, effects
-
-
-def ring_data(loads: DAFLLoads, surface: RevolvedSurface) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`law_data` of a mesh load's own law and effects (:func:`~fem_loads.kernel_layout.law_and_effects`, the
-    records the mesh kernel takes), with the rings' radius and one entry length for every ring: the mesh's at its
-    median point (``entry_smoothing`` times the square root of its weight)."""
-    if isinstance(loads.law, ResistanceLaw) and loads.law.strength_table:
-        raise ValueError("the ring model takes no strength table")
-    if not isinstance(loads.law, ResistanceLaw | UserLaw):
+    if not isinstance(law, ResistanceLaw | UserLaw):
         raise ValueError("the ring model takes one law, not layers")
+    if loads.free_surface is not None or not loads.separation:
+        raise ValueError("the ring model takes neither a free surface nor contact without separation")
     if loads.front_face != LEVEL:
         raise ValueError("the ring model takes a level target face")
-    laws, _, _, effects = law_and_effects(loads)
-    effects["entry_length"] = loads.entry_smoothing * math.sqrt(float(np.median(loads.quadrature.weights)))
-    effects["max_radius"] = surface.max_radius
+    entry_length = loads.entry_smoothing * math.sqrt(float(np.median(loads.quadrature.weights)))
+    laws, _, _, effects = law_and_effects(loads, entry_length=entry_length, max_radius=surface.max_radius)
     return laws, effects
 
 
@@ -232,7 +196,7 @@ def _ring_stress(law: Any, effects: Any, normal_velocity: float, height: float, 
         entry > 0.0,
     )
     stress = law_stress(law, effects.user_law, max(normal_velocity, 0.0), -height, _NO_TABLE, _NO_TABLE)
-    return point_stress(stress, normal_velocity, -height, height, 1.0, 1.0 / entry if entry > 0.0 else 0.0, switches)
+    return point_stress(stress, normal_velocity, -height, height, 1.0 / entry if entry > 0.0 else 0.0, switches)
 
 
 @njit(cache=True, inline="always")
@@ -460,7 +424,7 @@ class PitchPlaneLoad:
     ----------
     surface : RevolvedSurface
     law : tuple of ndarray
-        The law and effects records of :func:`law_data` (or :func:`ring_data`).
+        The law and effects records of :func:`ring_data` (or of :func:`~fem_loads.law_record.pack`).
     """
 
     def __init__(self, surface: RevolvedSurface, law: tuple[np.ndarray, np.ndarray]) -> None:

@@ -85,9 +85,10 @@ def face_frame_scalars(position: Any, rotation: Any, normal: Any, offset: float)
     ``R``, body to world).  A point ``r`` of the body (m, body frame) lies ``h + u . r`` above the face.  For the
     level face ``n = (0, 0, 1)``, ``d = 0`` they are exactly ``Z_c`` and the last row of ``R``."""
     n0, n1, n2 = normal[0], normal[1], normal[2]
-    up0 = n0 * rotation[0, 0] + n1 * rotation[1, 0] + n2 * rotation[2, 0]
-    up1 = n0 * rotation[0, 1] + n1 * rotation[1, 1] + n2 * rotation[2, 1]
-    up2 = n0 * rotation[0, 2] + n1 * rotation[1, 2] + n2 * rotation[2, 2]
+    r0, r1, r2 = rotation[0], rotation[1], rotation[2]  # rows: nested lists work too (plain floats are fast)
+    up0 = n0 * r0[0] + n1 * r1[0] + n2 * r2[0]
+    up1 = n0 * r0[1] + n1 * r1[1] + n2 * r2[1]
+    up2 = n0 * r0[2] + n1 * r1[2] + n2 * r2[2]
     return face_height_scalars(position, normal, offset), up0, up1, up2
 
 

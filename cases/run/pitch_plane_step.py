@@ -56,7 +56,7 @@ def pitch_plane_trajectory(
     b_error: np.ndarray,
 ) -> tuple[int, float, float, float, float, float, float, int, int, int]:
     """:func:`dynamics.pitch_plane.trajectory` with the load :func:`fem_loads.revolved.pitch_plane_load` on ``rings``
-    under the records ``laws`` and ``effects`` (:func:`fem_loads.revolved.law_data`; the lowest point on
+    under the records ``laws`` and ``effects`` (:func:`fem_loads.revolved.ring_data`; the lowest point on
     ``outline``); returns its :data:`~dynamics.pitch_plane.OUTCOME_FIELDS`."""
     return trajectory(
         _load,

@@ -11,7 +11,8 @@ from support import meshed, slow_except
 import cases
 from cases.studies.reference import embedded_axial_force
 from fem_loads import DAFLLoads, ResistanceLaw, mass_properties, resistance_law, surface_quadrature
-from fem_loads.revolved import PitchPlaneLoad, law_data, lowest_height, revolved_surface
+from fem_loads.law_record import pack
+from fem_loads.revolved import PitchPlaneLoad, lowest_height, revolved_surface
 from fem_loads.target import Friction
 from fem_loads.user_law import user_law
 from mesh import BODY, BluntOgiveNose, ConeNose, OgiveNose, Profile, ProjectileGeometry, analytic_mass_properties
@@ -50,17 +51,17 @@ def _rings(
     friction: Friction | None, tip: float, entry: float = ENTRY, law=SOIL, contact: str = "one_sided", **counts
 ) -> PitchPlaneLoad:
     surface = revolved_surface(PAPER, tip, **counts)
-    data = law_data(
-        law,
-        0.0,
-        DELTA,
-        entry,
-        surface.max_radius,
-        friction.coefficient if friction else 0.0,
-        friction.cap if friction else None,
-        contact,
-    )
-    return PitchPlaneLoad(surface, data)
+    return PitchPlaneLoad(
+        surface,
+        _records(law, contact_incidence=DELTA, entry_length=entry, max_radius=surface.max_radius, friction=friction,
+                 contact=contact),
+    )  # fmt: skip
+
+
+def _records(law, **effects) -> tuple[np.ndarray, np.ndarray]:
+    """The rings' law and effects records (:func:`~fem_loads.law_record.pack`)."""
+    laws, _, _, records = pack(law, **effects)
+    return laws, records
 
 
 # height of the centre (m), axis tilt from straight down (deg), speed (m/s), attack (deg), pitch rate (rad/s)
@@ -130,7 +131,9 @@ def test_closed_form_arcs_are_the_integrals():
     surface = revolved_surface(PAPER, 0.5, nose_rings=16, shank_rings=8)
 
     def load(mu):
-        return PitchPlaneLoad(surface, law_data(SOIL, 0.0, 0.0, 0.0, surface.max_radius, mu))
+        return PitchPlaneLoad(
+            surface, _records(SOIL, max_radius=surface.max_radius, friction=Friction(mu) if mu else None)
+        )
 
     exact, gauss = load(0.0), load(1e-300)
     rng = np.random.default_rng(7)
@@ -155,7 +158,7 @@ def test_rings_carry_the_exact_area_and_volume(nose):
 def test_axial_force_is_the_closed_form(speed):
     """Axial motion, wholly embedded, sharp switches: ``pi a^2 (A sigma_0 + N B rho_0 V^2)`` (the nose factor)."""
     surface = revolved_surface(PAPER, 0.5)
-    law = law_data(SOIL, 0.0, 0.0, 0.0, surface.max_radius)
+    law = _records(SOIL, max_radius=surface.max_radius)
     fx, fz, my = PitchPlaneLoad(surface, law)(-5.0, math.pi / 2, (speed, 0.0), 0.0)
     assert -fx == pytest.approx(embedded_axial_force(PAPER, SOIL, speed), rel=1e-9)
     assert fz == 0.0 and my == 0.0

@@ -35,6 +35,8 @@ NATIVE = {
     "surface_factor": ("factors", "surface_factor_scalars"),
     "friction_stress": ("factors", "friction_stress_scalars"),
     "point_stress": ("factors", "point_stress_scalars"),
+    "face_height": ("target", "face_height_scalars"),
+    "face_frame": ("target", "face_frame_scalars"),
     "cube_cell": ("exposure", "cube_cell_scalars"),
     "cell_exposure": ("exposure", "cell_exposure_scalars"),
 }
@@ -188,6 +190,38 @@ def test_the_factor_checks_find_a_copy():
     assert _cap_takers("def tau(s, mu, cap):\n    return min(mu * s, cap)\n") == ["tau"]
     assert _cap_takers("def tau(s, f):\n    return np.minimum(f.coefficient * s, f.cap)\n") == ["tau"]
     assert _ramp_callers("def load(vn):\n    return contact_factor(vn, True, 1.0, 0.0, 0.0)\n") == []
+
+
+#: the loads: each multiplies a point's law value by its factors through the pipeline, point_stress_scalars
+LOADS = ("fem_loads/dafl.py", "fem_loads/compiled_point.py", "fem_loads/revolved.py")
+#: the factors the pipeline applies (the entry factor is also the layers' blend, and the rings' early exit)
+PIPELINE_FACTORS = {"contact_factor", "contact_factor_scalars", "surface_factor", "surface_factor_scalars"}
+
+
+def _factor_callers(source: str) -> list[str]:
+    return [f.name for f in _functions_calling(ast.parse(source), PIPELINE_FACTORS)]
+
+
+def _pipeline_callers(source: str) -> list[str]:
+    return [f.name for f in _functions_calling(ast.parse(source), {"point_stress", "point_stress_scalars"})]
+
+
+@pytest.mark.parametrize("module", LOADS)
+def test_every_load_multiplies_its_factors_in_the_one_pipeline(module):
+    """The numpy load, the compiled kernel's points and the rings call :func:`fem_loads.factors.point_stress_scalars`
+    (or its compiled form) and apply no contact or free-surface factor of their own."""
+    source = (ROOT / module).read_text()
+    assert _pipeline_callers(source), module
+    assert _factor_callers(source) == [], module
+
+
+def test_the_pipeline_check_finds_a_factor_applied_outside_it():
+    """Control: a kernel that multiplies by the contact factor itself is found, and one that calls the pipeline is
+    seen calling it."""
+    own = "def sums(vn, w):\n    return law(vn) * contact_factor(vn, True, 1.0 / w, 0.0, 0.0)\n"
+    assert _factor_callers(own) == ["sums"] and _pipeline_callers(own) == []
+    shared = "def sums(vn, z, s):\n    return native.point_stress(law(vn), vn, -z, z, 0.0, s)\n"
+    assert _factor_callers(shared) == [] and _pipeline_callers(shared) == ["sums"]
 
 
 def test_no_module_reads_another_s_private_attributes():
