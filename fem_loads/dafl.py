@@ -1,54 +1,33 @@
 """Differential area force law (DAFL): resultant target loads on a rigid projectile.
 
-For each surface quadrature point with outward normal ``n`` at ``r`` from the
-centre of mass, moving with ``u = V + omega x r``:
+For each surface quadrature point with outward normal ``n`` at ``r`` from the centre of mass, moving with
+``u = V + omega x r``:
 
 * ``Vn = u . n`` (positive when the element pushes into the target);
-* ``sigma_n = f(Vn, z) c(Vn) g(z) e(Z) x``, each factor one function of :mod:`fem_loads.factors`, with ``f``
-  the target's law at the point's depth ``z`` (:func:`~fem_loads.resistance.normal_stress_scalars`, of which
-  the paper's cavity expansion ``A sigma_0 + B rho_0 Vn^2`` is one case; a user's law; or the layers' laws
-  blended across their interfaces), ``g`` the optional free-surface reduction and ``x`` the exposure
-  (:mod:`fem_loads.exposure`, 1 on a convex body): the
-  contact factor ``c`` is 0 for ``Vn <= 0`` (the target separates from surfaces
-  that move away from it) and 1 from ``Vn >= W``, the contact width
-  ``W = w + delta U`` (``contact_width`` ``w``, ``contact_incidence`` ``delta``,
-  ``U = |V| + |omega| r_max`` the body's speed scale: with ``w = 0`` the factor
-  depends on the incidence ``Vn / U`` alone, so it does not fade as the body
-  slows down), the entry
-  factor ``e`` is 1 for a point a distance ``l/2`` below the surface and 0 for
-  one ``l/2`` above it (``l``: the point's own extent, ``entry_smoothing``
-  times the square root of its quadrature weight);
+* ``sigma_n = f(Vn, z) c(Vn) g(z) e(H) x``, the pipeline of :func:`~fem_loads.factors.point_stress_scalars`:
+  ``f`` the target's law at the point's depth ``z`` (:func:`~fem_loads.resistance.normal_stress_scalars`, of
+  which the paper's cavity expansion ``A sigma_0 + B rho_0 Vn^2`` is one case; a user's law; or the layers'
+  laws blended across their interfaces), ``c`` the contact factor over the contact width ``W``, ``g`` the
+  optional free-surface reduction, ``e`` the entry factor over the point's own extent ``l`` at its height ``H``
+  above the target's front face (:class:`~fem_loads.target.FrontFace`, the level half-space ``Z < 0`` by
+  default), and ``x`` the exposure (:mod:`fem_loads.exposure`, 1 on a convex body);
 * ``dF = -sigma_n n dS``, ``F = sum dF``, ``M = sum r x dF``.
 
-Both factors are the smooth step of :mod:`fem_loads.ramps`, so the load is a
-continuous (Lipschitz, twice differentiable) function of the state wherever
-``W > 0`` (with ``w = 0``: wherever the body moves); with ``w = delta = 0``
-and ``l = 0`` they are the sharp switches of the paper's law (then a
-point carries stress only when ``Vn > guard (|V| + |omega| r_max)``, see
-``normal_velocity_guard``).  docs/model.md argues both widths and the
-convergence to the sharp law as they go to zero.
+Both switches are the smooth step of :mod:`fem_loads.ramps` (:class:`DAFLLoads` defines their widths), so the
+load is a continuous (Lipschitz, twice differentiable) function of the state wherever ``W > 0``; with zero
+widths they are the sharp switches of the paper's law.  docs/model.md argues both widths and the convergence
+to the sharp law as they go to zero.  All per-point work is a few passes over arrays cached at construction.
 
-The target lies behind its front face (:class:`~fem_loads.target.FrontFace`; by default the level half-space
-``Z < 0`` of the world frame, ``Z`` up): a point's height above it is :func:`~fem_loads.target.face_frame_scalars`'s
-``h + u . r``.  All
-per-point work is a few passes over arrays cached at construction, so nothing
-is reassembled per evaluation.
+Optional effects (:mod:`fem_loads.target`): layered targets, a free-surface reduction, friction
+``dF = -(sigma_n n + tau t) dS`` and, for comparison, no separation (every embedded point stays in contact
+with ``max(0, f(Vn, z))``).  An absent effect costs nothing.
 
-Optional effects (:mod:`fem_loads.target`): layered targets, a free-surface
-reduction, friction ``dF = -(sigma_n n + tau t) dS`` and, for comparison,
-no separation: every embedded point stays in contact with
-``sigma_n = max(0, A sigma_0 + B rho_0 Vn |Vn|)``, so receding surfaces feel
-the static pressure less the dynamic term.  An absent effect costs nothing.
-
-Mirror symmetry.  When the quadrature is mirror symmetric about the body
-planes ``y = 0`` and ``z = 0``, or about one of them
-(``SurfaceQuadrature.mirror_images``), every per-point quantity is computed as
-four (or two) rows, one per mirror image of the quarter ``y > 0, z > 0`` (or
-the half), and the resultant folds the images' sums in mirrored pairs
-(:mod:`fem_loads.images`).  A state symmetric about a plane then gives
-exactly equal stresses on mirrored points, their differences are exactly zero
-and the load is exactly symmetric, whatever the summation order.  The friction
-load is summed over all points in their own order (not exactly symmetric).
+Mirror symmetry.  When the quadrature is mirror symmetric about the body planes ``y = 0`` and ``z = 0``, or
+about one of them (``SurfaceQuadrature.mirror_images``), every per-point quantity is computed as four (or two)
+rows, one per mirror image of the quarter ``y > 0, z > 0`` (or the half), and the resultant folds the images'
+sums in mirrored pairs (:mod:`fem_loads.images`): a state symmetric about a plane then gives an exactly
+symmetric load, whatever the summation order.  The friction load is summed over all points in their own order
+(not exactly symmetric).
 """
 
 from __future__ import annotations

@@ -15,28 +15,7 @@ from . import images
 from .dafl import DAFLLoads
 from .law_record import compilable, pack
 
-__all__ = [
-    "KERNEL_ARRAYS",
-    "kernel_data",
-    "supports",
-    "law_and_effects",
-    "DATA_NORMAL_ARM",
-    "DATA_POINTS",
-    "DATA_WEIGHTS",
-    "DATA_INVERSE_ENTRY",
-    "DATA_HALF_ENTRY_LENGTH",
-    "DATA_IMAGE_SIGNS",
-    "DATA_POINT_SIGNS",
-    "DATA_EFFECTS",
-    "DATA_LAWS",
-    "DATA_TABLES",
-    "DATA_INTERFACES",
-    "DATA_EXPOSURE_COLUMNS",
-    "DATA_EXPOSURE_START",
-    "DATA_EXPOSURE_ROWS",
-    "DATA_EXPOSURE_CORNERS",
-    "DATA_EXPOSURE_FINE",
-]
+__all__ = ["KERNEL_ARRAYS", "kernel_data", "supports", "law_and_effects"]  # and each array's index, DATA_*
 
 #: the arrays of the kernel's data, in order (:func:`kernel_data`): a plain tuple of arrays, which numba's
 #: dispatcher types in C (a named tuple, or a function object in it, costs more per call from Python)

@@ -146,7 +146,7 @@ def pack(
         "half_entry": 0.5 * entry_length,
         "needs_depth": bool(law.depth_dependent),
         "plain": isinstance(law, ResistanceLaw)
-        and law.power == 0.0
+        and law.c == 0.0
         and not law.strength_table
         and separation
         and smooth_contact

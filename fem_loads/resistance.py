@@ -59,46 +59,44 @@ class UnknownLawError(ValueError):
     """A law name that :data:`NAMED_LAWS` does not hold; the message lists the names it does."""
 
 
-def polynomial_stress_scalars(
-    normal_velocity: Any, depth: Any, static_stress: float, depth_gradient: float, linear: float, dynamic_density: float
-) -> Any:
+def polynomial_stress_scalars(normal_velocity: Any, depth: Any, c0: float, k: float, c1: float, c2: float) -> Any:
     """``c0 + k max(z, 0) + c1 Vn + c2 Vn |Vn|`` (Pa): :func:`normal_stress_scalars` without the power term and
     the table, and the whole law when it has neither.  No calls: a compiled loop over points that uses it alone
     runs in SIMD lanes."""
     # on arrays the augmented operations work in place (one temporary)
     stress = np.abs(normal_velocity)
-    stress *= dynamic_density
-    stress += linear
+    stress *= c2
+    stress += c1
     stress *= normal_velocity
-    stress += static_stress
-    if depth_gradient != 0.0:
-        stress += depth_gradient * np.maximum(depth, 0.0)
+    stress += c0
+    if k != 0.0:
+        stress += k * np.maximum(depth, 0.0)
     return stress
 
 
 def normal_stress_scalars(
     normal_velocity: Any,
     depth: Any,
-    static_stress: float,
-    depth_gradient: float,
-    linear: float,
-    dynamic_density: float,
-    power: float,
-    exponent: float,
+    c0: float,
+    k: float,
+    c1: float,
+    c2: float,
+    c: float,
+    n: float,
     table_depths: np.ndarray,
     table_stresses: np.ndarray,
 ) -> Any:
     """``sigma_n`` (Pa) of the built-in law at normal velocity ``Vn`` (m/s) and depth ``z`` (m below the surface).
 
     ``Vn`` and ``z`` are floats (the compiled kernel) or arrays of one shape (the numpy path); the
-    coefficients are floats: ``c0`` (``static_stress``, Pa), ``k`` (``depth_gradient``, Pa/m), ``c1``
-    (``linear``), ``c2`` (``dynamic_density``), ``c`` (``power``) and ``n`` (``exponent``).
+    coefficients are floats: ``c0`` (Pa), ``k`` (Pa/m), ``c1`` (Pa s/m), ``c2`` (kg/m^3), ``c`` (Pa (s/m)^n) and
+    ``n``.
     ``table_depths`` (m, increasing) and ``table_stresses`` (Pa) add the table's strength, linear between
     rows; both empty: no table.
     """
-    stress = polynomial_stress_scalars(normal_velocity, depth, static_stress, depth_gradient, linear, dynamic_density)
-    if power != 0.0:
-        stress += power * np.sign(normal_velocity) * np.abs(normal_velocity) ** exponent
+    stress = polynomial_stress_scalars(normal_velocity, depth, c0, k, c1, c2)
+    if c != 0.0:
+        stress += c * np.sign(normal_velocity) * np.abs(normal_velocity) ** n
     if table_depths.shape[0] > 0:
         stress += np.interp(depth, table_depths, table_stresses)
     return stress
@@ -113,39 +111,39 @@ class ResistanceLaw:
 
     Parameters
     ----------
-    static_stress : float
-        ``c0`` (``A sigma_0`` of cavity expansion, Pa): the stress at vanishing normal velocity at the surface.
-    dynamic_density : float
-        ``c2`` (``B rho_0``, kg/m^3): the coefficient of ``Vn^2``.
+    c0 : float
+        Pa (``A sigma_0`` of cavity expansion): the stress at vanishing normal velocity at the surface.
+    c2 : float
+        kg/m^3 (``B rho_0``): the coefficient of ``Vn^2``.
     name : str
         A label for reports.
-    linear : float
-        ``c1`` (Pa s/m): the coefficient of ``Vn``.
-    power, exponent : float
-        ``c`` (Pa (s/m)^n) and ``n > 0`` of the term ``c Vn^n``.
-    depth_gradient : float
-        ``k`` (Pa/m): the strength's growth with depth below the surface.
+    c1 : float
+        Pa s/m: the coefficient of ``Vn``.
+    c, n : float
+        Pa (s/m)^n and ``n > 0``: the term ``c Vn^n``.
+    k : float
+        Pa/m: the strength's growth with depth below the surface.
     strength_table : tuple of (depth, stress) pairs, optional
         Extra strength (Pa) against depth (m, increasing), linear between rows and constant beyond.
     """
 
-    static_stress: float
-    dynamic_density: float
+    c0: float
+    c2: float
     name: str = "custom"
-    linear: float = 0.0
-    power: float = 0.0
-    exponent: float = 1.0
-    depth_gradient: float = 0.0
+    c1: float = 0.0
+    c: float = 0.0
+    n: float = 1.0
+    k: float = 0.0
     strength_table: tuple[tuple[float, float], ...] = ()
     _table: tuple[np.ndarray, np.ndarray] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        for field_name in ("static_stress", "dynamic_density", "linear", "power", "depth_gradient"):
+        for field_name in ("c0", "c2", "c1", "c", "k"):
             value = getattr(self, field_name)
             if not (math.isfinite(value) and value >= 0.0):
                 raise ValueError(f"{field_name} = {value}: must be a finite number >= 0")
-        if not (math.isfinite(self.exponent) and 0.0 < self.exponent <= 10.0):
-            raise ValueError(f"exponent = {self.exponent}: must lie in (0, 10]")
+        if not (math.isfinite(self.n) and 0.0 < self.n <= 10.0):
+            raise ValueError(f"n = {self.n}: must lie in (0, 10]")
         table = np.array(self.strength_table, dtype=float).reshape(-1, 2)
         if not (np.all(np.isfinite(table)) and np.all(table[:, 1] >= 0.0) and np.all(np.diff(table[:, 0]) > 0.0)):
             raise ValueError("strength_table: (depth, stress) rows with increasing depths and stresses >= 0")
@@ -160,12 +158,12 @@ class ResistanceLaw:
     @property
     def depth_dependent(self) -> bool:
         """Whether the stress depends on depth (``k > 0`` or a table)."""
-        return self.depth_gradient != 0.0 or len(self.strength_table) > 0
+        return self.k != 0.0 or len(self.strength_table) > 0
 
     @property
     def coefficients(self) -> tuple[float, float, float, float, float, float]:
         """``(c0, k, c1, c2, c, n)`` in the order :func:`normal_stress_scalars` takes them."""
-        return (self.static_stress, self.depth_gradient, self.linear, self.dynamic_density, self.power, self.exponent)
+        return (self.c0, self.k, self.c1, self.c2, self.c, self.n)
 
     @property
     def table(self) -> tuple[np.ndarray, np.ndarray]:

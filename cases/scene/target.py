@@ -64,7 +64,7 @@ class DepthStrength(Strict):
         return rows
 
     def _depth(self) -> dict[str, Any]:
-        return {"depth_gradient": self.depth_gradient, "strength_table": tuple(map(tuple, self.strength_table or ()))}
+        return {"k": self.depth_gradient, "strength_table": tuple(map(tuple, self.strength_table or ()))}
 
 
 class LawSpec(DepthStrength):
@@ -89,7 +89,7 @@ class PolynomialLawSpec(DepthStrength):
     c2: Number = field(0.0, unit="kg/m^3", ge=0.0, le=1e6, description="coefficient of Vn^2")
 
     def build(self) -> ResistanceLaw:
-        return ResistanceLaw(self.c0, self.c2, "polynomial", linear=self.c1, **self._depth())
+        return ResistanceLaw(self.c0, self.c2, "polynomial", c1=self.c1, **self._depth())
 
 
 class PowerLawSpec(DepthStrength):
@@ -101,7 +101,7 @@ class PowerLawSpec(DepthStrength):
     n: Number = field(gt=0.0, le=10.0, description="exponent")
 
     def build(self) -> ResistanceLaw:
-        return ResistanceLaw(self.c0, 0.0, "power", power=self.c, exponent=self.n, **self._depth())
+        return ResistanceLaw(self.c0, 0.0, "power", c=self.c, n=self.n, **self._depth())
 
 
 class MaterialLawSpec(Strict):

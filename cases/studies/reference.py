@@ -137,7 +137,7 @@ def embedded_axial_force(profile: Profile, law: ResistanceLaw, speed: float, fri
     Without friction ``N1 = 1`` and ``N2 = N``; see :func:`nose_factors`.
     """
     n1, n2 = nose_factors(profile, friction)
-    return math.pi * profile.radius**2 * (n1 * law.static_stress + n2 * law.dynamic_density * speed**2)
+    return math.pi * profile.radius**2 * (n1 * law.c0 + n2 * law.c2 * speed**2)
 
 
 def closed_form_depth(profile: Profile, law: ResistanceLaw, mass: float, speed: float) -> float:
@@ -147,8 +147,8 @@ def closed_form_depth(profile: Profile, law: ResistanceLaw, mass: float, speed: 
     """
     check_nose_alone_presses(profile)
     area = math.pi * profile.radius**2
-    n_b = profile.nose_factor() * law.dynamic_density
-    return mass / (2 * area * n_b) * math.log1p(n_b * speed**2 / law.static_stress)
+    n_b = profile.nose_factor() * law.c2
+    return mass / (2 * area * n_b) * math.log1p(n_b * speed**2 / law.c0)
 
 
 def axial_depth_1d(
@@ -178,7 +178,7 @@ def axial_depth_1d(
         Speed (m/s) when the nose is fully embedded.
     """
     check_nose_alone_presses(profile)
-    cavity = isinstance(law, ResistanceLaw) and law.linear == law.power == 0.0 and not law.depth_dependent
+    cavity = isinstance(law, ResistanceLaw) and law.c1 == law.c == 0.0 and not law.depth_dependent
     if contact_width > 0.0 or contact_incidence > 0.0 or not isinstance(law, ResistanceLaw) or not cavity:
         ramp = (contact_width, contact_incidence, contact)
         return _axial_depth_contact(profile, law, mass, speed, stop_speed, rtol, *ramp)
@@ -190,8 +190,8 @@ def axial_depth_1d(
 
     def rate(t: float, y: np.ndarray) -> list[float]:
         p = min(max(y[0], 0.0), ln)
-        force = math.pi * float(profile.radius_at(p)) ** 2 * law.static_stress
-        force += law.dynamic_density * y[1] ** 2 * float(g_interp(p))
+        force = math.pi * float(profile.radius_at(p)) ** 2 * law.c0
+        force += law.c2 * y[1] ** 2 * float(g_interp(p))
         return [y[1], -force / mass]
 
     sol = _integrate(rate, [0.0, speed], stop_speed, rtol, embedded_at=ln)

@@ -157,8 +157,8 @@ def c_loop_call(loads, position, velocity, rotation, spin, folder: Path) -> Call
         for a in (
             per_point["normal_arm"],
             per_point["points"],
-            loads.law.static_stress * weights,
-            loads.law.dynamic_density * weights,
+            loads.law.c0 * weights,
+            loads.law.c2 * weights,
             1.0 / per_point["entry_length"],
             np.concatenate([velocity @ rotation, spin]),
             rotation[2],

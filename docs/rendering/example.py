@@ -77,7 +77,7 @@ def main() -> None:
     if embedded is not None:
         law = build_law(scene.target.law)
         tip_angle = math.asin(math.sqrt(1.0 - ((5.0 - 0.5) / 5.0) ** 2))  # CRH 5: cos(theta) = (psi - 1/2) / psi
-        tip = law.static_stress + law.dynamic_density * (embedded.speed * math.sin(tip_angle)) ** 2
+        tip = law.c0 + law.c2 * (embedded.speed * math.sin(tip_angle)) ** 2
         print()
         print(
             f"At the embedded instant the hottest facet's mean is {embedded.sigma_n.max() / 1e6:.1f} MPa against "

@@ -29,7 +29,7 @@ from cases.studies.validate import validate
 
 def forrestal_concrete(diameter: float, nose_factor: float, law, mass: float, speed: float) -> float:
     """Forrestal et al.'s depth (m) with the crater of depth 2d (``law``: ``S f'c`` and ``rho`` as ``c0``, ``c2``)."""
-    strength, density = law.static_stress, law.dynamic_density
+    strength, density = law.c0, law.c2
     crater = math.pi * diameter**3 / 2
     v1_squared = (mass * speed**2 - crater * strength) / (mass + crater * nose_factor * density)
     tunnel = 2 * mass / (math.pi * diameter**2 * nose_factor * density)

@@ -121,7 +121,7 @@ def test_lowest_height_equals_the_numpy_one(quadrature, mode):
         )
 
 
-LAYERS = LayeredTarget((0.2, 0.5), (SOIL, resistance_law("softer_soil"), ResistanceLaw(2e6, 1e3, linear=3e4)))
+LAYERS = LayeredTarget((0.2, 0.5), (SOIL, resistance_law("softer_soil"), ResistanceLaw(2e6, 1e3, c1=3e4)))
 #: every effect and law of the kernel, each alone and some together (with the default smooth switches)
 EFFECTS = {
     "coulomb": {"friction": Friction(0.1)},
@@ -130,9 +130,9 @@ EFFECTS = {
     "free-surface": {"free_surface": FreeSurface(0.3, 0.2)},
     "layers": {"law": LAYERS},
     "centred": {"contact": "centred"},
-    "polynomial": {"law": ResistanceLaw(3e6, 800.0, linear=2e4)},
-    "power": {"law": ResistanceLaw(4e6, 0.0, power=5e3, exponent=1.6)},
-    "depth-gradient": {"law": ResistanceLaw(3e6, 1e3, depth_gradient=2e6)},
+    "polynomial": {"law": ResistanceLaw(3e6, 800.0, c1=2e4)},
+    "power": {"law": ResistanceLaw(4e6, 0.0, c=5e3, n=1.6)},
+    "depth-gradient": {"law": ResistanceLaw(3e6, 1e3, k=2e6)},
     "table": {"law": ResistanceLaw(3e6, 1e3, strength_table=((0.0, 0.0), (0.3, 5e6), (1.0, 6e6)))},
     "all": {"law": LAYERS, "friction": Friction(0.2), "free_surface": FreeSurface(0.3), "contact": "centred"},
 }

@@ -48,7 +48,7 @@ def test_tail_first_motion_loads_only_the_tail():
     profile = PROFILES["paper CRH 5"]
     loads, _ = _loads(profile)
     force, _ = loads(DEEP, np.array([0.0, 0.0, 200.0]), DOWN, np.zeros(3))
-    exact = math.pi * profile.radius**2 * (SOIL.static_stress + SOIL.dynamic_density * 200.0**2)
+    exact = math.pi * profile.radius**2 * (SOIL.c0 + SOIL.c2 * 200.0**2)
     assert -force[2] == pytest.approx(exact, rel=1e-6)
 
 
@@ -72,7 +72,7 @@ def test_lateral_motion_matches_1d_integrals():
     v = 150.0
     rotation = np.eye(3)  # any attitude: the whole body is deep inside
     force, moment = loads(DEEP, np.array([0.0, v, 0.0]), rotation, np.zeros(3))
-    a_s0, b_r0 = SOIL.static_stress, SOIL.dynamic_density
+    a_s0, b_r0 = SOIL.c0, SOIL.c2
 
     def parts(s):
         r, slope = float(profile.radius_at(s)), float(profile.slope_at(s))

@@ -88,9 +88,9 @@ def test_the_ring_load_is_the_mesh_load(state, friction):
 
 
 LAWS = {
-    "polynomial": ResistanceLaw(3e6, 900.0, linear=2.5e4),
-    "power": ResistanceLaw(4e6, 0.0, power=5e3, exponent=1.6),
-    "depth gradient": ResistanceLaw(1e7, 2e3, depth_gradient=3e6),
+    "polynomial": ResistanceLaw(3e6, 900.0, c1=2.5e4),
+    "power": ResistanceLaw(4e6, 0.0, c=5e3, n=1.6),
+    "depth gradient": ResistanceLaw(1e7, 2e3, k=3e6),
     "user law": user_law(
         f"{Path(cases.__file__).parent}/laws/soil_laws.py:overburden",
         {"c0": 1e7, "c2": 2e3, "unit_weight": 1.8e4, "lateral_ratio": 0.5},

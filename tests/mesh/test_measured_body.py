@@ -106,13 +106,7 @@ def _flare_axial_force(speed: float) -> float:
     def integrand(s: float) -> float:
         slope = float(FLARE.slope_at(s))
         sin2 = slope**2 / (1 + slope**2)
-        return (
-            2
-            * math.pi
-            * float(FLARE.radius_at(s))
-            * max(slope, 0.0)
-            * (SOIL.static_stress + SOIL.dynamic_density * speed**2 * sin2)
-        )
+        return 2 * math.pi * float(FLARE.radius_at(s)) * max(slope, 0.0) * (SOIL.c0 + SOIL.c2 * speed**2 * sin2)
 
     flare = integrate.quad(integrand, FLARE.body.start, 0.93, points=FLARE.breakpoints, limit=200, epsrel=1e-12)[0]
     return nose + flare

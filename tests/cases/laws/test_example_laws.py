@@ -41,12 +41,10 @@ EQUAL_TO_SOIL = {
     "user law": {
         "target.law": {
             "function": f"{LAWS}:cavity_expansion",
-            "parameters": {"c0": SOIL.static_stress, "c2": SOIL.dynamic_density},
+            "parameters": {"c0": SOIL.c0, "c2": SOIL.c2},
         }
     },
-    "polynomial, c1 = 0": {
-        "target.law": {"model": "polynomial", "c0": SOIL.static_stress, "c1": 0.0, "c2": SOIL.dynamic_density}
-    },
+    "polynomial, c1 = 0": {"target.law": {"model": "polynomial", "c0": SOIL.c0, "c1": 0.0, "c2": SOIL.c2}},
     "k = 0": {"target.law": {"A": 1.718, "sigma_0": 10e6, "B": 1.227, "rho_0": 1860.0, "depth_gradient": 0.0}},
 }
 

@@ -19,7 +19,7 @@ SOIL = resistance_law("soil")
 LAWS_FILE = scene_path("paper_p3").parent / "laws" / "soil_laws.py"
 SAME_AS_SOIL = {
     "function": f"{LAWS_FILE}:cavity_expansion",
-    "parameters": {"c0": SOIL.static_stress, "c2": SOIL.dynamic_density},
+    "parameters": {"c0": SOIL.c0, "c2": SOIL.c2},
 }
 
 
@@ -45,7 +45,7 @@ def test_any_laws_side_by_side(tmp_path):
     for _, rows in by_speed.groupby("law"):
         assert rows.sort_values("impact.speed")["depth"].is_monotonic_increasing  # faster goes deeper
     x, sigma = comparison.nose_stress["soil"]
-    assert sigma.max() > SOIL.static_stress and np.all(sigma >= 0.0) and len(x) == len(sigma)
+    assert sigma.max() > SOIL.c0 and np.all(sigma >= 0.0) and len(x) == len(sigma)
     assert {p.name for p in out.iterdir()} == {"compare.md", "compare.csv", "compare.png"}
     written = pd.read_csv(out / "compare.csv")
     assert list(written["law"]) == ["soil", "softer", "poly", "mine"]

@@ -45,8 +45,8 @@ def test_concrete_strength_factor_is_frews_fit():
     assert concrete_strength_factor(51e6) == pytest.approx(9.7290, abs=2e-4)
     assert concrete_strength_factor(13.5e6) == pytest.approx(20.05, abs=0.01)
     law = concrete_cavity_expansion(51e6, 2300.0)
-    assert law.static_stress == pytest.approx(concrete_strength_factor(51e6) * 51e6, rel=1e-15)
-    assert law.dynamic_density == 2300.0  # B = 1
+    assert law.c0 == pytest.approx(concrete_strength_factor(51e6) * 51e6, rel=1e-15)
+    assert law.c2 == 2300.0  # B = 1
     with pytest.raises(ValueError, match="compressive_strength"):
         concrete_strength_factor(-1.0)
 
@@ -62,7 +62,7 @@ def test_concrete_family_runs_as_its_cavity_expansion_form():
     assert family["depth"] == pytest.approx(plain["depth"], rel=1e-9)
     # a given S replaces Frew's
     given = load_scene(scene, [("target.law.S", 12.0)]).target.build()
-    assert given.static_stress == pytest.approx(12.0 * 51e6, rel=1e-15)
+    assert given.c0 == pytest.approx(12.0 * 51e6, rel=1e-15)
 
 
 # -- validate
