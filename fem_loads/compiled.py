@@ -51,7 +51,7 @@ from .kernel_layout import (
     kernel_data,
     supports,
 )
-from .native import face_frame, face_height
+from .native import face_frame
 from .user_law import user_law_signature
 
 __all__ = ["dafl_kernel", "lowest_height_kernel", "kernel_data", "supports", "KERNEL_ARRAYS", "USER_LAW_SIGNATURE"]
@@ -212,10 +212,10 @@ def lowest_height_kernel(data: tuple[np.ndarray, ...], position: np.ndarray, rot
     """
     points, half_entry_length, point_signs = data[DATA_POINTS], data[DATA_HALF_ENTRY_LENGTH], data[DATA_POINT_SIGNS]
     effects = data[DATA_EFFECTS][0]
-    top = face_height(position, effects.face_normal, effects.face_offset) + effects.max_radius
+    height, up0, up1, up2 = face_frame(position, rotation, effects.face_normal, effects.face_offset)
+    top = height + effects.max_radius
     if top < 0.0:
         return top
-    height, up0, up1, up2 = face_frame(position, rotation, effects.face_normal, effects.face_offset)
     lowest = math.inf
     for j in range(points.shape[1]):
         p0, p1, p2 = up0 * points[0, j], up1 * points[1, j], up2 * points[2, j]
