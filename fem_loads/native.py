@@ -56,12 +56,12 @@ __all__ = [
 
 smooth_step = njit(inline="always", error_model="numpy")(smooth_step_scalars)
 # the smooth step as numba sees it inside the factors (the plain function stays plain)
-register_jitable(error_model="numpy")(smooth_step_scalars)
+register_jitable(inline="always", error_model="numpy")(smooth_step_scalars)
 # every factor of fem_loads.factors (its *_scalars functions) as numba sees it inside the pipeline, so that a new
 # factor needs no line here
 for _name, _function in vars(factors).items():
     if _name.endswith("_scalars") and callable(_function) and _function is not smooth_step_scalars:
-        register_jitable(error_model="numpy")(_function)
+        register_jitable(inline="always", error_model="numpy")(_function)
 point_stress = njit(inline="always", error_model="numpy")(point_stress_scalars)
 contact_factor = njit(inline="always", error_model="numpy")(contact_factor_scalars)
 entry_factor = njit(inline="always", error_model="numpy")(entry_factor_scalars)
