@@ -1,27 +1,14 @@
 """The DAFL load in compiled code (numba): one loop over the surface points per evaluation.
 
-:func:`dafl_kernel` evaluates the same resultant as :meth:`DAFLLoads.__call__
-<fem_loads.dafl.DAFLLoads.__call__>`, every effect included:
+:func:`dafl_kernel` evaluates the resultant of :meth:`DAFLLoads.__call__ <fem_loads.dafl.DAFLLoads.__call__>`,
+every effect included, through the same per-point pipeline (:mod:`fem_loads.compiled_point`).  Mirror images are
+kept as the numpy path keeps them (:mod:`fem_loads.images`): each image of the fundamental part's points is summed
+with its own signs, in the same order, and the images are folded in mirrored pairs, so a symmetric state gives an
+exactly symmetric normal load.
 
-* ``Vn = n . (R^T V) + (r x n) . omega`` at every point (its own signs per mirror image);
-* ``sigma = f(Vn, z) c(Vn) e(Z) g(z)``: the law ``f`` (the built-in :func:`~fem_loads.resistance.normal_stress_scalars`
-  compiled, a user's function through its numba ``cfunc``, or the layers' laws blended across their
-  interfaces), the contact factor ``c`` (one-sided or centred ramp, or the sharp switch), the entry
-  factor ``e`` and the free surface's ``g``, with the same smooth step (:mod:`fem_loads.ramps`);
-* ``F = -R sum sigma n w``, ``M = -sum sigma r x n w``, and the friction's ``-sum tau k s w`` and its moment.
-
-Mirror symmetry is kept exactly as on the numpy path (:mod:`fem_loads.images`): each point of the
-quarter ``y > 0, z > 0`` (or of the half, for one mirror plane) is evaluated as its four (two)
-images, every image's ``Vn`` and height summed in the same order with its own signs, each image's
-resultant summed separately over the points, and the images folded in mirrored pairs.  A state
-symmetric about a body plane then gives mirrored images bitwise-equal stresses and sums, and an
-exactly symmetric normal load.  A quadrature without mirror images is one "image" of every point.
-The friction load is summed in body coordinates (as on the numpy path, not exactly symmetric).
-
-The kernel takes its arrays as one tuple (:func:`kernel_data`, :data:`KERNEL_ARRAYS`), so the compiled
-Runge-Kutta step (:mod:`dynamics.compiled`) calls it without knowing what it computes.  A user's law
-enters as the address of its numba ``cfunc`` of a fixed signature (:data:`USER_LAW_SIGNATURE`), called
-through a pointer: the kernel and the step are compiled and cached once for every law.
+The kernel takes its arrays as one tuple (:func:`kernel_data`), so the compiled Runge-Kutta step
+(:mod:`dynamics.compiled`) calls it without knowing what it computes, and a user's law as the address of its
+``cfunc`` (:data:`USER_LAW_SIGNATURE`): the kernel is compiled and cached once for every law.
 """
 
 from __future__ import annotations

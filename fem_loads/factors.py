@@ -4,24 +4,14 @@ The DAFL stress of a point is its target's law times factors, and its friction s
 
     sigma = f(Vn, z) c(Vn) g(z) e(H) x,    tau = min(mu sigma, tau_s)
 
-* ``c`` the contact factor (:func:`contact_factor_scalars`): the target separates from surface that moves away
-  from it, smoothly over the contact width or at a sharp switch;
-* ``g`` the free-surface reduction (:func:`surface_factor_scalars`);
-* ``e`` the entry factor (:func:`entry_factor_scalars`): a point enters the target (or a layer below an
-  interface) over its own extent ``l``;
-* ``x`` the exposure (:func:`fem_loads.exposure.cell_exposure_scalars`);
-* ``tau`` the friction stress (:func:`friction_stress_scalars`), along the slip by
-  :func:`fem_loads.target.slip_factor_scalars`.
+with ``c`` the contact factor, ``g`` the free-surface reduction, ``e`` the entry factor, ``x`` the exposure
+(:func:`fem_loads.exposure.cell_exposure_scalars`) and ``tau`` the friction stress, along the slip by
+:func:`fem_loads.target.slip_factor_scalars`.
 
-Each is written on floats and numpy arrays alike, with the smooth step of :mod:`fem_loads.ramps`: the numpy
-path evaluates it on every point at once, and :mod:`fem_loads.native` compiles the very same function for the
-compiled kernels (the mesh's and the rings').  A flag such as ``smooth`` is one value for all the points, so a
-compiled loop that passes a constant keeps no branch.
-
-:func:`point_stress_scalars` is the pipeline: it multiplies a point's law value by the factors, and every load
-(the numpy path, the compiled mesh kernel and its SIMD loop, the rings) calls it.  A new factor is one function
-here (named ``*_scalars``: :mod:`fem_loads.native` compiles every such function of this module) and one line in
-the pipeline.
+Each is written on floats and numpy arrays alike: the numpy path evaluates it on every point at once, and
+:mod:`fem_loads.native` compiles the same function for the compiled kernels.  A flag is one value for all the
+points, so a compiled loop that passes a constant keeps no branch.  :func:`point_stress_scalars` is the pipeline
+every load calls; a new factor is one ``*_scalars`` function here and one line in it.
 """
 
 from __future__ import annotations

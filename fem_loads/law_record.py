@@ -1,18 +1,10 @@
 """The law and its effects as the compiled kernels take them: typed records, packed in one place.
 
-Every compiled kernel (the mesh's, :mod:`fem_loads.compiled`, and the rings', :mod:`fem_loads.revolved`) reads the
-target's law and the load's effects from numpy structured arrays whose fields say what they are, and numba reads
-them by name (``law.c1``, ``effects.contact_width``):
-
-* :data:`LAW`, one record per layer: the coefficients of :func:`~fem_loads.resistance.normal_stress_scalars`
-  (``c0`` Pa, ``k`` Pa/m, ``c1`` Pa s/m, ``c2`` kg/m^3, ``c`` Pa (s/m)^n, ``n``), a user law's parameters
-  (``user``, :class:`~fem_loads.user_law.UserLaw`), and where its strength table lies in the tables' array;
-* :data:`EFFECTS`, one record: the contact and entry ramps, friction, the free surface, the user law's address,
-  and what the mesh kernel derives from them once (its bounding sphere, whether the depth is needed, whether
-  the law is the plain polynomial its SIMD loop handles).
-
-:func:`pack` builds them; :func:`compilable` is the one rule of which targets the
-compiled kernels take.
+:data:`LAW` (one record per layer: the coefficients of :func:`~fem_loads.resistance.normal_stress_scalars`, a user
+law's parameters, where its strength table lies) and :data:`EFFECTS` (the ramps, friction, free surface, front face
+and what the mesh kernel derives from them once) are numpy structured arrays that numba reads by field name.
+:func:`pack` builds both, for the mesh kernel and the rings alike; :func:`compilable` is the one rule of which
+targets the compiled kernels take.
 """
 
 from __future__ import annotations

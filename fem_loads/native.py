@@ -1,15 +1,9 @@
 """The compiled forms of the scalar definitions the numpy path shares, and the call into a user's law.
 
-Each compiled form here (:data:`smooth_step`, :data:`contact_factor`, :data:`point_stress`, :data:`face_frame`,
-...) is numba's compilation of the one ``*_scalars`` definition the numpy path evaluates (in
-:mod:`fem_loads.ramps`, :mod:`fem_loads.factors`, :mod:`fem_loads.resistance`, :mod:`fem_loads.target` and
-:mod:`fem_loads.exposure`), for the compiled kernels (:mod:`fem_loads.compiled`, :mod:`fem_loads.revolved`) to
-inline.
-
-:func:`call_user_law` calls a user's law, a C call through the address of its numba ``cfunc``
-(:meth:`fem_loads.user_law.UserLaw.compiled`).  The kernels take the address as data, so they are compiled
-and cached once for every law; a function object passed instead would be typed anew on every call from
-Python and compiled anew in every process.
+Each compiled form (:data:`point_stress`, :data:`face_frame`, ...) is numba's compilation of the one ``*_scalars``
+definition the numpy path evaluates, for the compiled kernels to inline.  :func:`call_user_law` calls a user's law
+through the address of its ``cfunc`` (:meth:`fem_loads.user_law.UserLaw.compiled`): the kernels take the address
+as data, so they are compiled and cached once for every law.
 """
 
 from __future__ import annotations
@@ -24,13 +18,7 @@ from numba.extending import intrinsic, register_jitable
 
 from . import factors
 from .exposure import cell_exposure_scalars, corner_exposure, cube_cell_scalars, fine_exposure
-from .factors import (
-    contact_factor_scalars,
-    entry_factor_scalars,
-    friction_stress_scalars,
-    point_stress_scalars,
-    surface_factor_scalars,
-)
+from .factors import entry_factor_scalars, friction_stress_scalars, point_stress_scalars
 from .ramps import smooth_step_scalars
 from .resistance import normal_stress_scalars, polynomial_stress_scalars
 from .target import face_frame_scalars, face_height_scalars, slip_factor_scalars
@@ -38,38 +26,29 @@ from .user_law import MAX_PARAMETERS
 
 __all__ = [
     "call_user_law",
-    "smooth_step",
     "slip_factor",
     "builtin_stress",
     "polynomial_stress",
-    "contact_factor",
     "entry_factor",
-    "surface_factor",
     "friction_stress",
     "point_stress",
-    "face_height",
     "face_frame",
     "cube_cell",
     "cell_exposure",
     "law_stress",
 ]
 
-smooth_step = njit(inline="always", error_model="numpy")(smooth_step_scalars)
-# the smooth step as numba sees it inside the factors (the plain function stays plain)
+# the smooth step and every factor of fem_loads.factors (its *_scalars functions) as numba sees them inside the
+# pipeline, so that a new factor needs no line here (the plain functions stay plain)
 register_jitable(inline="always", error_model="numpy")(smooth_step_scalars)
-# every factor of fem_loads.factors (its *_scalars functions) as numba sees it inside the pipeline, so that a new
-# factor needs no line here
 for _name, _function in vars(factors).items():
     if _name.endswith("_scalars") and callable(_function) and _function is not smooth_step_scalars:
         register_jitable(inline="always", error_model="numpy")(_function)
 point_stress = njit(inline="always", error_model="numpy")(point_stress_scalars)
-contact_factor = njit(inline="always", error_model="numpy")(contact_factor_scalars)
 entry_factor = njit(inline="always", error_model="numpy")(entry_factor_scalars)
-surface_factor = njit(inline="always", error_model="numpy")(surface_factor_scalars)
 friction_stress = njit(inline="always", error_model="numpy")(friction_stress_scalars)
 slip_factor = njit(inline="always", error_model="numpy")(slip_factor_scalars)
-face_height = njit(inline="always", error_model="numpy")(face_height_scalars)
-# the centre's height as numba sees it inside the face's frame (the plain function stays plain)
+# the centre's height as numba sees it inside the face's frame
 register_jitable(error_model="numpy")(face_height_scalars)
 face_frame = njit(inline="always", error_model="numpy")(face_frame_scalars)
 polynomial_stress = njit(inline="always", error_model="numpy")(polynomial_stress_scalars)

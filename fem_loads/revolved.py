@@ -1,29 +1,18 @@
 """The DAFL load of a body of revolution moving in a plane through its axis, integrated ring by ring.
 
-A body of revolution is a stack of rings: the ring at ``x`` (m, along the axis, forward of the
-centre of mass) has radius ``rho``, outward normal ``(n_axial, n_radial cos phi ...)`` at the angle
-``phi`` around it and the area weight ``w`` per radian of ``phi`` (:class:`RevolvedSurface`).  In a
-motion in the body's x-z plane (velocity ``(v_x, 0, v_z)`` and pitch rate ``q`` about the body y
-axis, body frame; the axis tilted by ``theta`` about the world Y axis) everything the law needs is
-linear in ``c = cos phi`` around a ring:
+A body of revolution is a stack of rings (:class:`RevolvedSurface`).  In a motion in the body's x-z plane
+(velocity ``(v_x, 0, v_z)`` and pitch rate ``q``, body frame; the axis tilted by ``theta`` about the world Y
+axis) everything the law needs is linear in ``c = cos phi`` around the ring at ``x`` of radius ``rho``:
 
 * the normal velocity ``Vn = a + b c``, ``a = n_axial v_x``, ``b = n_radial v_z + q (rho n_axial - x n_radial)``;
 * the height ``H = h0 + h1 c`` above the target surface, ``h0 = Z - x sin theta``, ``h1 = rho cos theta``.
 
-So each switch of the law is one value of ``c``: separation (``Vn = 0``), the end of the contact
-ramp (``Vn = W``), the waterline (``H = 0``, or ``H = -+ l/2`` at the ends of the entry ramp) and
-the friction cap.  Between consecutive switches the stress is a polynomial in ``c``: where the
-full law holds and the ring is wholly inside, ``sigma = A sigma_0 + B rho_0 (a + b c)^2`` and the
-integrals of ``sigma cos^k phi`` are closed forms in ``acos c`` and ``sqrt(1 - c^2)``; on the arcs of
-a ramp (``0 < Vn < W``, or partly embedded within ``l/2`` of the surface) and wherever friction acts
-the integrand is smooth and Gauss-Legendre in ``phi`` integrates it.  The load is the DAFL of
-:mod:`fem_loads.dafl` with the same law, switches and friction, evaluated on the exact surface
-instead of a mesh's quadrature points; in the plane of motion the body's mirror symmetry halves
-the ring (``0 <= phi <= pi``, doubled).  One evaluation costs about a microsecond for a few
-dozen rings (numba, compiled once and cached like :mod:`fem_loads.compiled`), so a reduced model
-can call it thousands of times in the time a mesh load takes a hundred.
-
-This module is compiled code and its builder; it knows nothing of time integration.
+So each switch of the load (separation, the ends of the contact and entry ramps, the friction cap) is one value
+of ``c``.  Between consecutive switches the stress of the law ``c0 + c2 Vn^2``, wholly inside and at the full
+law, has closed-form integrals in ``acos c`` and ``sqrt(1 - c^2)``; every other arc is smooth and Gauss-Legendre
+in ``phi`` integrates it.  The stress is the points' pipeline (:func:`~fem_loads.factors.point_stress_scalars`)
+with the law, switches and friction of :mod:`fem_loads.dafl`, on the exact surface instead of a mesh; the
+body's mirror symmetry in the plane of motion halves each ring.
 """
 
 from __future__ import annotations
@@ -172,44 +161,25 @@ _NO_TABLE = np.zeros(0)
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _entering(height: float, entry: float) -> float:
-    """The entry factor at ``height`` (m above the surface): the smooth ramp over ``entry`` (m), or sharp."""
-    return entry_factor(height, entry > 0.0, 1.0 / entry if entry > 0.0 else 0.0)
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def _ring_stress(law: Any, effects: Any, normal_velocity: float, height: float, width: float) -> float:
-    """A ring point's stress (Pa) at ``Vn`` (m/s) and ``height`` (m above the surface) through the points' pipeline
-    (:func:`~fem_loads.factors.point_stress_scalars`): the law at ``max(Vn, 0)`` and depth ``-height``, times the
-    contact factor (the smooth ramp, one-sided or centred, or the sharp switch at ``Vn = 0``) and the entry factor."""
+def _ring_stress(law: Any, effects: Any, switches: Switches, normal_velocity: float, height: float) -> float:
+    """A ring point's stress (Pa) at ``Vn`` (m/s) and ``height`` (m above the surface): the law at ``max(Vn, 0)``
+    and depth ``-height`` through the points' pipeline."""
     entry = effects.entry_length
-    switches = Switches(
-        True,
-        width > 0.0,
-        1.0 / width if width > 0.0 else 0.0,
-        effects.contact_offset,
-        0.0,
-        False,
-        0.0,
-        1.0,
-        True,
-        entry > 0.0,
-    )
     stress = law_stress(law, effects.user_law, max(normal_velocity, 0.0), -height, _NO_TABLE, _NO_TABLE)
     return point_stress(stress, normal_velocity, -height, height, 1.0 / entry if entry > 0.0 else 0.0, switches)
 
 
 @njit(cache=True, inline="always")
-def _add_switch(switches: np.ndarray, count: int, value: float) -> int:
+def _add_break(breaks: np.ndarray, count: int, value: float) -> int:
     if -1.0 < value < 1.0:
-        switches[count] = value
+        breaks[count] = value
         count += 1
     return count
 
 
 @njit(cache=True, inline="always")
-def _switches(
-    switches: np.ndarray,
+def _breaks(
+    breaks: np.ndarray,
     a: float,
     b: float,
     h0: float,
@@ -219,28 +189,23 @@ def _switches(
     entry: float,
     cap_speed: float,
 ) -> int:
-    """The values of ``c = cos phi`` where the law switches around one ring, with -1 and 1, sorted."""
-    switches[0] = -1.0
+    """The values of ``c = cos phi`` where the load switches around one ring, with -1 and 1, sorted: ``Vn`` at the
+    contact ramp's ``start`` and ``full`` and where friction reaches its cap (m/s), ``H`` at the ends of the entry
+    ramp of length ``entry`` (m)."""
+    breaks[0] = -1.0
     count = 1
     if b != 0.0:
-        count = _add_switch(switches, count, (start - a) / b)  # separation, the contact ramp's start
-        count = _add_switch(switches, count, (full - a) / b)  # the contact ramp's end
+        count = _add_break(breaks, count, (start - a) / b)
+        count = _add_break(breaks, count, (full - a) / b)
         if cap_speed < 1.0:
-            count = _add_switch(switches, count, (cap_speed - a) / b)  # friction reaches its cap
+            count = _add_break(breaks, count, (cap_speed - a) / b)
     if h1 != 0.0:
-        count = _add_switch(switches, count, (-0.5 * entry - h0) / h1)  # wholly inside below this height
+        count = _add_break(breaks, count, (-0.5 * entry - h0) / h1)  # wholly inside below this height
         if entry > 0.0:
-            count = _add_switch(switches, count, (0.5 * entry - h0) / h1)  # nothing above this one
-    switches[count] = 1.0
-    count += 1
-    for m in range(1, count):  # insertion sort: at most eight values
-        value = switches[m]
-        n = m - 1
-        while n >= 0 and switches[n] > value:
-            switches[n + 1] = switches[n]
-            n -= 1
-        switches[n + 1] = value
-    return count
+            count = _add_break(breaks, count, (0.5 * entry - h0) / h1)  # nothing above this one
+    breaks[count] = 1.0
+    breaks[: count + 1].sort()
+    return count + 1
 
 
 @njit(cache=True, inline="always")
@@ -262,25 +227,21 @@ def _closed_arc(low: float, high: float, a: float, b: float, static: float, dyna
 def _gauss_arc(
     low: float,
     high: float,
-    a: float,
-    b: float,
-    h0: float,
-    h1: float,
-    x: float,
-    rho: float,
-    n_axial: float,
-    n_radial: float,
-    vx: float,
-    vz: float,
-    q: float,
+    ring: tuple[float, float, float, float],
+    motion: tuple[float, float, float, float, float, float, float],
     law: Any,
     effects: Any,
+    switches: Switches,
     width: float,
 ) -> tuple[float, float, float, float, float]:
-    """Integrals over the arc ``low < cos phi < high`` by Gauss-Legendre panels of at most 45 degrees (6 points
-    integrate cos^4 over one to 1e-9, where over a half ring they would err by 1e-4): ``sigma``,
-    ``sigma cos phi``, and the friction stress's x and z components and its moment arm."""
+    """Integrals over the arc ``low < cos phi < high`` of the ``ring`` ``(x, rho, n_axial, n_radial)`` in the
+    ``motion`` ``(a, b, h0, h1, v_x, v_z, q)``, by Gauss-Legendre panels of at most 45 degrees (6 points integrate
+    cos^4 over one to 1e-9): ``sigma``, ``sigma cos phi``, and the friction stress's x and z components and its
+    moment arm."""
+    x, rho, n_axial, n_radial = ring
+    a, b, h0, h1, vx, vz, q = motion
     entry, mu, cap = effects.entry_length, effects.friction, effects.friction_cap
+    inverse_entry = 1.0 / entry if entry > 0.0 else 0.0
     j0 = j1 = jx = jz = jm = 0.0
     phi_low, phi_high = math.acos(high), math.acos(low)
     panels = int(math.ceil((phi_high - phi_low) / _PANEL))
@@ -291,9 +252,9 @@ def _gauss_arc(
         c = math.cos(phi)
         vn = a + b * c
         height = h0 + h1 * c
-        if _entering(height, entry) == 0.0:
+        if entry_factor(height, entry > 0.0, inverse_entry) == 0.0:
             continue
-        sigma = _ring_stress(law, effects, vn, height, width)
+        sigma = _ring_stress(law, effects, switches, vn, height)
         if sigma == 0.0:
             continue
         weight = half * weights[g % nodes.shape[0]]
@@ -314,12 +275,20 @@ def _gauss_arc(
 
 @njit(cache=True, inline="always")
 def _uniform_ring(
-    a: float, h0: float, vx: float, n_axial: float, n_radial: float, law: Any, effects: Any, width: float
+    a: float,
+    h0: float,
+    vx: float,
+    n_axial: float,
+    n_radial: float,
+    law: Any,
+    effects: Any,
+    switches: Switches,
+    width: float,
 ) -> tuple[float, float]:
     """A ring loaded the same all round (``b = 0``, ``h1 = 0``: axial motion, the axis vertical): ``sigma`` over
     the half ring, and the friction's axial part (the slip along the meridian); no side load, exactly."""
     mu, cap = effects.friction, effects.friction_cap
-    sigma = _ring_stress(law, effects, a, h0, width)
+    sigma = _ring_stress(law, effects, switches, a, h0)
     if sigma == 0.0:
         return 0.0, 0.0
     jx = 0.0
@@ -362,8 +331,12 @@ def pitch_plane_load(
     cap_speed = 2.0  # a normal velocity beyond any: no cap
     if quadratic and mu > 0.0 and cap > mu * static and dynamic > 0.0:
         cap_speed = math.sqrt((cap / mu - static) / dynamic)
+    switches = Switches(
+        True, width > 0.0, 1.0 / width if width > 0.0 else 0.0, effects.contact_offset, 0.0, False, 0.0, 1.0, True,
+        entry > 0.0,
+    )  # fmt: skip
     fx = fz = my = 0.0
-    switches = np.empty(8)
+    breaks = np.empty(8)
     for i in range(rings.shape[0]):
         x, rho, n_axial, n_radial, w = rings[i, 0], rings[i, 1], rings[i, 2], rings[i, 3], rings[i, 4]
         a = n_axial * vx
@@ -378,11 +351,11 @@ def pitch_plane_load(
             j0 = math.pi * (static + dynamic * (a * a + 0.5 * b * b))
             j1 = math.pi * dynamic * a * b
         elif b == 0.0 and h1 == 0.0 and (mu == 0.0 or q == 0.0):
-            j0, jx = _uniform_ring(a, h0, vx, n_axial, n_radial, law, effects, width)
+            j0, jx = _uniform_ring(a, h0, vx, n_axial, n_radial, law, effects, switches, width)
         else:
-            count = _switches(switches, a, b, h0, h1, start, full, entry, cap_speed)
+            count = _breaks(breaks, a, b, h0, h1, start, full, entry, cap_speed)
             for m in range(count - 1):
-                low, high = switches[m], switches[m + 1]
+                low, high = breaks[m], breaks[m + 1]
                 middle = 0.5 * (low + high)
                 speed_middle, height_middle = a + b * middle, h0 + h1 * middle
                 if high <= low or speed_middle <= start or height_middle >= 0.5 * entry:
@@ -392,9 +365,8 @@ def pitch_plane_load(
                     j0 += d0
                     j1 += d1
                 else:
-                    d0, d1, dx, dz, dm = _gauss_arc(
-                        low, high, a, b, h0, h1, x, rho, n_axial, n_radial, vx, vz, q, law, effects, width
-                    )
+                    ring, motion = (x, rho, n_axial, n_radial), (a, b, h0, h1, vx, vz, q)
+                    d0, d1, dx, dz, dm = _gauss_arc(low, high, ring, motion, law, effects, switches, width)
                     j0, j1, jx, jz, jm = j0 + d0, j1 + d1, jx + dx, jz + dz, jm + dm
         # both halves of the ring: dF = -(sigma n + tau t) w dphi, dM = r x dF
         fx -= 2.0 * w * (n_axial * j0 + jx)

@@ -26,16 +26,12 @@ compiled_modules()  # numba's cache in the folder named for the compiled code
 
 #: the compiled forms :mod:`fem_loads.native` makes, and the module of each one definition
 NATIVE = {
-    "smooth_step": ("ramps", "smooth_step_scalars"),
     "slip_factor": ("target", "slip_factor_scalars"),
     "builtin_stress": ("resistance", "normal_stress_scalars"),
     "polynomial_stress": ("resistance", "polynomial_stress_scalars"),
-    "contact_factor": ("factors", "contact_factor_scalars"),
     "entry_factor": ("factors", "entry_factor_scalars"),
-    "surface_factor": ("factors", "surface_factor_scalars"),
     "friction_stress": ("factors", "friction_stress_scalars"),
     "point_stress": ("factors", "point_stress_scalars"),
-    "face_height": ("target", "face_height_scalars"),
     "face_frame": ("target", "face_frame_scalars"),
     "cube_cell": ("exposure", "cube_cell_scalars"),
     "cell_exposure": ("exposure", "cell_exposure_scalars"),
@@ -77,7 +73,7 @@ def test_each_compiled_form_is_the_one_definition(index):
 
 @pytest.mark.parametrize("module", ["compiled", "compiled_point", "revolved"])
 def test_the_kernels_take_every_compiled_form_from_one_module(module):
-    """A kernel's ``contact_factor`` (and every other name :mod:`fem_loads.native` makes) is native's own object."""
+    """A kernel's ``point_stress`` (and every other name :mod:`fem_loads.native` makes) is native's own object."""
     import importlib
 
     from fem_loads import native
