@@ -18,6 +18,7 @@ import math
 import numpy as np
 from numba import njit
 
+from . import kernel_layout as layout
 from .compiled_point import (
     Motion,
     exposure_correction,
@@ -27,17 +28,7 @@ from .compiled_point import (
     point_motion,
     setup,
 )
-from .kernel_layout import (
-    DATA_EFFECTS,
-    DATA_EXPOSURE_COLUMNS,
-    DATA_HALF_ENTRY_LENGTH,
-    DATA_IMAGE_SIGNS,
-    DATA_POINT_SIGNS,
-    DATA_POINTS,
-    KERNEL_ARRAYS,
-    kernel_data,
-    supports,
-)
+from .kernel_layout import KERNEL_ARRAYS, kernel_data, supports
 from .native import face_frame
 from .user_law import user_law_signature
 
@@ -137,7 +128,8 @@ def dafl_kernel(
 
     ``data`` from :func:`kernel_data`; the state as for :class:`~fem_loads.dafl.DAFLLoads`.
     """
-    image_signs, point_signs, effects = data[DATA_IMAGE_SIGNS], data[DATA_POINT_SIGNS], data[DATA_EFFECTS][0]
+    image_signs, point_signs = data[layout.DATA_IMAGE_SIGNS], data[layout.DATA_POINT_SIGNS]
+    effects = data[layout.DATA_EFFECTS][0]
     max_radius, half_entry = effects.max_radius, effects.half_entry
     for c in range(6):
         out[c] = 0.0
@@ -171,7 +163,7 @@ def dafl_kernel(
         _plain_sums(data, motion, sums, friction)
     else:
         _general_sums(data, motion, sums, friction)
-    if data[DATA_EXPOSURE_COLUMNS].shape[0] > 0:
+    if data[layout.DATA_EXPOSURE_COLUMNS].shape[0] > 0:
         exposure_correction(data, motion, effects.plain, sums, friction)
     body = np.empty(6)
     for c in range(6):
@@ -197,8 +189,8 @@ def lowest_height_kernel(data: tuple[np.ndarray, ...], position: np.ndarray, rot
     ``h + r_max``, a negative upper bound: the exit event needs only the sign there, and the heights
     of every point at every step cost as much as a load evaluation.
     """
-    points, half_entry_length, point_signs = data[DATA_POINTS], data[DATA_HALF_ENTRY_LENGTH], data[DATA_POINT_SIGNS]
-    effects = data[DATA_EFFECTS][0]
+    points, point_signs = data[layout.DATA_POINTS], data[layout.DATA_POINT_SIGNS]
+    half_entry_length, effects = data[layout.DATA_HALF_ENTRY_LENGTH], data[layout.DATA_EFFECTS][0]
     height, up0, up1, up2 = face_frame(position, rotation, effects.face_normal, effects.face_offset)
     top = height + effects.max_radius
     if top < 0.0:

@@ -13,23 +13,8 @@ from typing import Any, NamedTuple
 import numpy as np
 from numba import njit
 
+from . import kernel_layout as layout
 from .factors import Switches
-from .kernel_layout import (
-    DATA_EFFECTS,
-    DATA_EXPOSURE_COLUMNS,
-    DATA_EXPOSURE_CORNERS,
-    DATA_EXPOSURE_FINE,
-    DATA_EXPOSURE_ROWS,
-    DATA_EXPOSURE_START,
-    DATA_INTERFACES,
-    DATA_INVERSE_ENTRY,
-    DATA_LAWS,
-    DATA_NORMAL_ARM,
-    DATA_POINT_SIGNS,
-    DATA_POINTS,
-    DATA_TABLES,
-    DATA_WEIGHTS,
-)
 from .native import (
     cell_exposure,
     cube_cell,
@@ -92,7 +77,7 @@ def setup(
     (:data:`~fem_loads.law_record.EFFECTS`'s ``plain``), and ``with_friction`` whether the loop adds friction or a
     free surface; both constants in the loop that passes them, so that its switches are constants too and the loop
     keeps no branch that differs from point to point."""
-    effects, law = data[DATA_EFFECTS][0], data[DATA_LAWS][0]
+    effects, law = data[layout.DATA_EFFECTS][0], data[layout.DATA_LAWS][0]
     first, count = law.table_first, law.table_count
     width, surface_depth = motion.width, effects.surface_depth
     inverse_width = 1.0 / width if width > 0.0 else 0.0
@@ -113,20 +98,20 @@ def setup(
     shared = Setup(
         effects.needs_depth or surface_depth > 0.0 or not motion.embedded,
         (effects.friction, effects.friction_cap, width, v[0] * v[0] + v[1] * v[1] + v[2] * v[2]),
-        data[DATA_INTERFACES].shape[0] > 0,
+        data[layout.DATA_INTERFACES].shape[0] > 0,
         effects.user_law,
         law,
         (law.c0, law.k, law.c1, law.c2),
         switches,
     )
     arrays = (
-        data[DATA_POINTS],
-        data[DATA_NORMAL_ARM],
-        data[DATA_POINT_SIGNS],
-        data[DATA_WEIGHTS],
-        data[DATA_INVERSE_ENTRY],
-        data[DATA_TABLES][0, first : first + count].copy(),
-        data[DATA_TABLES][1, first : first + count].copy(),
+        data[layout.DATA_POINTS],
+        data[layout.DATA_NORMAL_ARM],
+        data[layout.DATA_POINT_SIGNS],
+        data[layout.DATA_WEIGHTS],
+        data[layout.DATA_INVERSE_ENTRY],
+        data[layout.DATA_TABLES][0, first : first + count].copy(),
+        data[layout.DATA_TABLES][1, first : first + count].copy(),
     )
     return shared, arrays
 
@@ -161,8 +146,8 @@ def layered_stress(
     """The layers' laws blended across each interface (:class:`~fem_loads.target.LayeredTarget`), at ``Vn`` (m/s)
     and depth (m): a point enters the layer below as it enters the target (``smooth``, over the length
     ``1 / inverse_length``, m), by the same entry factor."""
-    interfaces, laws, tables = data[DATA_INTERFACES], data[DATA_LAWS], data[DATA_TABLES]
-    address = data[DATA_EFFECTS][0].user_law
+    interfaces, laws, tables = data[layout.DATA_INTERFACES], data[layout.DATA_LAWS], data[layout.DATA_TABLES]
+    address = data[layout.DATA_EFFECTS][0].user_law
     stress = 0.0
     above = 1.0  # the share of this layer and those below it: the entry factor at its top interface d
     for layer in range(interfaces.shape[0] + 1):
@@ -264,8 +249,9 @@ def exposure_correction(
     those hidden at a corner of its cell of the cube map, or inside a refined one (:attr:`Exposure.cell_rows`), each
     with ``e`` from :func:`~fem_loads.exposure.cell_exposure_scalars`, as the numpy path has it.
     """
-    columns, start = data[DATA_EXPOSURE_COLUMNS], data[DATA_EXPOSURE_START]
-    rows, masks, fine = data[DATA_EXPOSURE_ROWS], data[DATA_EXPOSURE_CORNERS], data[DATA_EXPOSURE_FINE]
+    columns, start = data[layout.DATA_EXPOSURE_COLUMNS], data[layout.DATA_EXPOSURE_START]
+    rows, masks = data[layout.DATA_EXPOSURE_ROWS], data[layout.DATA_EXPOSURE_CORNERS]
+    fine = data[layout.DATA_EXPOSURE_FINE]
     v, w, g, up = motion.v, motion.w, motion.g, motion.up
     if v[0] == 0.0 and v[1] == 0.0 and v[2] == 0.0:
         return  # no direction of motion, no shadow

@@ -1,9 +1,5 @@
 """The layout of the compiled DAFL kernel's data (:mod:`fem_loads.compiled`): which arrays, in which order,
-built from a :class:`~fem_loads.dafl.DAFLLoads` through its public attributes.
-
-Kept apart from the kernel so that building the data needs no numba, and the kernel's module holds only
-compiled code.
-"""
+built from a :class:`~fem_loads.dafl.DAFLLoads` through its public attributes (without numba)."""
 
 from __future__ import annotations
 
@@ -121,22 +117,7 @@ def kernel_data(loads: DAFLLoads) -> tuple[np.ndarray, ...]:
 def _exposure_arrays(loads: DAFLLoads) -> tuple[np.ndarray, ...]:
     """``exposure_columns``, ``exposure_start``, ``exposure_rows``, ``exposure_corners`` and ``exposure_fine`` of
     :func:`kernel_data` (empty without)."""
-    exposure = loads.exposure
-    if exposure is None:
-        return (
-            np.zeros(0, dtype=np.int64),
-            np.zeros(1, dtype=np.int64),
-            np.zeros(0, dtype=np.int64),
-            np.zeros(0, dtype=np.int64),
-            np.zeros(0, dtype=np.int64),
-        )
-    return tuple(
-        np.ascontiguousarray(array, dtype=np.int64)
-        for array in (
-            exposure.columns,
-            exposure.cell_start,
-            exposure.cell_rows,
-            exposure.cell_corners,
-            exposure.cell_fine,
-        )
-    )
+    e = loads.exposure
+    empty = (np.zeros(0), np.zeros(1), np.zeros(0), np.zeros(0), np.zeros(0))
+    arrays = empty if e is None else (e.columns, e.cell_start, e.cell_rows, e.cell_corners, e.cell_fine)
+    return tuple(np.ascontiguousarray(array, dtype=np.int64) for array in arrays)
