@@ -1,49 +1,27 @@
 """Which surface the target can reach: each quadrature point's exposure to the soil, by the direction of motion.
 
-The DAFL loads every point whose normal velocity is positive.  On a body that is not convex that includes
-surface the soil cannot reach: the inner wall of a base recess, the faces of a groove behind a shoulder,
-fins in the lee of the body.  The body ahead of such a point has already opened the cavity it moves
-through.  The criterion used here: the soil moves past the body against the body's velocity ``V`` (its
-centre of mass's, in the body frame); a point meets it only if the ray from the point along ``V`` leaves
-the body without hitting it.  Its *exposure* ``e`` is 1 then and 0 otherwise, and its stresses (normal
-and friction) are multiplied by ``e``.  The direction is the body's, one for every point: a rotating body's
-points move in directions up to ``asin(|omega| r_max / |V|)`` away from it (a few degrees in a turning run,
-about one cell of the table below), which this leaves out.
+The criterion: the soil moves past the body against the body's velocity ``V`` (its centre of mass's, in the body
+frame); a point meets it only if the ray from the point along ``V`` leaves the body without hitting it.  Its
+*exposure* ``e`` is 1 then and 0 otherwise, and multiplies its stresses (normal and friction).  docs/geometry.md
+explains the choices below and measures them.
 
-Computed once per body, from the geometry (:func:`exposure_table`), and kept with the quadrature:
+Computed once per body (:func:`exposure_table`) and kept with the quadrature:
 
-* a point on the body's convex hull (its tangent plane has the whole body on one side) is exposed in
-  every direction that gives it a positive ``Vn``: such a ray leaves the tangent plane's half-space at
-  once and never meets the body.  It needs no table, and a convex body (every body of revolution of
-  the paper, a nose cut by a plane) has none at all;
-* every other point gets ``e`` at the nodes of a cube map of directions, ``resolution`` cells along each
-  face's edge: a ray cast against the outer surface (its curved facets split in four flat triangles)
-  from the point, lifted off the surface by twice its distance from those flat triangles (at least a
-  hundredth of the largest lift), so that it neither hides itself nor starts inside a gap it should cross.
-  A surface of flat facets (4-node tetrahedra) lifts every ray the largest lift: its points lie on the
-  triangles (no sag), but its facets meet at slight dents where they should not (a triangulation of a
-  convex surface is not convex everywhere), and a ray started closer hides behind its neighbour facet;
-* within a cell's width of grazing, ``-sin(delta) < d . n <= 0`` (``delta`` the largest angular diameter of
-  a cell), the ray goes along the tangential part of ``d``: a surface that slides along the body's path (a
-  recess's wall at a small attack angle) is as hidden as its neighbours that advance, and ``e`` is
-  continuous across ``Vn = 0``;
-* a direction further back, ``d . n <= -sin(delta)``, recedes from the soil: ``e = 1`` there (its stress,
-  where the contact model gives it any, is a receding surface's, which no shadow changes);
+* a point on the body's convex hull is exposed in every direction that gives it a positive ``Vn``: it needs no
+  table, and a convex body has none;
+* every other point gets ``e`` at the nodes of a cube map of directions (:func:`cube_nodes`): a ray cast against
+  the outer surface as flat triangles, from the point lifted off it by twice its distance from them (between
+  ``least_lift`` and ``lift``);
+* within a cell's width of grazing, ``-sin(delta) < d . n <= 0`` (``delta``: :func:`cell_diameter`), the ray goes
+  along the tangential part of ``d``, so that ``e`` is continuous across ``Vn = 0``; a direction further back
+  recedes from the soil: ``e = 1``;
 * a cell whose four nodes disagree holds the edge of the point's shadow: it is refined, its
-  ``(SUB_CELLS + 1)^2`` sub-nodes traced too (a 7 x 7 grid: the table's resolution six times over where
-  the shadow's edge lies, and only there).  Bilinear interpolation between the coarse nodes alone smears
-  the edge over a whole cell, and where the edges of many points crowd near one node (a groove's rear
-  wall, whose shadows all start at the lip) that smear does not average out (docs/geometry.md measures the
-  wall's load both ways against exact rays);
-* between the nodes (the sub-nodes of a refined cell) ``e`` is interpolated bilinearly: a number in
-  [0, 1], continuous in the direction, so that an adaptive step sees no jump when a shadow's edge crosses
-  a point; a cell (sub-cell) whose four nodes agree gives their value exactly.
+  ``(SUB_CELLS + 1)^2`` sub-nodes traced too;
+* between the (sub-)nodes ``e`` is interpolated bilinearly, exactly 0 or 1 in a cell whose four nodes agree.
 
-The rays are traced by Embree (through trimesh).  For the compiled kernel each cell of the cube map also lists
-the points hidden at one of its corners (:attr:`Exposure.cell_rows`), with the sub-nodes of a refined cell:
-an evaluation visits only the points hidden around the body's direction, and corrects those that carry
-stress (a few dozen in a forward run of the finned body).  :func:`cell_exposure_scalars` is the one
-definition of ``e`` in a cell, for both.
+For the compiled kernel each cell also lists the points hidden at one of its corners (:attr:`Exposure.cell_rows`):
+an evaluation visits only those around the body's direction.  :func:`cube_cell_scalars` and
+:func:`cell_exposure_scalars` are the one definition of ``e``, for both.
 """
 
 from __future__ import annotations
@@ -67,12 +45,14 @@ __all__ = [
 
 #: cells along each edge of a cube face: 16 gives 6 x 17 x 17 directions, about 5.6 degrees apart
 DEFAULT_RESOLUTION = 16
-#: sub-cells along each edge of a refined cell (one whose corners disagree): (6 + 1)^2 = 49 sub-nodes, a bit
-#: each in an int64
+#: sub-cells along each edge of a refined cell: (6 + 1)^2 = 49 sub-nodes, a bit each in an int64
 SUB_CELLS = 6
-#: the least lift of a ray's start, as a share of the largest: a point on a flat face (no sag) starts this far
-#: off it, well above the ray tracer's single-precision round-off
+#: the least lift of a ray's start, as a share of the largest (well above the ray tracer's round-off)
 LIFT_FLOOR = 0.01
+_BATCH = 64  # rows refined together
+# the sub-node bits along each edge of a refined cell: a = 0, a = SUB_CELLS, b = 0, b = SUB_CELLS
+_BITS = (1 << np.arange((SUB_CELLS + 1) ** 2, dtype=np.int64)).reshape(SUB_CELLS + 1, SUB_CELLS + 1)  # [b, a]
+_EDGE_MASKS = np.array([edge.sum() for edge in (_BITS[:, 0], _BITS[:, -1], _BITS[0], _BITS[-1])])
 
 
 @dataclass(frozen=True)
@@ -82,9 +62,8 @@ class Exposure:
     Attributes
     ----------
     columns : ndarray of int, shape (c,)
-        The points that can be hidden, as columns of the loads' layout: positions in the fundamental
-        part's points (``SurfaceQuadrature.mirror_images[0]``) of a mirror-symmetric quadrature, else
-        point indices.  Every other point is exposed whenever its ``Vn`` is positive.
+        The points that can be hidden, as columns of the loads' layout: positions in the fundamental part's
+        points (``SurfaceQuadrature.mirror_images[0]``) of a mirror-symmetric quadrature, else point indices.
     table : ndarray of uint8, shape (c, 6, N + 1, N + 1)
         1 where the ray from the point along the node's direction (:func:`cube_nodes`) leaves the body.
     refined : ndarray of int64, shape (r, 3)
@@ -131,60 +110,36 @@ class Exposure:
         return int(self.table.shape[-1]) - 1
 
     def hidden(self, direction: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The rows (positions in :attr:`columns`) not wholly exposed in one direction (body frame, any length, not
-        zero), and their exposure there: :meth:`factor`'s values below 1, from the direction's cell's list (the
-        other rows are exposed, 1)."""
+        """The rows (positions in :attr:`columns`) listed in the cell of a direction (body frame, any length, not
+        zero), and their exposure there; every other row's is 1."""
         n = self.resolution
         face, i, j, fx, fy = cube_cell_scalars(n, float(direction[0]), float(direction[1]), float(direction[2]))
         cell = (face * n + i) * n + j
         span = slice(self.cell_start[cell], self.cell_start[cell + 1])
-        exposure = np.array(
-            [
-                cell_exposure_scalars(mask, fine, fx, fy)
-                for mask, fine in zip(self.cell_corners[span].tolist(), self.cell_fine[span].tolist())
-            ]
-        )
+        corners, fine = self.cell_corners[span].tolist(), self.cell_fine[span].tolist()
+        exposure = np.array([cell_exposure_scalars(mask, bits, fx, fy) for mask, bits in zip(corners, fine)])
         return self.cell_rows[span], exposure
 
     def factor(self, directions: np.ndarray) -> np.ndarray:
-        """``e`` of each point of :attr:`columns` for directions (body frame, any length), shape (..., c, 3);
-        the result has shape (..., c): the table interpolated densely, every row at once (the loads use
-        :meth:`hidden`'s few rows; this is the form they are checked against)."""
-        n = self.resolution
-        magnitude = np.abs(directions)
-        axis = np.argmax(magnitude, axis=-1)
-        major = np.take_along_axis(directions, axis[..., None], axis=-1)[..., 0]
-        face = 2 * axis + (major < 0.0)
-        scale = np.where(major != 0.0, 1.0 / np.where(major != 0.0, np.abs(major), 1.0), 0.0)
-        s = np.take_along_axis(directions, ((axis + 1) % 3)[..., None], axis=-1)[..., 0] * scale
-        t = np.take_along_axis(directions, ((axis + 2) % 3)[..., None], axis=-1)[..., 0] * scale
-        x, y = (s + 1.0) * (0.5 * n), (t + 1.0) * (0.5 * n)
-        i, j = np.clip(np.floor(x).astype(np.int64), 0, n - 1), np.clip(np.floor(y).astype(np.int64), 0, n - 1)
-        fx, fy = x - i, y - j
-        rows = np.broadcast_to(np.arange(len(self.columns)), face.shape)
-        table = self.table
-        a, b = table[rows, face, i, j], table[rows, face, i + 1, j]
-        c, d = table[rows, face, i, j + 1], table[rows, face, i + 1, j + 1]
-        value = (1.0 - fx) * (1.0 - fy) * a + fx * (1.0 - fy) * b + (1.0 - fx) * fy * c + fx * fy * d
-        # a cell wholly hidden or wholly exposed is exactly 0 or 1, not 1 - 1e-16; no direction, no shadow
-        value = np.where((a == b) & (b == c) & (c == d), a, value)
-        refined = np.asarray(self.refined, dtype=np.int64).reshape(-1, 3)
-        if len(refined):  # a refined cell's value from its sub-nodes
-            keys = refined[:, 0] * (6 * n * n) + refined[:, 1]
-            order = np.argsort(keys)
-            wanted = rows * (6 * n * n) + (face * n + i) * n + j
-            at = np.clip(np.searchsorted(keys[order], wanted), 0, len(keys) - 1)
-            found = keys[order][at] == wanted
-            for index in zip(*np.nonzero(found)):
-                bits = int(refined[order[at[index]], 2])
-                value[index] = fine_exposure(bits, float(fx[index]), float(fy[index]))
-        return np.where(major == 0.0, 1.0, value)
+        """``e`` of each point of :attr:`columns` for directions (body frame, any length), shape (..., c, 3), as
+        shape (..., c): :meth:`hidden` for every row (1 for no direction)."""
+        directions = np.asarray(directions, dtype=float)
+        value = np.ones(directions.shape[:-1])
+        found: dict[bytes, dict[int, float]] = {}
+        for index in np.ndindex(value.shape):
+            direction = directions[index]
+            if direction.any():
+                key = direction.tobytes()
+                if key not in found:
+                    rows, exposure = self.hidden(direction)
+                    found[key] = dict(zip(rows.tolist(), exposure.tolist()))
+                value[index] = found[key].get(index[-1], 1.0)
+        return value
 
 
 def cube_cell_scalars(n: int, d0: float, d1: float, d2: float) -> tuple[int, int, int, float, float]:
     """The cube map's cell of a direction (any length, not zero), ``n`` cells along a face's edge: ``(face, i, j,
-    fx, fy)``, the cell's first node (:func:`cube_nodes`) and the direction's place in it, in [0, 1] each.  The one
-    definition: :meth:`Exposure.hidden` calls it and the compiled kernel compiles it (:mod:`fem_loads.native`)."""
+    fx, fy)``, the cell's first node (:func:`cube_nodes`) and the direction's place in it, in [0, 1] each."""
     a0, a1, a2 = abs(d0), abs(d1), abs(d2)
     if a0 >= a1 and a0 >= a2:
         face, major, s, t = (0 if d0 >= 0.0 else 1), a0, d1, d2
@@ -199,9 +154,7 @@ def cube_cell_scalars(n: int, d0: float, d1: float, d2: float) -> tuple[int, int
 
 def cell_exposure_scalars(mask: int, fine: int, fx: float, fy: float) -> float:
     """``e`` at the place ``(fx, fy)`` in a cell (:func:`cube_cell_scalars`) of a point hidden at the corners
-    ``mask`` (:attr:`Exposure.cell_corners`), with the sub-node bits ``fine`` of a refined cell (-1: not refined):
-    bilinear between the four (sub-)nodes around it, exactly 0 or 1 where they agree.  The one definition:
-    :meth:`Exposure.hidden` calls it and the compiled kernel compiles it (:mod:`fem_loads.native`)."""
+    ``mask`` (:attr:`Exposure.cell_corners`), with the sub-node bits ``fine`` of a refined cell (-1: not refined)."""
     if fine < 0:
         return corner_exposure(mask, fx, fy)
     return fine_exposure(fine, fx, fy)
@@ -218,8 +171,8 @@ def fine_exposure(bits: int, fx: float, fy: float) -> float:
 
 
 def corner_exposure(mask: int, fx: float, fy: float) -> float:
-    """``e`` at ``(fx, fy)`` in a cell hidden at the corners ``mask`` (a bit each, in the order ``(0, 0)``,
-    ``(1, 0)``, ``(0, 1)``, ``(1, 1)``): one less the bilinear shares of the hidden corners; 0 exactly at four."""
+    """``e`` at ``(fx, fy)`` in a cell hidden at the corners ``mask`` (:attr:`Exposure.cell_corners`): one less
+    the bilinear shares of the hidden corners; 0 exactly at four."""
     if mask == 15:
         return 0.0
     exposure = 1.0
@@ -235,21 +188,26 @@ def corner_exposure(mask: int, fx: float, fy: float) -> float:
 
 
 def cube_nodes(resolution: int) -> np.ndarray:
-    """The unit directions at the nodes of the cube map, shape (6, N + 1, N + 1, 3).
-
-    Face ``f`` is the side of the cube along axis ``f // 2`` (positive for even ``f``); node ``(i, j)`` of
-    it is the direction ``(+-1, s, t)`` in the axes ``(a, a + 1, a + 2)`` (mod 3), with ``s = 2 i / N - 1``
-    and ``t = 2 j / N - 1``, normalised.  :meth:`Exposure.factor` inverts this.
-    """
+    """The unit directions at the nodes of the cube map, shape (6, N + 1, N + 1, 3): node ``(i, j)`` of face ``f``
+    at ``s = 2 i / N - 1``, ``t = 2 j / N - 1`` (:func:`_on_faces`); :func:`cube_cell_scalars` inverts this."""
     grid = 2.0 * np.arange(resolution + 1) / resolution - 1.0
     s, t = np.meshgrid(grid, grid, indexing="ij")
-    nodes = np.zeros((6, resolution + 1, resolution + 1, 3))
+    shape = (6, resolution + 1, resolution + 1)
+    return _on_faces(np.arange(6), np.broadcast_to(s, shape), np.broadcast_to(t, shape))
+
+
+def _on_faces(faces: np.ndarray, s: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """The unit directions at ``(s, t)`` (shape (k, ...)) on faces ``faces`` (shape (k,)), shape (k, ..., 3): face
+    ``f`` is the side of the cube along axis ``a = f // 2`` (positive for even ``f``), and ``(s, t)`` on it the
+    direction ``(+-1, s, t)`` in the axes ``(a, a + 1, a + 2)`` (mod 3), normalised."""
+    directions = np.empty((*s.shape, 3))
     for face in range(6):
-        axis, sign = face // 2, -1.0 if face % 2 else 1.0
-        nodes[face, :, :, axis] = sign
-        nodes[face, :, :, (axis + 1) % 3] = s
-        nodes[face, :, :, (axis + 2) % 3] = t
-    return nodes / np.linalg.norm(nodes, axis=-1, keepdims=True)
+        on = faces == face
+        axis = face // 2
+        directions[on, ..., axis] = -1.0 if face % 2 else 1.0
+        directions[on, ..., (axis + 1) % 3] = s[on]
+        directions[on, ..., (axis + 2) % 3] = t[on]
+    return directions / np.linalg.norm(directions, axis=-1, keepdims=True)
 
 
 def _on_hull(points: np.ndarray, normals: np.ndarray, nodes: np.ndarray, tolerance: float) -> np.ndarray:
@@ -283,36 +241,29 @@ def exposure_table(
         The outer surface as flat triangles (corners), the whole body.
     lift : float
         The furthest off the surface a ray starts (m): more than the flat triangles' largest distance from the
-        exact surface the points lie on.  Each point's ray starts twice its own distance from them off the
-        surface (so that it does not hide itself), but at least ``least_lift``.
+        exact surface.  Each point's ray starts twice its own distance from them off it, at least ``least_lift``.
     resolution : int
         Cells along each edge of a cube face.
     least_lift : float, optional
-        The least lift (m); ``LIFT_FLOOR * lift`` by default.  Give ``lift`` for a surface of flat facets (the
-        points on the triangles themselves): every ray then starts ``lift`` off it, beyond its facets' dents.
+        The least lift (m); ``LIFT_FLOOR * lift`` by default.  Give ``lift`` for a surface of flat facets, whose
+        points lie on the triangles: every ray then starts beyond its facets' dents.
 
     Returns
     -------
-    columns : ndarray of int, shape (c,)
-        The points hidden in some direction.
-    table : ndarray of uint8, shape (c, 6, N + 1, N + 1)
-        Their exposure at the cube map's nodes.
-    refined : ndarray of int64, shape (r, 3)
-        The cells whose corners disagree, refined: :attr:`Exposure.refined`.
+    columns, table, refined : ndarray
+        The points hidden in some direction, their exposure at the cube map's nodes and their refined cells:
+        the fields of :class:`Exposure`.
     """
     corners = triangles.reshape(-1, 3)
     candidates = np.flatnonzero(~_on_hull(points, normals, corners, lift))
     shape = (-1, 6, resolution + 1, resolution + 1)
     if len(candidates) == 0:
         return candidates, np.zeros((0, *shape[1:]), dtype=np.uint8), np.zeros((0, 3), dtype=np.int64)
-    # imported only for a body that is not convex (a second and more of the first preparation otherwise)
-    import trimesh
+    import trimesh  # only for a body that is not convex
     from trimesh.ray.ray_pyembree import RayMeshIntersector
 
     surface = trimesh.Trimesh(corners, np.arange(len(corners)).reshape(-1, 3), process=False)
     tracer = RayMeshIntersector(surface)
-    # each point's own lift: a ray lifted further than it needs starts inside the gap it should cross (a groove's
-    # rear wall 10 mm from its lip, lifted 1 mm, sees 9 mm of it)
     least = LIFT_FLOOR * lift if least_lift is None else least_lift
     lifts = np.clip(2.0 * _sag(tracer, points[candidates], normals[candidates], lift), least, lift)
     grazing = math.sin(cell_diameter(resolution))
@@ -330,9 +281,6 @@ def exposure_table(
         found[:, 0] += first
         refined.append(found)
     return kept, table, np.concatenate(refined)
-
-
-_BATCH = 64  # rows refined together
 
 
 def _exposed(
@@ -378,16 +326,10 @@ def _refined(
         if len(rows) == 0:
             break
         directions = _sub_nodes(n, faces, i, j)  # (k, 49, 3)
-        count, nodes = len(rows), directions.shape[1]
-        hidden = 1 - _exposed(
-            tracer,
-            np.repeat(points[rows], nodes, axis=0),
-            np.repeat(normals[rows], nodes, axis=0),
-            np.repeat(lifts[rows], nodes),
-            directions.reshape(-1, 3),
-            grazing,
-        ).reshape(count, nodes)
-        found = (hidden.astype(np.int64) << np.arange(nodes, dtype=np.int64)).sum(axis=1)
+        nodes = directions.shape[1]
+        each = np.repeat(rows, nodes)  # each sub-node's row
+        hidden = 1 - _exposed(tracer, points[each], normals[each], lifts[each], directions.reshape(-1, 3), grazing)
+        found = (hidden.reshape(-1, nodes).astype(np.int64) << np.arange(nodes, dtype=np.int64)).sum(axis=1)
         bits[rows, faces, i, j], done[rows, faces, i, j] = found, True
         for (di, dj), edge in zip(((-1, 0), (1, 0), (0, -1), (0, 1)), _EDGE_MASKS.tolist()):
             part = found & edge
@@ -397,36 +339,14 @@ def _refined(
     return np.column_stack([rows, cells, bits.reshape(len(bits), -1)[rows, cells]]).astype(np.int64).reshape(-1, 3)
 
 
-# the sub-node bits along each edge of a refined cell: a = 0, a = SUB_CELLS, b = 0, b = SUB_CELLS
-_EDGE_MASKS = np.array(
-    [
-        sum(1 << k for k in edge)
-        for edge in (
-            [b * (SUB_CELLS + 1) for b in range(SUB_CELLS + 1)],
-            [b * (SUB_CELLS + 1) + SUB_CELLS for b in range(SUB_CELLS + 1)],
-            list(range(SUB_CELLS + 1)),
-            [SUB_CELLS * (SUB_CELLS + 1) + a for a in range(SUB_CELLS + 1)],
-        )
-    ],
-    dtype=np.int64,
-)
-
-
 def _sub_nodes(n: int, faces: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
     """The unit directions of the sub-nodes of cells ``(faces, i, j)``, shape (k, (SUB_CELLS + 1)^2, 3): sub-node
-    ``(a, b)`` at ``b (SUB_CELLS + 1) + a``, placed on its face as :func:`cube_nodes` places the nodes."""
+    ``(a, b)`` at ``b (SUB_CELLS + 1) + a``."""
     sub = np.arange(SUB_CELLS + 1) / SUB_CELLS
     a, b = np.meshgrid(sub, sub, indexing="xy")
     s = 2.0 * (i[:, None] + a.ravel()[None, :]) / n - 1.0
     t = 2.0 * (j[:, None] + b.ravel()[None, :]) / n - 1.0
-    directions = np.empty((*s.shape, 3))
-    for face in range(6):
-        on = faces == face
-        axis, sign = face // 2, -1.0 if face % 2 else 1.0
-        directions[on, :, axis] = sign
-        directions[on, :, (axis + 1) % 3] = s[on]
-        directions[on, :, (axis + 2) % 3] = t[on]
-    return directions / np.linalg.norm(directions, axis=-1, keepdims=True)
+    return _on_faces(faces, s, t)
 
 
 def _sag(tracer: object, points: np.ndarray, normals: np.ndarray, lift: float) -> np.ndarray:

@@ -1,33 +1,19 @@
 """Sums over a mirror-symmetric quadrature that keep a symmetric state exactly symmetric.
 
-The quadrature of a projectile mesh is mirror symmetric bitwise about the body
-planes ``y = 0`` and ``z = 0``, or about one of them
-(:func:`fem_loads.quadrature.mirror_images`): each point of the fundamental
-part (``y > 0, z > 0``; ``y > 0``; ``z > 0``) has one or three images whose
-coordinates and normals differ from its own only in signs.
-:class:`MirrorImages` keeps the part's columns of ``[n | r x n]`` and
-evaluates every per-point quantity as ``k`` rows, one per image (``k`` = 4 or
-2), shape ``(k, m)`` with ``m = n / k``:
+Each point of the fundamental part of a mirror-symmetric quadrature (:attr:`SurfaceQuadrature.mirror_images`) has
+one or three images whose coordinates and normals differ from its own only in signs.  :class:`MirrorImages`
+keeps the part's columns of ``[n | r x n]`` and evaluates every per-point quantity as ``k`` rows, one per image,
+shape ``(k, m)``:
 
-* ``Vn`` of image ``i`` is the part's ``[n | r x n]`` times the generalised
-  velocity ``(R^T V, omega)`` with the image's signs, all images in one product;
-* the resultant is ``P = [n | r x n] S^T``, shape ``(6, k)``, folded per row as
-  ``(P0 + Y P1) + Z (P2 + Y P3)`` (two planes) or ``P0 + S P1`` (one), where
-  ``Y``, ``Z`` and ``S`` are the signs the mirrors give that component.
+* ``Vn`` of every image in one product of the images' signed ``[n | r x n]`` with ``(R^T V, omega)``;
+* the resultant ``P = [n | r x n] S^T``, shape ``(6, k)``, folded per row as ``(P0 + Y P1) + Z (P2 + Y P3)``
+  (two planes) or ``P0 + S P1`` (one), ``Y``, ``Z`` and ``S`` the signs the mirrors give that component.
 
-Why: a state symmetric about a body plane (a straight normal impact, or the
-mirror image of another run) then has bitwise-equal stresses on mirrored
-images, the differences in the fold are exactly zero, and the components the
-mirror reverses vanish exactly, whatever the order in which BLAS sums.  A
-plain sum over all points cancels only to round-off (~1e-16 relative), which
-the jump of the stress at ``Vn = 0`` on the shank amplifies into a lateral
-drift of millimetres over a long run (docs/numerics.md, Hard cases).
-
-It relies on a property of the BLAS matrix product: equal rows of one factor
-give bitwise-equal rows of the result (each output element is computed by the
-same sequence of operations).  It holds for OpenBLAS's kernels and is checked
-on the actual arrays when the images are set up; if it fails, each image is
-evaluated by its own matrix-vector product, which is exact but slower.
+A state symmetric about a body plane then has bitwise-equal stresses on mirrored images and the components the
+mirror reverses vanish exactly, where a plain sum cancels only to round-off, which the jump of the stress at
+``Vn = 0`` amplifies into a lateral drift (docs/numerics.md, Hard cases).  This relies on equal rows of one
+factor of a BLAS product giving bitwise-equal rows of the result: checked on the actual arrays when the images
+are set up; where it fails each image gets its own product, exact but slower.
 """
 
 from __future__ import annotations
@@ -59,17 +45,13 @@ if [tuple(s) for s in MIRROR_SIGNS] != [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-
 
 def _generic_factors(count: int, start: int) -> np.ndarray:
     """``count`` numbers spread over [-1, 1) with full mantissas: the fractional parts of the multiples
-    ``start + 1, start + 2, ...`` of the golden ratio.  Factors for the check below that need no
-    ``numpy.random``, whose import would lengthen every run's start."""
+    ``start + 1, start + 2, ...`` of the golden ratio (no ``numpy.random``, whose import is slow)."""
     return 2.0 * ((np.arange(start + 1, start + count + 1) * 0.6180339887498949) % 1.0) - 1.0
 
 
 def _products_reproducible(arm: np.ndarray, points: np.ndarray, count: int) -> bool:
-    """Whether equal images give bitwise-equal results in the matrix products used here.
-
-    Checked on ``count`` equal copies of the part's arrays (the layout of the
-    images' arrays) with generic factors (:func:`_generic_factors`).
-    """
+    """Whether equal images give bitwise-equal results in the matrix products used here, on ``count`` equal copies
+    of the part's arrays (the layout of the images' arrays) with generic factors."""
     m = arm.shape[1]
     normal_velocity = _generic_factors(6, 0) @ np.tile(arm, count)
     heights = _generic_factors(3, 6) @ np.tile(points, count)
@@ -87,8 +69,7 @@ class MirrorImages:
     Parameters
     ----------
     images : ndarray of int, shape (k, m)
-        ``SurfaceQuadrature.mirror_images``: the part's points and their
-        images (k = 4: in ``y = 0``, ``z = 0`` and both; k = 2: in one plane).
+        ``SurfaceQuadrature.mirror_images``.
     signs : sequence of (float, float)
         ``SurfaceQuadrature.mirror_signs``: each image's signs of ``(y, z)``.
     normal_arm_t : ndarray, shape (6, n)
@@ -118,10 +99,7 @@ class MirrorImages:
         self._fold_signs = self.image_signs[1].tolist(), self.image_signs[2].tolist() if len(images) == 4 else []
 
     def quarter(self, values: np.ndarray) -> np.ndarray:
-        """Per-point values that the images share (weights), as the images' rows, shape (k, m).
-
-        The part's values repeated: elementwise passes over (k, m) arrays then need no broadcasting.
-        """
+        """Per-point values that the images share (weights), as the images' rows, shape (k, m): the part's repeated."""
         return np.tile(values[self.images[0]], (len(self.images), 1))
 
     def gather(self, values: np.ndarray) -> np.ndarray:

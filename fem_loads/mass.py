@@ -1,10 +1,8 @@
 """Mass, centre of mass and inertia tensor of a multi-material solid mesh (scikit-fem).
 
-The projectile meshes are mirrored exactly about ``y = 0`` and ``z = 0``
-(:mod:`mesh.geometry`); the integrals of the odd monomials (``y``, ``x y``,
-``y z``, ...) over such a mesh are zero, and are set to zero rather than left
-at their round-off (~1e-16 kg m^2), which would tilt the principal axes and
-break the mirror symmetry of the motion.
+Over a mesh that is its own mirror image (:func:`mirror_symmetric_axes`) the integrals of the odd monomials
+(``y``, ``x y``, ``y z``, ...) are set to zero: their round-off would tilt the principal axes and break the
+mirror symmetry of the motion.
 """
 
 from __future__ import annotations
@@ -78,35 +76,24 @@ class MassProperties:
 
 
 def to_skfem(mesh: ProjectileMesh) -> MeshTet1 | MeshTet2:
+    """The scikit-fem mesh of a :class:`ProjectileMesh` (corner order kept)."""
     from skfem import MeshTet1, MeshTet2
 
-    """The scikit-fem mesh of a :class:`ProjectileMesh` (corner order kept)."""
-    if mesh.order == 1:
-        return MeshTet1(np.ascontiguousarray(mesh.points.T), np.ascontiguousarray(mesh.tetra.T))
-    return MeshTet2(np.ascontiguousarray(mesh.points.T), np.ascontiguousarray(mesh.tetra.T))
+    kind = MeshTet1 if mesh.order == 1 else MeshTet2
+    return kind(np.ascontiguousarray(mesh.points.T), np.ascontiguousarray(mesh.tetra.T))
 
 
-# per-element integrals of the monomials up to degree two
+# the monomials up to degree two, integrated per element: 1, x, y, z, x^2, y^2, z^2, x y, x z, y z
 _MONOMIALS = (
     lambda x: 1.0 + 0.0 * x[0],
-    lambda x: x[0],
-    lambda x: x[1],
-    lambda x: x[2],
-    lambda x: x[0] * x[0],
-    lambda x: x[1] * x[1],
-    lambda x: x[2] * x[2],
-    lambda x: x[0] * x[1],
-    lambda x: x[0] * x[2],
-    lambda x: x[1] * x[2],
+    *(lambda x, a=a: x[a] for a in range(3)),
+    *(lambda x, a=a, b=b: x[a] * x[b] for a, b in ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))),
 )
 
 
 def mirror_symmetric_axes(mesh: ProjectileMesh) -> tuple[int, ...]:
-    """The axes (1 for ``y``, 2 for ``z``) in whose plane ``x[axis] = 0`` the mesh is its own mirror image.
-
-    Exact (bitwise) test: every node's image is a node, and the image of every
-    element is an element of the same region.
-    """
+    """The axes (1 for ``y``, 2 for ``z``) in whose plane ``x[axis] = 0`` the mesh is its own mirror image, bitwise:
+    every node's image is a node, and the image of every element is an element of the same region."""
     points = mesh.points + 0.0  # -0.0 -> 0.0, so that the comparison is of values
     corners = np.sort(mesh.tetra[:, :4], axis=1)
     elements = np.column_stack([corners, mesh.tetra_region])
@@ -159,7 +146,6 @@ def mass_properties(
         sz = xz = yz = 0.0
     centre = np.array([sx, sy, sz]) / v
     second = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
-    # inertia about the origin, then shifted to the centre of mass (parallel-axis theorem)
-    inertia_origin = np.trace(second) * np.eye(3) - second
-    inertia = inertia_origin - v * (centre @ centre * np.eye(3) - np.outer(centre, centre))
+    # inertia about the origin, shifted to the centre of mass (parallel-axis theorem)
+    inertia = np.trace(second) * np.eye(3) - second - v * (centre @ centre * np.eye(3) - np.outer(centre, centre))
     return MassProperties(float(v), centre, inertia, volume)

@@ -1,43 +1,25 @@
 """Outer-surface quadrature of a projectile mesh (scikit-fem), computed once.
 
-Three normal models trade accuracy for nothing at run time (the quadrature is
-built once, so each costs the same per load evaluation):
+Two normal models (:data:`NORMAL_MODELS`), of the same cost per load evaluation:
 
 ``mesh``
-    Points, normals and weights of the mesh facets as scikit-fem's
-    :class:`~skfem.FacetBasis` gives them: flat triangles for a first-order
-    mesh, curved ones for a second-order mesh.  Flat facets tilt the nose
-    normals by degrees and give the cylindrical shank normals an axial
-    component, which loads the shank with the static stress ``A sigma_0``
-    where the exact surface carries nothing (see docs/accuracy.md).
+    The facets' own points, normals and weights: flat triangles for a first-order mesh, curved ones for a
+    second-order mesh.  Flat facets tilt the normals, which loads the shank where the exact surface carries
+    nothing (docs/accuracy.md).
 ``exact``
-    The facet quadrature is carried onto the exact surface of revolution by a
-    radial projection from the axis: points are moved onto the profile, the
-    normals are the profile's, and the weights take the Jacobian of the
-    projection, ``(r / rho) (n_mesh . e_rho) / (n_exact . e_rho)``.  The
-    facets then only partition the exact surface.  The flat tail disc (and
-    the flat front face of a blunt nose) are stretched radially to their
-    exact areas.  For a projectile from a CAD file (no profile) each facet
-    on a curved CAD surface gets the same rule mapped through the surface's
-    own parametrisation (:meth:`mesh.cad.CadSurface.quadrature`): points
-    on the surface, its normals, and its area element; facets on planes keep
-    their own quadrature, which is exact there.
+    The facet quadrature carried onto the exact surface: by a radial projection from the axis onto the profile of
+    a body of revolution (:func:`_to_exact_surface`), or through each curved CAD surface's own parametrisation
+    for a projectile from a CAD file (:meth:`mesh.cad.CadSurface.quadrature`; facets on planes keep their own).
 
-The projectile meshes are mirrored exactly about the planes ``y = 0`` and
-``z = 0`` (:mod:`mesh.geometry`; a file's body about those of its mirror planes,
-:mod:`mesh.symmetry`), but scikit-fem computes each facet's points and normals
-from its own node order, so mirrored points differ in their last bits.
-:func:`find_mirror_images` finds the mirror images of every point of the
-fundamental part (the quarter ``y > 0, z > 0``, or the half ``y > 0`` or
-``z > 0`` for one plane) and :func:`surface_quadrature` rewrites the other
-images from it by exact sign changes: the quadrature is then mirror symmetric
-bitwise, and :class:`~fem_loads.DAFLLoads` can sum the images so that a
-symmetric state gives an exactly symmetric load.
+The meshes are mirror symmetric (:mod:`mesh.geometry`, :mod:`mesh.symmetry`), but scikit-fem computes each
+facet's points and normals from its own node order, so mirrored points differ in their last bits:
+:func:`surface_quadrature` rewrites the mirror images (:func:`find_mirror_images`) of the fundamental part by
+exact sign changes, so that :class:`~fem_loads.DAFLLoads` can sum them exactly.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -76,13 +58,10 @@ class SurfaceQuadrature:
     weights : ndarray, shape (n,)
         Area weights (m^2).
     mirror_images : ndarray of int, shape (k, n // k), optional
-        Indices of the mirror images of each point of the fundamental part: for
-        two mirror planes (k = 4) the quarter ``y > 0, z > 0``, the point
-        itself, its images in ``y = 0``, in ``z = 0`` and in both
-        (:data:`MIRROR_SIGNS`); for one plane (k = 2) the half on its positive
-        side and the images in it.  The images are exact (bitwise) sign changes
-        of the point and its normal, with equal weights.  None for a quadrature
-        without mirror symmetry.
+        Indices of the mirror images of each point of the fundamental part: for two mirror planes (k = 4) the
+        quarter ``y > 0, z > 0``, the point itself, its images in ``y = 0``, in ``z = 0`` and in both
+        (:data:`MIRROR_SIGNS`); for one plane (k = 2) the half on its positive side and its image.  Exact sign
+        changes of the point and its normal, with equal weights.  None without mirror symmetry.
     exposure : Exposure, optional
         Which points the target cannot reach, by the direction they move (:mod:`fem_loads.exposure`);
         None for a convex body, whose every point with a positive ``Vn`` is reached.
@@ -144,7 +123,9 @@ def _facet_indices(m: MeshTet1 | MeshTet2, triangles: np.ndarray) -> np.ndarray:
 def _to_exact_surface(
     points: np.ndarray, normals: np.ndarray, weights: np.ndarray, profile: Profile
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Carry a facet quadrature (mesh coordinates, tip at origin) onto the exact surface."""
+    """Carry a facet quadrature (mesh coordinates, tip at origin) onto the exact surface of revolution: radially
+    onto the profile, its normals, the weights times the projection's Jacobian ``(r / rho) (n_mesh . e_rho) /
+    (n_exact . e_rho)``."""
     s = -points[:, 0]
     rho = np.hypot(points[:, 1], points[:, 2])
     e_rho = np.zeros_like(points)
@@ -154,15 +135,12 @@ def _to_exact_surface(
     lateral = n_mesh_radial > 1e-6 * np.abs(normals[:, 0])
     r = profile.radius_at(s[lateral])
     n_forward, n_radial = profile.outward_normal(s[lateral])
-    points = points.copy()
-    normals = normals.copy()
-    weights = weights.copy()
+    points, normals, weights = points.copy(), normals.copy(), weights.copy()
     points[lateral, 1:] = r[:, None] * e_rho[lateral, 1:]
     normals[lateral, 0] = n_forward
     normals[lateral, 1:] = n_radial[:, None] * e_rho[lateral, 1:]
     weights[lateral] *= (r / rho[lateral]) * n_mesh_radial[lateral] / n_radial
-    # the tail disc (and a flat front face) are planar, but a flat mesh bounds them by a
-    # polygon: stretch each radially onto its exact disc (uniformly)
+    # the tail disc (and a flat front face), bounded by a polygon: stretched radially onto its exact disc
     for disc, radius in (
         (~lateral & (normals[:, 0] < 0), profile.tail_radius),
         (~lateral & (normals[:, 0] > 0), profile.tip_radius),
@@ -186,26 +164,21 @@ def _planes(points: np.ndarray, images: np.ndarray | None) -> tuple[int, ...]:
 
 
 def find_mirror_images(points: np.ndarray, rtol: float = 1e-9) -> np.ndarray | None:
-    """The mirror images of each point of the fundamental part, for the most mirror planes the points have.
-
-    Tries both planes ``y = 0`` and ``z = 0`` (the quarter ``y > 0, z > 0`` and its images in ``y = 0``, in
-    ``z = 0`` and in both), then ``y = 0`` alone (the half ``y > 0``), then ``z = 0`` alone (``z > 0``).
+    """The mirror images of each point of the fundamental part, for the most mirror planes the points have:
+    both ``y = 0`` and ``z = 0``, else ``y = 0`` alone, else ``z = 0`` alone.
 
     Parameters
     ----------
     points : ndarray, shape (n, 3)
         Points relative to the axis ``y = z = 0``.
     rtol : float
-        Largest distance between a point's image and its partner, relative to
-        the largest coordinate.
+        Largest distance between a point's image and its partner, relative to the largest coordinate.
 
     Returns
     -------
     ndarray of int, shape (k, n // k), or None
-        Rows: the part's points and their images (see
-        :attr:`SurfaceQuadrature.mirror_images`); None unless every point has
-        exactly one partner in each image of some plane (a point on a plane,
-        or an asymmetric set).
+        :attr:`SurfaceQuadrature.mirror_images`; None unless every point has exactly one partner in each image
+        of some plane (a point on a plane, or an asymmetric set).
     """
     from scipy.spatial import cKDTree  # imported where used: only when a quadrature is built
 
@@ -228,22 +201,6 @@ def find_mirror_images(points: np.ndarray, rtol: float = 1e-9) -> np.ndarray | N
             if len(np.unique(table)) == n:
                 return table
     return None
-
-
-def _symmetrise(
-    points: np.ndarray,
-    normals: np.ndarray,
-    weights: np.ndarray,
-    images: np.ndarray,
-    signs: tuple[tuple[float, float], ...],
-) -> None:
-    """Rewrite the other images from the fundamental part by exact sign changes (in place)."""
-    part = images[0]
-    for partner, (sign_y, sign_z) in zip(images[1:], signs[1:]):
-        flip = np.array([1.0, sign_y, sign_z])
-        points[partner] = points[part] * flip
-        normals[partner] = normals[part] * flip
-        weights[partner] = weights[part]
 
 
 def _on_cad_surface(
@@ -290,14 +247,9 @@ def _basis_rule(
 
 
 def _shape_rule(mesh: ProjectileMesh, intorder: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Points, unit normals and weights of the outer facets from their own Lagrange shape functions.
-
-    The same rule as :func:`_basis_rule` (each facet's points in its own corner order, the
-    weights the area element ``|x_xi x x_eta|``, the normal along that cross product, outward as
-    ``mesh.outer`` is oriented), without FacetBasis's Newton inversion of every point into its
-    tetrahedron, which fails on some curved elements (github.com/kinnala/scikit-fem/issues/965) and which these
-    values do not need.
-    """
+    """Points, unit normals and weights of the outer facets from their own Lagrange shape functions: the rule of
+    :func:`_basis_rule` without FacetBasis's Newton inversion of every point into its tetrahedron, which fails on
+    some curved elements (github.com/kinnala/scikit-fem/issues/965)."""
     from skfem import ElementTriP1, ElementTriP2
     from skfem.quadrature import get_quadrature
     from skfem.refdom import RefTri
@@ -364,13 +316,14 @@ def surface_quadrature(
     elif normal_model == "exact":
         assert surface is not None  # checked above
         points, normals, weights = _on_cad_surface(points, normals, weights, mesh, intorder, surface)
-    points = np.ascontiguousarray(points - centre)
-    normals = np.ascontiguousarray(normals)
-    weights = np.ascontiguousarray(weights)
-    # each point keeps its facet (the renderer draws facet by facet): only the values are rewritten
+    points, normals, weights = (np.ascontiguousarray(a) for a in (points - centre, normals, weights))
     images = find_mirror_images(points)
-    if images is not None:
-        _symmetrise(points, normals, weights, images, SIGNS_OF_PLANES[_planes(points, images)])
+    if images is not None:  # the images rewritten from the part; each point keeps its facet (the renderer's)
+        for partner, (sign_y, sign_z) in zip(images[1:], SIGNS_OF_PLANES[_planes(points, images)][1:]):
+            flip = np.array([1.0, sign_y, sign_z])
+            points[partner] = points[images[0]] * flip
+            normals[partner] = normals[images[0]] * flip
+            weights[partner] = weights[images[0]]
     return SurfaceQuadrature(points, normals, weights, images)
 
 
@@ -396,7 +349,4 @@ def with_exposure(
     columns, table, refined = exposure_table(
         quadrature.points[part], quadrature.normals[part], triangles, lift, resolution, least_lift
     )
-    exposure = Exposure(columns, table, refined) if len(columns) else None
-    return SurfaceQuadrature(
-        quadrature.points, quadrature.normals, quadrature.weights, quadrature.mirror_images, exposure
-    )
+    return replace(quadrature, exposure=Exposure(columns, table, refined) if len(columns) else None)

@@ -1,16 +1,14 @@
 """A resistance law of the user's own: a Python function in a file, run by the numpy path and compiled.
 
-The function is ``def name(normal_velocity, depth, p1, p2, ...)``: the normal stress (Pa) at the normal
-velocity ``Vn`` (m/s, positive into the target) and the depth ``z`` (m below the target surface), with
-the law's parameters after them, by name.  The numpy path calls it on arrays of all points at once and
-the compiled kernel calls its numba compilation per point, so it must be written with operations
-both understand (arithmetic, ``math`` on floats does not take arrays: use ``numpy``'s functions).
-With separation (the default) it is evaluated at ``Vn >= 0`` only; without, the load clips it at zero.
+The function is ``def name(normal_velocity, depth, p1, p2, ...)``: the normal stress (Pa) at the normal velocity
+``Vn`` (m/s, positive into the target) and the depth ``z`` (m below the target surface), with the law's parameters
+after them.  The numpy path calls it on arrays of all points, the compiled kernel calls its numba compilation per
+point, so it must use operations both understand (``numpy``'s functions, not ``math``'s).  With separation (the
+default) it is evaluated at ``Vn >= 0`` only; without, the load clips it at zero.
 
-:func:`user_law` checks everything before a run starts, each failure one line (:class:`LawError`): the
-file and the function exist, the function's arguments after the first two are exactly the parameters
-given, it returns finite stresses ``>= 0`` on a probe grid of ``Vn`` and ``z``, numba compiles it, and
-the compiled function gives the plain one's numbers on that grid.
+:func:`user_law` checks everything before a run starts, each failure one line (:class:`LawError`): the file and
+the function exist, its arguments after the first two are exactly the parameters given, it returns finite
+stresses ``>= 0`` on a probe grid of ``Vn`` and ``z``, and numba compiles it to the same numbers there.
 """
 
 from __future__ import annotations
@@ -87,35 +85,29 @@ class UserLaw:
         return _compile(self.source, self.sha256, len(self.parameters))
 
 
-#: the functions read in this process, by (path, name, digest): a study builds many scenes of one law
-_READ: dict[tuple[str, str, str], Callable[..., Any]] = {}
-
-
-def _read_function(path: Path, name: str, digest: str) -> Callable[..., Any]:
-    key = (str(path), name, digest)
-    if key not in _READ:
-        module_name = f"penetrate_user_law_{digest[:16]}"
-        spec = importlib.util.spec_from_file_location(module_name, path)
-        if spec is None or spec.loader is None:
-            raise LawError(f"function = '{path}:{name}': not a Python file (give a .py file)")
-        module = importlib.util.module_from_spec(spec)
-        try:
-            spec.loader.exec_module(module)
-        except Exception as exc:  # the user's file: any error in it is theirs to fix
-            first = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
-            raise LawError(
-                f"function = '{path}:{name}': the file does not run ({type(exc).__name__}: {first}); it must"
-                " import without error"
-            ) from None
-        sys.modules[module_name] = module  # numba finds a function's globals through its module
-        function = getattr(module, name, None)
-        if not callable(function) or not inspect.isfunction(function):
-            raise LawError(
-                f"function = '{path}:{name}': the file defines no function {name!r} (give the name of a function"
-                " defined in it)"
-            )
-        _READ[key] = function
-    return _READ[key]
+@functools.cache  # once per process, file and digest: a study builds many scenes of one law
+def _read_function(path: str, name: str, digest: str) -> Callable[..., Any]:
+    module_name = f"penetrate_user_law_{digest[:16]}"
+    spec = importlib.util.spec_from_file_location(module_name, path)
+    if spec is None or spec.loader is None:
+        raise LawError(f"function = '{path}:{name}': not a Python file (give a .py file)")
+    module = importlib.util.module_from_spec(spec)
+    try:
+        spec.loader.exec_module(module)
+    except Exception as exc:  # the user's file: any error in it is theirs to fix
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+        raise LawError(
+            f"function = '{path}:{name}': the file does not run ({type(exc).__name__}: {first}); it must"
+            " import without error"
+        ) from None
+    sys.modules[module_name] = module  # numba finds a function's globals through its module
+    function = getattr(module, name, None)
+    if not callable(function) or not inspect.isfunction(function):
+        raise LawError(
+            f"function = '{path}:{name}': the file defines no function {name!r} (give the name of a function"
+            " defined in it)"
+        )
+    return function
 
 
 def user_law(source: str, parameters: Mapping[str, float], folder: Path | None = None) -> UserLaw:
@@ -135,7 +127,7 @@ def user_law(source: str, parameters: Mapping[str, float], folder: Path | None =
             " or relative to the scene file's folder"
         ) from None
     shown = f"{path}:{name}"
-    function = _read_function(path.resolve(), name, digest)
+    function = _read_function(str(path.resolve()), name, digest)
     ordered = _parameters(function, shown, parameters)
     law = UserLaw(f"{path.resolve()}:{name}", ordered, function, digest)
     _probe(law, shown)
@@ -216,7 +208,7 @@ def _compile(source: str, digest: str, count: int) -> Any:
     from numba.core.errors import NumbaExperimentalFeatureWarning
 
     path, name = source.rsplit(":", 1)
-    function = njit(error_model="numpy")(_READ[(path, name, digest)])
+    function = njit(error_model="numpy")(_read_function(path, name, digest))
     arguments = ", ".join(f"p{k}" for k in range(MAX_PARAMETERS))
     passed = ", ".join(f"p{k}" for k in range(count))
     namespace: dict[str, Any] = {"law": function}

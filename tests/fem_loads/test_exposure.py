@@ -228,21 +228,44 @@ def test_a_convex_body_of_flat_facets_hides_little_of_itself(tmp_path):
     assert abs(on.depth / off.depth - 1.0) < 1e-2
 
 
-def test_one_direction_s_hidden_rows_are_the_factor_below_one():
+def _on_face(face: int, s: float, t: float, length: float = 1.0) -> np.ndarray:
+    """The direction ``length (+-1, s, t)`` in the axes ``(a, a + 1, a + 2)`` (mod 3) of face ``f`` (axis
+    ``a = f // 2``, positive for even ``f``): the cube map's placing, written out here."""
+    axis, direction = face // 2, np.empty(3)
+    direction[axis] = -1.0 if face % 2 else 1.0
+    direction[(axis + 1) % 3], direction[(axis + 2) % 3] = s, t
+    return length * direction
+
+
+def _bilinear(a, b, c, d, fx: float, fy: float):
+    """Corner values ``(0, 0)``, ``(1, 0)``, ``(0, 1)``, ``(1, 1)`` interpolated at ``(fx, fy)``."""
+    return (1.0 - fx) * (1.0 - fy) * a + fx * (1.0 - fy) * b + (1.0 - fx) * fy * c + fx * fy * d
+
+
+def test_the_factor_is_the_table_at_the_nodes_and_bilinear_between():
+    """At each node, given unnormalised so that its place in its cell is exact, every row's factor is the table's
+    value exactly; at random places in random cells it is the bilinear interpolation of the cell's four corners
+    (exactly their value where they agree)."""
     exposure = _random_exposure(5, count=40)
+    n, table = exposure.resolution, exposure.table.astype(float)
+    for face, i, j in np.ndindex(6, n + 1, n + 1):
+        direction = _on_face(face, 2.0 * i / n - 1.0, 2.0 * j / n - 1.0)
+        assert np.array_equal(exposure.factor(np.broadcast_to(direction, (40, 3))), table[:, face, i, j])
     rng = np.random.default_rng(6)
-    for direction in rng.normal(size=(300, 3)):
-        rows, values = exposure.hidden(direction)
-        dense = exposure.factor(np.broadcast_to(direction, (40, 3)))
-        expected = np.flatnonzero(dense < 1.0)
-        assert set(expected.tolist()) <= set(rows.tolist())
-        np.testing.assert_allclose(values, dense[rows], rtol=0, atol=1e-12)
-        assert np.array_equal(values == 0.0, dense[rows] == 0.0)
+    for _ in range(300):
+        face, i, j = rng.integers(6), rng.integers(n), rng.integers(n)
+        fx, fy = rng.uniform(1e-3, 1.0 - 1e-3, 2)
+        direction = _on_face(face, 2.0 * (i + fx) / n - 1.0, 2.0 * (j + fy) / n - 1.0, rng.uniform(0.1, 10.0))
+        corners = [table[:, face, i + di, j + dj] for di, dj in ((0, 0), (1, 0), (0, 1), (1, 1))]
+        value = exposure.factor(np.broadcast_to(direction, (40, 3)))
+        np.testing.assert_allclose(value, _bilinear(*corners, fx, fy), rtol=0, atol=1e-12)
+        agree = (corners[0] == corners[1]) & (corners[1] == corners[2]) & (corners[2] == corners[3])
+        assert np.array_equal(value[agree], corners[0][agree])
 
 
-def test_a_refined_cell_is_its_sub_nodes_at_theirs_and_the_same_on_both_paths():
-    """A refined cell's value at each of its 49 sub-nodes is that sub-node's bit, and :meth:`Exposure.hidden`
-    (the loads' path, one direction) gives :meth:`Exposure.factor`'s values (the dense form) everywhere."""
+def test_a_refined_cell_is_its_sub_nodes_at_theirs_and_bilinear_between():
+    """A refined cell's value at each of its 49 sub-nodes is that sub-node's bit, and between them the bilinear
+    interpolation of the four sub-nodes around the direction (exactly their value where they agree)."""
     from fem_loads.exposure import SUB_CELLS, _sub_nodes
 
     base = _random_exposure(3)
@@ -262,11 +285,16 @@ def test_a_refined_cell_is_its_sub_nodes_at_theirs_and_the_same_on_both_paths():
         directions = np.broadcast_to(inside[k][:, None, :], (sub.shape[1], count, 3))
         value = exposure.factor(directions)[:, rows[k]]
         np.testing.assert_allclose(value, 1 - bits[k], atol=1e-9)
-    for d in rng.normal(size=(300, 3)):
-        hidden, values = exposure.hidden(d)
-        dense = exposure.factor(np.broadcast_to(d, (count, 3)))
-        np.testing.assert_allclose(values, dense[hidden], atol=1e-12)
-        assert np.all(np.delete(dense, hidden) == 1.0)
+        for fx, fy in rng.uniform(1e-3, 1.0 - 1e-3, (20, 2)):
+            direction = _on_face(faces[k], 2.0 * (i[k] + fx) / n - 1.0, 2.0 * (j[k] + fy) / n - 1.0)
+            a, b = int(fx * SUB_CELLS), int(fy * SUB_CELLS)  # the sub-cell
+            first = b * (SUB_CELLS + 1) + a
+            corners = 1.0 - bits[k, [first, first + 1, first + SUB_CELLS + 1, first + SUB_CELLS + 2]]
+            value = exposure.factor(np.broadcast_to(direction, (count, 3)))[rows[k]]
+            expected = _bilinear(*corners, fx * SUB_CELLS - a, fy * SUB_CELLS - b)
+            assert value == pytest.approx(expected, rel=0, abs=1e-12)
+            if np.all(corners == corners[0]):
+                assert value == corners[0]
 
 
 @pytest.fixture(scope="module")
