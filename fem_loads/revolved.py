@@ -197,7 +197,7 @@ def _breaks(
     if b != 0.0:
         count = _add_break(breaks, count, (start - a) / b)
         count = _add_break(breaks, count, (full - a) / b)
-        if cap_speed < 1.0:
+        if cap_speed < math.inf:
             count = _add_break(breaks, count, (cap_speed - a) / b)
     if h1 != 0.0:
         count = _add_break(breaks, count, (-0.5 * entry - h0) / h1)  # wholly inside below this height
@@ -328,7 +328,7 @@ def pitch_plane_load(
     start, full = -effects.contact_offset * width, (1.0 - effects.contact_offset) * width
     # the law exactly c0 + c2 Vn^2: the closed forms below are its integrals (else Gauss-Legendre throughout)
     quadratic = effects.user_law == 0 and law.c1 == 0.0 and law.c == 0.0 and law.k == 0.0
-    cap_speed = 2.0  # a normal velocity beyond any: no cap
+    cap_speed = math.inf  # no cap
     if quadratic and mu > 0.0 and cap > mu * static and dynamic > 0.0:
         cap_speed = math.sqrt((cap / mu - static) / dynamic)
     switches = Switches(

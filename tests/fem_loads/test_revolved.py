@@ -145,6 +145,57 @@ def test_closed_form_arcs_are_the_integrals():
         assert np.allclose(a, b, rtol=0.0, atol=1e-9 * (abs(a[:2]).max() + 1.0)), (a, b)
 
 
+def _brute_force_rings(surface, law, friction, state, points=100_000):
+    """The ring load by the midpoint rule in ``phi`` on ``points`` points per half ring: the integrand of the points'
+    pipeline (the numpy path's scalar functions), summed as :func:`~fem_loads.revolved.pitch_plane_load` sums it."""
+    from fem_loads.factors import Switches, friction_stress_scalars, point_stress_scalars
+    from fem_loads.target import slip_factor_scalars
+
+    height, theta, (vx, vz), q = state
+    width = DELTA * (math.hypot(vx, vz) + abs(q) * surface.max_radius)
+    switches = Switches(True, True, 1.0 / width, 0.0, 0.0, False, 0.0, 1.0, True, True)
+    phi = (np.arange(points) + 0.5) * math.pi / points
+    c, s = np.cos(phi), np.sin(phi)
+    load = np.zeros(3)
+    for x, rho, n_axial, n_radial, w in surface.rings:
+        vn = n_axial * vx + (n_radial * vz + q * (rho * n_axial - x * n_radial)) * c
+        h = height - math.sin(theta) * x + math.cos(theta) * rho * c
+        sigma = point_stress_scalars(law.normal_stress(np.maximum(vn, 0.0), -h), vn, -h, h, 1.0 / ENTRY, switches)
+        j0, j1, jx, jz, jm = (sigma.sum(), (sigma * c).sum(), 0.0, 0.0, 0.0)
+        if friction is not None:
+            sx, sy, sz = vx + q * rho * c - vn * n_axial, -vn * n_radial * s, vz - q * x - vn * n_radial * c
+            slip = slip_factor_scalars(sx * sx + sy * sy + sz * sz, width, vx * vx + vz * vz)
+            t = friction_stress_scalars(sigma, friction.coefficient, friction.cap or 0.0) * slip
+            jx, jz, jm = (t * sx).sum(), (t * sz).sum(), (t * (rho * c * sx - x * sz)).sum()
+        step = math.pi / points
+        load -= (
+            2.0 * w * step * np.array([n_axial * j0 + jx, n_radial * j1 + jz, (rho * n_axial - x * n_radial) * j1 + jm])
+        )
+    return load
+
+
+@pytest.mark.parametrize("friction", [None, Friction(0.1), Friction(0.1, 5e6)], ids=["none", "Coulomb", "capped"])
+@pytest.mark.parametrize(
+    ("state", "tolerance"),
+    [((-1.0, 80.0, (600.0, 40.0), 30.0), 1e-8), ((0.2, 70.0, (800.0, 100.0), -50.0), 1e-6)],
+    ids=["embedded", "entering"],
+)
+def test_the_ring_load_is_its_integral(friction, state, tolerance):
+    """Each ring's arcs, split where the load switches (the ramps' ends and, for the law ``c0 + c2 Vn^2``, the
+    friction cap's kink), integrate the points' pipeline: against the midpoint rule on 100 000 points per half ring,
+    to 1e-8 of the load deep in the target (a contact ramp's arc by 4 Gauss points per 45 degrees errs by 4e-9;
+    an arc across the cap's kink, were it not split there, by 1e-6), and to 1e-6 with the nose entering (the
+    entry ramp's arcs, 4e-7)."""
+    surface = revolved_surface(PAPER, 0.5, nose_rings=16, shank_rings=8)
+    records = _records(SOIL, contact_incidence=DELTA, entry_length=ENTRY, max_radius=surface.max_radius,
+                       friction=friction)  # fmt: skip
+    height, tilt, velocity, q = state
+    state = (height, math.radians(tilt), velocity, q)
+    rings = PitchPlaneLoad(surface, records)(*state)
+    exact = _brute_force_rings(surface, SOIL, friction, state)
+    assert np.abs(rings - exact).max() < tolerance * np.abs(exact[:2]).max(), (rings, exact)
+
+
 @pytest.mark.parametrize("nose", [OgiveNose(5.0), ConeNose(12.92), BluntOgiveNose(3.0, 0.02)], ids=str)
 def test_rings_carry_the_exact_area_and_volume(nose):
     profile = Profile(0.155, 0.93, nose)
