@@ -1,24 +1,12 @@
 """Runge-Kutta steps in compiled code (numba): the whole stage loop, for a load with a compiled kernel.
 
-:class:`CompiledRungeKutta` keeps the contract of :class:`~dynamics.integrators.RungeKutta`
-(same tableau, same Runge-Kutta-Munthe-Kaas step on ``(x, v, u, omega)``, same chord path
-increment), but one call of :func:`rk_step` does every stage of a step in machine code: the
-stage state, the attitude ``q0 * exp(u)``, the load (the kernel of a :class:`CompiledLoad`,
-called without leaving compiled code), Newton-Euler and ``dexp^-1``.  The Python driver
-(:func:`~dynamics.simulate.simulate`) is unchanged: it sees one :class:`StepResult` per step.
-
-Each load kernel gets its own compiled step, :func:`rk_step` inlined with the kernel as a global
-(:class:`CompiledLoad`).  The quaternion and path arithmetic is the Python step's own (the
-``*_scalars`` functions of :mod:`dynamics.quaternion` and :mod:`dynamics.integrators`, compiled);
-the stage sums and the load run in another order, so the two agree to round-off per step, not bit
-for bit (tests/dynamics/test_compiled_step.py compares them on problems with exact solutions and on
-each other).
-
-numba compiles the functions on their first call and keeps the machine code in its cache
-(``cache=True``, beside this module or in ``NUMBA_CACHE_DIR``): the first process compiles
-(docs/numerics.md, "The compiled step", gives the times); later processes load the code, importing numba and its
-compiled-code registry mostly, once per process.  That is why a single short run is faster
-on the numpy path, and a study's worker processes, which load it once for many runs, on this one.
+:class:`CompiledRungeKutta` keeps the contract of :class:`~dynamics.integrators.RungeKutta` (same tableau,
+Runge-Kutta-Munthe-Kaas step and chord path increment), but one call of :func:`rk_step` does every stage of a
+step in machine code, the load kernel of a :class:`CompiledLoad` included; the driver
+(:func:`~dynamics.simulate.simulate`) sees one :class:`StepResult` per step as before.  The quaternion and path
+arithmetic is the Python step's own ``*_scalars`` functions, compiled; the stage sums and the load run in
+another order, so the two steps agree to round-off, not bit for bit (tests/dynamics/test_compiled_step.py).
+Caching and its costs: docs/numerics.md, "The compiled step".
 """
 
 from __future__ import annotations
@@ -41,8 +29,10 @@ _ERROR = slice(14, 27)
 _FIRST, _LAST = 27, 39  # each: acceleration (3), angular acceleration (3), force (3), moment (3)
 _OUT = 51
 
+#: a load kernel's arrays and constants
+KernelData = tuple[np.ndarray, ...]
 # ``kernel(data, position, velocity, rotation, angular_velocity, out)`` of a CompiledLoad (a numba dispatcher)
-LoadKernel = Callable[[tuple[np.ndarray, ...], np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], None]
+LoadKernel = Callable[[KernelData, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], None]
 #: the body as the step takes it: constant force (N, world frame), mass (kg), inertia tensor and its inverse
 #: (kg m^2, body frame)
 Body = tuple[np.ndarray, float, np.ndarray, np.ndarray]
@@ -58,9 +48,9 @@ class CompiledLoad:
     Parameters
     ----------
     kernel : numba dispatcher
-        ``kernel(data, position, velocity, rotation, angular_velocity, out)`` writes the force
-        (world frame, N) into ``out[:3]`` and the moment (body frame, about the centre of mass,
-        N m) into ``out[3:6]``; arguments as for :class:`~dynamics.rigid_body.LoadFunction`.
+        ``kernel(data, position, velocity, rotation, angular_velocity, out)`` writes the force (world frame, N)
+        into ``out[:3]`` and the moment (body frame, about the centre of mass, N m) into ``out[3:6]``; arguments
+        as for :class:`~dynamics.rigid_body.LoadFunction`.
     data : tuple
         The kernel's arrays and constants.
     step : numba dispatcher
@@ -70,20 +60,15 @@ class CompiledLoad:
             def step(data, body, method, start, h, given, has_given, out):
                 rk_step(kernel, data, body, method, start, h, given, has_given, out)
 
-        :func:`rk_step` is inlined into it, and the kernel is a global there, so numba can keep the
-        machine code in its cache; a step that took the kernel as an argument from Python would be
-        compiled anew by every process (numba keys such code on the kernel object's identity) and
-        would pay for typing the kernel argument on every call.
+        The kernel is a global there, so numba can cache the machine code; a step taking the kernel as an
+        argument from Python would be compiled anew by every process (numba keys such code on the kernel
+        object's identity).
     constant_force : ndarray, shape (3,), optional
         A force added to the kernel's (world frame, N): the weight of the body.
     """
 
     def __init__(
-        self,
-        kernel: LoadKernel,
-        data: tuple[np.ndarray, ...],
-        step: Callable[..., None],
-        constant_force: np.ndarray | None = None,
+        self, kernel: LoadKernel, data: KernelData, step: Callable[..., None], constant_force: np.ndarray | None = None
     ) -> None:
         self.kernel, self.data, self.step = kernel, data, step
         self.constant_force = np.zeros(3) if constant_force is None else np.asarray(constant_force, dtype=float)
@@ -99,9 +84,7 @@ class CompiledLoad:
 class CompiledRungeKutta:
     """The compiled step of a Runge-Kutta method: the method's tableau, stepped by :func:`rk_step`.
 
-    It wraps ``method`` and is a :class:`~dynamics.integrators.Stepper` as the method is (the same order, error
-    estimate and contract), but its :meth:`step` takes a :class:`CompiledLoad`: that load's own compiled step
-    runs the kernel.
+    A :class:`~dynamics.integrators.Stepper` like ``method``, whose :meth:`step` takes a :class:`CompiledLoad`.
 
     Parameters
     ----------
@@ -111,6 +94,7 @@ class CompiledRungeKutta:
 
     def __init__(self, method: RungeKutta) -> None:
         self.method = method
+        self.adaptive, self.error_order = method.adaptive, method.error_order
         b_error = np.zeros_like(method.b) if method.b_error is None else method.b_error
         self._tableau: Tableau = (
             np.ascontiguousarray(method.A, dtype=float),
@@ -118,25 +102,7 @@ class CompiledRungeKutta:
             np.ascontiguousarray(b_error, dtype=float),
             bool(method.fsal),
         )
-        self._body: RigidBody | None = None
-        self._inertia: np.ndarray | None = None
-        self._inverse: np.ndarray | None = None
-
-    @property
-    def adaptive(self) -> bool:
-        return self.method.adaptive
-
-    @property
-    def error_order(self) -> int:
-        return self.method.error_order
-
-    def _matrices(self, body: RigidBody) -> tuple[np.ndarray, np.ndarray]:
-        if body is not self._body:
-            self._body = body
-            self._inertia = np.ascontiguousarray(body.inertia, dtype=float)
-            self._inverse = np.ascontiguousarray(np.linalg.inv(self._inertia))
-        assert self._inertia is not None and self._inverse is not None  # set with self._body
-        return self._inertia, self._inverse
+        self._matrices: tuple[RigidBody, np.ndarray, np.ndarray] | None = None  # a body, its inertia and inverse
 
     def step(
         self, body: RigidBody, loads: LoadFunction, state: State, h: float, first: Evaluation | None = None
@@ -145,33 +111,22 @@ class CompiledRungeKutta:
         :class:`CompiledLoad`."""
         if not isinstance(loads, CompiledLoad):
             raise TypeError("a compiled step takes a CompiledLoad, whose own step runs its kernel")
-        inertia, inverse = self._matrices(body)
-        given = np.empty(12)
-        if first is not None:
-            given[0:3], given[3:6], given[6:9], given[9:12] = (
-                first.acceleration,
-                first.angular_acceleration,
-                first.force,
-                first.moment,
-            )
+        if self._matrices is None or self._matrices[0] is not body:
+            inertia = np.ascontiguousarray(body.inertia, dtype=float)
+            self._matrices = (body, inertia, np.ascontiguousarray(np.linalg.inv(inertia)))
+        _, inertia, inverse = self._matrices
+        given = np.empty(12) if first is None else np.concatenate(first)  # the fields of an Evaluation, in order
+        body_data: Body = (loads.constant_force, body.mass, inertia, inverse)
+        start: Start = (state.position, state.velocity, state.attitude, state.angular_velocity)
         out = np.empty(_OUT)
-        loads.step(
-            loads.data,
-            (loads.constant_force, body.mass, inertia, inverse),
-            self._tableau,
-            (state.position, state.velocity, state.attitude, state.angular_velocity),
-            h,
-            given,
-            first is not None,
-            out,
-        )
+        loads.step(loads.data, body_data, self._tableau, start, h, given, first is not None, out)
         new = State(state.time + h, out[_X], out[_V], out[_Q], out[_W], state.path_length + out[_S])
-        error = out[_ERROR] if self.method.adaptive else None
+        error = out[_ERROR] if self.adaptive else None
         # without a first-same-as-last stage the step evaluates the end state too: the driver needs it for
         # the next step and the history, and it costs less here than from Python
         evaluations = self.method.stages - (first is not None) + (not self.method.fsal)
-        start = first if first is not None else _evaluation(out, _FIRST)
-        return StepResult(new, error, start, _evaluation(out, _LAST), evaluations)
+        start_evaluation = first if first is not None else _evaluation(out, _FIRST)
+        return StepResult(new, error, start_evaluation, _evaluation(out, _LAST), evaluations)
 
 
 def _evaluation(out: np.ndarray, at: int) -> Evaluation:
@@ -180,10 +135,8 @@ def _evaluation(out: np.ndarray, at: int) -> Evaluation:
 
 # -- compiled ---------------------------------------------------------------------------------------
 # error_model="numpy": a division by zero gives inf or nan (as numpy does) instead of raising, so a
-# state that leaves the floats comes back non-finite and the step control ends the run
-
-
-# the arithmetic of the Python step (dynamics.quaternion, dynamics.integrators), compiled from the same source
+# state that leaves the floats comes back non-finite and the step control ends the run.
+# The arithmetic of the Python step (dynamics.quaternion, dynamics.integrators), compiled from the same source:
 _exp_scalars = njit(inline="always", error_model="numpy")(exp_scalars)
 _hamilton_scalars = njit(inline="always", error_model="numpy")(hamilton_scalars)
 _rotation_scalars = njit(inline="always", error_model="numpy")(rotation_scalars)
@@ -200,24 +153,9 @@ def _compose(q: np.ndarray, u: np.ndarray, out: np.ndarray) -> None:
 
 
 @njit(inline="always", error_model="numpy")
-def _rotation(q: np.ndarray, out: np.ndarray) -> None:
-    """Body-to-world rotation matrix (:func:`dynamics.quaternion.rotation_matrix`)."""
-    r = _rotation_scalars(q[0], q[1], q[2], q[3])
-    out[0, 0], out[0, 1], out[0, 2] = r[0], r[1], r[2]
-    out[1, 0], out[1, 1], out[1, 2] = r[3], r[4], r[5]
-    out[2, 0], out[2, 1], out[2, 2] = r[6], r[7], r[8]
-
-
-@njit(inline="always", error_model="numpy")
-def _rate(u: np.ndarray, w: np.ndarray, out: np.ndarray) -> None:
-    """``du/dt = dexp^-1_u(omega)`` (:func:`dynamics.quaternion.right_jacobian_inverse`)."""
-    out[0], out[1], out[2] = _dexp_inverse_scalars(u[0], u[1], u[2], w[0], w[1], w[2])
-
-
-@njit(inline="always", error_model="numpy")
 def _evaluate(
     load: LoadKernel,
-    data: tuple[np.ndarray, ...],
+    data: KernelData,
     body: Body,
     x: np.ndarray,
     v: np.ndarray,
@@ -228,9 +166,12 @@ def _evaluate(
     out: np.ndarray,
     at: int,
 ) -> None:
-    """One load evaluation and Newton-Euler; ``out[at:at + 12]`` = (a, alpha, F, M)."""
+    """One load evaluation at the attitude ``q`` and Newton-Euler; ``out[at:at + 12]`` = (a, alpha, F, M)."""
     constant_force, mass, inertia, inverse = body
-    _rotation(q, rotation)
+    r = _rotation_scalars(q[0], q[1], q[2], q[3])
+    rotation[0, 0], rotation[0, 1], rotation[0, 2] = r[0], r[1], r[2]
+    rotation[1, 0], rotation[1, 1], rotation[1, 2] = r[3], r[4], r[5]
+    rotation[2, 0], rotation[2, 1], rotation[2, 2] = r[6], r[7], r[8]
     load(data, x, v, rotation, w, loads)
     for c in range(3):
         force = loads[c] + constant_force[c]
@@ -239,16 +180,17 @@ def _evaluate(
         out[at + c] = force / mass
     i, j = inertia, inverse
     out[at + 3], out[at + 4], out[at + 5] = _euler_scalars(
-        loads[3], loads[4], loads[5], w[0], w[1], w[2],
-        i[0, 0], i[0, 1], i[0, 2], i[1, 0], i[1, 1], i[1, 2], i[2, 0], i[2, 1], i[2, 2],
-        j[0, 0], j[0, 1], j[0, 2], j[1, 0], j[1, 1], j[1, 2], j[2, 0], j[2, 1], j[2, 2],
-    )  # fmt: skip
+        (loads[3], loads[4], loads[5]),
+        (w[0], w[1], w[2]),
+        (i[0, 0], i[0, 1], i[0, 2], i[1, 0], i[1, 1], i[1, 2], i[2, 0], i[2, 1], i[2, 2]),
+        (j[0, 0], j[0, 1], j[0, 2], j[1, 0], j[1, 1], j[1, 2], j[2, 0], j[2, 1], j[2, 2]),
+    )
 
 
 @njit(inline="always", error_model="numpy")
 def rk_step(
     load: LoadKernel,
-    data: tuple[np.ndarray, ...],
+    data: KernelData,
     body: Body,
     method: Tableau,
     start: Start,
@@ -259,13 +201,12 @@ def rk_step(
 ) -> None:
     """One explicit Runge-Kutta-Munthe-Kaas step from ``start`` = ``(x0, v0, q0, w0)`` by ``h`` seconds.
 
-    Inlined into the step of each load kernel (:class:`CompiledLoad`, ``step``), never called alone.
-    ``load(data, x, v, R, omega, loads6)`` is the compiled load kernel, ``body`` the :data:`Body` and
-    ``method`` the :data:`Tableau`; ``given`` holds the first stage's evaluation when ``has_given``.
-    Fills ``out``: the new position, velocity, unit attitude, angular velocity and path increment, the error estimate
-    ``h (b_error . k)`` of the increments ``(x, v, u, omega, s)``, and the first and last
-    evaluations (acceleration, angular acceleration, force, moment); the last is that of the end state
-    (the last stage's when ``fsal``, an extra evaluation otherwise).
+    Inlined into the step of each load kernel (:class:`CompiledLoad`, ``step``), never called alone.  ``load`` is
+    the compiled load kernel, ``body`` the :data:`Body` and ``method`` the :data:`Tableau`; ``given`` holds the
+    first stage's evaluation when ``has_given``.  Fills ``out``: the new position, velocity, unit attitude, angular
+    velocity and path increment, the error estimate ``h (b_error . k)`` of the increments ``(x, v, u, omega, s)``,
+    and the first and last evaluations (acceleration, angular acceleration, force, moment); the last is that of the
+    end state (the last stage's when ``fsal``, an extra evaluation otherwise).
     """
     A, b, b_error, fsal = method
     x0, v0, q0, w0 = start
@@ -276,18 +217,16 @@ def rk_step(
     rotation = np.empty((3, 3))
     loads = np.empty(6)
     evaluation = np.empty(_OUT)
-    for i in range(stages):
-        if i == 0:
-            if has_given:
-                out[_FIRST : _FIRST + 12] = given
-            else:
-                _evaluate(load, data, body, x0, v0, q0, w0, rotation, loads, out, _FIRST)
-            for j in range(3):
-                k[0, j] = v0[j]
-                k[0, 3 + j] = out[_FIRST + j]
-                k[0, 6 + j] = w0[j]
-                k[0, 9 + j] = out[_FIRST + 3 + j]
-            continue
+    if has_given:
+        out[_FIRST : _FIRST + 12] = given
+    else:
+        _evaluate(load, data, body, x0, v0, q0, w0, rotation, loads, out, _FIRST)
+    for j in range(3):
+        k[0, j] = v0[j]
+        k[0, 3 + j] = out[_FIRST + j]
+        k[0, 6 + j] = w0[j]
+        k[0, 9 + j] = out[_FIRST + 3 + j]
+    for i in range(1, stages):
         for j in range(13):
             total = 0.0
             for m in range(i):
@@ -299,29 +238,17 @@ def rk_step(
             z[9 + j] += w0[j]
         _compose(q0, z[6:9], q)
         at = _LAST if i == stages - 1 else 0
-        _evaluate(
-            load,
-            data,
-            body,
-            z[0:3],
-            z[3:6],
-            q,
-            z[9:12],
-            rotation,
-            loads,
-            evaluation if at == 0 else out,
-            at,
-        )
         source = evaluation if at == 0 else out
-        _rate(z[6:9], z[9:12], k[i, 6:9])
+        _evaluate(load, data, body, z[0:3], z[3:6], q, z[9:12], rotation, loads, source, at)
+        # du/dt = dexp^-1_u(omega)
+        k[i, 6], k[i, 7], k[i, 8] = _dexp_inverse_scalars(z[6], z[7], z[8], z[9], z[10], z[11])
         for j in range(3):
             k[i, j] = z[3 + j]
             k[i, 3 + j] = source[at + j]
             k[i, 9 + j] = source[at + 3 + j]
     increment = np.empty(13)
     for j in range(13):
-        total = 0.0
-        error = 0.0
+        total = error = 0.0
         for m in range(stages):
             total += b[m] * k[m, j]
             error += b_error[m] * k[m, j]
@@ -341,16 +268,4 @@ def rk_step(
         increment[0], increment[1], increment[2], v0[0], v0[1], v0[2], out[3], out[4], out[5]
     )
     if not fsal:
-        _evaluate(
-            load,
-            data,
-            body,
-            out[_X],
-            out[_V],
-            out[_Q],
-            out[_W],
-            rotation,
-            loads,
-            out,
-            _LAST,
-        )
+        _evaluate(load, data, body, out[_X], out[_V], out[_Q], out[_W], rotation, loads, out, _LAST)

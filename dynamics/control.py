@@ -1,12 +1,7 @@
 """Step-size control and the energy guard of :func:`~dynamics.simulate.simulate`.
 
-A step control chooses how long each trial step is and judges every trial
-step the integrator took: accept it (and say how long the next trial is),
-retake it shorter, or end the run.  :class:`FixedStep` steps by a fixed
-``time_step``; :class:`ErrorControl` measures the embedded error estimate
-against a tolerance.  The :class:`EnergyGuard` judges accepted steps once
-more, for loads that can only remove energy.  The driver
-(:func:`~dynamics.simulate.simulate`) only loops, counts and handles events.
+A step control (:class:`StepControl`) sizes and judges every trial step; the :class:`EnergyGuard` judges the
+accepted ones once more, for loads that can only remove energy.
 """
 
 from __future__ import annotations
@@ -16,7 +11,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .integrators import Stepper, StepResult
+from .integrators import ANGULAR_VELOCITY, N_INCREMENTS, POSITION, VELOCITY, Stepper, StepResult
 from .rigid_body import RigidBody, State
 
 __all__ = [
@@ -38,19 +33,16 @@ NON_FINITE = "non_finite"
 # the integration needed a step shorter than its floor: a numerical failure, the history up to it is kept
 STEP_FLOOR = "step_floor"
 
-# relative kinetic-energy gain above which a step of a dissipative system is retaken: far above
-# round-off and the harmless gains of the shank's sliding chatter (1e-10 after convergence, up to 5e-8
-# while a turned projectile leaves the target),
-# far below the pumping that lets a run creep near rest (percent per step)
+# relative kinetic-energy gain above which a step of a dissipative system is retaken: far above round-off and the
+# shank's sliding chatter, far below the pumping that lets a run creep near rest (docs/numerics.md, energy guard)
 ENERGY_TOLERANCE = 1e-7
 
 
 class StepControl:
     """Base class of step-size controls.
 
-    Contract: :meth:`start` checks that the control suits the method and
-    returns the first trial step (s); after each trial step of ``size`` from
-    ``state``, :meth:`judge` returns a verdict and a value:
+    Contract: :meth:`start` checks that the control suits the method and returns the first trial step (s); after
+    each trial step of ``size`` from ``state``, :meth:`judge` returns a verdict and a value:
 
     * ``(ACCEPT, next_step)``: keep the step, try ``next_step`` next;
     * ``(RETAKE, shorter)``: retake the step from ``state`` with ``shorter``;
@@ -90,29 +82,24 @@ class FixedStep(StepControl):
     time_step : float
         The step (s).
     min_step : float
-        The step floor (s) of the energy guard's retakes; the floor only
-        matters to the guard here.
+        The step floor (s) of the energy guard's retakes (the only use of it here).
     """
 
     def __init__(self, time_step: float, min_step: float = 1e-10) -> None:
         self.time_step = _positive("time_step", time_step)
         self.min_step = _positive("min_step", min_step)
-        self.forced_steps = 0
 
     def start(self, method: Stepper) -> float:
         return self.time_step
 
     def judge(self, result: StepResult, state: State, size: float) -> tuple[str, float | str]:
-        if not result.state.is_finite():
-            return END, NON_FINITE
-        return ACCEPT, self.time_step
+        return (ACCEPT, self.time_step) if result.state.is_finite() else (END, NON_FINITE)
 
 
 def step_factor_scalars(norm: float, exponent: float) -> float:
     """The next step (or the retaken one) over this one, from the error norm of this one: ``0.9 norm^exponent``
     within 0.2 to 5 (``exponent = -1/(p + 1)``, p the order of the estimate); 5 for a zero norm, 0.2 for one
-    that is infinite or not a number.  The one definition: :class:`ErrorControl` calls it, and the compiled
-    pitch-plane driver (:mod:`dynamics.pitch_plane`) compiles it."""
+    that is infinite or not a number.  :class:`ErrorControl` calls it, :mod:`dynamics.pitch_plane` compiles it."""
     if 0.0 < norm < math.inf:
         return min(5.0, max(0.2, 0.9 * norm**exponent))
     return 5.0 if norm == 0.0 else 0.2
@@ -121,10 +108,9 @@ def step_factor_scalars(norm: float, exponent: float) -> float:
 class ErrorControl(StepControl):
     """Error control on the embedded estimate of an adaptive method.
 
-    The error of the increments ``(x, v, u, omega, s)`` is measured in the RMS
-    norm scaled by ``atol + rtol |value|``; a step passes when the norm is at
-    most 1, and the next step is ``0.9 norm^(-1/(p+1))`` times this one (p the
-    order of the estimate), within a factor 0.2 to 5.
+    The error of the increments ``(x, v, u, omega, s)`` is measured in the RMS norm scaled by
+    ``atol + rtol |value|`` (:meth:`norm`); a step passes when the norm is at most 1, and the next step is
+    :func:`step_factor_scalars` times this one.
 
     Parameters
     ----------
@@ -135,16 +121,12 @@ class ErrorControl(StepControl):
     first_step, max_step : float
         First and largest step (s).
     min_step : float
-        The step floor (s): a step that would have to be retaken shorter ends
-        the run with :data:`STEP_FLOOR` (:data:`NON_FINITE` when the trial
-        state was not finite; such a trial is retaken at a fifth of its size).
+        The step floor (s): a step that would have to be retaken shorter ends the run with :data:`STEP_FLOOR`
+        (:data:`NON_FINITE` when the trial state was not finite; such a trial is retaken at a fifth of its size).
     forced_step : float
-        The control shortens no step below this (s): a step of this size (or a
-        shorter first step) that fails the tolerance is accepted and counted
-        in :attr:`forced_steps`.  The DAFL load jumps (at ``Vn = 0`` on the
-        shank, where points cross the target surface), and across a jump no
-        step meets a tolerance set on a smooth error model: without this bound
-        the step collapses at every jump and the cost has no bound.  0: none.
+        The control shortens no step below this (s): a step of this size (or a shorter first step) that fails
+        the tolerance is accepted and counted in :attr:`forced_steps`, for a load that jumps, across which no
+        step meets a tolerance set on a smooth error model (docs/numerics.md).  0: none.
     """
 
     def __init__(
@@ -158,32 +140,26 @@ class ErrorControl(StepControl):
         max_step: float = math.inf,
     ) -> None:
         self.rtol = _positive("rtol", rtol)
-        self.atol = np.broadcast_to(np.asarray(rtol if atol is None else atol, dtype=float), (13,))
+        self.atol = np.broadcast_to(np.asarray(rtol if atol is None else atol, dtype=float), (N_INCREMENTS,))
         self.min_step = _positive("min_step", min_step)
         self.first_step, self.forced_step, self.max_step = first_step, forced_step, max_step
-        self.forced_steps = 0
         self._exponent = math.nan
 
     def start(self, method: Stepper) -> float:
         if not method.adaptive:
             raise ValueError(f"{type(method).__name__} has no error estimate: use a fixed time step")
         self._exponent = -1.0 / (method.error_order + 1)
-        # the first step may be shorter than forced_step (a smooth start, e.g. the nose entry); the
-        # control then grows it, and shortens no step below forced_step
+        # the first step may be shorter than forced_step (a smooth start, e.g. the nose entry)
         return max(min(self.first_step, self.max_step), self.min_step)
 
     def norm(self, result: StepResult, before: State) -> float:
         """RMS of the error estimate scaled by ``atol + rtol |value|``."""
         after = result.state
-        magnitude = np.concatenate(
-            [
-                np.maximum(np.abs(before.position), np.abs(after.position)),
-                np.maximum(np.abs(before.velocity), np.abs(after.velocity)),
-                np.zeros(3),  # the rotation increment starts from zero: absolute tolerance only
-                np.maximum(np.abs(before.angular_velocity), np.abs(after.angular_velocity)),
-                [max(before.path_length, after.path_length)],
-            ]
-        )
+        magnitude = np.zeros(N_INCREMENTS)  # the rotation increment starts from zero: absolute tolerance only
+        magnitude[POSITION] = np.maximum(np.abs(before.position), np.abs(after.position))
+        magnitude[VELOCITY] = np.maximum(np.abs(before.velocity), np.abs(after.velocity))
+        magnitude[ANGULAR_VELOCITY] = np.maximum(np.abs(before.angular_velocity), np.abs(after.angular_velocity))
+        magnitude[-1] = max(before.path_length, after.path_length)  # the path length, last
         assert result.error is not None  # start() takes adaptive methods only: every step estimates its error
         scaled = result.error / (self.atol + self.rtol * magnitude)
         return float(np.sqrt(np.mean(scaled * scaled)))
@@ -207,13 +183,10 @@ class ErrorControl(StepControl):
 class EnergyGuard:
     """Retakes steps that gain kinetic energy, for loads that can only remove it.
 
-    When the loads only dissipate (``F.V + M.omega <= 0``), a step whose
-    kinetic energy ends above its start by more than ``tolerance`` (relative)
-    is a numerical artefact: an explicit step across a jump of the load
-    overshoots, and repeated overshoots (chatter) can pump energy in.  Such a
-    step is retaken at half its size, down to ``min_step``; a smaller gain is
-    projected away (:meth:`project`), so the kinetic energy never increases
-    from one recorded state to the next.
+    When the loads only dissipate (``F.V + M.omega <= 0``), a step whose kinetic energy ends above its start by
+    more than ``tolerance`` (relative) is a numerical artefact (the overshoot of an explicit step across a jump of
+    the load): it is retaken at half its size, down to ``min_step``; a smaller gain is projected away
+    (:meth:`project`), so the kinetic energy never increases from one recorded state to the next.
 
     Attributes
     ----------
@@ -244,9 +217,8 @@ class EnergyGuard:
     ) -> tuple[str, float | str]:
         """The verdict on an accepted step of ``size``; ``truncated``: shortened to end at the time limit.
 
-        ``(RETAKE, size / 2)`` for a gain above the tolerance; ``(END, STEP_FLOOR)`` when
-        half the step is below the floor (a step already shortened to end at the time limit
-        is accepted instead); else ``(ACCEPT, size)``.
+        ``(RETAKE, size / 2)`` for a gain above the tolerance; ``(END, STEP_FLOOR)`` when half the step is below
+        the floor (a ``truncated`` step is accepted instead); else ``(ACCEPT, size)``.
         """
         if self._energy(body, after) > self._energy(body, before) * (1.0 + self.tolerance):
             if 0.5 * size >= self.min_step:
@@ -259,11 +231,9 @@ class EnergyGuard:
     def project(self, body: RigidBody, before: State, after: State) -> tuple[State, bool]:
         """``after`` with no more kinetic energy than ``before``, and whether it had to be changed.
 
-        A step that gains less than the tolerance (round-off, or the overshoot of an
-        explicit step across the shank's ``Vn = 0`` switch: up to 3e-8 while projectile #3
-        turns and leaves the target) is not retaken: its velocity and angular velocity are
-        scaled by ``sqrt(E0 / E1)``, which keeps their directions and removes the gain, as
-        the unit quaternion is renormalised after every step.
+        A step that gains less than the tolerance is not retaken: its velocity and angular velocity are scaled by
+        ``sqrt(E0 / E1)``, which keeps their directions and removes the gain, as the unit quaternion is
+        renormalised after every step.
         """
         start, end = self._energy(body, before), self._energy(body, after)
         if not end > start:

@@ -1,10 +1,9 @@
 """The convergence of a turning run, defined once: where the attack angle, after its peak, falls below a threshold.
 
-A run's attack angle grows from its impact value to a peak and, in a stable run, decays; the *convergence
-speed* is the speed at which it first falls below a threshold after that peak, interpolated linearly between
-the two steps around the crossing.  The full model finds it in a run's history (``cases.run``), the reduced
-pitch-plane model (:mod:`dynamics.pitch_plane`) while it integrates, compiled: both with
-:func:`crossing_speed_scalars`.
+A run's attack angle grows from its impact value to a peak and, in a stable run, decays; the *convergence speed* is
+the speed at which it first falls below a threshold after that peak, interpolated linearly between the two steps
+around the crossing (:func:`crossing_speed_scalars`): in the full model's history (``cases.run``) and, compiled,
+while the reduced model (:mod:`dynamics.pitch_plane`) integrates.
 """
 
 from __future__ import annotations

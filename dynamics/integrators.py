@@ -1,20 +1,12 @@
 """Explicit Runge-Kutta methods on the rigid-body state (Runge-Kutta-Munthe-Kaas).
 
-Within one step the attitude is written ``q = q0 * exp(u)`` with a rotation
-vector ``u`` that starts at zero, so the step integrates a plain ODE for
-``(x, v, u, omega)``: ``du/dt = dexp^-1_u(omega)``
-(:func:`~dynamics.quaternion.right_jacobian_inverse`).  The new attitude
-``q0 * exp(u1)`` is a product of unit quaternions: it stays on the unit sphere
-up to round-off, which one renormalisation per step removes.  With the exact
-``dexp^-1`` the method keeps the classical order of its tableau.  The path
-length ``s`` is measured on the step's chord (:func:`_path_increment`), not
-integrated from the stage velocities.
-
-A step whose state leaves the floating-point numbers (an infinite rotation
-vector makes ``math.sin`` raise) returns a non-finite state instead of raising,
-so that the caller ends the run with its history.
-
-Concrete methods differ only in their tableau, as in scipy's ``integrate._ivp``.
+Within one step the attitude is written ``q = q0 * exp(u)`` with a rotation vector ``u`` that starts at zero, so
+the step integrates a plain ODE for ``(x, v, u, omega)``: ``du/dt = dexp^-1_u(omega)``
+(:func:`~dynamics.quaternion.right_jacobian_inverse`), which keeps the classical order of the tableau.  The new
+attitude ``q0 * exp(u1)`` is a product of unit quaternions, renormalised once per step.  The path length ``s``
+is measured on the step's chord (:func:`path_increment_scalars`).  A step whose state leaves the floats returns
+a non-finite state instead of raising, so that the caller ends the run with its history.  Concrete methods
+differ only in their tableau, as in scipy's ``integrate._ivp``.
 """
 
 from __future__ import annotations
@@ -30,23 +22,13 @@ from .rigid_body import LoadFunction, RigidBody, State
 
 __all__ = ["Stepper", "RungeKutta", "RK4", "DormandPrince54", "Evaluation", "StepResult", "METHODS"]
 
-# layout of the increment vector z = (x, v, u, omega, s) used inside a step
-POSITION, VELOCITY, ROTATION, ANGULAR_VELOCITY, PATH = (
-    slice(0, 3),
-    slice(3, 6),
-    slice(6, 9),
-    slice(9, 12),
-    slice(12, 13),
-)
+# layout of the increment vector z = (x, v, u, omega, s) used inside a step (s the last)
+POSITION, VELOCITY, ROTATION, ANGULAR_VELOCITY = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
 N_INCREMENTS = 13
 
 
 class Evaluation(NamedTuple):
-    """Loads and accelerations at one state (one call of the load function).
-
-    A named tuple: several are made per step, and a frozen dataclass costs
-    three times as much to build.
-    """
+    """Loads and accelerations at one state (one call of the load function)."""
 
     acceleration: np.ndarray  # world frame (m/s^2)
     angular_acceleration: np.ndarray  # body frame (rad/s^2)
@@ -70,50 +52,26 @@ def evaluate(
 
 @dataclass(frozen=True)
 class StepResult:
-    """Outcome of one Runge-Kutta step.
+    """Outcome of one Runge-Kutta step."""
 
-    Attributes
-    ----------
-    state : State
-        The state at the end of the step.
-    error : ndarray or None
-        Local error estimate of the increments ``(x, v, u, omega, s)``, for
-        methods with an embedded pair.
-    first : Evaluation or None
-        The evaluation at the start of the step (reusable after a rejection); None when the step left
-        the floats before it had one (the first evaluation raised).
-    last : Evaluation or None
-        For first-same-as-last methods, the evaluation at the end of the step.
-    evaluations : int
-        Calls of the load function the step made.
-    """
-
-    state: State
-    error: np.ndarray | None
+    state: State  # at the end of the step
+    error: np.ndarray | None  # local error estimate of the increments (x, v, u, omega, s), for embedded pairs
+    # the evaluation at the start of the step (reusable after a rejection); None when the step left the floats
+    # before it had one
     first: Evaluation | None
-    last: Evaluation | None
-    evaluations: int = 0
-
-
-def _path_increment(chord: np.ndarray, before: np.ndarray, after: np.ndarray) -> float:
-    """Length (m) of the centre of mass's path over one step.
-
-    The chord ``|x1 - x0|`` lengthened by ``theta^2 / 24``, ``theta`` the angle
-    between the velocities at the two ends: exact for a straight or circular
-    path up to ``O(theta^4)``.  Not ``int |v| dt`` by the step's own quadrature:
-    inside a step across the shank's ``Vn = 0`` switch (a jump of about 2 MN
-    on 23 kg) the stage velocities swing sideways by ``h a`` times the
-    tableau's coefficients (up to 11.6 for Dormand-Prince), and the weighted
-    sum of their lengths, with a negative weight, then undercounts the path
-    (docs/numerics.md, Hard cases, measures it on Forrestal-Luk test 5).
-    """
-    return path_increment_scalars(*chord.tolist(), *before.tolist(), *after.tolist())
+    last: Evaluation | None  # for first-same-as-last methods, the evaluation at the end of the step
+    evaluations: int = 0  # calls of the load function the step made
 
 
 def path_increment_scalars(
     cx: float, cy: float, cz: float, ax: float, ay: float, az: float, bx: float, by: float, bz: float
 ) -> float:
-    """:func:`_path_increment` on the components (floats only: the compiled step compiles it too)."""
+    """Length (m) of the centre of mass's path over a step of chord ``c`` from velocity ``a`` to ``b``.
+
+    The chord ``|c|`` lengthened by ``theta^2 / 24``, ``theta`` the angle between ``a`` and ``b``: exact for a
+    straight or circular path up to ``O(theta^4)``.  Not ``int |v| dt`` by the step's quadrature, whose stage
+    velocities swing sideways across a jump of the load (docs/numerics.md, Hard cases).
+    """
     length = math.sqrt(cx * cx + cy * cy + cz * cz)
     dot = ax * bx + ay * by + az * bz
     cross2 = (ay * bz - az * by) ** 2 + (az * bx - ax * bz) ** 2 + (ax * by - ay * bx) ** 2
@@ -139,37 +97,19 @@ class Stepper(Protocol):
 class RungeKutta:
     """Base class of explicit Runge-Kutta methods on the rigid-body state.
 
-    Contract: :meth:`step` advances a :class:`~dynamics.rigid_body.State` by
-    ``h`` seconds, calling the load function once per stage (once less when
-    the first evaluation is passed in), and returns a :class:`StepResult`.  The
-    attitude of the result is a unit quaternion to round-off.  Subclasses set
-    only the class attributes:
-
-    Attributes
-    ----------
-    A : ndarray, shape (stages, stages)
-        Runge-Kutta matrix (strictly lower triangular).
-    b : ndarray, shape (stages,)
-        Weights of the solution.
-    c : ndarray, shape (stages,)
-        Nodes.
-    b_error : ndarray or None
-        ``b - b_hat``: weights of the embedded error estimate, or None.
-    order : int
-        Order of the solution.
-    error_order : int
-        Order of the embedded estimate (step-size control uses ``1/(error_order + 1)``).
-    fsal : bool
-        True if the last stage is evaluated at the end of the step.
+    Contract: :meth:`step` advances a :class:`~dynamics.rigid_body.State` by ``h`` seconds, calling the load
+    function once per stage (once less when the first evaluation is passed in), and returns a
+    :class:`StepResult` whose attitude is a unit quaternion to round-off.  Subclasses set only the class
+    attributes.
     """
 
-    A: np.ndarray
-    b: np.ndarray
-    c: np.ndarray
-    b_error: np.ndarray | None = None
-    order: int
-    error_order: int = 0
-    fsal: bool = False
+    A: np.ndarray  # Runge-Kutta matrix, shape (stages, stages), strictly lower triangular
+    b: np.ndarray  # weights of the solution, shape (stages,)
+    c: np.ndarray  # nodes, shape (stages,)
+    b_error: np.ndarray | None = None  # b - b_hat: weights of the embedded error estimate, or None
+    order: int  # of the solution
+    error_order: int = 0  # of the embedded estimate (the step-size control uses 1/(error_order + 1))
+    fsal: bool = False  # first same as last: the last stage is evaluated at the end of the step
 
     @property
     def adaptive(self) -> bool:
@@ -187,7 +127,7 @@ class RungeKutta:
         # the increments' start (x0, v0, 0, omega0, 0): one add per stage gives every stage state
         start = np.zeros(N_INCREMENTS)
         start[POSITION], start[VELOCITY], start[ANGULAR_VELOCITY] = x0, v0, w0
-        k = np.zeros((self.stages, N_INCREMENTS))  # the path column stays 0: see _path_increment
+        k = np.zeros((self.stages, N_INCREMENTS))  # the path column stays 0: see path_increment_scalars
         evaluations: list[Evaluation] = []
         calls = 0
         try:
@@ -215,20 +155,20 @@ class RungeKutta:
             z = h * (self.b @ k)
             attitude = normalize(compose(q0, z[ROTATION]))
         except (ValueError, OverflowError, ZeroDivisionError):
-            # math.sin of an infinite rotation, or |q| = 0: the state left the floats inside
-            # the step; a non-finite result lets the caller end the run (or retake it shorter)
+            # math.sin of an infinite rotation, or |q| = 0: the state left the floats inside the step
             nan = np.full(3, np.nan)
             new = State(state.time + h, nan, nan, np.full(4, np.nan), nan, math.nan)
             error = np.full(N_INCREMENTS, np.inf) if self.b_error is not None else None
             return StepResult(new, error, evaluations[0] if evaluations else first, None, calls)
         velocity = v0 + z[VELOCITY]
+        path_increment = path_increment_scalars(*z[POSITION].tolist(), *v0.tolist(), *velocity.tolist())
         new = State(
             time=state.time + h,
             position=x0 + z[POSITION],
             velocity=velocity,
             attitude=attitude,
             angular_velocity=w0 + z[ANGULAR_VELOCITY],
-            path_length=state.path_length + _path_increment(z[POSITION], v0, velocity),
+            path_length=state.path_length + path_increment,
         )
         error = h * (self.b_error @ k) if self.b_error is not None else None
         return StepResult(new, error, evaluations[0], evaluations[-1] if self.fsal else None, calls)

@@ -1,34 +1,28 @@
 """Rigid-body motion in a plane through the body's axis, compiled: Dormand-Prince 5(4) with its events.
 
-The reduced model of ``penetrate predict`` (docs/theory.md) moves a body of revolution in the
-vertical plane only: three degrees of freedom instead of six, so neither quaternions nor the
-Munthe-Kaas step of :mod:`dynamics.integrators` are needed.  The state is
+The reduced model of ``penetrate predict`` (docs/theory.md) moves a body of revolution in the vertical plane only:
+three degrees of freedom instead of six, so neither quaternions nor the Munthe-Kaas step of
+:mod:`dynamics.integrators` are needed.  The state is
 
     ``y = (X, Z, phi, v_X, v_Z, q)``
 
-with the centre of mass at ``(X, Z)`` (m, world frame, ``Z`` up), the axis angle ``phi`` (rad: the
-body axis from the downward vertical towards ``+X``, the paper's angle; the axis points along
-``(sin phi, -cos phi)`` in ``X, Z``), the velocity ``(v_X, v_Z)`` (m/s) and the pitch rate ``q``
-about the body's y axis (rad/s; ``d phi / dt = -q``).  Newton-Euler: ``m dv/dt = R F - m g e_Z``,
-``I dq/dt = M_y``, with ``F = (F_x, F_z)`` and ``M_y`` from a load kernel in the body frame.  The
-body is turned by ``theta = pi/2 - phi`` about the world ``Y`` axis; a straight downward axis is
-``phi = 0`` exactly, so its sine and cosine are exact and a symmetric start stays exactly straight.
+with the centre of mass at ``(X, Z)`` (m, world frame, ``Z`` up), the axis angle ``phi`` (rad: the body axis from
+the downward vertical towards ``+X``, the paper's angle; the axis points along ``(sin phi, -cos phi)`` in ``X, Z``),
+the velocity ``(v_X, v_Z)`` (m/s) and the pitch rate ``q`` about the body's y axis (rad/s; ``d phi / dt = -q``).
+Newton-Euler: ``m dv/dt = R F - m g e_Z``, ``I dq/dt = M_y``, with ``F = (F_x, F_z)`` and ``M_y`` from a load
+kernel in the body frame.  The body is turned by ``theta = pi/2 - phi`` about the world ``Y`` axis; a straight
+downward axis is ``phi = 0`` exactly, so its sine and cosine are exact and a symmetric start stays exactly straight.
 
 A load kernel is a compiled function ``load(data, height, sin_theta, cos_theta, v_x, v_z, q, out)``
 writing ``F_x``, ``F_z`` (N) and ``M_y`` (N m) into ``out`` (:func:`fem_loads.revolved.pitch_plane_load`),
-with ``lowest(data, height, sin_theta, cos_theta)`` the height of the body's lowest point.  As in
-:mod:`dynamics.compiled`, :func:`trajectory` takes them as arguments and is inlined into a
-function of the caller's module that names them as globals, so numba can cache the machine code.
+with ``lowest(data, height, sin_theta, cos_theta)`` the height of the body's lowest point.  As the step of
+:mod:`dynamics.compiled`, :func:`trajectory` takes them as arguments and is inlined where they are globals.
 
-:func:`trajectory` only steps and watches events, like :func:`dynamics.simulate`: the Dormand-Prince
-tableau is :class:`~dynamics.integrators.DormandPrince54`'s, and the step control
-:class:`~dynamics.control.ErrorControl`'s rule, compiled from its one definition
-(:func:`~dynamics.control.step_factor_scalars`, on the root mean square of the error over
-``atol + rtol |y|``).  It ends when the body stops (speed below ``stop_speed``), leaves the target
-(lowest point back above the surface after having been in), its axis has turned by ``turn_limit``,
-the time limit passes, or, when asked, the attack angle has converged (fallen below ``threshold`` after
-its peak, the crossing's speed by :func:`~dynamics.convergence.crossing_speed_scalars`, as the full
-model's history finds it).
+:func:`trajectory` steps by :class:`~dynamics.integrators.DormandPrince54`'s tableau under
+:class:`~dynamics.control.ErrorControl`'s rule (:func:`~dynamics.control.step_factor_scalars`), and ends when the
+body stops (speed below ``stop_speed``), leaves the target (lowest point back above the surface after having been
+in), its axis has turned by ``turn_limit``, the time limit passes, or, when asked, the attack angle has converged
+(:mod:`dynamics.convergence`).
 """
 
 from __future__ import annotations
@@ -74,14 +68,13 @@ OUTCOME_FIELDS = (
 TABLEAU = (np.ascontiguousarray(DormandPrince54.A), np.ascontiguousarray(DormandPrince54.b_error))
 _STATES = 6
 
-# the compiled functions :func:`trajectory` is given (module docstring): ``load(data, height, sin_theta,
-# cos_theta, v_x, v_z, q, out)`` and ``lowest(data, height, sin_theta, cos_theta)``
+# the compiled functions :func:`trajectory` is given (module docstring)
 PlaneLoad = Callable[[tuple[np.ndarray, ...], float, float, float, float, float, float, np.ndarray], None]
 LowestPoint = Callable[[tuple[np.ndarray, ...], float, float, float], float]
 
 
+# Newton-Euler, the full model's step control and its convergence rule, compiled from the same source
 _euler_scalars = njit(inline="always", error_model="numpy")(euler_scalars)
-# the full model's step control and convergence rule, compiled from the same source
 _step_factor = njit(inline="always", error_model="numpy")(step_factor_scalars)
 _crossing_speed = njit(inline="always", error_model="numpy")(crossing_speed_scalars)
 
@@ -102,14 +95,16 @@ def _derivative(
     vx = cos_t * y[3] - sin_t * y[4]  # body frame: R^T v
     vz = sin_t * y[3] + cos_t * y[4]
     load(data, y[1], sin_t, cos_t, vx, vz, y[5], loads)
-    out[0] = y[3]
-    out[1] = y[4]
-    out[2] = -y[5]
+    out[0], out[1], out[2] = y[3], y[4], -y[5]
     out[3] = (cos_t * loads[0] + sin_t * loads[1]) / mass
     out[4] = (-sin_t * loads[0] + cos_t * loads[1]) / mass - gravity
     # Euler's equation about the pitch axis: the spin vector lies on it, so omega x (I omega) vanishes
-    out[5] = _euler_scalars(0.0, loads[2], 0.0, 0.0, y[5], 0.0, 1.0, 0.0, 0.0, 0.0, inertia, 0.0, 0.0, 0.0, 1.0,
-                            1.0, 0.0, 0.0, 0.0, 1.0 / inertia, 0.0, 0.0, 0.0, 1.0)[1]  # fmt: skip
+    out[5] = _euler_scalars(
+        (0.0, loads[2], 0.0),
+        (0.0, y[5], 0.0),
+        (1.0, 0.0, 0.0, 0.0, inertia, 0.0, 0.0, 0.0, 1.0),
+        (1.0, 0.0, 0.0, 0.0, 1.0 / inertia, 0.0, 0.0, 0.0, 1.0),
+    )[1]
 
 
 @njit(cache=True, inline="always")
@@ -216,30 +211,16 @@ def trajectory(
             peak, speed_at_peak, converged_at = attack, speed, -1.0
         elif converged_at < 0.0 and peak >= threshold and attack < threshold <= previous_attack:
             converged_at = _crossing_speed(previous_attack, attack, previous_speed, speed, threshold)
-        low = lowest(data, y[1], math.cos(y[2]), math.sin(y[2]))
-        if low < 0.0:
-            entered = True
-        elif entered:
+        inside = lowest(data, y[1], math.cos(y[2]), math.sin(y[2])) < 0.0
+        if entered and not inside:
             end = EXITED
-            break
-        if speed < stop_speed:
+        elif speed < stop_speed:
             end = STOPPED
-            break
-        if abs(y[2] - y0[2]) >= turn_limit:
+        elif abs(y[2] - y0[2]) >= turn_limit:
             end = TURNED
-            break
-        if stop_when_converged and converged_at >= 0.0:
+        elif stop_when_converged and converged_at >= 0.0:
             end = CONVERGED
+        if end != TIME_LIMIT:  # one of the ends is met
             break
-    return (
-        end,
-        t,
-        math.hypot(y[3], y[4]),
-        y[2] - y0[2],
-        peak,
-        speed_at_peak,
-        converged_at,
-        steps,
-        rejected,
-        evaluations,
-    )
+        entered = entered or inside
+    return end, t, math.hypot(y[3], y[4]), y[2] - y0[2], peak, speed_at_peak, converged_at, steps, rejected, evaluations

@@ -1,14 +1,11 @@
 """Unit quaternions ``q = (w, x, y, z)`` (scalar first) for rigid-body attitude.
 
-``rotation_matrix(q)`` maps body coordinates to world coordinates; attitude
-kinematics with the body-frame angular velocity ``omega`` read
-``dq/dt = q * (0, omega) / 2``.
+``rotation_matrix(q)`` maps body coordinates to world coordinates; attitude kinematics with the body-frame
+angular velocity ``omega`` read ``dq/dt = q * (0, omega) / 2``.
 
-The functions work on 3- and 4-vectors, called several times per stage of
-every step: they unpack to Python floats (``tolist``) and build one array at
-the end, which costs about a quarter of the equivalent numpy expressions.  The
-arithmetic itself is in the ``*_scalars`` functions, on floats only, so that the
-compiled step (:mod:`dynamics.compiled`) compiles the very same expressions.
+The functions, called several times per stage of every step, unpack their 3- and 4-vectors to Python floats
+(numpy's per-call overhead is most of the cost at this size).  The arithmetic is in the ``*_scalars``
+functions, on floats only, so that the compiled step (:mod:`dynamics.compiled`) compiles the same expressions.
 """
 
 from __future__ import annotations
@@ -25,19 +22,11 @@ __all__ = [
     "from_rotation_matrix",
     "right_jacobian_inverse",
     "normalize",
-    "cross",
     "hamilton_scalars",
     "exp_scalars",
     "rotation_scalars",
     "dexp_inverse_scalars",
 ]
-
-
-def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Cross product of two 3-vectors (``np.cross``'s overhead per call is many times the arithmetic)."""
-    a0, a1, a2 = a.tolist()
-    b0, b1, b2 = b.tolist()
-    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
 def hamilton_scalars(
@@ -52,13 +41,9 @@ def hamilton_scalars(
     )
 
 
-def _hamilton(p: tuple[float, ...] | list[float], q: tuple[float, ...] | list[float]) -> np.ndarray:
-    return np.array(hamilton_scalars(*p, *q))
-
-
 def multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Hamilton product ``p * q``."""
-    return _hamilton(p.tolist(), q.tolist())
+    return np.array(hamilton_scalars(*p.tolist(), *q.tolist()))
 
 
 def exp_scalars(vx: float, vy: float, vz: float) -> tuple[float, float, float, float]:
@@ -71,28 +56,23 @@ def exp_scalars(vx: float, vy: float, vz: float) -> tuple[float, float, float, f
     return math.cos(half), scale * vx, scale * vy, scale * vz
 
 
-def _exp(rotation_vector: np.ndarray) -> tuple[float, float, float, float]:
-    return exp_scalars(*rotation_vector.tolist())
-
-
 def exp_map(rotation_vector: np.ndarray) -> np.ndarray:
     """Unit quaternion of the rotation by ``|v|`` radians about ``v``."""
-    return np.array(_exp(rotation_vector))
+    return np.array(exp_scalars(*rotation_vector.tolist()))
 
 
 def compose(q: np.ndarray, rotation_vector: np.ndarray) -> np.ndarray:
     """``q * exp_map(rotation_vector)`` in one call (the attitude inside a Runge-Kutta step)."""
-    return _hamilton(q.tolist(), _exp(rotation_vector))
+    qw, qx, qy, qz = q.tolist()
+    return np.array(hamilton_scalars(qw, qx, qy, qz, *exp_scalars(*rotation_vector.tolist())))
 
 
 def normalize(q: np.ndarray) -> np.ndarray:
     """``q / |q|``.
 
-    ``|q|^2`` is summed on Python floats as ``(w^2 + y^2) + (x^2 + z^2)``: the same bits for the
-    quaternions of mirrored attitudes (which swap ``w`` with ``y`` and ``x`` with ``z``, or change
-    signs).  ``q @ q`` goes to the BLAS dot kernel, whose order depends on the CPU: with fused
-    multiply-adds (OpenBLAS on AVX-512) ``(w, 0, y, 0)`` and ``(y, 0, w, 0)`` differ in the last bit
-    in a fifth of the cases, which broke the mirror symmetry of whole runs.
+    ``|q|^2`` is summed as ``(w^2 + y^2) + (x^2 + z^2)``: the same bits for the quaternions of mirrored
+    attitudes (which swap ``w`` with ``y`` and ``x`` with ``z``, or change signs), which ``q @ q`` (the BLAS
+    dot, in an order that depends on the CPU) does not always give.
     """
     w, x, y, z = q.tolist()
     return q / math.sqrt((w * w + y * y) + (x * x + z * z))
@@ -126,8 +106,7 @@ def from_rotation_matrix(matrix: np.ndarray) -> np.ndarray:
     """Unit quaternion (with ``w >= 0``) of a rotation matrix (Shepperd's method)."""
     m = np.asarray(matrix, dtype=float)
     trace = np.trace(m)
-    candidates = np.array([trace, m[0, 0], m[1, 1], m[2, 2]])
-    k = int(np.argmax(candidates))
+    k = int(np.argmax([trace, m[0, 0], m[1, 1], m[2, 2]]))
     if k == 0:
         w = 0.5 * math.sqrt(1.0 + trace)
         q = np.array([w, (m[2, 1] - m[1, 2]) / (4 * w), (m[0, 2] - m[2, 0]) / (4 * w), (m[1, 0] - m[0, 1]) / (4 * w)])
@@ -161,10 +140,6 @@ def dexp_inverse_scalars(
 
 
 def right_jacobian_inverse(u: np.ndarray, omega: np.ndarray) -> np.ndarray:
-    """``du/dt`` for ``q = q0 * exp(u)`` turning with body angular velocity ``omega``.
-
-    The inverse right Jacobian of SO(3):
-    ``omega + u x omega / 2 + c(|u|) u x (u x omega)`` with
-    ``c(t) = (1 - (t/2) cot(t/2)) / t^2``.
-    """
+    """``du/dt`` for ``q = q0 * exp(u)`` turning with body angular velocity ``omega``: the inverse right Jacobian of
+    SO(3), ``omega + u x omega / 2 + c(|u|) u x (u x omega)`` with ``c(t) = (1 - (t/2) cot(t/2)) / t^2``."""
     return np.array(dexp_inverse_scalars(*u.tolist(), *omega.tolist()))

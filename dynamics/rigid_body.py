@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Protocol
 
@@ -14,35 +15,16 @@ __all__ = ["RigidBody", "State", "LoadFunction", "euler_scalars"]
 
 
 def euler_scalars(
-    m0: float,
-    m1: float,
-    m2: float,
-    w0: float,
-    w1: float,
-    w2: float,
-    i00: float,
-    i01: float,
-    i02: float,
-    i10: float,
-    i11: float,
-    i12: float,
-    i20: float,
-    i21: float,
-    i22: float,
-    j00: float,
-    j01: float,
-    j02: float,
-    j10: float,
-    j11: float,
-    j12: float,
-    j20: float,
-    j21: float,
-    j22: float,
+    moment: Sequence[float], angular_velocity: Sequence[float], inertia: Sequence[float], inverse: Sequence[float]
 ) -> tuple[float, float, float]:
-    """Euler's equations on the components: the angular acceleration ``I^-1 (M - omega x (I omega))`` (body
-    frame, rad/s^2) for the moment ``M`` (N m), the angular velocity ``omega`` (rad/s), the inertia ``I``
-    (``i``, kg m^2, by rows) and its inverse (``j``).  The one definition: the Python step, the compiled step
-    (:mod:`dynamics.compiled`) and the pitch-plane model (:mod:`dynamics.pitch_plane`) use it."""
+    """Euler's equations: the angular acceleration ``I^-1 (M - omega x (I omega))`` (body frame, rad/s^2) for the
+    moment ``M`` (N m), the angular velocity ``omega`` (rad/s), the inertia ``I`` (kg m^2, nine components by rows)
+    and its inverse, all floats.  The one definition: the Python step, the compiled step and the pitch-plane model
+    use it."""
+    m0, m1, m2 = moment
+    w0, w1, w2 = angular_velocity
+    i00, i01, i02, i10, i11, i12, i20, i21, i22 = inertia
+    j00, j01, j02, j10, j11, j12, j20, j21, j22 = inverse
     h0 = i00 * w0 + i01 * w1 + i02 * w2  # I omega
     h1 = i10 * w0 + i11 * w1 + i12 * w2
     h2 = i20 * w0 + i21 * w1 + i22 * w2
@@ -55,11 +37,10 @@ def euler_scalars(
 class LoadFunction(Protocol):
     """Resultant loads on a rigid body.
 
-    Called as ``loads(position, velocity, rotation, angular_velocity)`` with the
-    centre-of-mass position and velocity in the world frame (m, m/s), the
-    body-to-world rotation matrix and the body-frame angular velocity (rad/s);
-    returns the force in the world frame (N) and the moment about the centre
-    of mass in the body frame (N m).
+    Called as ``loads(position, velocity, rotation, angular_velocity)`` with the centre-of-mass position and
+    velocity in the world frame (m, m/s), the body-to-world rotation matrix and the body-frame angular velocity
+    (rad/s); returns the force in the world frame (N) and the moment about the centre of mass in the body frame
+    (N m).
     """
 
     def __call__(
@@ -81,8 +62,7 @@ class RigidBody:
 
     mass: float
     inertia: np.ndarray
-    # derived in __post_init__: the inverse, and both matrices' rows as Python floats
-    _inertia_inverse: np.ndarray = field(init=False, repr=False, compare=False)
+    # derived in __post_init__: both matrices as Python floats (numpy's per-call overhead would dominate on 3-vectors)
     _inertia_rows: tuple[tuple[float, ...], ...] = field(init=False, repr=False, compare=False)
     _inertia_flat: tuple[float, ...] = field(init=False, repr=False, compare=False)
     _inverse_flat: tuple[float, ...] = field(init=False, repr=False, compare=False)
@@ -96,18 +76,15 @@ class RigidBody:
         if np.linalg.eigvalsh(inertia).min() <= 0:
             raise ValueError("inertia: must be positive definite")
         object.__setattr__(self, "inertia", inertia)
-        object.__setattr__(self, "_inertia_inverse", np.linalg.inv(inertia))
-        # the same matrices as Python floats: called several times per step on 3-vectors, where
-        # numpy's per-call overhead is most of the cost
         object.__setattr__(self, "_inertia_rows", tuple(tuple(row) for row in inertia.tolist()))
         object.__setattr__(self, "_inertia_flat", tuple(inertia.ravel().tolist()))
-        object.__setattr__(self, "_inverse_flat", tuple(self._inertia_inverse.ravel().tolist()))
+        object.__setattr__(self, "_inverse_flat", tuple(np.linalg.inv(inertia).ravel().tolist()))
 
     def accelerations(
         self, force: np.ndarray, moment: np.ndarray, angular_velocity: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
         """Linear acceleration (world) and angular acceleration (body) from Newton-Euler."""
-        alpha = euler_scalars(*moment.tolist(), *angular_velocity.tolist(), *self._inertia_flat, *self._inverse_flat)
+        alpha = euler_scalars(moment.tolist(), angular_velocity.tolist(), self._inertia_flat, self._inverse_flat)
         return force / self.mass, np.array(alpha)
 
     def kinetic_energy(self, state: State) -> float:
@@ -120,30 +97,14 @@ class RigidBody:
 
 @dataclass(frozen=True)
 class State:
-    """Rigid-body state at time ``time``.
+    """Rigid-body state at time ``time``."""
 
-    Attributes
-    ----------
-    time : float
-        Time (s).
-    position : ndarray, shape (3,)
-        Centre of mass, world frame (m).
-    velocity : ndarray, shape (3,)
-        Centre-of-mass velocity, world frame (m/s).
-    attitude : ndarray, shape (4,)
-        Unit quaternion, body to world.
-    angular_velocity : ndarray, shape (3,)
-        Angular velocity, body frame (rad/s).
-    path_length : float
-        Distance travelled by the centre of mass since the start (m).
-    """
-
-    time: float
-    position: np.ndarray
-    velocity: np.ndarray
-    attitude: np.ndarray
-    angular_velocity: np.ndarray
-    path_length: float = 0.0
+    time: float  # s
+    position: np.ndarray  # shape (3,): the centre of mass, world frame (m)
+    velocity: np.ndarray  # shape (3,): velocity of the centre of mass, world frame (m/s)
+    attitude: np.ndarray  # shape (4,): unit quaternion, body to world
+    angular_velocity: np.ndarray  # shape (3,): body frame (rad/s)
+    path_length: float = 0.0  # distance travelled by the centre of mass since the start (m)
 
     @property
     def rotation(self) -> np.ndarray:
@@ -155,14 +116,5 @@ class State:
         return float(np.sqrt(self.velocity @ self.velocity))
 
     def is_finite(self) -> bool:
-        return all(
-            map(
-                math.isfinite,
-                [
-                    *self.position.tolist(),
-                    *self.velocity.tolist(),
-                    *self.attitude.tolist(),
-                    *self.angular_velocity.tolist(),
-                ],
-            )
-        )
+        arrays = (self.position, self.velocity, self.attitude, self.angular_velocity)
+        return all(math.isfinite(value) for array in arrays for value in array.tolist())

@@ -1,11 +1,8 @@
 """Time integration of a rigid body under a load function, with terminal events.
 
-:func:`simulate` advances a :class:`~dynamics.rigid_body.State` with a fixed
-step (any method) or with error control (methods with an embedded pair) until
-a terminal event or the time limit.  An event is a scalar function of the
-state crossing zero in a given direction; its time is located to round-off by
-regula falsi (:func:`find_root`) on re-taken partial steps from the last accepted state, so the
-run ends exactly at the event and nothing is integrated past it.
+:func:`simulate` advances a :class:`~dynamics.rigid_body.State` until a terminal event or the time limit.  An
+event is a scalar function of the state crossing zero; its time is located to round-off by regula falsi
+(:func:`find_root`) on re-taken partial steps from the last accepted state, so nothing is integrated past it.
 """
 
 from __future__ import annotations
@@ -17,7 +14,7 @@ from typing import Any, cast
 
 import numpy as np
 
-from .control import END, NON_FINITE, RETAKE, STEP_FLOOR, EnergyGuard, StepControl
+from .control import ACCEPT, END, NON_FINITE, RETAKE, STEP_FLOOR, EnergyGuard, StepControl
 from .integrators import Evaluation, Stepper, evaluate
 from .rigid_body import LoadFunction, RigidBody, State
 
@@ -73,21 +70,12 @@ class Event:
 class SpeedBelow(Event):
     """The speed falls below ``threshold`` (m/s).
 
-    A step may also carry the velocity through zero and out again without
-    ending below the threshold (a discrete overshoot of a body brought to
-    rest); such a reversal fires too.  Inside the step the event is located on
-    the velocity component along the velocity at the start of the step, which
-    passes through the threshold in both cases.
-
-    A step may not reach past the stop (:meth:`step_limit`).  The resistance of a
-    target that holds a body at rest (a static strength) switches sign with the
-    velocity: over a step longer than the time it takes to stop the body, the
-    stages of an explicit method see the body moving one way and the other, their
-    loads cancel, and the body creeps on at a nearly constant speed for thousands
-    of steps instead of stopping (docs/numerics.md, the end of a run, measures it in
-    concrete).  Limiting the step to the time the deceleration at its
-    start takes to bring the speed to half the threshold keeps every stage moving
-    forwards, and the step ends below the threshold, where the event is located.
+    A step that carries the velocity through zero and out again (the overshoot of a body brought to rest) fires
+    too: inside the step the event is located on the velocity component along the velocity at the step's start,
+    which passes through the threshold in both cases.  A step may not reach past the stop (:meth:`step_limit`:
+    the time the deceleration at its start takes to bring the speed to half the threshold), or the stages of an
+    explicit method see the body moving both ways against a static strength and it creeps on instead of
+    stopping (docs/numerics.md, "The end of a run").
     """
 
     threshold: float  # set in __init__ (not a dataclass field: the class is not a dataclass of its own)
@@ -114,41 +102,20 @@ class SpeedBelow(Event):
 
 @dataclass
 class Trajectory:
-    """Recorded states and loads of a run (one row per accepted step, plus the start).
+    """Recorded states and loads of a run: ``n`` rows, one per accepted step, plus the start."""
 
-    Attributes
-    ----------
-    time : ndarray, shape (n,)
-    position, velocity : ndarray, shape (n, 3)
-        Centre of mass, world frame (m, m/s).
-    attitude : ndarray, shape (n, 4)
-        Unit quaternions, body to world.
-    angular_velocity : ndarray, shape (n, 3)
-        Body frame (rad/s).
-    path_length : ndarray, shape (n,)
-        Distance travelled by the centre of mass (m).
-    force : ndarray, shape (n, 3)
-        Load on the body, world frame (N).
-    moment : ndarray, shape (n, 3)
-        Moment about the centre of mass, body frame (N m).
-    end_reason : str
-        Name of the event that ended the run, ``time_limit``, ``non_finite`` or ``max_steps``.
-    statistics : dict
-        ``steps``, ``rejected_steps``, ``forced_steps`` (accepted at the
-        error control's floor with the error above tolerance),
-        ``energy_rejections``, ``energy_projections``, ``load_evaluations`` and
-        ``smallest_step`` (s; the last step before the time limit not counted).
-    """
-
-    time: np.ndarray
-    position: np.ndarray
-    velocity: np.ndarray
-    attitude: np.ndarray
-    angular_velocity: np.ndarray
-    path_length: np.ndarray
-    force: np.ndarray
-    moment: np.ndarray
-    end_reason: str
+    time: np.ndarray  # shape (n,), s
+    position: np.ndarray  # shape (n, 3): the centre of mass, world frame (m)
+    velocity: np.ndarray  # shape (n, 3): velocity of the centre of mass, world frame (m/s)
+    attitude: np.ndarray  # shape (n, 4): unit quaternions, body to world
+    angular_velocity: np.ndarray  # shape (n, 3): body frame (rad/s)
+    path_length: np.ndarray  # shape (n,): distance travelled by the centre of mass (m)
+    force: np.ndarray  # shape (n, 3): load on the body, world frame (N)
+    moment: np.ndarray  # shape (n, 3): about the centre of mass, body frame (N m)
+    end_reason: str  # name of the event that ended the run, TIME_LIMIT, NON_FINITE, STEP_FLOOR or MAX_STEPS
+    # steps, rejected_steps, forced_steps (accepted at the error control's floor with the error above tolerance),
+    # energy_rejections, energy_projections, load_evaluations and smallest_step (s; the last step before the time
+    # limit not counted)
     statistics: dict[str, Any] = field(default_factory=dict)
 
     def state(self, index: int = -1) -> State:
@@ -162,28 +129,21 @@ class Trajectory:
         )
 
 
-class _Recorder:
-    def __init__(self) -> None:
-        self.rows: list[tuple[State, Evaluation]] = []
-
-    def add(self, state: State, evaluation: Evaluation) -> None:
-        self.rows.append((state, evaluation))
-
-    def trajectory(self, end_reason: str, statistics: dict[str, Any]) -> Trajectory:
-        states = [s for s, _ in self.rows]
-        evals = [e for _, e in self.rows]
-        return Trajectory(
-            time=np.array([s.time for s in states]),
-            position=np.array([s.position for s in states]),
-            velocity=np.array([s.velocity for s in states]),
-            attitude=np.array([s.attitude for s in states]),
-            angular_velocity=np.array([s.angular_velocity for s in states]),
-            path_length=np.array([s.path_length for s in states]),
-            force=np.array([e.force for e in evals]),
-            moment=np.array([e.moment for e in evals]),
-            end_reason=end_reason,
-            statistics=statistics,
-        )
+def _trajectory(rows: list[tuple[State, Evaluation]], end_reason: str, statistics: dict[str, Any]) -> Trajectory:
+    """The :class:`Trajectory` of the recorded states, each with its evaluation."""
+    states = [s for s, _ in rows]
+    return Trajectory(
+        time=np.array([s.time for s in states]),
+        position=np.array([s.position for s in states]),
+        velocity=np.array([s.velocity for s in states]),
+        attitude=np.array([s.attitude for s in states]),
+        angular_velocity=np.array([s.angular_velocity for s in states]),
+        path_length=np.array([s.path_length for s in states]),
+        force=np.array([e.force for _, e in rows]),
+        moment=np.array([e.moment for _, e in rows]),
+        end_reason=end_reason,
+        statistics=statistics,
+    )
 
 
 def simulate(
@@ -198,49 +158,33 @@ def simulate(
     guard: EnergyGuard | None = None,
     max_steps: int = 5_000_000,
 ) -> Trajectory:
-    """Integrate the motion of ``body`` under ``loads`` from ``initial``.
+    """Integrate the motion of ``body`` under ``loads`` from ``initial`` by the Runge-Kutta ``method``.
 
-    The driver only loops: ``control`` sizes and judges every trial step
-    (:class:`~dynamics.control.FixedStep`, :class:`~dynamics.control.ErrorControl`),
-    ``guard`` judges the accepted ones once more, and the events end the run.
+    The driver only loops: ``control`` sizes and judges every trial step, ``guard`` judges the accepted ones once
+    more, and the events end the run.
 
     Parameters
     ----------
-    body : RigidBody
-        Mass and inertia.
-    loads : LoadFunction
-        Resultant force (world) and moment (body) for a state.
-    initial : State
-        The start.
-    method : Stepper
-        The Runge-Kutta method.
-    control : StepControl
-        The step-size control.
     time_limit : float
         The run ends at this time (s) if no event ends it first.
     events : sequence of Event
         Terminal events, checked after every step.
     guard : EnergyGuard, optional
-        For loads that can only remove energy: steps that gain kinetic energy are
-        retaken shorter, and sub-tolerance gains projected away.
+        For loads that can only remove energy.
     max_steps : int
         Safety limit on the number of steps.
 
     Returns
     -------
     Trajectory
-        One row per accepted step, plus the start; ``end_reason`` is the name
-        of the event that ended the run, :data:`TIME_LIMIT`, :data:`NON_FINITE`,
-        :data:`STEP_FLOOR` or :data:`MAX_STEPS`.  The history up to the last
-        accepted step is kept whatever ended the run.
+        One row per accepted step, plus the start, whatever ended the run.
     """
     h = control.start(method)
     state = initial
     first: Evaluation | None  # the evaluation at the start of the next step, if known (StepResult.first)
     first = evaluate(body, loads, state.position, state.velocity, state.attitude, state.angular_velocity)
     calls = 1  # load evaluations: this one, those of every step taken (RETAKEn ones too) and of the event searches
-    recorder = _Recorder()
-    recorder.add(state, first)
+    rows: list[tuple[State, Evaluation]] = [(state, first)]  # the recorded states, each with its evaluation
     values = [event.function(state) for event in events]
     steps = rejected = 0
     end_reason = TIME_LIMIT
@@ -260,46 +204,38 @@ def simulate(
         calls += result.evaluations
         # a verdict's value: a step size (s) with RETAKE and ACCEPT, an end reason with END
         verdict, value = control.judge(result, state, size)
+        next_step = value  # the control's next step, if it and the guard accept
         if verdict == RETAKE:
             rejected += 1
+        elif verdict == ACCEPT and guard is not None:
+            verdict, value = guard.judge(body, state, result.state, size, truncated=size < limit)
+        if verdict == RETAKE:
             h, first = cast(float, value), result.first
             continue
         if verdict == END:
             end_reason = cast(str, value)
             break
-        next_step = cast(float, value)
-        if guard is not None:
-            verdict, value = guard.judge(body, state, result.state, size, truncated=size < limit)
-            if verdict == RETAKE:
-                h, first = cast(float, value), result.first
-                continue
-            if verdict == END:
-                end_reason = cast(str, value)
-                break
-        h = next_step
+        h = cast(float, next_step)
         steps += 1
         if size < remaining:  # the last step before the time limit does not count
             smallest = min(smallest, size)
         new = result.state
         new_values = [event.function(new) for event in events]
         fired = [ev for ev, g0, g1 in zip(events, values, new_values) if ev.fired(state, new, g0, g1)]
-        if fired:
+        if fired:  # the run ends at the earliest event inside the step
             new, end_reason, searched = _locate(body, loads, method, state, result.first, size, fired)
-            calls += searched + 1
-            if guard is not None:
-                new, _ = guard.project(body, state, new)
-            last = evaluate(body, loads, new.position, new.velocity, new.attitude, new.angular_velocity)
-            recorder.add(new, last)
-            break
+            calls += searched
         projected = False
         if guard is not None:
             new, projected = guard.project(body, state, new)
-        if result.last is not None and not projected:
+        if result.last is not None and not projected and not fired:
             first = result.last
         else:
             first = evaluate(body, loads, new.position, new.velocity, new.attitude, new.angular_velocity)
             calls += 1
-        recorder.add(new, first)
+        rows.append((new, first))
+        if fired:
+            break
         state, values = new, new_values
 
     statistics = {
@@ -311,7 +247,7 @@ def simulate(
         "load_evaluations": calls,
         "smallest_step": smallest if math.isfinite(smallest) else None,
     }
-    return recorder.trajectory(end_reason, statistics)
+    return _trajectory(rows, end_reason, statistics)
 
 
 def find_root(
@@ -319,12 +255,10 @@ def find_root(
 ) -> float:
     """A root of ``function`` in ``[a, b]``, where ``fa`` and ``fb`` have opposite signs.
 
-    The Illinois variant of regula falsi, with a bisection step whenever the
-    bracket fails to halve: superlinear on smooth functions, never slower than
-    bisection, and the bracket always holds a sign change.  Returns when the
-    bracket is narrower than ``xtol``.  (scipy's ``brentq`` would do, but
-    importing ``scipy.optimize`` costs a large part of a short run's wall time,
-    and every run ends with an event.)
+    The Illinois variant of regula falsi, with a bisection step whenever the bracket fails to halve: superlinear
+    on smooth functions, never slower than bisection, and the bracket always holds a sign change.  Returns when
+    the bracket is narrower than ``xtol``.  (Not scipy's ``brentq``: importing ``scipy.optimize`` costs a short
+    run much of its wall time.)
     """
     if not (fa < 0.0 < fb or fb < 0.0 < fa):
         raise ValueError(f"no sign change on [{a}, {b}]: f = {fa}, {fb}")
@@ -373,9 +307,8 @@ def _locate(
 ) -> tuple[State, str, int]:
     """The earliest of ``events`` inside a step of ``size`` from ``state``, and the load evaluations it took.
 
-    Each event's locator changes sign inside the step; regula falsi finds
-    the root on re-taken partial steps, and the end state is taken just past
-    it, on the side where the event has happened.
+    Each event's locator changes sign inside the step; :func:`find_root` finds the root on re-taken partial
+    steps, and the end state is taken just past it, on the side where the event has happened.
     """
     calls = 0
 
@@ -385,24 +318,20 @@ def _locate(
         calls += result.evaluations
         return result.state
 
-    best: tuple[float, Event] | None = None
     tolerance = max(1e-15, 1e-12 * size)
-    for event in events:
+
+    def crossing(event: Event) -> float:
         locator = event.locator(state)
         g_start = locator(state)
 
-        def g(s: float, locator: Callable[[State], float] = locator, g_start: float = g_start) -> float:
+        def g(s: float) -> float:
             return g_start if s <= 0.0 else locator(partial_step(s))
 
         g_end = g(size)
         if g_end == 0.0 or (g_start > 0) == (g_end > 0):
-            t_cross = size  # no sign change to refine: the event is at the end of the step
-        else:
-            t_cross = find_root(g, 0.0, size, g_start, g_end, tolerance)
-            if (g(t_cross) > 0) == (g_start > 0):
-                t_cross = min(size, t_cross + tolerance)
-        if best is None or t_cross < best[0]:
-            best = (t_cross, event)
-    assert best is not None
-    t_cross, event = best
+            return size  # no sign change to refine: the event is at the end of the step
+        t_cross = find_root(g, 0.0, size, g_start, g_end, tolerance)
+        return min(size, t_cross + tolerance) if (g(t_cross) > 0) == (g_start > 0) else t_cross
+
+    t_cross, event = min(((crossing(event), event) for event in events), key=lambda pair: pair[0])
     return partial_step(t_cross), event.name, calls
