@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -40,7 +41,9 @@ from .rigid_body import euler_scalars
 
 __all__ = [
     "trajectory",
-    "TABLEAU",
+    "PlaneBody",
+    "PlaneSteps",
+    "PlaneEnds",
     "STOPPED",
     "EXITED",
     "TURNED",
@@ -65,12 +68,40 @@ OUTCOME_FIELDS = (
     "rejected_steps",
     "evaluations",
 )
-TABLEAU = (np.ascontiguousarray(DormandPrince54.A), np.ascontiguousarray(DormandPrince54.b_error))
+_A, _B_ERROR = np.ascontiguousarray(DormandPrince54.A), np.ascontiguousarray(DormandPrince54.b_error)
 _STATES = 6
 
 # the compiled functions :func:`trajectory` is given (module docstring)
 PlaneLoad = Callable[[tuple[np.ndarray, ...], float, float, float, float, float, float, np.ndarray], None]
 LowestPoint = Callable[[tuple[np.ndarray, ...], float, float, float], float]
+
+
+class PlaneBody(NamedTuple):
+    """The body as :func:`trajectory` moves it."""
+
+    mass: float  #: kg
+    inertia: float  #: kg m^2: the transverse moment of inertia about the centre of mass
+    gravity: float  #: m/s^2, downward (0: none)
+
+
+class PlaneSteps(NamedTuple):
+    """The step control of :func:`trajectory`."""
+
+    rtol: float  #: the relative tolerance
+    scales: np.ndarray  #: (6,): the absolute tolerances over ``rtol``
+    first_step: float  #: s
+    max_step: float  #: s: events are not located (a run ends at the first step past one), so this bounds the overrun
+
+
+class PlaneEnds(NamedTuple):
+    """When :func:`trajectory` ends a run besides the body's leaving the target."""
+
+    stop_speed: float  #: m/s
+    time_limit: float  #: s
+    turn_limit: float  #: rad: the axis turn ``|phi - phi_0|``
+    threshold: float  #: rad: the attack angle below which, after its peak, the run has converged
+    peak_floor: float  #: m/s: the peak is sought while the speed is at least this (a tenth of the impact speed)
+    stop_when_converged: bool  #: end the run at convergence
 
 
 # Newton-Euler, the full model's step control and its convergence rule, compiled from the same source
@@ -81,16 +112,10 @@ _crossing_speed = njit(inline="always", error_model="numpy")(crossing_speed_scal
 
 @njit(cache=True, inline="always")
 def _derivative(
-    load: PlaneLoad,
-    data: tuple[np.ndarray, ...],
-    y: np.ndarray,
-    mass: float,
-    inertia: float,
-    gravity: float,
-    out: np.ndarray,
-    loads: np.ndarray,
+    load: PlaneLoad, data: tuple[np.ndarray, ...], y: np.ndarray, body: PlaneBody, out: np.ndarray, loads: np.ndarray
 ) -> None:
     """``dy/dt`` at ``y`` into ``out`` (``loads``: a 3-vector to use for the body-frame load)."""
+    mass, inertia, gravity = body
     sin_t, cos_t = math.cos(y[2]), math.sin(y[2])  # theta = pi/2 - phi
     vx = cos_t * y[3] - sin_t * y[4]  # body frame: R^T v
     vz = sin_t * y[3] + cos_t * y[4]
@@ -120,56 +145,20 @@ def trajectory(
     lowest: LowestPoint,
     data: tuple[np.ndarray, ...],
     y0: np.ndarray,
-    mass: float,
-    inertia: float,
-    gravity: float,
-    rtol: float,
-    scales: np.ndarray,
-    first_step: float,
-    max_step: float,
-    stop_speed: float,
-    time_limit: float,
-    turn_limit: float,
-    threshold: float,
-    peak_floor: float,
-    stop_when_converged: bool,
-    a_matrix: np.ndarray,
-    b_error: np.ndarray,
+    body: PlaneBody,
+    control: PlaneSteps,
+    ends: PlaneEnds,
 ) -> tuple[int, float, float, float, float, float, float, int, int, int]:
-    """Integrate from ``y0`` to an end; returns the :data:`OUTCOME_FIELDS` (SI units, angles in rad).
-
-    Parameters
-    ----------
-    load, lowest : compiled functions
-        The load kernel and the lowest point's height (module docstring), both given ``data``.
-    y0 : ndarray, shape (6,)
-        ``(X, Z, phi, v_X, v_Z, q)`` at the start.
-    mass, inertia : float
-        Mass (kg) and transverse moment of inertia about the centre of mass (kg m^2).
-    gravity : float
-        Downward acceleration (m/s^2; 0 without gravity).
-    rtol : float
-        Relative tolerance; ``scales`` (shape (6,)) times it are the absolute tolerances.
-    first_step, max_step, stop_speed, time_limit : float
-        s, s, m/s, s.  Events are not located: a run ends at the first step past one, and the convergence
-        speed is interpolated linearly between the two steps around it, so ``max_step`` bounds how far
-        past an event a run may go.
-    turn_limit, threshold : float
-        The axis turn ``|phi - phi_0|`` that ends the run (rad), and the attack angle below which, after its peak,
-        the run counts as converged (rad).
-    peak_floor : float
-        The peak is sought while the speed is at least this (m/s), as
-        :func:`cases.run.convergence_speed` seeks it above a tenth of the impact speed.
-    stop_when_converged : bool
-        End the run at convergence (nothing after changes the convergence speed or the turn much).
-    a_matrix, b_error : ndarray
-        :data:`TABLEAU`.
-    """
+    """Integrate from ``y0`` (``(X, Z, phi, v_X, v_Z, q)``) to an end; returns the :data:`OUTCOME_FIELDS` (SI units,
+    angles in rad).  ``load`` and ``lowest`` are the compiled load kernel and the lowest point's height (module
+    docstring), both given ``data``."""
+    rtol, scales, first_step, max_step = control
+    stop_speed, time_limit, turn_limit, threshold, peak_floor, stop_when_converged = ends
     k = np.empty((7, _STATES))
     y = y0.copy()
     trial = np.empty(_STATES)
     loads = np.empty(3)
-    _derivative(load, data, y, mass, inertia, gravity, k[0], loads)
+    _derivative(load, data, y, body, k[0], loads)
     evaluations, steps, rejected = 1, 0, 0
     t, h = 0.0, min(first_step, max_step)
     speed = math.hypot(y[3], y[4])
@@ -182,15 +171,15 @@ def trajectory(
             for i in range(_STATES):
                 total = 0.0
                 for j in range(stage):
-                    total += a_matrix[stage, j] * k[j, i]
+                    total += _A[stage, j] * k[j, i]
                 trial[i] = y[i] + h * total
-            _derivative(load, data, trial, mass, inertia, gravity, k[stage], loads)
+            _derivative(load, data, trial, body, k[stage], loads)
         evaluations += 6
         error = 0.0
         for i in range(_STATES):
             estimate = 0.0
             for j in range(7):
-                estimate += b_error[j] * k[j, i]
+                estimate += _B_ERROR[j] * k[j, i]
             scaled = h * estimate / (rtol * (scales[i] + abs(y[i])))
             error += scaled * scaled
         error = math.sqrt(error / _STATES)

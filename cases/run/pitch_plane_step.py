@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from dynamics.pitch_plane import trajectory
+from dynamics.pitch_plane import PlaneBody, PlaneEnds, PlaneSteps, trajectory
 from fem_loads.revolved import lowest_height, pitch_plane_load
 
 __all__ = ["pitch_plane_trajectory"]
@@ -39,43 +39,11 @@ def pitch_plane_trajectory(
     effects: np.ndarray,
     outline: np.ndarray,
     y0: np.ndarray,
-    mass: float,
-    inertia: float,
-    gravity: float,
-    rtol: float,
-    scales: np.ndarray,
-    first_step: float,
-    max_step: float,
-    stop_speed: float,
-    time_limit: float,
-    turn_limit: float,
-    threshold: float,
-    peak_floor: float,
-    stop_when_converged: bool,
-    a_matrix: np.ndarray,
-    b_error: np.ndarray,
+    body: PlaneBody,
+    control: PlaneSteps,
+    ends: PlaneEnds,
 ) -> tuple[int, float, float, float, float, float, float, int, int, int]:
     """:func:`dynamics.pitch_plane.trajectory` with the load :func:`fem_loads.revolved.pitch_plane_load` on ``rings``
     under the records ``laws`` and ``effects`` (:func:`fem_loads.revolved.ring_data`; the lowest point on
     ``outline``); returns its :data:`~dynamics.pitch_plane.OUTCOME_FIELDS`."""
-    return trajectory(
-        _load,
-        _lowest,
-        (rings, laws, effects, outline),
-        y0,
-        mass,
-        inertia,
-        gravity,
-        rtol,
-        scales,
-        first_step,
-        max_step,
-        stop_speed,
-        time_limit,
-        turn_limit,
-        threshold,
-        peak_floor,
-        stop_when_converged,
-        a_matrix,
-        b_error,
-    )
+    return trajectory(_load, _lowest, (rings, laws, effects, outline), y0, body, control, ends)

@@ -94,13 +94,12 @@ class ReducedModel:
         check_supported(scene)
         announce_compiling("pitch_plane_step")
         use_numba_cache()
-        from dynamics.pitch_plane import TABLEAU
         from fem_loads.revolved import revolved_surface, ring_data
 
         from ..run.pitch_plane_step import pitch_plane_trajectory
 
         self.scene, self.prepared = scene, prepared
-        self._trajectory, self._tableau = pitch_plane_trajectory, TABLEAU
+        self._trajectory = pitch_plane_trajectory
         self.rtol = rtol
         self.surface = revolved_surface(prepared.profile, float(prepared.tip[0]), **(rings or RINGS))
         effects = scene.effects
@@ -166,29 +165,25 @@ class ReducedModel:
         length, numerics = self.prepared.length, self.scene.numerics
         # absolute tolerances as the full model's error control sets them (cases.run.step_control)
         scales = np.array([length, length, 0.01, speed, speed, 0.01 * speed / length])
+        from dynamics.pitch_plane import END_REASONS, PlaneBody, PlaneEnds, PlaneSteps
+
         outcome = self._trajectory(
             self.surface.rings,
             self.laws,
             self.effects,
             self.surface.outline,
             self.start(speed) if start is None else start,
-            self.mass,
-            self.inertia,
-            self.gravity,
-            self.rtol,
-            scales,
-            1e-3 * length / speed,
-            math.inf,
-            numerics.stop_speed,
-            numerics.time_limit if time_limit is None else time_limit,
-            math.radians(turn_limit),
-            math.radians(CONVERGENCE_THRESHOLD),
-            0.1 * speed,
-            stop_when_converged,
-            *self._tableau,
+            PlaneBody(self.mass, self.inertia, self.gravity),
+            PlaneSteps(self.rtol, scales, 1e-3 * length / speed, math.inf),
+            PlaneEnds(
+                numerics.stop_speed,
+                numerics.time_limit if time_limit is None else time_limit,
+                math.radians(turn_limit),
+                math.radians(CONVERGENCE_THRESHOLD),
+                0.1 * speed,
+                stop_when_converged,
+            ),
         )
-        from dynamics.pitch_plane import END_REASONS
-
         end, _, _, turn, peak, _, converged, _, _, evaluations = outcome
         turn = math.degrees(turn)  # the run's axis_angle_change
         return ReducedRun(

@@ -6,7 +6,18 @@ import numpy as np
 import pytest
 from numba import njit
 
-from dynamics.pitch_plane import CONVERGED, EXITED, OUTCOME_FIELDS, STOPPED, TABLEAU, TIME_LIMIT, TURNED, trajectory
+from dynamics.pitch_plane import (
+    CONVERGED,
+    EXITED,
+    OUTCOME_FIELDS,
+    STOPPED,
+    TIME_LIMIT,
+    TURNED,
+    PlaneBody,
+    PlaneEnds,
+    PlaneSteps,
+    trajectory,
+)
 
 CONSTANT_MOMENT, LINEAR_DRAG, PENDULUM = 0.0, 1.0, 2.0
 MASS, INERTIA = 2.0, 0.5
@@ -38,21 +49,9 @@ def _run(data, y0, gravity, rtol, time_limit, turn_limit, threshold, stop_when_c
         _lowest,
         data,
         y0,
-        MASS,
-        INERTIA,
-        gravity,
-        rtol,
-        np.ones(6),
-        1e-4,
-        MAX_STEP,
-        1e-3,
-        time_limit,
-        turn_limit,
-        threshold,
-        0.0,
-        stop_when_converged,
-        TABLEAU[0],
-        TABLEAU[1],
+        PlaneBody(MASS, INERTIA, gravity),
+        PlaneSteps(rtol, np.ones(6), 1e-4, MAX_STEP),
+        PlaneEnds(1e-3, time_limit, turn_limit, threshold, 0.0, stop_when_converged),
     )
 
 
