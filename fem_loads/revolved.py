@@ -158,6 +158,8 @@ def ring_data(loads: DAFLLoads, surface: RevolvedSurface) -> tuple[np.ndarray, n
 
 
 _NO_TABLE = np.zeros(0)
+#: ``(height, sin theta, cos theta, v_x, v_z, q)`` (:func:`pitch_plane_load`)
+PlaneState = tuple[float, float, float, float, float, float]
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -301,23 +303,13 @@ def _uniform_ring(
 
 @njit(cache=True)
 def pitch_plane_load(
-    rings: np.ndarray,
-    laws: np.ndarray,
-    effects_record: np.ndarray,
-    height: float,
-    sin_theta: float,
-    cos_theta: float,
-    vx: float,
-    vz: float,
-    q: float,
-    out: np.ndarray,
+    rings: np.ndarray, laws: np.ndarray, effects_record: np.ndarray, state: PlaneState, out: np.ndarray
 ) -> None:
-    """Force ``(F_x, F_z)`` (body frame, N) and pitch moment ``M_y`` (N m, about the centre of mass) into ``out``.
-
-    ``height`` is the centre of mass's height above the target surface (m; the target is below),
-    ``theta`` the body's rotation about the world Y axis (body x in the world: ``(cos, -sin)`` in X, Z),
-    ``vx``, ``vz`` the velocity in the body frame (m/s), ``q`` the pitch rate (rad/s).
-    """
+    """Force ``(F_x, F_z)`` (body frame, N) and pitch moment ``M_y`` (N m, about the centre of mass) into ``out``, in
+    the ``state`` ``(height, sin theta, cos theta, v_x, v_z, q)``: the centre of mass's height above the target
+    surface (m), the body's rotation ``theta`` about the world Y axis (body x in the world: ``(cos, -sin)`` in X, Z),
+    the velocity in the body frame (m/s) and the pitch rate (rad/s)."""
+    height, sin_theta, cos_theta, vx, vz, q = state
     law, effects = laws[0], effects_record[0]
     static, dynamic = law.c0, law.c2
     entry, mu, cap = effects.entry_length, effects.friction, effects.friction_cap
@@ -408,16 +400,7 @@ class PitchPlaneLoad:
         """``(F_x, F_z, M_y)`` in the body frame (N, N m) at ``height`` (m), ``theta`` (rad), ``(v_x, v_z)`` (m/s)
         and ``pitch_rate`` (rad/s)."""
         out = np.empty(3)
-        pitch_plane_load(
-            self.surface.rings,
-            self.laws,
-            self.effects,
-            float(height),
-            math.sin(theta),
-            math.cos(theta),
-            float(velocity_body[0]),
-            float(velocity_body[1]),
-            float(pitch_rate),
-            out,
-        )
+        vx, vz = float(velocity_body[0]), float(velocity_body[1])
+        state = (float(height), math.sin(theta), math.cos(theta), vx, vz, float(pitch_rate))
+        pitch_plane_load(self.surface.rings, self.laws, self.effects, state, out)
         return out

@@ -24,7 +24,7 @@ def _load(
     q: float,
     out: np.ndarray,
 ) -> None:
-    pitch_plane_load(data[0], data[1], data[2], height, sin_theta, cos_theta, vx, vz, q, out)
+    pitch_plane_load(data[0], data[1], data[2], (height, sin_theta, cos_theta, vx, vz, q), out)
 
 
 @njit(cache=True, inline="always")
