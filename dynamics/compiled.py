@@ -82,26 +82,15 @@ class CompiledLoad:
 
 
 class CompiledRungeKutta:
-    """The compiled step of a Runge-Kutta method: the method's tableau, stepped by :func:`rk_step`.
-
-    A :class:`~dynamics.integrators.Stepper` like ``method``, whose :meth:`step` takes a :class:`CompiledLoad`.
-
-    Parameters
-    ----------
-    method : RungeKutta
-        The method whose tableau to use (:class:`~dynamics.integrators.RK4`, ...).
-    """
+    """The compiled step of the Runge-Kutta ``method`` (its tableau, stepped by :func:`rk_step`): a
+    :class:`~dynamics.integrators.Stepper` like ``method``, whose :meth:`step` takes a :class:`CompiledLoad`."""
 
     def __init__(self, method: RungeKutta) -> None:
         self.method = method
         self.adaptive, self.error_order = method.adaptive, method.error_order
         b_error = np.zeros_like(method.b) if method.b_error is None else method.b_error
-        self._tableau: Tableau = (
-            np.ascontiguousarray(method.A, dtype=float),
-            np.ascontiguousarray(method.b, dtype=float),
-            np.ascontiguousarray(b_error, dtype=float),
-            bool(method.fsal),
-        )
+        A, b, b_error = (np.ascontiguousarray(array, dtype=float) for array in (method.A, method.b, b_error))
+        self._tableau: Tableau = (A, b, b_error, bool(method.fsal))
         self._matrices: tuple[RigidBody, np.ndarray, np.ndarray] | None = None  # a body, its inertia and inverse
 
     def step(
@@ -124,9 +113,9 @@ class CompiledRungeKutta:
         error = out[_ERROR] if self.adaptive else None
         # without a first-same-as-last stage the step evaluates the end state too: the driver needs it for
         # the next step and the history, and it costs less here than from Python
-        evaluations = self.method.stages - (first is not None) + (not self.method.fsal)
-        start_evaluation = first if first is not None else _evaluation(out, _FIRST)
-        return StepResult(new, error, start_evaluation, _evaluation(out, _LAST), evaluations)
+        evaluations = len(self.method.b) - (first is not None) + (not self.method.fsal)
+        first = first if first is not None else _evaluation(out, _FIRST)
+        return StepResult(new, error, first, _evaluation(out, _LAST), evaluations)
 
 
 def _evaluation(out: np.ndarray, at: int) -> Evaluation:
@@ -199,14 +188,11 @@ def rk_step(
     has_given: bool,
     out: np.ndarray,
 ) -> None:
-    """One explicit Runge-Kutta-Munthe-Kaas step from ``start`` = ``(x0, v0, q0, w0)`` by ``h`` seconds.
-
-    Inlined into the step of each load kernel (:class:`CompiledLoad`, ``step``), never called alone.  ``load`` is
-    the compiled load kernel, ``body`` the :data:`Body` and ``method`` the :data:`Tableau`; ``given`` holds the
-    first stage's evaluation when ``has_given``.  Fills ``out``: the new position, velocity, unit attitude, angular
-    velocity and path increment, the error estimate ``h (b_error . k)`` of the increments ``(x, v, u, omega, s)``,
-    and the first and last evaluations (acceleration, angular acceleration, force, moment); the last is that of the
-    end state (the last stage's when ``fsal``, an extra evaluation otherwise).
+    """One explicit Runge-Kutta-Munthe-Kaas step from ``start`` by ``h`` seconds, inlined into the step of each load
+    kernel (:class:`CompiledLoad`, ``step``), never called alone; ``given`` is the first stage's evaluation when
+    ``has_given``.  Fills ``out`` (its layout at the module's top): the new state and path increment, the error
+    estimate ``h (b_error . k)`` of the increments ``(x, v, u, omega, s)``, and the first and last evaluations; the
+    last is the end state's (the last stage's when ``fsal``, an extra evaluation otherwise).
     """
     A, b, b_error, fsal = method
     x0, v0, q0, w0 = start

@@ -1,8 +1,5 @@
-"""Step-size control and the energy guard of :func:`~dynamics.simulate.simulate`.
-
-A step control (:class:`StepControl`) sizes and judges every trial step; the :class:`EnergyGuard` judges the
-accepted ones once more, for loads that can only remove energy.
-"""
+"""The judges of a trial step in :func:`~dynamics.simulate.simulate`: the step-size controls (:class:`StepControl`)
+and the energy guard (:class:`EnergyGuard`), for loads that can only remove energy."""
 
 from __future__ import annotations
 
@@ -153,7 +150,6 @@ class ErrorControl(StepControl):
         return max(min(self.first_step, self.max_step), self.min_step)
 
     def norm(self, result: StepResult, before: State) -> float:
-        """RMS of the error estimate scaled by ``atol + rtol |value|``."""
         after = result.state
         magnitude = np.zeros(N_INCREMENTS)  # the rotation increment starts from zero: absolute tolerance only
         magnitude[POSITION] = np.maximum(np.abs(before.position), np.abs(after.position))
@@ -167,16 +163,16 @@ class ErrorControl(StepControl):
     def judge(self, result: StepResult, state: State, size: float) -> tuple[str, float | str]:
         finite = result.state.is_finite()
         norm = self.norm(result, state) if finite else math.inf
+        factor = step_factor_scalars(norm, self._exponent)
         if not norm <= 1.0 and (size > self.forced_step or not finite):
             # reject: shorten by the usual factor (a fifth for a non-finite trial)
-            shorter = size * min(1.0, step_factor_scalars(norm, self._exponent))
+            shorter = size * min(1.0, factor)
             if finite:
                 shorter = max(shorter, self.forced_step)
             if shorter < self.min_step:
                 return END, (STEP_FLOOR if finite else NON_FINITE)
             return RETAKE, shorter
         self.forced_steps += norm > 1.0
-        factor = step_factor_scalars(norm, self._exponent)
         return ACCEPT, min(self.max_step, max(self.min_step, self.forced_step, size * factor))
 
 
@@ -215,11 +211,8 @@ class EnergyGuard:
     def judge(
         self, body: RigidBody, before: State, after: State, size: float, truncated: bool
     ) -> tuple[str, float | str]:
-        """The verdict on an accepted step of ``size``; ``truncated``: shortened to end at the time limit.
-
-        ``(RETAKE, size / 2)`` for a gain above the tolerance; ``(END, STEP_FLOOR)`` when half the step is below
-        the floor (a ``truncated`` step is accepted instead); else ``(ACCEPT, size)``.
-        """
+        """The verdict on an accepted step of ``size``, as :meth:`StepControl.judge`'s; a retake below the floor ends
+        the run with :data:`STEP_FLOOR`, or accepts a ``truncated`` step (shortened to end at the time limit)."""
         if self._energy(body, after) > self._energy(body, before) * (1.0 + self.tolerance):
             if 0.5 * size >= self.min_step:
                 self.rejections += 1
@@ -229,12 +222,8 @@ class EnergyGuard:
         return ACCEPT, size
 
     def project(self, body: RigidBody, before: State, after: State) -> tuple[State, bool]:
-        """``after`` with no more kinetic energy than ``before``, and whether it had to be changed.
-
-        A step that gains less than the tolerance is not retaken: its velocity and angular velocity are scaled by
-        ``sqrt(E0 / E1)``, which keeps their directions and removes the gain, as the unit quaternion is
-        renormalised after every step.
-        """
+        """``after`` with no more kinetic energy than ``before`` (its velocity and angular velocity scaled by
+        ``sqrt(E0 / E1)``: docs/numerics.md, "The energy guard"), and whether it had to be changed."""
         start, end = self._energy(body, before), self._energy(body, after)
         if not end > start:
             return after, False

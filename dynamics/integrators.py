@@ -1,12 +1,11 @@
-"""Explicit Runge-Kutta methods on the rigid-body state (Runge-Kutta-Munthe-Kaas).
+"""Explicit Runge-Kutta methods on the rigid-body state (Runge-Kutta-Munthe-Kaas; docs/numerics.md).
 
-Within one step the attitude is written ``q = q0 * exp(u)`` with a rotation vector ``u`` that starts at zero, so
-the step integrates a plain ODE for ``(x, v, u, omega)``: ``du/dt = dexp^-1_u(omega)``
+Within one step the attitude is ``q = q0 * exp(u)`` with a rotation vector ``u`` that starts at zero, so the step
+integrates a plain ODE for ``(x, v, u, omega)``: ``du/dt = dexp^-1_u(omega)``
 (:func:`~dynamics.quaternion.right_jacobian_inverse`), which keeps the classical order of the tableau.  The new
-attitude ``q0 * exp(u1)`` is a product of unit quaternions, renormalised once per step.  The path length ``s``
-is measured on the step's chord (:func:`path_increment_scalars`).  A step whose state leaves the floats returns
-a non-finite state instead of raising, so that the caller ends the run with its history.  Concrete methods
-differ only in their tableau, as in scipy's ``integrate._ivp``.
+attitude ``q0 * exp(u1)`` is renormalised once per step; the path length ``s`` is measured on the step's chord
+(:func:`path_increment_scalars`).  A step whose state leaves the floats returns a non-finite state instead of
+raising, so that the caller ends the run with its history.
 """
 
 from __future__ import annotations
@@ -83,11 +82,10 @@ class Stepper(Protocol):
     """What the driver (:func:`~dynamics.simulate.simulate`) and the step control ask of a method: a
     :class:`RungeKutta`, or the compiled step that wraps one (:class:`~dynamics.compiled.CompiledRungeKutta`)."""
 
-    @property
-    def adaptive(self) -> bool: ...
+    error_order: int
 
     @property
-    def error_order(self) -> int: ...
+    def adaptive(self) -> bool: ...
 
     def step(
         self, body: RigidBody, loads: LoadFunction, state: State, h: float, first: Evaluation | None = None
@@ -115,10 +113,6 @@ class RungeKutta:
     def adaptive(self) -> bool:
         return self.b_error is not None
 
-    @property
-    def stages(self) -> int:
-        return len(self.b)
-
     def step(
         self, body: RigidBody, loads: LoadFunction, state: State, h: float, first: Evaluation | None = None
     ) -> StepResult:
@@ -127,11 +121,11 @@ class RungeKutta:
         # the increments' start (x0, v0, 0, omega0, 0): one add per stage gives every stage state
         start = np.zeros(N_INCREMENTS)
         start[POSITION], start[VELOCITY], start[ANGULAR_VELOCITY] = x0, v0, w0
-        k = np.zeros((self.stages, N_INCREMENTS))  # the path column stays 0: see path_increment_scalars
+        k = np.zeros((len(self.b), N_INCREMENTS))  # the path column stays 0: see path_increment_scalars
         evaluations: list[Evaluation] = []
         calls = 0
         try:
-            for i in range(self.stages):
+            for i in range(len(self.b)):
                 if i:
                     z = start + (h * self.A[i, :i]) @ k[:i]
                     x, v, u, w = z[POSITION], z[VELOCITY], z[ROTATION], z[ANGULAR_VELOCITY]
@@ -139,19 +133,13 @@ class RungeKutta:
                     calls += 1
                     rate = right_jacobian_inverse(u, w)
                 else:
-                    x, v, w = x0, v0, w0
-                    if first is None:
-                        e = evaluate(body, loads, x, v, q0, w)
-                        calls += 1
-                    else:
-                        e = first
-                    rate = w
+                    v, rate = v0, w0
+                    e = evaluate(body, loads, x0, v0, q0, w0) if first is None else first
+                    calls += first is None
                 evaluations.append(e)
                 row = k[i]
-                row[POSITION] = v
-                row[VELOCITY] = e.acceleration
-                row[ROTATION] = rate
-                row[ANGULAR_VELOCITY] = e.angular_acceleration
+                row[POSITION], row[VELOCITY] = v, e.acceleration
+                row[ROTATION], row[ANGULAR_VELOCITY] = rate, e.angular_acceleration
             z = h * (self.b @ k)
             attitude = normalize(compose(q0, z[ROTATION]))
         except (ValueError, OverflowError, ZeroDivisionError):
@@ -160,16 +148,9 @@ class RungeKutta:
             new = State(state.time + h, nan, nan, np.full(4, np.nan), nan, math.nan)
             error = np.full(N_INCREMENTS, np.inf) if self.b_error is not None else None
             return StepResult(new, error, evaluations[0] if evaluations else first, None, calls)
-        velocity = v0 + z[VELOCITY]
-        path_increment = path_increment_scalars(*z[POSITION].tolist(), *v0.tolist(), *velocity.tolist())
-        new = State(
-            time=state.time + h,
-            position=x0 + z[POSITION],
-            velocity=velocity,
-            attitude=attitude,
-            angular_velocity=w0 + z[ANGULAR_VELOCITY],
-            path_length=state.path_length + path_increment,
-        )
+        velocity, chord = v0 + z[VELOCITY], z[POSITION]
+        path_length = state.path_length + path_increment_scalars(*chord.tolist(), *v0.tolist(), *velocity.tolist())
+        new = State(state.time + h, x0 + chord, velocity, attitude, w0 + z[ANGULAR_VELOCITY], path_length)
         error = h * (self.b_error @ k) if self.b_error is not None else None
         return StepResult(new, error, evaluations[0], evaluations[-1] if self.fsal else None, calls)
 

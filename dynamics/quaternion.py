@@ -81,9 +81,7 @@ def normalize(q: np.ndarray) -> np.ndarray:
 def rotation_scalars(w: float, x: float, y: float, z: float) -> tuple[float, ...]:
     """The rotation matrix of a unit quaternion, row by row (nine components)."""
     ww, xx, yy, zz = w * w, x * x, y * y, z * z
-    # the homogeneous diagonal (w^2 + x^2 - y^2 - z^2, not 1 - 2 (y^2 + z^2)): a quaternion with two
-    # bitwise-equal components gives exact zeros, e.g. R[2, 2] = 0 for the nose-down attitude
-    # (sqrt(1/2), 0, sqrt(1/2), 0), where the other form leaves -2.2e-16 and tilts a straight impact
+    # the homogeneous diagonal, not 1 - 2 (y^2 + z^2): exact zeros for two bitwise-equal components (docs/numerics.md)
     return (
         (ww + xx) - (yy + zz),
         2 * (x * y - w * z),
@@ -114,12 +112,11 @@ def from_rotation_matrix(matrix: np.ndarray) -> np.ndarray:
         i = k - 1
         j, n = (i + 1) % 3, (i + 2) % 3
         r = math.sqrt(1.0 + m[i, i] - m[j, j] - m[n, n])
-        v = np.zeros(3)
-        v[i] = 0.5 * r
-        v[j] = (m[j, i] + m[i, j]) / (2 * r)
-        v[n] = (m[n, i] + m[i, n]) / (2 * r)
-        w = (m[n, j] - m[j, n]) / (2 * r)
-        q = np.array([w, *v])
+        q = np.zeros(4)
+        q[0] = (m[n, j] - m[j, n]) / (2 * r)
+        q[1 + i] = 0.5 * r
+        q[1 + j] = (m[j, i] + m[i, j]) / (2 * r)
+        q[1 + n] = (m[n, i] + m[i, n]) / (2 * r)
     q = normalize(q)
     return q if q[0] >= 0 else -q
 

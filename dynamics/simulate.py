@@ -62,20 +62,16 @@ class Event:
         return self.function
 
     def step_limit(self, state: State, evaluation: Evaluation) -> float:
-        """The longest step (s) from ``state`` (with its loads ``evaluation``) that can still resolve the event;
-        unlimited unless an event says otherwise."""
+        """The longest step (s) from ``state`` (loads ``evaluation``) that can still resolve the event: no limit."""
         return math.inf
 
 
 class SpeedBelow(Event):
-    """The speed falls below ``threshold`` (m/s).
+    """The speed falls below ``threshold`` (m/s), or a step carries the velocity through zero and out again.
 
-    A step that carries the velocity through zero and out again (the overshoot of a body brought to rest) fires
-    too: inside the step the event is located on the velocity component along the velocity at the step's start,
-    which passes through the threshold in both cases.  A step may not reach past the stop (:meth:`step_limit`:
-    the time the deceleration at its start takes to bring the speed to half the threshold), or the stages of an
-    explicit method see the body moving both ways against a static strength and it creeps on instead of
-    stopping (docs/numerics.md, "The end of a run").
+    Inside the step the event is located on the velocity along its direction at the step's start.  No step
+    reaches past the stop: :meth:`step_limit` is the time the deceleration at its start takes to bring the speed to
+    half the threshold (why: docs/numerics.md, "The end of a run").
     """
 
     threshold: float  # set in __init__ (not a dataclass field: the class is not a dataclass of its own)
@@ -85,8 +81,7 @@ class SpeedBelow(Event):
         object.__setattr__(self, "threshold", threshold)
 
     def fired(self, before: State, after: State, g_before: float, g_after: float) -> bool:
-        reversed_ = float(before.velocity @ after.velocity) <= 0.0
-        return g_before > 0.0 and (g_after <= 0.0 or reversed_)
+        return g_before > 0.0 and (g_after <= 0.0 or float(before.velocity @ after.velocity) <= 0.0)
 
     def locator(self, before: State) -> Callable[[State], float]:
         heading = before.velocity / before.speed
@@ -129,23 +124,6 @@ class Trajectory:
         )
 
 
-def _trajectory(rows: list[tuple[State, Evaluation]], end_reason: str, statistics: dict[str, Any]) -> Trajectory:
-    """The :class:`Trajectory` of the recorded states, each with its evaluation."""
-    states = [s for s, _ in rows]
-    return Trajectory(
-        time=np.array([s.time for s in states]),
-        position=np.array([s.position for s in states]),
-        velocity=np.array([s.velocity for s in states]),
-        attitude=np.array([s.attitude for s in states]),
-        angular_velocity=np.array([s.angular_velocity for s in states]),
-        path_length=np.array([s.path_length for s in states]),
-        force=np.array([e.force for _, e in rows]),
-        moment=np.array([e.moment for _, e in rows]),
-        end_reason=end_reason,
-        statistics=statistics,
-    )
-
-
 def simulate(
     body: RigidBody,
     loads: LoadFunction,
@@ -161,7 +139,7 @@ def simulate(
     """Integrate the motion of ``body`` under ``loads`` from ``initial`` by the Runge-Kutta ``method``.
 
     The driver only loops: ``control`` sizes and judges every trial step, ``guard`` judges the accepted ones once
-    more, and the events end the run.
+    more, and the events end the run; the trajectory holds every accepted step, whatever ended the run.
 
     Parameters
     ----------
@@ -173,11 +151,6 @@ def simulate(
         For loads that can only remove energy.
     max_steps : int
         Safety limit on the number of steps.
-
-    Returns
-    -------
-    Trajectory
-        One row per accepted step, plus the start, whatever ended the run.
     """
     h = control.start(method)
     state = initial
@@ -190,10 +163,7 @@ def simulate(
     end_reason = TIME_LIMIT
     smallest = math.inf
 
-    while True:
-        remaining = time_limit - state.time
-        if remaining <= 1e-12 * max(1.0, time_limit):
-            break
+    while (remaining := time_limit - state.time) > 1e-12 * max(1.0, time_limit):
         if steps >= max_steps:
             end_reason = MAX_STEPS
             break
@@ -225,9 +195,7 @@ def simulate(
         if fired:  # the run ends at the earliest event inside the step
             new, end_reason, searched = _locate(body, loads, method, state, result.first, size, fired)
             calls += searched
-        projected = False
-        if guard is not None:
-            new, projected = guard.project(body, state, new)
+        new, projected = guard.project(body, state, new) if guard is not None else (new, False)
         if result.last is not None and not projected and not fired:
             first = result.last
         else:
@@ -238,16 +206,26 @@ def simulate(
             break
         state, values = new, new_values
 
-    statistics = {
-        "steps": steps,
-        "rejected_steps": rejected,
-        "forced_steps": int(control.forced_steps),
-        "energy_rejections": guard.rejections if guard else 0,
-        "energy_projections": guard.projections if guard else 0,
-        "load_evaluations": calls,
-        "smallest_step": smallest if math.isfinite(smallest) else None,
-    }
-    return _trajectory(rows, end_reason, statistics)
+    return Trajectory(
+        time=np.array([s.time for s, _ in rows]),
+        position=np.array([s.position for s, _ in rows]),
+        velocity=np.array([s.velocity for s, _ in rows]),
+        attitude=np.array([s.attitude for s, _ in rows]),
+        angular_velocity=np.array([s.angular_velocity for s, _ in rows]),
+        path_length=np.array([s.path_length for s, _ in rows]),
+        force=np.array([e.force for _, e in rows]),
+        moment=np.array([e.moment for _, e in rows]),
+        end_reason=end_reason,
+        statistics={
+            "steps": steps,
+            "rejected_steps": rejected,
+            "forced_steps": int(control.forced_steps),
+            "energy_rejections": guard.rejections if guard else 0,
+            "energy_projections": guard.projections if guard else 0,
+            "load_evaluations": calls,
+            "smallest_step": smallest if math.isfinite(smallest) else None,
+        },
+    )
 
 
 def find_root(
