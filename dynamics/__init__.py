@@ -4,10 +4,10 @@ This package takes a load function and knows nothing of meshes or resistance law
 What it may import is written once, in pyproject.toml's [tool.penetrate.rooms].
 """
 
-from .control import ENERGY_TOLERANCE, EnergyGuard, ErrorControl, FixedStep, StepControl
+from .control import ENERGY_TOLERANCE, NON_FINITE, STEP_FLOOR, EnergyGuard, ErrorControl, FixedStep, StepControl
 from .integrators import METHODS, RK4, DormandPrince54, RungeKutta
 from .rigid_body import LoadFunction, RigidBody, State
-from .simulate import MAX_STEPS, NON_FINITE, STEP_FLOOR, TIME_LIMIT, Event, SpeedBelow, Trajectory, simulate
+from .simulate import MAX_STEPS, TIME_LIMIT, Event, SpeedBelow, Trajectory, simulate
 
 __all__ = [
     "RigidBody",

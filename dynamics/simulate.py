@@ -14,21 +14,11 @@ from typing import Any, cast
 
 import numpy as np
 
-from .control import ACCEPT, END, NON_FINITE, RETAKE, STEP_FLOOR, EnergyGuard, StepControl
+from .control import ACCEPT, END, RETAKE, EnergyGuard, StepControl
 from .integrators import Evaluation, Stepper, evaluate
 from .rigid_body import LoadFunction, RigidBody, State
 
-__all__ = [
-    "Event",
-    "SpeedBelow",
-    "Trajectory",
-    "simulate",
-    "find_root",
-    "TIME_LIMIT",
-    "NON_FINITE",
-    "MAX_STEPS",
-    "STEP_FLOOR",
-]
+__all__ = ["Event", "SpeedBelow", "Trajectory", "simulate", "find_root", "TIME_LIMIT", "MAX_STEPS"]
 
 TIME_LIMIT, MAX_STEPS = "time_limit", "max_steps"
 
