@@ -119,19 +119,8 @@ def revolved_surface(
     ):
         if outer > 0.0:  # a flat face: rings of radius rho, area rho d rho d phi
             nodes, weights = np.polynomial.legendre.leggauss(face_rings)
-            rho = outer * (nodes + 1.0) / 2.0
-            rows.append(
-                np.stack(
-                    [
-                        np.full(face_rings, x),
-                        rho,
-                        np.full(face_rings, face_normal),
-                        np.zeros(face_rings),
-                        rho * outer / 2.0 * weights,
-                    ],
-                    axis=1,
-                )
-            )
+            rho, ones = outer * (nodes + 1.0) / 2.0, np.ones(face_rings)
+            rows.append(np.stack([x * ones, rho, face_normal * ones, 0.0 * ones, rho * outer / 2.0 * weights], axis=1))
     s = np.unique(np.concatenate([np.linspace(0.0, length, OUTLINE_POINTS), pieces]))
     outline = np.stack([tip_from_centre - s, profile.radius_at(s)], axis=1)
     outline = np.vstack([[tip_from_centre, 0.0], outline])  # the tip's centre (a blunt nose's face)
