@@ -1,28 +1,21 @@
 """Resistance functions: the normal stress of the target on a surface element, defined once.
 
-Every built-in law is one scalar function of the element's normal velocity ``Vn`` (m/s, positive
-into the target) and its depth ``z`` (m below the target surface), :func:`normal_stress_scalars`:
+Every built-in law is one function of the element's normal velocity ``Vn`` (m/s, positive into the target) and
+its depth ``z`` (m below the target surface), :func:`normal_stress_scalars`:
 
     sigma_n = s(z) + c1 Vn + c2 Vn^2 + c Vn^n,    s(z) = c0 + k max(z, 0) + table(z)
 
-with ``c0`` (Pa) the strength at the surface, ``k`` (Pa/m) its growth with depth (overburden), an
-optional table of extra strength against depth (linear between its rows, constant beyond them),
-``c1`` (Pa s/m), ``c2`` (kg/m^3) and ``c`` (Pa (s/m)^n) with ``n > 0``.  The families a scene names
-are choices of these coefficients (docs/laws.md gives each one's source):
+The families a scene names are choices of these coefficients (docs/laws.md gives each one's source):
 
 * cavity expansion, ``A sigma_0 + B rho_0 Vn^2``: ``c0 = A sigma_0``, ``c2 = B rho_0``;
 * polynomial, ``c0 + c1 Vn + c2 Vn^2``;
 * power, ``c0 + c Vn^n``;
 * any of them with depth-dependent strength (``k``, or a table).
 
-The function is written on floats and numpy arrays alike (numpy's functions, no Python branches on
-``Vn`` or ``z``), so the numpy path evaluates it on all points at once and the compiled kernel
-(:mod:`fem_loads.compiled`) compiles the very same expression per point.  A law of a user's own
-(:mod:`fem_loads.user_law`) is a function with the same first two arguments.
-
-For ``Vn < 0`` the velocity terms are extended as odd functions (``c2 Vn |Vn|``, ``c sign(Vn) |Vn|^n``):
-only a load without separation evaluates there (receding surfaces feel the strength less the
-dynamic terms, clipped at zero by the load).
+Like the factors (:mod:`fem_loads.factors`) it is written on floats and numpy arrays alike, for the numpy path
+and the compiled kernel.  A law of a user's own (:mod:`fem_loads.user_law`) takes the same first two arguments.
+For ``Vn < 0``, where only a load without separation evaluates it, the velocity terms are odd
+(``c2 Vn |Vn|``, ``c sign(Vn) |Vn|^n``).
 """
 
 from __future__ import annotations
@@ -61,8 +54,7 @@ class UnknownLawError(ValueError):
 
 def polynomial_stress_scalars(normal_velocity: Any, depth: Any, c0: float, k: float, c1: float, c2: float) -> Any:
     """``c0 + k max(z, 0) + c1 Vn + c2 Vn |Vn|`` (Pa): :func:`normal_stress_scalars` without the power term and
-    the table, and the whole law when it has neither.  No calls: a compiled loop over points that uses it alone
-    runs in SIMD lanes."""
+    the table, and the whole law when it has neither (no calls: a compiled loop using it alone runs in SIMD lanes)."""
     # on arrays the augmented operations work in place (one temporary)
     stress = np.abs(normal_velocity)
     stress *= c2
@@ -88,11 +80,8 @@ def normal_stress_scalars(
 ) -> Any:
     """``sigma_n`` (Pa) of the built-in law at normal velocity ``Vn`` (m/s) and depth ``z`` (m below the surface).
 
-    ``Vn`` and ``z`` are floats (the compiled kernel) or arrays of one shape (the numpy path); the
-    coefficients are floats: ``c0`` (Pa), ``k`` (Pa/m), ``c1`` (Pa s/m), ``c2`` (kg/m^3), ``c`` (Pa (s/m)^n) and
-    ``n``.
-    ``table_depths`` (m, increasing) and ``table_stresses`` (Pa) add the table's strength, linear between
-    rows; both empty: no table.
+    ``Vn`` and ``z`` are floats or arrays of one shape; the coefficients are those of :class:`ResistanceLaw`.
+    ``table_depths`` (m, increasing) and ``table_stresses`` (Pa): the strength table, both empty without one.
     """
     stress = polynomial_stress_scalars(normal_velocity, depth, c0, k, c1, c2)
     if c != 0.0:
@@ -120,7 +109,7 @@ class ResistanceLaw:
     c1 : float
         Pa s/m: the coefficient of ``Vn``.
     c, n : float
-        Pa (s/m)^n and ``n > 0``: the term ``c Vn^n``.
+        Pa (s/m)^n and ``0 < n <= 10``: the term ``c Vn^n``.
     k : float
         Pa/m: the strength's growth with depth below the surface.
     strength_table : tuple of (depth, stress) pairs, optional
@@ -135,7 +124,8 @@ class ResistanceLaw:
     n: float = 1.0
     k: float = 0.0
     strength_table: tuple[tuple[float, float], ...] = ()
-    _table: tuple[np.ndarray, np.ndarray] = field(init=False, repr=False, compare=False)
+    #: the strength table's depths (m) and stresses (Pa) as arrays, both empty without one
+    table: tuple[np.ndarray, np.ndarray] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         for field_name in ("c0", "c2", "c1", "c", "k"):
@@ -148,7 +138,7 @@ class ResistanceLaw:
         if not (np.all(np.isfinite(table)) and np.all(table[:, 1] >= 0.0) and np.all(np.diff(table[:, 0]) > 0.0)):
             raise ValueError("strength_table: (depth, stress) rows with increasing depths and stresses >= 0")
         depths, stresses = (np.ascontiguousarray(table[:, 0]), np.ascontiguousarray(table[:, 1]))
-        object.__setattr__(self, "_table", (depths, stresses) if len(table) else (_NO_TABLE, _NO_TABLE))
+        object.__setattr__(self, "table", (depths, stresses) if len(table) else (_NO_TABLE, _NO_TABLE))
 
     @classmethod
     def from_coefficients(cls, A: float, sigma_0: float, B: float, rho_0: float, name: str = "custom") -> ResistanceLaw:
@@ -165,11 +155,6 @@ class ResistanceLaw:
         """``(c0, k, c1, c2, c, n)`` in the order :func:`normal_stress_scalars` takes them."""
         return (self.c0, self.k, self.c1, self.c2, self.c, self.n)
 
-    @property
-    def table(self) -> tuple[np.ndarray, np.ndarray]:
-        """The strength table's depths (m) and stresses (Pa), both empty without one."""
-        return self._table
-
     def normal_stress(self, normal_velocity: np.ndarray, depth: np.ndarray | float = 0.0) -> np.ndarray:
         """``sigma_n`` (Pa) at ``Vn`` (m/s) and depth (m below the surface); the caller applies separation."""
         return np.asarray(
@@ -180,25 +165,11 @@ class ResistanceLaw:
 def locking_cavity_expansion(
     sigma_0: float, rho_0: float, locking_strain: float, name: str = "locking cavity expansion"
 ) -> ResistanceLaw:
-    """Spherical cavity expansion in an elastic-plastic-locking soil (rigid-locking limit).
-
-    A cavity expands at speed ``V`` into a Tresca soil of strength ``sigma_0``
-    and density ``rho_0`` that locks at the volumetric strain ``eta*``: between
-    the cavity ``a`` and a plastic front ``b`` the soil is locked
-    (incompressible at ``rho* = rho_0 / (1 - eta*)``), so mass conservation
-    fixes ``(a/b)^3 = eta*``; ahead of the front the soil is at rest with the
-    elastic-limit stress ``2 sigma_0 / 3`` (elastic strains neglected).
-    Integrating the radial momentum equation with ``v = V a^2/r^2`` across the
-    locked region and adding the momentum jump ``rho_0 c v_b`` at the front
-    (``c = V eta*^(-1/3)``, ``v_b = V eta*^(2/3)``) gives
-    ``sigma_r(a) = A sigma_0 + B rho_0 V^2`` with
-
-    * ``A = (2/3)(1 - ln eta*)`` (brief section 2), and
-    * ``B = [3/2 - 2 eta*^(1/3) + eta*^(4/3)/2] / (1 - eta*) + eta*^(1/3)``.
-
-    The brief's dynamic-cavity-expansion rows (which also use the elastic
-    modulus ``E``) have a higher ``B``; docs/effects.md compares the two.
-    """
+    """Spherical cavity expansion in an elastic-plastic-locking soil, rigid-locking limit: ``A sigma_0 + B rho_0 V^2``
+    for a soil of strength ``sigma_0`` (Pa) and density ``rho_0`` (kg/m^3) that locks at the volumetric strain
+    ``eta*`` (``locking_strain``), with ``A = (2/3)(1 - ln eta*)`` and
+    ``B = [3/2 - 2 eta*^(1/3) + eta*^(4/3)/2] / (1 - eta*) + eta*^(1/3)``; docs/effects.md derives them and compares
+    them with the paper's dynamic cavity-expansion laws."""
     if not (0.0 < locking_strain < 1.0):
         raise ValueError(f"locking_strain = {locking_strain}: must lie in (0, 1)")
     eta = locking_strain
@@ -208,27 +179,20 @@ def locking_cavity_expansion(
     return ResistanceLaw.from_coefficients(a, sigma_0, b, rho_0, name)
 
 
-#: Frew et al.'s fit of the static coefficient of concrete, ``S = FACTOR (f'c / MPa)^EXPONENT``
-CONCRETE_S_FACTOR, CONCRETE_S_EXPONENT = 82.6, -0.544
-
-
 def concrete_strength_factor(compressive_strength: float) -> float:
     """``S = 82.6 (f'c / 1 MPa)^-0.544``: the static coefficient of concrete from its unconfined compressive
     strength ``f'c`` (Pa), Frew, Hanchak, Green and Forrestal's empirical fit to penetration tests (IJIE 1998)."""
     if not (math.isfinite(compressive_strength) and compressive_strength > 0.0):
         raise ValueError(f"compressive_strength = {compressive_strength}: must be a finite number > 0")
-    return CONCRETE_S_FACTOR * (compressive_strength / 1e6) ** CONCRETE_S_EXPONENT
+    return 82.6 * (compressive_strength / 1e6) ** -0.544
 
 
 def concrete_cavity_expansion(
     compressive_strength: float, density: float, strength_factor: float | None = None, name: str = "concrete"
 ) -> ResistanceLaw:
-    """Forrestal's spherical cavity expansion for concrete: ``sigma_n = S f'c + rho Vn^2``.
-
-    The cavity-expansion form ``A sigma_0 + B rho_0 Vn^2`` with ``sigma_0 = f'c`` (the unconfined
-    compressive strength, Pa), ``A = S``, ``B = 1`` and ``rho_0 = rho`` (kg/m^3); ``S`` (``strength_factor``)
-    defaults to :func:`concrete_strength_factor`.
-    """
+    """Forrestal's spherical cavity expansion for concrete, ``sigma_n = S f'c + rho Vn^2``, from the unconfined
+    compressive strength ``f'c`` (Pa) and the density ``rho`` (kg/m^3); ``S`` (``strength_factor``) defaults to
+    :func:`concrete_strength_factor`."""
     factor = concrete_strength_factor(compressive_strength) if strength_factor is None else strength_factor
     return ResistanceLaw.from_coefficients(factor, compressive_strength, 1.0, density, name)
 

@@ -1,33 +1,15 @@
 """Targets and optional load effects: the front face, layers, free-surface reduction, friction.
 
-Every effect here is optional; :class:`~fem_loads.dafl.DAFLLoads` takes the
-cheap path when an effect is absent, so a scene pays only for what it asks.
-
-Equations (docs/effects.md):
+Every effect is optional, and :class:`~fem_loads.dafl.DAFLLoads` pays only for those a scene asks for.  Their
+factors are those of :mod:`fem_loads.factors`; docs/effects.md gives the equations and their sources.
 
 * **Front face**: the plane ``n . X = d`` (world frame) through which the body enters, the target on its far
-  side.  A point's height above it is ``H = (n . X_c - d) + (R^T n) . r`` for the point ``r`` (body frame) of a
-  body at ``X_c`` turned by ``R``; its depth is ``-H``.  :func:`face_frame_scalars` gives the two numbers every
-  kernel needs for that, the centre's height and the face normal in the body frame.  The level half-space
-  ``Z < 0`` is ``n = (0, 0, 1)``, ``d = 0``.
-* **Layers**: interfaces at depths ``d_1 < d_2 < ...`` below the surface;
-  a point at depth ``d`` uses the law of the layer containing it, its stress blended
-  smoothly with the next layer's across each interface over the point's own extent ``l``
-  (``S((d - d_k)/l + 1/2)``, :mod:`fem_loads.ramps`); ``l = 0`` is the sharp switch.
-* **Free-surface reduction**: the normal stress of a point at depth ``d`` is
-  multiplied by ``f(d) = f0 + (1 - f0) S(d / D)``, ``S`` the smooth step of
-  :mod:`fem_loads.ramps` (from ``f0`` at the surface to 1 below ``D``): the
-  resistance of a near-surface element is lowered because the target
-  material can flow to the free surface.  This follows the idea of the
-  free-surface corrections of Warren and Poormon (2001) and Warren, Hanchak
-  and Poormon (2004), which reduce the cavity-expansion stress with the
-  element's proximity to the free surface; the ramp with the two parameters
-  ``D`` (``depth``) and ``f0`` (``surface_fraction``) is our simplest form of
-  it, not their calibrated function.  (A linear ramp would put kinks in the
-  load at ``d = 0`` and ``d = D``, which cost a Runge-Kutta method its order.)
-* **Friction**: a tangential stress ``tau`` opposite to the local slip
-  ``u_t = u - Vn n``: Coulomb ``tau = mu sigma_n`` or capped
-  ``tau = min(mu sigma_n, tau_s)``.
+  side.  A point ``r`` (body frame) of a body at ``X_c`` turned by ``R`` lies ``H = (n . X_c - d) + (R^T n) . r``
+  above it (its depth is ``-H``): :func:`face_frame_scalars` gives the centre's height and ``R^T n``.
+* **Layers**: interfaces at depths ``d_1 < d_2 < ...``; a point uses the law of the layer containing it, blended
+  with the next layer's across each interface over the point's own extent ``l``.
+* **Free-surface reduction**: the normal stress at depth ``d`` times ``f(d) = f0 + (1 - f0) S(d / D)``.
+* **Friction**: a tangential stress opposite to the local slip ``u - Vn n``, ``tau = min(mu sigma_n, tau_s)``.
 """
 
 from __future__ import annotations
@@ -80,10 +62,9 @@ def face_height_scalars(position: Any, normal: Any, offset: float) -> Any:
 
 
 def face_frame_scalars(position: Any, rotation: Any, normal: Any, offset: float) -> tuple[Any, Any, Any, Any]:
-    """``(h, u0, u1, u2)``: the height ``h`` (m, :func:`face_height_scalars`) of the centre of mass ``position``
-    above the face ``normal . X = offset``, and ``u = R^T n``, the face's normal in the body frame (``rotation``
-    ``R``, body to world).  A point ``r`` of the body (m, body frame) lies ``h + u . r`` above the face.  For the
-    level face ``n = (0, 0, 1)``, ``d = 0`` they are exactly ``Z_c`` and the last row of ``R``."""
+    """``(h, u0, u1, u2)``: the height ``h`` (m) of the centre of mass ``position`` above the face
+    ``normal . X = offset``, and ``u = R^T n``, the face's normal in the body frame (``rotation`` ``R``, body to
+    world), so that a point ``r`` of the body lies ``h + u . r`` above the face."""
     n0, n1, n2 = normal[0], normal[1], normal[2]
     r0, r1, r2 = rotation[0], rotation[1], rotation[2]  # rows: nested lists work too (plain floats are fast)
     up0 = n0 * r0[0] + n1 * r1[0] + n2 * r2[0]
@@ -126,22 +107,20 @@ class LayeredTarget:
         """The stress (Pa) at each point: its layer's law, blended with the next layer's across each interface.
 
         ``lengths`` (m, one per point, or None): the width over which each point's stress blends from one
-        layer to the next, centred on the interface (the entry factor,
-        :func:`~fem_loads.factors.entry_factor_scalars`, of its height ``d_k - z`` above it); zero or None is
-        the sharp switch.  Each layer's law is evaluated only where it has a share.
+        layer to the next, centred on the interface; zero or None is the sharp switch.  Each layer's law is
+        evaluated only where it has a share.
         """
         stress = np.zeros(np.shape(normal_velocity))
         above = np.ones(np.shape(normal_velocity))
         smooth = lengths is not None and bool(np.any(lengths))
         inverse = 1.0 / np.asarray(lengths) if smooth else 0.0
+        interfaces = self.interfaces
         for layer, law in enumerate(self.laws):
-            if layer < len(self.thicknesses):
+            if layer < len(interfaces):
                 # a point enters the layer below as it enters the target: its entry factor at the interface
-                below = np.broadcast_to(
-                    entry_factor_scalars(self.interfaces[layer] - depth, smooth, inverse), stress.shape
-                )
+                below = np.broadcast_to(entry_factor_scalars(interfaces[layer] - depth, smooth, inverse), stress.shape)
             else:
-                below = np.zeros(np.shape(normal_velocity))
+                below = np.zeros(stress.shape)
             share = above - below
             where = share != 0.0
             if where.any():
@@ -152,7 +131,7 @@ class LayeredTarget:
 
 @dataclass(frozen=True)
 class FreeSurface:
-    """Linear free-surface reduction of the normal stress near the surface.
+    """Free-surface reduction of the normal stress near the surface.
 
     Parameters
     ----------
@@ -187,9 +166,8 @@ class Friction:
 
 def slip_factor_scalars(slip2: Any, width: float, speed2: float) -> Any:
     """``k``, with which the friction stress along the slip ``s`` is ``tau k s``: ``1 / sqrt(|s|^2 + W^2)``
-    with a contact width ``W > 0`` (the direction fades below ``W`` of slip, so the stress is continuous
-    through zero slip); sharp, ``1/|s|`` where ``|s|^2 > 1e-24 |V|^2`` and 0 elsewhere (the direction is
-    undefined at zero slip).  ``slip2 = |s|^2`` (m^2/s^2) is a float (compiled) or an array (numpy)."""
+    with a contact width ``W > 0`` (continuous through zero slip); sharp, ``1/|s|`` where ``|s|^2 > 1e-24 |V|^2``
+    and 0 elsewhere (the direction is undefined at zero slip).  ``slip2 = |s|^2`` (m^2/s^2)."""
     if width > 0.0:
         return 1.0 / np.sqrt(slip2 + width * width)
     moving = slip2 > 1e-24 * speed2
