@@ -2,22 +2,13 @@
 
 The criterion: the soil moves past the body against the body's velocity ``V`` (its centre of mass's, in the body
 frame); a point meets it only if the ray from the point along ``V`` leaves the body without hitting it.  Its
-*exposure* ``e`` is 1 then and 0 otherwise, and multiplies its stresses (normal and friction).  docs/geometry.md
-explains the choices below and measures them.
+*exposure* ``e`` is 1 then and 0 otherwise, and multiplies its stresses (normal and friction).
 
-Computed once per body (:func:`exposure_table`) and kept with the quadrature:
-
-* a point on the body's convex hull is exposed in every direction that gives it a positive ``Vn``: it needs no
-  table, and a convex body has none;
-* every other point gets ``e`` at the nodes of a cube map of directions (:func:`cube_nodes`): a ray cast against
-  the outer surface as flat triangles, from the point lifted off it by twice its distance from them (between
-  ``least_lift`` and ``lift``);
-* within a cell's width of grazing, ``-sin(delta) < d . n <= 0`` (``delta``: :func:`cell_diameter`), the ray goes
-  along the tangential part of ``d``, so that ``e`` is continuous across ``Vn = 0``; a direction further back
-  recedes from the soil: ``e = 1``;
-* a cell whose four nodes disagree holds the edge of the point's shadow: it is refined, its
-  ``(SUB_CELLS + 1)^2`` sub-nodes traced too;
-* between the (sub-)nodes ``e`` is interpolated bilinearly, exactly 0 or 1 in a cell whose four nodes agree.
+Computed once per body (:func:`exposure_table`) and kept with the quadrature, as docs/geometry.md (Exposure)
+explains and measures: no table for a point on the body's convex hull (a convex body has none); for every other
+point ``e`` at the nodes of a cube map of directions (:func:`cube_nodes`), rays along the surface within a cell's
+width of grazing (:func:`_exposed`), the cells whose nodes disagree refined (:data:`SUB_CELLS`), and ``e``
+bilinear between the (sub-)nodes: exactly 0 or 1 in a cell whose four nodes agree.
 
 For the compiled kernel each cell also lists the points hidden at one of its corners (:attr:`Exposure.cell_rows`):
 an evaluation visits only those around the body's direction.  :func:`cube_cell_scalars` and
@@ -28,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any  # the ray tracer's: trimesh is untyped
 
 import numpy as np
 
@@ -155,9 +147,7 @@ def cube_cell_scalars(n: int, d0: float, d1: float, d2: float) -> tuple[int, int
 def cell_exposure_scalars(mask: int, fine: int, fx: float, fy: float) -> float:
     """``e`` at the place ``(fx, fy)`` in a cell (:func:`cube_cell_scalars`) of a point hidden at the corners
     ``mask`` (:attr:`Exposure.cell_corners`), with the sub-node bits ``fine`` of a refined cell (-1: not refined)."""
-    if fine < 0:
-        return corner_exposure(mask, fx, fy)
-    return fine_exposure(fine, fx, fy)
+    return corner_exposure(mask, fx, fy) if fine < 0 else fine_exposure(fine, fx, fy)
 
 
 def fine_exposure(bits: int, fx: float, fy: float) -> float:
@@ -262,8 +252,7 @@ def exposure_table(
     import trimesh  # only for a body that is not convex
     from trimesh.ray.ray_pyembree import RayMeshIntersector
 
-    surface = trimesh.Trimesh(corners, np.arange(len(corners)).reshape(-1, 3), process=False)
-    tracer = RayMeshIntersector(surface)
+    tracer = RayMeshIntersector(trimesh.Trimesh(corners, np.arange(len(corners)).reshape(-1, 3), process=False))
     least = LIFT_FLOOR * lift if least_lift is None else least_lift
     lifts = np.clip(2.0 * _sag(tracer, points[candidates], normals[candidates], lift), least, lift)
     grazing = math.sin(cell_diameter(resolution))
@@ -284,16 +273,12 @@ def exposure_table(
 
 
 def _exposed(
-    tracer: object,
-    point: np.ndarray,
-    normal: np.ndarray,
-    lift: np.ndarray | float,
-    directions: np.ndarray,
-    grazing: float,
+    tracer: Any, point: np.ndarray, normal: np.ndarray, lift: np.ndarray | float, directions: np.ndarray, grazing: float
 ) -> np.ndarray:
     """1 where the ray from ``point`` (lifted by ``lift`` along ``normal``) along each direction leaves the body:
-    advancing ones as they are, those within ``grazing`` behind the tangent plane along the surface, receding
-    ones exposed.  ``point``, ``normal`` and ``lift`` are one point's, or each direction's (shapes (r, 3), (r,))."""
+    advancing ones as they are, those within ``grazing`` behind the tangent plane (``-grazing < d . n <= 0``) along
+    the surface, so that ``e`` is continuous across ``Vn = 0``; receding ones exposed.  ``point``, ``normal`` and
+    ``lift`` are one point's, or each direction's (shapes (r, 3), (r,))."""
     point, normal = np.broadcast_to(point, directions.shape), np.broadcast_to(normal, directions.shape)
     lift = np.broadcast_to(lift, directions.shape[:1])
     exposed = np.ones(len(directions), dtype=np.uint8)
@@ -302,16 +287,16 @@ def _exposed(
     rays, normal, along = directions[traced], normal[traced], along[traced]
     sliding = along <= 0.0
     rays[sliding] -= along[sliding, None] * normal[sliding]  # along the surface
-    flat = np.flatnonzero(np.linalg.norm(rays, axis=1) < 1e-9)
-    if len(flat):
-        rays[flat] = np.array([_any_tangent(v) for v in normal[flat]])
+    for k in np.flatnonzero(np.linalg.norm(rays, axis=1) < 1e-9):  # nothing left along the surface: any tangent
+        tangent = np.cross(normal[k], np.eye(3)[int(np.argmin(np.abs(normal[k])))])
+        rays[k] = tangent / np.linalg.norm(tangent)
     origin = point[traced] + lift[traced, None] * normal
-    exposed[traced] = ~tracer.intersects_any(origin, rays)  # type: ignore[attr-defined]  # trimesh is untyped
+    exposed[traced] = ~tracer.intersects_any(origin, rays)
     return exposed
 
 
 def _refined(
-    tracer: object, points: np.ndarray, normals: np.ndarray, lifts: np.ndarray, table: np.ndarray, grazing: float
+    tracer: Any, points: np.ndarray, normals: np.ndarray, lifts: np.ndarray, table: np.ndarray, grazing: float
 ) -> np.ndarray:
     """``(row, cell, bits)`` of each cell of the rows' tables (shape (c, 6, N + 1, N + 1)) whose corners disagree,
     and of each cell next to a refined one across an edge whose sub-nodes disagree (so that ``e`` stays continuous
@@ -349,13 +334,13 @@ def _sub_nodes(n: int, faces: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.nd
     return _on_faces(faces, s, t)
 
 
-def _sag(tracer: object, points: np.ndarray, normals: np.ndarray, lift: float) -> np.ndarray:
+def _sag(tracer: Any, points: np.ndarray, normals: np.ndarray, lift: float) -> np.ndarray:
     """Each point's distance from the flat triangles along its normal, either way (0 where a ray finds them
     nowhere within ``lift``): how far its chord lies under or over it."""
     sag = np.full(len(points), np.inf)
     for side in (1.0, -1.0):
         rays = side * normals
-        hits, ray, _ = tracer.intersects_location(points, rays, multiple_hits=False)  # type: ignore[attr-defined]
+        hits, ray, _ = tracer.intersects_location(points, rays, multiple_hits=False)
         distance = np.einsum("ij,ij->i", hits - points[ray], rays[ray])
         np.minimum.at(sag, ray, np.abs(distance))
     return np.where(sag <= lift, sag, 0.0)
@@ -365,14 +350,6 @@ def cell_diameter(resolution: int) -> float:
     """The largest angle (rad) between two corners of a cell of the cube map: a direction in a cell is within it
     of each of the cell's corners."""
     nodes = cube_nodes(resolution)
-    first, last = nodes[:, :-1, :-1], nodes[:, 1:, 1:]
-    across, other = nodes[:, 1:, :-1], nodes[:, :-1, 1:]
-    cosine = min(np.einsum("fijd,fijd->fij", first, last).min(), np.einsum("fijd,fijd->fij", across, other).min())
+    diagonals = ((nodes[:, :-1, :-1], nodes[:, 1:, 1:]), (nodes[:, 1:, :-1], nodes[:, :-1, 1:]))
+    cosine = min(np.einsum("fijd,fijd->fij", first, last).min() for first, last in diagonals)
     return float(np.arccos(np.clip(cosine, -1.0, 1.0)))
-
-
-def _any_tangent(normal: np.ndarray) -> np.ndarray:
-    """A unit vector perpendicular to ``normal``."""
-    helper = np.eye(3)[int(np.argmin(np.abs(normal)))]
-    tangent = np.cross(normal, helper)
-    return tangent / np.linalg.norm(tangent)

@@ -3,17 +3,12 @@
 Each point of the fundamental part of a mirror-symmetric quadrature (:attr:`SurfaceQuadrature.mirror_images`) has
 one or three images whose coordinates and normals differ from its own only in signs.  :class:`MirrorImages`
 keeps the part's columns of ``[n | r x n]`` and evaluates every per-point quantity as ``k`` rows, one per image,
-shape ``(k, m)``:
-
-* ``Vn`` of every image in one product of the images' signed ``[n | r x n]`` with ``(R^T V, omega)``;
-* the resultant ``P = [n | r x n] S^T``, shape ``(6, k)``, folded per row as ``(P0 + Y P1) + Z (P2 + Y P3)``
-  (two planes) or ``P0 + S P1`` (one), ``Y``, ``Z`` and ``S`` the signs the mirrors give that component.
-
-A state symmetric about a body plane then has bitwise-equal stresses on mirrored images and the components the
-mirror reverses vanish exactly, where a plain sum cancels only to round-off, which the jump of the stress at
-``Vn = 0`` amplifies into a lateral drift (docs/numerics.md, Hard cases).  This relies on equal rows of one
-factor of a BLAS product giving bitwise-equal rows of the result: checked on the actual arrays when the images
-are set up; where it fails each image gets its own product, exact but slower.
+shape ``(k, m)``, and folds the resultant image by image (:meth:`MirrorImages.negative_resultant`): a state
+symmetric about a body plane then has bitwise-equal stresses on mirrored images and the components the mirror
+reverses vanish exactly, where a plain sum cancels only to round-off, which the jump of the stress at ``Vn = 0``
+amplifies into a lateral drift.  docs/numerics.md explains the products and the fold, and the check (on the actual
+arrays) that equal rows of one factor of a BLAS product give bitwise-equal rows of the result; where it fails each
+image gets its own product, exact but slower.
 """
 
 from __future__ import annotations
@@ -84,9 +79,8 @@ class MirrorImages:
         if len(images) not in (2, 4) or len(signs) != len(images):
             raise ValueError(f"{len(images)} images with {len(signs)} signs: the images of one or two mirrors")
         self.images = images
-        part = images[0]
-        self.normal_arm = np.ascontiguousarray(normal_arm_t[:, part])
-        self.points = np.ascontiguousarray(points_t[:, part])
+        self.normal_arm = np.ascontiguousarray(normal_arm_t[:, images[0]])
+        self.points = np.ascontiguousarray(points_t[:, images[0]])
         self.shape = images.shape
         self.image_signs, self.point_signs = image_signs(signs), point_signs(signs)
         # the images' [n | r x n] and points side by side, shape (6, n) and (3, n): exact sign changes
@@ -116,9 +110,9 @@ class MirrorImages:
         """``Vn`` of the images, shape (k, m), for ``generalised = (R^T V, omega)``."""
         if self.reproducible:
             np.matmul(generalised, self.image_normal_arm, out=out.reshape(-1))
-            return out
-        for image, signs in enumerate(self.image_signs):
-            np.matmul(generalised * signs, self.normal_arm, out=out[image])
+        else:
+            for image, signs in enumerate(self.image_signs):
+                np.matmul(generalised * signs, self.normal_arm, out=out[image])
         return out
 
     def heights(self, height: float, up: np.ndarray, out: np.ndarray) -> np.ndarray:
@@ -132,7 +126,9 @@ class MirrorImages:
         return out
 
     def negative_resultant(self, weighted_stress: np.ndarray) -> np.ndarray:
-        """``-sum s [n | r x n]`` over every point, shape (6,), from the images' rows ``s``, shape (k, m)."""
+        """``-sum s [n | r x n]`` over every point, shape (6,), from the images' rows ``s``, shape (k, m): the part's
+        products ``P = [n | r x n] s^T``, shape (6, k), folded per row as ``(P0 + Y P1) + Z (P2 + Y P3)`` (two
+        planes) or ``P0 + S P1`` (one), ``Y``, ``Z`` and ``S`` the signs the mirrors give that component."""
         products = self._products
         if self.reproducible:
             np.matmul(self.normal_arm, weighted_stress.T, out=products)

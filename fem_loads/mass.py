@@ -66,13 +66,9 @@ class MassProperties:
     def axisymmetric(
         cls, mass: float, centre_from_tip: float, axial_inertia: float, transverse_inertia: float
     ) -> MassProperties:
-        """Mass properties given directly (no mesh integration)."""
-        return cls(
-            mass,
-            np.array([-centre_from_tip, 0.0, 0.0]),
-            np.diag([axial_inertia, transverse_inertia, transverse_inertia]),
-            float("nan"),
-        )
+        """Mass properties given directly (no mesh integration, so no volume: NaN)."""
+        inertia = np.diag([axial_inertia, transverse_inertia, transverse_inertia])
+        return cls(mass, np.array([-centre_from_tip, 0.0, 0.0]), inertia, float("nan"))
 
 
 def to_skfem(mesh: ProjectileMesh) -> MeshTet1 | MeshTet2:
@@ -95,8 +91,7 @@ def mirror_symmetric_axes(mesh: ProjectileMesh) -> tuple[int, ...]:
     """The axes (1 for ``y``, 2 for ``z``) in whose plane ``x[axis] = 0`` the mesh is its own mirror image, bitwise:
     every node's image is a node, and the image of every element is an element of the same region."""
     points = mesh.points + 0.0  # -0.0 -> 0.0, so that the comparison is of values
-    corners = np.sort(mesh.tetra[:, :4], axis=1)
-    elements = np.column_stack([corners, mesh.tetra_region])
+    elements = np.column_stack([np.sort(mesh.tetra[:, :4], axis=1), mesh.tetra_region])
     elements = elements[np.lexsort(elements.T[::-1])]
     axes = []
     for axis in (1, 2):
@@ -127,8 +122,7 @@ def mass_properties(
     skfem_mesh : MeshTet1 or MeshTet2, optional
         A scikit-fem mesh already made from ``mesh``.
     """
-    missing = set(np.unique(mesh.tetra_region).tolist()) - set(densities)
-    if missing:
+    if missing := set(np.unique(mesh.tetra_region).tolist()) - set(densities):
         raise ValueError(f"densities: no density given for region(s) {sorted(missing)}")
     from skfem import Basis, ElementTetP0, Functional
 

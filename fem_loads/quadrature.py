@@ -11,10 +11,8 @@ Two normal models (:data:`NORMAL_MODELS`), of the same cost per load evaluation:
     a body of revolution (:func:`_to_exact_surface`), or through each curved CAD surface's own parametrisation
     for a projectile from a CAD file (:meth:`mesh.cad.CadSurface.quadrature`; facets on planes keep their own).
 
-The meshes are mirror symmetric (:mod:`mesh.geometry`, :mod:`mesh.symmetry`), but scikit-fem computes each
-facet's points and normals from its own node order, so mirrored points differ in their last bits:
 :func:`surface_quadrature` rewrites the mirror images (:func:`find_mirror_images`) of the fundamental part by
-exact sign changes, so that :class:`~fem_loads.DAFLLoads` can sum them exactly.
+exact sign changes, so that :class:`~fem_loads.DAFLLoads` sums them exactly (docs/numerics.md, exact mirror symmetry).
 """
 
 from __future__ import annotations
@@ -43,6 +41,7 @@ MIRROR_SIGNS = ((1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0))
 SIGNS_OF_PLANES = {(1, 2): MIRROR_SIGNS, (1,): MIRROR_SIGNS[:2], (2,): (MIRROR_SIGNS[0], MIRROR_SIGNS[2])}
 
 NORMAL_MODELS = ("mesh", "exact")
+Rule = tuple[np.ndarray, np.ndarray, np.ndarray]  # a facet quadrature: points, unit normals and weights
 
 
 @dataclass(frozen=True)
@@ -120,9 +119,7 @@ def _facet_indices(m: MeshTet1 | MeshTet2, triangles: np.ndarray) -> np.ndarray:
     return found
 
 
-def _to_exact_surface(
-    points: np.ndarray, normals: np.ndarray, weights: np.ndarray, profile: Profile
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _to_exact_surface(points: np.ndarray, normals: np.ndarray, weights: np.ndarray, profile: Profile) -> Rule:
     """Carry a facet quadrature (mesh coordinates, tip at origin) onto the exact surface of revolution: radially
     onto the profile, its normals, the weights times the projection's Jacobian ``(r / rho) (n_mesh . e_rho) /
     (n_exact . e_rho)``."""
@@ -141,10 +138,8 @@ def _to_exact_surface(
     normals[lateral, 1:] = n_radial[:, None] * e_rho[lateral, 1:]
     weights[lateral] *= (r / rho[lateral]) * n_mesh_radial[lateral] / n_radial
     # the tail disc (and a flat front face), bounded by a polygon: stretched radially onto its exact disc
-    for disc, radius in (
-        (~lateral & (normals[:, 0] < 0), profile.tail_radius),
-        (~lateral & (normals[:, 0] > 0), profile.tip_radius),
-    ):
+    tail, front = ~lateral & (normals[:, 0] < 0), ~lateral & (normals[:, 0] > 0)
+    for disc, radius in ((tail, profile.tail_radius), (front, profile.tip_radius)):
         if disc.any() and radius > 0:
             stretch = np.pi * radius**2 / weights[disc].sum()
             weights[disc] *= stretch
@@ -203,35 +198,26 @@ def find_mirror_images(points: np.ndarray, rtol: float = 1e-9) -> np.ndarray | N
     return None
 
 
-def _on_cad_surface(
-    points: np.ndarray,
-    normals: np.ndarray,
-    weights: np.ndarray,
-    mesh: ProjectileMesh,
-    intorder: int,
-    surface: CadSurface,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The rule of :meth:`mesh.cad.CadSurface.quadrature` on the facets of curved CAD surfaces; the
-    facets of planes keep their own (exact) points, normals and weights."""
+def _on_cad_surface(rule: Rule, mesh: ProjectileMesh, intorder: int, surface: CadSurface) -> Rule:
+    """The rule of :meth:`mesh.cad.CadSurface.quadrature` on the facets of curved CAD surfaces; those on planes
+    keep their own (exact) points, normals and weights."""
     from skfem.quadrature import get_quadrature
     from skfem.refdom import RefTri
 
+    points, normals, weights = (a.copy() for a in rule)
     ref_points, ref_weights = get_quadrature(RefTri, intorder)
     nodes = mesh.points[mesh.outer]  # corners, and edge nodes on the surface (on its boundary curves too)
     assert mesh.outer_entity is not None  # checked by surface_quadrature
     cad_points, cad_normals, cad_weights, planar = surface.quadrature(nodes, mesh.outer_entity, ref_points, ref_weights)
     curved = ~np.repeat(planar, len(ref_weights))
     cosine = np.einsum("ij,ij->i", cad_normals[curved], normals[curved])
-    points, normals, weights = points.copy(), normals.copy(), weights.copy()
     points[curved] = cad_points[curved]
     normals[curved] = cad_normals[curved] * np.sign(cosine)[:, None]  # CAD faces may face either way: outward
     weights[curved] = cad_weights[curved]
     return points, normals, weights
 
 
-def _basis_rule(
-    mesh: ProjectileMesh, intorder: int, skfem_mesh: MeshTet1 | MeshTet2 | None
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _basis_rule(mesh: ProjectileMesh, intorder: int, skfem_mesh: MeshTet1 | MeshTet2 | None) -> Rule:
     """Points, unit normals and weights of the outer facets from scikit-fem's FacetBasis."""
     from skfem import ElementTetP0, FacetBasis
 
@@ -246,10 +232,9 @@ def _basis_rule(
     return points, normals / np.linalg.norm(normals, axis=1)[:, None], fb.dx.reshape(-1)
 
 
-def _shape_rule(mesh: ProjectileMesh, intorder: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Points, unit normals and weights of the outer facets from their own Lagrange shape functions: the rule of
-    :func:`_basis_rule` without FacetBasis's Newton inversion of every point into its tetrahedron, which fails on
-    some curved elements (github.com/kinnala/scikit-fem/issues/965)."""
+def _shape_rule(mesh: ProjectileMesh, intorder: int) -> Rule:
+    """The rule of :func:`_basis_rule` from the facets' own Lagrange shape functions, without FacetBasis's Newton
+    inversion of every point into its tetrahedron, which fails on some curved elements (kinnala/scikit-fem#965)."""
     from skfem import ElementTriP1, ElementTriP2
     from skfem.quadrature import get_quadrature
     from skfem.refdom import RefTri
@@ -294,12 +279,11 @@ def surface_quadrature(
     skfem_mesh : MeshTet1 or MeshTet2, optional
         A scikit-fem mesh already made from ``mesh``.
     surface : mesh.cad.CadSurface, optional
-        The exact surface of a projectile from a CAD file, for ``normal_model="exact"``
-        (``mesh.outer_entity`` names each facet's CAD surface).
+        The exact surface of a projectile from a CAD file, for ``normal_model="exact"`` (``mesh.outer_entity``
+        names each facet's CAD surface).
     facet_rule : {"basis", "shape"}
-        How the facets' own points, normals and weights are computed: by scikit-fem's
-        :class:`~skfem.FacetBasis` (the analytic projectiles' meshes), or from the facets'
-        Lagrange shape functions (:func:`_shape_rule`; any mesh).
+        How the facets' own points, normals and weights are computed: by scikit-fem's :class:`~skfem.FacetBasis` (the
+        analytic projectiles' meshes), or from the facets' Lagrange shape functions (:func:`_shape_rule`; any mesh).
     """
     if facet_rule not in ("basis", "shape"):
         raise ValueError(f"facet_rule = {facet_rule!r}: must be 'basis' or 'shape'")
@@ -307,16 +291,13 @@ def surface_quadrature(
         raise ValueError(f"normal_model = {normal_model!r}: must be one of {NORMAL_MODELS}")
     if normal_model == "exact" and profile is None and (surface is None or mesh.outer_entity is None):
         raise ValueError("normal_model = 'exact' needs the profile or the CAD surface")
-    if facet_rule == "basis":
-        points, normals, weights = _basis_rule(mesh, intorder, skfem_mesh)
-    else:
-        points, normals, weights = _shape_rule(mesh, intorder)
+    rule = _basis_rule(mesh, intorder, skfem_mesh) if facet_rule == "basis" else _shape_rule(mesh, intorder)
     if normal_model == "exact" and profile is not None:
-        points, normals, weights = _to_exact_surface(points, normals, weights, profile)
+        rule = _to_exact_surface(*rule, profile)
     elif normal_model == "exact":
         assert surface is not None  # checked above
-        points, normals, weights = _on_cad_surface(points, normals, weights, mesh, intorder, surface)
-    points, normals, weights = (np.ascontiguousarray(a) for a in (points - centre, normals, weights))
+        rule = _on_cad_surface(rule, mesh, intorder, surface)
+    points, normals, weights = (np.ascontiguousarray(a) for a in (rule[0] - centre, *rule[1:]))
     images = find_mirror_images(points)
     if images is not None:  # the images rewritten from the part; each point keeps its facet (the renderer's)
         for partner, (sign_y, sign_z) in zip(images[1:], SIGNS_OF_PLANES[_planes(points, images)][1:]):
@@ -342,11 +323,8 @@ def with_exposure(
     triangles : ndarray, shape (t, 3, 3)
         The outer surface as flat triangles, in the quadrature's frame (about the centre of mass, m).
     lift, least_lift : float, optional
-        How far off the surface the rays start at most and at least (m); see
-        :func:`~fem_loads.exposure.exposure_table`.
+        How far off the surface the rays start at most and at least (m); see :func:`~.exposure.exposure_table`.
     """
     part = quadrature.mirror_images[0] if quadrature.mirror_images is not None else np.arange(len(quadrature))
-    columns, table, refined = exposure_table(
-        quadrature.points[part], quadrature.normals[part], triangles, lift, resolution, least_lift
-    )
-    return replace(quadrature, exposure=Exposure(columns, table, refined) if len(columns) else None)
+    tables = exposure_table(quadrature.points[part], quadrature.normals[part], triangles, lift, resolution, least_lift)
+    return replace(quadrature, exposure=Exposure(*tables) if len(tables[0]) else None)  # no columns: convex

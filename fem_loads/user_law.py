@@ -2,13 +2,9 @@
 
 The function is ``def name(normal_velocity, depth, p1, p2, ...)``: the normal stress (Pa) at the normal velocity
 ``Vn`` (m/s, positive into the target) and the depth ``z`` (m below the target surface), with the law's parameters
-after them.  The numpy path calls it on arrays of all points, the compiled kernel calls its numba compilation per
-point, so it must use operations both understand (``numpy``'s functions, not ``math``'s).  With separation (the
-default) it is evaluated at ``Vn >= 0`` only; without, the load clips it at zero.
-
-:func:`user_law` checks everything before a run starts, each failure one line (:class:`LawError`): the file and
-the function exist, its arguments after the first two are exactly the parameters given, it returns finite
-stresses ``>= 0`` on a probe grid of ``Vn`` and ``z``, and numba compiles it to the same numbers there.
+after them, evaluated at ``Vn >= 0`` only with separation (without, the load clips it at zero).  :func:`user_law`
+checks it before a run starts, each failure one line (:class:`LawError`); docs/laws.md (Your own law) says what it
+may use and what is checked.
 """
 
 from __future__ import annotations
@@ -102,7 +98,7 @@ def _read_function(path: str, name: str, digest: str) -> Callable[..., Any]:
         ) from None
     sys.modules[module_name] = module  # numba finds a function's globals through its module
     function = getattr(module, name, None)
-    if not callable(function) or not inspect.isfunction(function):
+    if not inspect.isfunction(function):
         raise LawError(
             f"function = '{path}:{name}': the file defines no function {name!r} (give the name of a function"
             " defined in it)"
@@ -128,8 +124,7 @@ def user_law(source: str, parameters: Mapping[str, float], folder: Path | None =
         ) from None
     shown = f"{path}:{name}"
     function = _read_function(str(path.resolve()), name, digest)
-    ordered = _parameters(function, shown, parameters)
-    law = UserLaw(f"{path.resolve()}:{name}", ordered, function, digest)
+    law = UserLaw(f"{path.resolve()}:{name}", _parameters(function, shown, parameters), function, digest)
     _probe(law, shown)
     return law
 
@@ -146,21 +141,17 @@ def _parameters(
             " plain arguments only"
         )
     names = [argument.name for argument in arguments[2:]]
-    unknown = sorted(set(parameters) - set(names))
-    if unknown:
+    if unknown := sorted(set(parameters) - set(names)):
         raise LawError(f"parameters: {', '.join(unknown)} unknown to '{shown}' (allowed: {', '.join(names) or 'none'})")
-    missing = [name for name in names if name not in parameters]
-    if missing:
+    if missing := [name for name in names if name not in parameters]:
         raise LawError(f"parameters: '{shown}' needs {', '.join(missing)} (give parameters = {{...}})")
     if len(names) > MAX_PARAMETERS:
         raise LawError(f"function = '{shown}': {len(names)} parameters, at most {MAX_PARAMETERS} allowed")
-    values = []
     for name in names:
         value = parameters[name]
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise LawError(f"parameters.{name} = {value!r}: must be a finite number")
-        values.append((name, float(value)))
-    return tuple(values)
+    return tuple((name, float(parameters[name])) for name in names)
 
 
 def _probe(law: UserLaw, shown: str) -> None:
