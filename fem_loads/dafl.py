@@ -175,8 +175,6 @@ class DAFLLoads:
             view.flags.writeable = False
         return views
 
-    # -- geometry ---------------------------------------------------------------------------------
-
     def heights(self, position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
         """Height (m) of every quadrature point above the front face; negative inside the target."""
         return self._scatter(self._heights(*self._frame(position, rotation)))
@@ -218,8 +216,6 @@ class DAFLLoads:
         heights = self.heights(position, rotation)
         return float((heights - 0.5 * self._entry_length).min() if self.entry_smoothing else heights.min())
 
-    # -- the factors of the switches ---------------------------------------------------------------
-
     def _inverse_width(self, speed_scale: float) -> float:
         """``1 / W``, ``W = w + delta U`` the contact width (m/s) at the speed scale ``U``; 0 for a body at rest
         with ``w = 0`` (every ``Vn`` is then 0, and so is the factor)."""
@@ -241,8 +237,6 @@ class DAFLLoads:
             entering,
             bool(self.entry_smoothing),
         )
-
-    # -- per point ---------------------------------------------------------------------------------
 
     def _stress(
         self, frame: tuple[float, ...], velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray
@@ -322,8 +316,6 @@ class DAFLLoads:
             self._expose(rows, velocity @ rotation)
             exposure = self._scatter(rows)
         return SurfaceStress(sigma, tau, normal_velocity, exposure)
-
-    # -- resultants ----------------------------------------------------------------------------------
 
     def __call__(
         self, position: np.ndarray, velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray

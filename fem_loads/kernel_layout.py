@@ -3,79 +3,39 @@ built from a :class:`~fem_loads.dafl.DAFLLoads` through its public attributes (w
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 from . import images
 from .dafl import DAFLLoads
 from .law_record import compilable, pack
 
-__all__ = ["KERNEL_ARRAYS", "kernel_data", "supports", "law_and_effects"]  # and each array's index, DATA_*
+__all__ = ["KERNEL_ARRAYS", "kernel_data", "supports"]  # and each array's index, DATA_*
 
-#: the arrays of the kernel's data, in order (:func:`kernel_data`): a plain tuple of arrays, which numba's
-#: dispatcher types in C (a named tuple, or a function object in it, costs more per call from Python)
-KERNEL_ARRAYS = (
-    "normal_arm",  # (6, m): [n | r x n] of the fundamental part's (or every) point
-    "points",  # (3, m), m
-    "weights",  # (m,), m^2
-    "inverse_entry",  # (m,): 1 / l (1/m), zero with sharp entry
-    "half_entry_length",  # (m,): l / 2 (m)
-    "image_signs",  # (k, 6)
-    "point_signs",  # (k, 3)
-    "effects",  # (1,) EFFECTS record: the ramps, friction, free surface, user law (law_record)
-    "laws",  # (layers,) LAW records: each layer's coefficients or user parameters (law_record)
-    "tables",  # (2, columns): the layers' strength tables one after the other, depth (m) and stress (Pa)
-    "interfaces",  # (layers - 1,): the layers' interfaces (m below the surface)
-    "exposure_columns",  # (c,), int: the points that can be hidden (Exposure.columns); empty for a convex body
-    "exposure_start",  # (6 N^2 + 1,), int: where each cell's hidden rows start (Exposure.cell_start)
-    "exposure_rows",  # (h,), int: the rows hidden at a corner of each cell, cell after cell (Exposure.cell_rows)
-    "exposure_corners",  # (h,), int: at which of its corners, a bit each (Exposure.cell_corners)
-    "exposure_fine",  # (h,), int: a refined cell's sub-nodes hidden, a bit each, or -1 (Exposure.cell_fine)
-)
-(
-    DATA_NORMAL_ARM,
-    DATA_POINTS,
-    DATA_WEIGHTS,
-    DATA_INVERSE_ENTRY,
-    DATA_HALF_ENTRY_LENGTH,
-    DATA_IMAGE_SIGNS,
-    DATA_POINT_SIGNS,
-    DATA_EFFECTS,
-    DATA_LAWS,
-    DATA_TABLES,
-    DATA_INTERFACES,
-    DATA_EXPOSURE_COLUMNS,
-    DATA_EXPOSURE_START,
-    DATA_EXPOSURE_ROWS,
-    DATA_EXPOSURE_CORNERS,
-    DATA_EXPOSURE_FINE,
-) = range(len(KERNEL_ARRAYS))
+# the index of each array in the kernel's data (:func:`kernel_data`), a plain tuple of arrays, which numba's
+# dispatcher types in C (a named tuple, or a function object in it, costs more per call from Python)
+DATA_NORMAL_ARM = 0  # (6, m): [n | r x n] of the fundamental part's (or every) point
+DATA_POINTS = 1  # (3, m), m
+DATA_WEIGHTS = 2  # (m,), m^2
+DATA_INVERSE_ENTRY = 3  # (m,): 1 / l (1/m), zero with sharp entry
+DATA_HALF_ENTRY_LENGTH = 4  # (m,): l / 2 (m)
+DATA_IMAGE_SIGNS = 5  # (k, 6)
+DATA_POINT_SIGNS = 6  # (k, 3)
+DATA_EFFECTS = 7  # (1,) EFFECTS record: the ramps, friction, free surface, user law (law_record)
+DATA_LAWS = 8  # (layers,) LAW records: each layer's coefficients or user parameters (law_record)
+DATA_TABLES = 9  # (2, columns): the layers' strength tables one after the other, depth (m) and stress (Pa)
+DATA_INTERFACES = 10  # (layers - 1,): the layers' interfaces (m below the surface)
+DATA_EXPOSURE_COLUMNS = 11  # (c,), int: the points that can be hidden (Exposure.columns); empty for a convex body
+DATA_EXPOSURE_START = 12  # (6 N^2 + 1,), int: where each cell's hidden rows start (Exposure.cell_start)
+DATA_EXPOSURE_ROWS = 13  # (h,), int: the rows hidden at a corner of each cell, cell after cell (Exposure.cell_rows)
+DATA_EXPOSURE_CORNERS = 14  # (h,), int: at which of its corners, a bit each (Exposure.cell_corners)
+DATA_EXPOSURE_FINE = 15  # (h,), int: a refined cell's sub-nodes hidden, a bit each, or -1 (Exposure.cell_fine)
+#: the arrays' names, in order
+KERNEL_ARRAYS = tuple(name[5:].lower() for name in list(globals()) if name.startswith("DATA_"))
 
 
 def supports(loads: DAFLLoads) -> bool:
     """Whether :func:`dafl_kernel` computes ``loads``: :func:`~fem_loads.law_record.compilable` of its target."""
     return compilable(loads.law)
-
-
-def law_and_effects(loads: DAFLLoads, **given: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(laws, tables, interfaces, effects)`` of ``loads``: its target and effects packed by
-    :func:`~fem_loads.law_record.pack`, the arguments ``given`` (the rings': their ``entry_length`` and
-    ``max_radius``) replacing the load's own."""
-    entry_length = loads.point_arrays()["entry_length"]
-    effects: dict[str, Any] = {
-        "contact_width": loads.contact_width,
-        "contact_incidence": loads.contact_incidence,
-        "contact": loads.contact,
-        "guard": loads.normal_velocity_guard,
-        "separation": loads.separation,
-        "entry_length": float(entry_length.max()) if len(entry_length) else 0.0,
-        "friction": loads.friction,
-        "free_surface": loads.free_surface,
-        "max_radius": loads.max_radius,
-        "front_face": loads.front_face,
-    }
-    return pack(loads.law, **(effects | given))
 
 
 def kernel_data(loads: DAFLLoads) -> tuple[np.ndarray, ...]:
@@ -93,7 +53,7 @@ def kernel_data(loads: DAFLLoads) -> tuple[np.ndarray, ...]:
         image_signs, point_signs = np.ones((1, 6)), np.ones((1, 3))
     arrays = loads.point_arrays()
     entry_length = arrays["entry_length"][index]
-    laws, tables, interfaces, effects = law_and_effects(loads)
+    laws, tables, interfaces, effects = pack(loads)
 
     def contiguous(array: np.ndarray) -> np.ndarray:
         return np.ascontiguousarray(array, dtype=float)

@@ -11,8 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .dafl import DAFLLoads
 from .resistance import ResistanceLaw
-from .target import LEVEL, FreeSurface, Friction, FrontFace, LayeredTarget
+from .target import LayeredTarget
 from .user_law import MAX_PARAMETERS, UserLaw
 
 __all__ = ["LAW", "EFFECTS", "COEFFICIENTS", "pack", "pack_laws", "compilable"]
@@ -99,52 +100,45 @@ def pack_laws(law: ResistanceLaw | UserLaw | LayeredTarget) -> tuple[np.ndarray,
 
 
 def pack(
-    law: ResistanceLaw | UserLaw | LayeredTarget,
-    *,
-    contact_width: float = 0.0,
-    contact_incidence: float = 0.0,
-    contact: str = "one_sided",
-    guard: float = 0.0,
-    separation: bool = True,
-    entry_length: float = 0.0,
-    friction: Friction | None = None,
-    free_surface: FreeSurface | None = None,
-    max_radius: float = 0.0,
-    front_face: FrontFace = LEVEL,
+    loads: DAFLLoads, entry_length: float | None = None, max_radius: float | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(laws, tables, interfaces, effects)``: the target's law by :func:`pack_laws` and one :data:`EFFECTS` record
-    (shape (1,)) of the load's effects, named as :class:`~fem_loads.dafl.DAFLLoads` names them: the one place both
-    the mesh kernel (:func:`~fem_loads.kernel_layout.law_and_effects`) and the rings
-    (:func:`~fem_loads.revolved.ring_data`) pack them.  ``entry_length`` (m): the longest point's (the rings': every
-    ring's); 0 is sharp.  ``max_radius`` (m): the farthest point from the centre of mass."""
+    """``(laws, tables, interfaces, effects)``: the target's law of ``loads`` by :func:`pack_laws` and one
+    :data:`EFFECTS` record (shape (1,)) of its effects, the one place both the mesh kernel
+    (:func:`~fem_loads.kernel_layout.kernel_data`) and the rings (:func:`~fem_loads.revolved.ring_data`) pack them.
+    ``entry_length`` (m; 0 sharp) and ``max_radius`` (m): the load's own by default (its longest point's entry
+    length, its farthest point from the centre of mass); the rings give theirs."""
+    law, friction, surface, face = loads.law, loads.friction, loads.free_surface, loads.front_face
+    if entry_length is None:
+        lengths = loads.point_arrays()["entry_length"]
+        entry_length = float(lengths.max()) if len(lengths) else 0.0
     laws, tables, interfaces, address = pack_laws(law)
-    smooth_contact = contact_width > 0.0 or contact_incidence > 0.0
+    smooth_contact = loads.contact_width > 0.0 or loads.contact_incidence > 0.0
     effects = np.zeros(1, dtype=EFFECTS)
     values = {
-        "contact_width": contact_width,
-        "contact_incidence": contact_incidence,
-        "contact_offset": 0.5 if contact == "centred" else 0.0,
+        "contact_width": loads.contact_width,
+        "contact_incidence": loads.contact_incidence,
+        "contact_offset": 0.5 if loads.contact == "centred" else 0.0,
         "smooth_contact": smooth_contact,
-        "guard": guard,
-        "separation": separation,
+        "guard": loads.normal_velocity_guard,
+        "separation": loads.separation,
         "smooth_entry": entry_length > 0.0,
         "entry_length": entry_length,
         "friction": friction.coefficient if friction is not None else 0.0,
         "friction_cap": (friction.cap or 0.0) if friction is not None else 0.0,
-        "surface_depth": free_surface.depth if free_surface is not None else 0.0,
-        "surface_fraction": free_surface.surface_fraction if free_surface is not None else 0.0,
+        "surface_depth": surface.depth if surface is not None else 0.0,
+        "surface_fraction": surface.surface_fraction if surface is not None else 0.0,
         "user_law": address,
-        "max_radius": max_radius,
+        "max_radius": loads.max_radius if max_radius is None else max_radius,
         "half_entry": 0.5 * entry_length,
         "needs_depth": bool(law.depth_dependent),
         "plain": isinstance(law, ResistanceLaw)
         and law.c == 0.0
         and not law.strength_table
-        and separation
+        and loads.separation
         and smooth_contact
         and entry_length > 0.0,
-        "face_normal": front_face.normal,
-        "face_offset": front_face.offset,
+        "face_normal": face.normal,
+        "face_offset": face.offset,
     }
     for name, value in values.items():
         effects[name] = value

@@ -19,7 +19,6 @@ from numba.extending import intrinsic, register_jitable
 from . import factors
 from .exposure import cell_exposure_scalars, corner_exposure, cube_cell_scalars, fine_exposure
 from .factors import entry_factor_scalars, friction_stress_scalars, point_stress_scalars
-from .ramps import smooth_step_scalars
 from .resistance import normal_stress_scalars, polynomial_stress_scalars
 from .target import face_frame_scalars, face_height_scalars, slip_factor_scalars
 from .user_law import MAX_PARAMETERS
@@ -38,11 +37,10 @@ __all__ = [
     "law_stress",
 ]
 
-# the smooth step and every factor of fem_loads.factors (its *_scalars functions) as numba sees them inside the
-# pipeline, so that a new factor needs no line here (the plain functions stay plain)
-register_jitable(inline="always", error_model="numpy")(smooth_step_scalars)
+# every *_scalars function of fem_loads.factors (its factors and the smooth step it imports) as numba sees them
+# inside the pipeline, so that a new factor needs no line here (the plain functions stay plain)
 for _name, _function in vars(factors).items():
-    if _name.endswith("_scalars") and callable(_function) and _function is not smooth_step_scalars:
+    if _name.endswith("_scalars") and callable(_function):
         register_jitable(inline="always", error_model="numpy")(_function)
 point_stress = njit(inline="always", error_model="numpy")(point_stress_scalars)
 entry_factor = njit(inline="always", error_model="numpy")(entry_factor_scalars)

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["smooth_step", "smooth_step_scalars", "MAX_SLOPE"]
+__all__ = ["smooth_step_scalars", "MAX_SLOPE"]
 
 MAX_SLOPE = 15.0 / 8.0  # the largest dS/dt, at t = 1/2
 
@@ -38,12 +38,3 @@ def smooth_step_scalars(t: Any) -> Any:
     step *= t
     step *= t
     return step
-
-
-def smooth_step(t: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
-    """:func:`smooth_step_scalars` elementwise on an array; written into ``out`` when given."""
-    values = smooth_step_scalars(np.asarray(t, dtype=float))
-    if out is None:
-        return np.asarray(values)
-    np.copyto(out, values)
-    return out

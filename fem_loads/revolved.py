@@ -28,7 +28,7 @@ from mesh import Profile
 
 from .dafl import DAFLLoads
 from .factors import Switches
-from .kernel_layout import law_and_effects
+from .law_record import pack
 from .native import entry_factor, friction_stress, law_stress, point_stress, slip_factor
 from .resistance import ResistanceLaw
 from .target import LEVEL
@@ -142,7 +142,7 @@ def ring_data(loads: DAFLLoads, surface: RevolvedSurface) -> tuple[np.ndarray, n
     if loads.front_face != LEVEL:
         raise ValueError("the ring model takes a level target face")
     entry_length = loads.entry_smoothing * math.sqrt(float(np.median(loads.quadrature.weights)))
-    laws, _, _, effects = law_and_effects(loads, entry_length=entry_length, max_radius=surface.max_radius)
+    laws, _, _, effects = pack(loads, entry_length, surface.max_radius)
     return laws, effects
 
 

@@ -14,7 +14,7 @@ import pytest
 from support import meshed
 
 from fem_loads import DAFLLoads, mass_properties, resistance_law, surface_quadrature
-from fem_loads.ramps import MAX_SLOPE, smooth_step
+from fem_loads.ramps import MAX_SLOPE, smooth_step_scalars
 from fem_loads.target import FreeSurface, Friction, LayeredTarget
 from mesh import BODY, OgiveNose, Profile, ProjectileGeometry
 
@@ -31,8 +31,8 @@ def quadrature():
 
 def test_the_smooth_step_is_twice_differentiable_and_monotone():
     t = np.linspace(-0.5, 1.5, 200001)
-    s = smooth_step(t)
-    assert s[0] == 0.0 and s[-1] == 1.0 and float(smooth_step(np.array(0.5))) == 0.5
+    s = smooth_step_scalars(t)
+    assert s[0] == 0.0 and s[-1] == 1.0 and float(smooth_step_scalars(np.array(0.5))) == 0.5
     assert np.all(np.diff(s) >= 0.0)
     dt = t[1] - t[0]
     first = np.gradient(s, dt)

@@ -6,12 +6,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from support import meshed, slow_except
+from support import meshed, ring_records, slow_except
 
 import cases
 from cases.studies.reference import embedded_axial_force
 from fem_loads import DAFLLoads, ResistanceLaw, mass_properties, resistance_law, surface_quadrature
-from fem_loads.law_record import pack
 from fem_loads.revolved import PitchPlaneLoad, lowest_height, revolved_surface
 from fem_loads.target import Friction
 from fem_loads.user_law import user_law
@@ -53,15 +52,9 @@ def _rings(
     surface = revolved_surface(PAPER, tip, **counts)
     return PitchPlaneLoad(
         surface,
-        _records(law, contact_incidence=DELTA, entry_length=entry, max_radius=surface.max_radius, friction=friction,
+        ring_records(law, contact_incidence=DELTA, entry_length=entry, max_radius=surface.max_radius, friction=friction,
                  contact=contact),
     )  # fmt: skip
-
-
-def _records(law, **effects) -> tuple[np.ndarray, np.ndarray]:
-    """The rings' law and effects records (:func:`~fem_loads.law_record.pack`)."""
-    laws, _, _, records = pack(law, **effects)
-    return laws, records
 
 
 # height of the centre (m), axis tilt from straight down (deg), speed (m/s), attack (deg), pitch rate (rad/s)
@@ -132,7 +125,7 @@ def test_closed_form_arcs_are_the_integrals():
 
     def load(mu):
         return PitchPlaneLoad(
-            surface, _records(SOIL, max_radius=surface.max_radius, friction=Friction(mu) if mu else None)
+            surface, ring_records(SOIL, max_radius=surface.max_radius, friction=Friction(mu) if mu else None)
         )
 
     exact, gauss = load(0.0), load(1e-300)
@@ -187,7 +180,7 @@ def test_the_ring_load_is_its_integral(friction, state, tolerance):
     an arc across the cap's kink, were it not split there, by 1e-6), and to 1e-6 with the nose entering (the
     entry ramp's arcs, 4e-7)."""
     surface = revolved_surface(PAPER, 0.5, nose_rings=16, shank_rings=8)
-    records = _records(SOIL, contact_incidence=DELTA, entry_length=ENTRY, max_radius=surface.max_radius,
+    records = ring_records(SOIL, contact_incidence=DELTA, entry_length=ENTRY, max_radius=surface.max_radius,
                        friction=friction)  # fmt: skip
     height, tilt, velocity, q = state
     state = (height, math.radians(tilt), velocity, q)
@@ -209,7 +202,7 @@ def test_rings_carry_the_exact_area_and_volume(nose):
 def test_axial_force_is_the_closed_form(speed):
     """Axial motion, wholly embedded, sharp switches: ``pi a^2 (A sigma_0 + N B rho_0 V^2)`` (the nose factor)."""
     surface = revolved_surface(PAPER, 0.5)
-    law = _records(SOIL, max_radius=surface.max_radius)
+    law = ring_records(SOIL, max_radius=surface.max_radius)
     fx, fz, my = PitchPlaneLoad(surface, law)(-5.0, math.pi / 2, (speed, 0.0), 0.0)
     assert -fx == pytest.approx(embedded_axial_force(PAPER, SOIL, speed), rel=1e-9)
     assert fz == 0.0 and my == 0.0

@@ -6,13 +6,12 @@ import math
 import numpy as np
 import pytest
 from scipy import integrate
-from support import meshed, slow_except
+from support import meshed, ring_records, slow_except
 
 from cases import load_scene, run_scene, scene_path, summarise
 from cases.scene import SceneError
 from cases.studies.reference import axial_depth_1d, check_nose_alone_presses, embedded_axial_force
 from fem_loads import DAFLLoads, mass_properties, resistance_law, surface_quadrature
-from fem_loads.law_record import pack
 from fem_loads.revolved import PitchPlaneLoad, revolved_surface
 from mesh import (
     BODY,
@@ -124,8 +123,7 @@ def test_a_flare_presses_in_axial_motion(speed):
     force, _ = loads(np.array([0.0, 0.0, -10.0]), np.array([0.0, 0.0, -speed]), DOWN, np.zeros(3))
     assert force[2] == pytest.approx(exact, rel=5e-3)
     surface = revolved_surface(FLARE, -float(centre[0]), nose_rings=24, shank_rings=24)
-    laws, _, _, effects = pack(SOIL, max_radius=surface.max_radius)
-    rings = PitchPlaneLoad(surface, (laws, effects))
+    rings = PitchPlaneLoad(surface, ring_records(SOIL, max_radius=surface.max_radius))
     assert -rings(-10.0, math.pi / 2, (speed, 0.0), 0.0)[0] == pytest.approx(exact, rel=1e-6)
     with pytest.raises(ValueError, match="flare"):
         check_nose_alone_presses(FLARE)

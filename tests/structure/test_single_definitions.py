@@ -38,12 +38,11 @@ NATIVE = {
 }
 #: compiled functions of :mod:`fem_loads.native` with no plain twin (they read the kernels' records)
 NATIVE_ONLY = ("law_stress", "call_user_law")
-#: the functions that may call the smooth step: its array wrapper and the factors
+#: the functions that may call the smooth step: the factors
 RAMP_CALLERS = [
     "fem_loads/factors.py:contact_factor_scalars",
     "fem_loads/factors.py:entry_factor_scalars",
     "fem_loads/factors.py:surface_factor_scalars",
-    "fem_loads/ramps.py:smooth_step",
 ]
 
 

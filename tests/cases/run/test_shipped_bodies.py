@@ -16,7 +16,7 @@ from cases.run import initial_state, prepare_projectile
 from cases.scene.target import build_law
 from docs.geometry.cad_bodies import occ_mass_properties
 from dynamics.quaternion import rotation_matrix
-from fem_loads.ramps import smooth_step
+from fem_loads.ramps import smooth_step_scalars
 
 SCENES = {"eroded": "cases/eroded_test2.toml", "finned": "cases/finned_test2.toml"}
 FILES = {"eroded": "cases/bodies/eroded_test2.step", "finned": "cases/bodies/finned_test2.step"}
@@ -100,7 +100,7 @@ def eroded_nose_loads(
     origin = np.array([length - bodies.ERODED_DEPTH / 1000, 0.0, 0.0])
 
     def sigma(vn):
-        ramp = smooth_step(np.clip(vn / (incidence * speed), 0.0, 1.0))
+        ramp = smooth_step_scalars(np.clip(vn / (incidence * speed), 0.0, 1.0))
         return np.where(vn > 0, ramp * (static + dynamic * vn**2), 0.0)
 
     def r_of(x):
