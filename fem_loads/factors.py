@@ -75,10 +75,9 @@ def contact_factor_scalars(
     without a fixed width) and ``offset`` 0 (one-sided: from 0 at ``Vn = 0`` to 1 at ``W``) or 1/2 (centred on
     ``Vn = 0``); sharp, 1 where ``Vn > threshold`` (m/s) and 0 elsewhere."""
     if smooth:
-        # on an array the augmented operation works in place (one temporary)
-        argument = normal_velocity * inverse_width
-        argument += offset
-        return smooth_step_scalars(argument)
+        if offset != 0.0:
+            return smooth_step_scalars(normal_velocity * inverse_width + offset)
+        return smooth_step_scalars(normal_velocity * inverse_width)  # one-sided: an array pass fewer
     return (normal_velocity > threshold) * 1.0
 
 
