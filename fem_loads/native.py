@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from llvmlite import ir
 from numba import njit, types
-from numba.extending import intrinsic, register_jitable
+from numba.extending import intrinsic, overload, register_jitable
 
 from . import factors
 from .exposure import cell_exposure_scalars, corner_exposure, cube_cell_scalars, fine_exposure
@@ -36,6 +36,14 @@ __all__ = [
     "cell_exposure",
     "law_stress",
 ]
+
+
+@overload(np.clip, inline="always")
+def _clip_float(a, a_min, a_max):  # type: ignore[no-untyped-def]  # numba matches the names, without annotations
+    """``np.clip`` on a float, which numba compiles only for arrays."""
+    float_clip = lambda a, a_min, a_max: np.minimum(np.maximum(a, a_min), a_max)  # noqa: E731
+    return float_clip if isinstance(a, types.Float) else None
+
 
 # every *_scalars function of fem_loads.factors (its factors and the smooth step it imports) as numba sees them
 # inside the pipeline, so that a new factor needs no line here (the plain functions stay plain)

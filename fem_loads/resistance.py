@@ -58,7 +58,8 @@ def polynomial_stress_scalars(normal_velocity: Any, depth: Any, c0: float, k: fl
     # on arrays the augmented operations work in place (one temporary)
     stress = np.abs(normal_velocity)
     stress *= c2
-    stress += c1
+    if c1 != 0.0:
+        stress += c1
     stress *= normal_velocity
     stress += c0
     if k != 0.0:
