@@ -175,14 +175,16 @@ class DAFLLoads:
             view.flags.writeable = False
         return views
 
-    def heights(self, position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
-        """Height (m) of every quadrature point above the front face; negative inside the target."""
-        return self._scatter(self._heights(*self._frame(position, rotation)))
+    def heights(self, position: np.ndarray, rotation: np.ndarray, face: FrontFace | None = None) -> np.ndarray:
+        """Height (m) of every quadrature point above the front face (or ``face``); negative inside the target."""
+        return self._scatter(self._heights(*self._frame(position, rotation, face)))
 
-    def _frame(self, position: np.ndarray, rotation: np.ndarray) -> tuple[float, float, float, float]:
-        """``(h, u0, u1, u2)``: the centre's height (m) above the front face and the face's normal in the body
-        frame (:func:`~fem_loads.target.face_frame_scalars`)."""
-        face = self.front_face
+    def _frame(
+        self, position: np.ndarray, rotation: np.ndarray, face: FrontFace | None = None
+    ) -> tuple[float, float, float, float]:
+        """``(h, u0, u1, u2)``: the centre's height (m) above the front face (or ``face``) and the face's normal in
+        the body frame (:func:`~fem_loads.target.face_frame_scalars`)."""
+        face = face or self.front_face
         return face_frame_scalars(position.tolist(), rotation.tolist(), face.normal, face.offset)
 
     def _heights(self, height: float, *up: float) -> np.ndarray:
@@ -210,10 +212,10 @@ class DAFLLoads:
         outside, with the centre ``height`` (m) above the front face."""
         return height + self.max_radius + self._half_entry < 0.0, height - self.max_radius - self._half_entry >= 0.0
 
-    def lowest_height(self, position: np.ndarray, rotation: np.ndarray) -> float:
-        """Height (m) of the lowest point of the loaded band, ``min(Z - l/2)``; negative once any point
-        carries load (with sharp entry, the lowest surface point)."""
-        heights = self.heights(position, rotation)
+    def lowest_height(self, position: np.ndarray, rotation: np.ndarray, face: FrontFace | None = None) -> float:
+        """Height (m) of the lowest point of the loaded band above the front face (or ``face``), ``min(H - l/2)``;
+        negative once any point carries load (with sharp entry, the lowest surface point)."""
+        heights = self.heights(position, rotation, face)
         return float((heights - 0.5 * self._entry_length).min() if self.entry_smoothing else heights.min())
 
     def _inverse_width(self, speed_scale: float) -> float:

@@ -27,6 +27,7 @@ from .user_law import UserLaw
 __all__ = [
     "FrontFace",
     "LEVEL",
+    "GAP",
     "face_height_scalars",
     "face_frame_scalars",
     "LayeredTarget",
@@ -51,9 +52,17 @@ class FrontFace:
         if not math.isfinite(self.offset):
             raise ValueError(f"front face offset = {self.offset}: must be a finite number (m)")
 
+    def behind(self, depth: float) -> FrontFace:
+        """The plane ``depth`` (m) below this face, facing back out of the target: a point's height above it is
+        its depth below this face less ``depth`` (``behind(0)``: the depth itself; ``behind(T)``: past a rear
+        face at ``T``)."""
+        return FrontFace((-self.normal[0], -self.normal[1], -self.normal[2]), depth - self.offset)
+
 
 #: the level half-space Z < 0
 LEVEL = FrontFace()
+#: the law of a gap between layers, and of the empty space behind a target's rear face: no stress
+GAP = ResistanceLaw(0.0, 0.0, "air")
 
 
 def face_height_scalars(position: Any, normal: Any, offset: float) -> Any:
@@ -82,7 +91,8 @@ class LayeredTarget:
     thicknesses : sequence of float
         Thickness (m) of every layer but the last, which extends to infinity.
     laws : sequence of ResistanceLaw or UserLaw
-        One law per layer (``len(thicknesses) + 1`` of them).
+        One law per layer (``len(thicknesses) + 1`` of them); :data:`GAP` for a gap, and as the last, the space
+        behind a target of finite thickness.
     """
 
     thicknesses: tuple[float, ...]
@@ -100,6 +110,11 @@ class LayeredTarget:
     def interfaces(self) -> np.ndarray:
         """The interfaces' depths (m below the surface), from the top down."""
         return np.cumsum(self.thicknesses)
+
+    @property
+    def rear_face(self) -> float:
+        """The depth (m) of the rear face, past which the target is empty (``inf`` for a half-space)."""
+        return float(self.interfaces[-1]) if self.laws[-1] == GAP else math.inf
 
     def normal_stress(
         self, normal_velocity: np.ndarray, depth: np.ndarray, lengths: np.ndarray | None = None

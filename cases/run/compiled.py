@@ -224,26 +224,34 @@ def _dafl_step() -> Callable[..., None]:
 
 def compiled_step(
     loads: DAFLLoads, method: RungeKutta, body: RigidBody, weight: np.ndarray | None
-) -> tuple[CompiledLoad, CompiledRungeKutta, Callable[[np.ndarray, np.ndarray], float]]:
+) -> tuple[CompiledLoad, CompiledRungeKutta, Callable[..., float]]:
     """The compiled load, Runge-Kutta step and exit height for a scene's loads (a ``DAFLLoads``).
 
     Returns ``(load, method, lowest_height)``: a :class:`~dynamics.compiled.CompiledLoad` (plus
     ``weight``, N, world frame, when given), the :class:`~dynamics.compiled.CompiledRungeKutta` of
-    ``method``, and ``lowest_height(position, attitude)`` for the exit event.
+    ``method``, and ``lowest_height(position, attitude, face=None)`` for the exit events
+    (:meth:`fem_loads.DAFLLoads.lowest_height`).
     """
     announce_compiling("dafl_step")
     step, load = _import_compiled()
     from dynamics.quaternion import rotation_matrix
+    from fem_loads.kernel_layout import DATA_EFFECTS
+    from fem_loads.target import FrontFace
 
     data = load.kernel_data(loads)
     compiled_load = step.CompiledLoad(load.dafl_kernel, data, _dafl_step(), weight)
     compiled_method = step.CompiledRungeKutta(method)
     _warm(compiled_load, compiled_method, body, data, load.lowest_height_kernel)
-    return (
-        compiled_load,
-        compiled_method,
-        lambda position, attitude: load.lowest_height_kernel(data, position, rotation_matrix(attitude)),
-    )
+    facing: dict[FrontFace, tuple[np.ndarray, ...]] = {}
+
+    def lowest_height(position: np.ndarray, attitude: np.ndarray, face: FrontFace | None = None) -> float:
+        if face is not None and face not in facing:  # the kernel's arrays with this face in the effects record
+            effects = data[DATA_EFFECTS].copy()
+            effects["face_normal"], effects["face_offset"] = face.normal, face.offset
+            facing[face] = data[:DATA_EFFECTS] + (effects,) + data[DATA_EFFECTS + 1 :]
+        return load.lowest_height_kernel(data if face is None else facing[face], position, rotation_matrix(attitude))
+
+    return compiled_load, compiled_method, lowest_height
 
 
 def _warm(

@@ -101,6 +101,7 @@ def history_columns(result: RunResult) -> dict[str, np.ndarray]:
     rotation = np.array([rotation_matrix(q) for q in tr.attitude])
     axis = rotation[:, :, 0]
     tip = tr.position + rotation @ result.prepared.tip
+    face = result.scene.target.face
     speed = np.linalg.norm(tr.velocity, axis=1)
     direction = tr.velocity / np.where(speed > 0, speed, 1.0)[:, None]
     total_attack = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", axis, direction), -1.0, 1.0)))
@@ -123,7 +124,7 @@ def history_columns(result: RunResult) -> dict[str, np.ndarray]:
         "velocity_z": tr.velocity[:, 2],
         "speed": speed,
         "path_length": tr.path_length,
-        "tip_depth": -tip[:, 2],
+        "tip_depth": face.offset - tip @ np.asarray(face.normal),  # below the front face
         "attitude_w": tr.attitude[:, 0],
         "attitude_x": tr.attitude[:, 1],
         "attitude_y": tr.attitude[:, 2],

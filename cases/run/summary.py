@@ -9,15 +9,17 @@ import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any, NamedTuple
 
 import numpy as np
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 
+from dynamics.quaternion import rotation_matrix
+
 from ..scene import Numerics, Scene
 from .history import ATTACK_ANGLE_SPEED_FRACTION, HISTORY_UNITS, attack_angle_peak, history_columns, history_csv
 from .persistence import atomic_write, atomic_write_text, json_safe
-from .runner import COARSE_ERROR, COARSE_TURN, RunResult, run_scene
+from .runner import COARSE_ERROR, COARSE_TURN, EXITED, PERFORATED, RICOCHETED, STOPPED, RunResult, run_scene
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -67,7 +69,9 @@ class RunSummary(BaseModel):
     scene: str = Field(description="the scene's name")
     depth: Real = _quantity("m", "largest depth of the nose tip below the surface")
     path_length: Real = _quantity("m", "distance travelled by the centre of mass")
-    end_reason: str = Field(description="stopped, exited, time_limit, non_finite, step_floor or max_steps")
+    end_reason: str = Field(
+        description="stopped, exited, perforated, ricocheted, time_limit, non_finite, step_floor or max_steps"
+    )
     final_time: Real = _quantity("s", "time at the end of the run")
     final_speed: Real = _quantity("m/s", "speed at the end of the run")
     final_position: list[Real] = _quantity("m", "centre of mass at the end, world frame")
@@ -77,6 +81,27 @@ class RunSummary(BaseModel):
     )
     final_attack_angle: Real = _quantity("deg", "signed attack angle in the vertical plane at the end")
     axis_angle_change: Real = _quantity("deg", "turn of the axis in the vertical plane over the run")
+    residual_velocity: Real = Field(
+        math.nan, description="speed after perforation (NaN unless perforated)", json_schema_extra={"unit": "m/s"}
+    )
+    exit_time: Real = Field(
+        math.nan,
+        description="when the whole body left the target: perforated, exited or ricocheted (NaN otherwise)",
+        json_schema_extra={"unit": "s"},
+    )
+    exit_axis_angle: Real = Field(
+        math.nan,
+        description="at exit, the axis's angle from the outward normal of the face it left through",
+        json_schema_extra={"unit": "deg"},
+    )
+    exit_velocity_angle: Real = Field(
+        math.nan,
+        description="at exit, the velocity's angle from the outward normal of the face it left through",
+        json_schema_extra={"unit": "deg"},
+    )
+    exit_attack_angle: Real = Field(
+        math.nan, description="at exit, the angle between the axis and the velocity", json_schema_extra={"unit": "deg"}
+    )
     wall_time: Real = _quantity("s", "the whole run, preparation included")
     integration_time: Real = _quantity("s", "the time integration alone")
     mass: Real = _quantity("kg", "mass of the projectile")
@@ -113,6 +138,7 @@ def summarise(result: RunResult, history: pd.DataFrame | Mapping[str, np.ndarray
 
     mass = result.prepared.mass
     stats = result.trajectory.statistics
+    leaving = exit_quantities(result)
     return RunSummary(
         scene=result.scene.name,
         depth=float(np.max(column("tip_depth"))),
@@ -124,6 +150,11 @@ def summarise(result: RunResult, history: pd.DataFrame | Mapping[str, np.ndarray
         max_attack_angle=float(column("total_attack_angle")[attack_angle_peak(h)]),
         final_attack_angle=float(column("attack_angle")[-1]),
         axis_angle_change=float(column("axis_angle")[-1] - column("axis_angle")[0]),
+        residual_velocity=leaving.residual_velocity,
+        exit_time=leaving.exit_time,
+        exit_axis_angle=leaving.exit_axis_angle,
+        exit_velocity_angle=leaving.exit_velocity_angle,
+        exit_attack_angle=leaving.exit_attack_angle,
         wall_time=result.wall_time,
         integration_time=result.integration_time,
         mass=mass.mass,
@@ -147,6 +178,42 @@ def summarise(result: RunResult, history: pd.DataFrame | Mapping[str, np.ndarray
         + numerics_warnings(result.scene.numerics)
         + entry_warnings(result.scene, result.prepared.nose_length)
         + axis_warnings(result.prepared),
+    )
+
+
+class ExitQuantities(NamedTuple):
+    """The summary's exit fields (:class:`RunSummary`), NaN for a run that did not leave the target."""
+
+    residual_velocity: float = math.nan
+    exit_time: float = math.nan
+    exit_axis_angle: float = math.nan
+    exit_velocity_angle: float = math.nan
+    exit_attack_angle: float = math.nan
+
+
+def exit_quantities(result: RunResult) -> ExitQuantities:
+    """The exit fields of a run that left the target (``residual_velocity`` after perforation alone): its final
+    state, where the exit event ended it."""
+    end, trajectory = result.trajectory.end_reason, result.trajectory
+    if end not in (PERFORATED, EXITED, RICOCHETED):
+        return ExitQuantities()
+    inward = -np.asarray(result.scene.target.face.normal)
+    outward = inward if end == PERFORATED else -inward  # the rear face's outward normal, or the front face's
+    axis = rotation_matrix(trajectory.attitude[-1])[:, 0]
+    velocity = trajectory.velocity[-1]
+    speed = float(np.linalg.norm(velocity))
+    direction = velocity / speed if speed > 0.0 else velocity
+
+    def angle(a: np.ndarray, b: np.ndarray) -> float:
+        return math.degrees(math.acos(min(1.0, max(-1.0, float(a @ b)))))
+
+    moving = speed > 0.0  # a body at rest has no direction of motion
+    return ExitQuantities(
+        speed if end == PERFORATED else math.nan,
+        float(trajectory.time[-1]),
+        angle(axis, outward),
+        angle(direction, outward) if moving else math.nan,
+        angle(axis, direction) if moving else math.nan,
     )
 
 
@@ -226,7 +293,7 @@ def run_warnings(end_reason: str, statistics: dict) -> list[str]:
     """
     steps = max(1, int(statistics.get("steps") or 0))
     warnings = []
-    if end_reason not in ("stopped", "exited"):
+    if end_reason not in (STOPPED, EXITED, PERFORATED, RICOCHETED):
         warnings.append(f"the run ended by {end_reason}, not by stopping or leaving the target")
     retaken = int(statistics.get("energy_rejections") or 0)
     if retaken > WARN_SHARE * steps:

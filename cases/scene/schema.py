@@ -194,4 +194,5 @@ class Scene(Strict):
             **effects.contact_ramp,
             entry_smoothing=self.numerics.entry_smoothing,
             exposure=effects.exposure,
+            front_face=self.target.face,
         )

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import math
 from typing import Annotated, Any, Literal, Self
 
 from pydantic import Discriminator, Tag, field_validator, model_validator
@@ -16,7 +17,7 @@ from fem_loads.resistance import (
     locking_cavity_expansion,
     resistance_law,
 )
-from fem_loads.target import FreeSurface, Friction, LayeredTarget
+from fem_loads.target import GAP, LEVEL, FreeSurface, Friction, FrontFace, LayeredTarget
 from fem_loads.user_law import LawError, UserLaw, user_law
 
 from .base import Label, Number, Strict, field
@@ -232,20 +233,36 @@ def _check_law_name(value: object) -> object:
     return value
 
 
+#: the law name of a gap between layers: empty space, no stress
+AIR = "air"
+
+
 class LayerSpec(Strict):
-    """One layer of a layered target; the last layer has no thickness (it goes on forever)."""
+    """One layer of a layered target, or a gap (``law = "air"``); the last layer without a thickness goes on
+    forever, with one the target ends at its rear face."""
 
     thickness: Number | None = field(None, unit="m", gt=0.0, le=1e4)
-    law: LawChoice = field(description="a named law or a table of its coefficients")
+    law: LawChoice = field(description='a named law, a table of its coefficients, or "air" for a gap')
 
-    _known_name = field_validator("law")(classmethod(lambda cls, value: _check_law_name(value)))
+    _known_name = field_validator("law")(
+        classmethod(lambda cls, value: value if value == AIR else _check_law_name(value))
+    )
 
 
 class Target(Strict):
-    """The half-space below the plane ``Z = 0``: homogeneous (``law``) or layered (``layers``)."""
+    """The target below its front face, the plane ``Z = 0`` turned about ``Y`` by ``inclination``: homogeneous
+    (``law``) or layered (``layers``), a half-space or, when the last layer has a thickness, a slab."""
 
     law: LawChoice = field("soil", description="a named law or a table of its coefficients")
-    layers: list[LayerSpec] | None = field(None, description="layers from the surface down")
+    layers: list[LayerSpec] | None = field(None, description="layers from the front face in")
+    inclination: Number = field(
+        0.0,
+        unit="deg",
+        gt=-90.0,
+        lt=90.0,
+        description="turn of the front face and every interface about the Y axis: the face's normal leans from +Z"
+        " towards +X, so a vertical shot meets it as a level target meets oblique_angle = inclination",
+    )
 
     _known_name = field_validator("law")(classmethod(lambda cls, value: _check_law_name(value)))
 
@@ -259,17 +276,54 @@ class Target(Strict):
             raise ValueError("layers: give at least one layer")
         if any(layer.thickness is None for layer in self.layers[:-1]):
             raise ValueError("layers: every layer but the last needs a thickness (m)")
-        if self.layers[-1].thickness is not None:
-            raise ValueError("layers: the last layer goes on forever; drop its thickness")
+        gaps = [layer.law == AIR for layer in self.layers]
+        if gaps[0] or gaps[-1]:
+            raise ValueError(
+                'layers: a gap (law = "air") lies between two layers (allowed: not the first layer, where the'
+                " target starts at its first material, nor the last, where it ends)"
+            )
         return self
 
+    @property
+    def face(self) -> FrontFace:
+        """The front face, through the origin, its normal turned from +Z towards +X by the inclination."""
+        if self.inclination == 0.0:
+            return LEVEL
+        angle = math.radians(self.inclination)
+        return FrontFace((math.sin(angle), 0.0, math.cos(angle)), 0.0)
+
+    @property
+    def thickness(self) -> float:
+        """The depth (m) of the rear face below the front face: ``inf`` for a half-space."""
+        layers = self.layers or []
+        return (
+            math.inf if not layers or layers[-1].thickness is None else sum(layer.thickness or 0.0 for layer in layers)
+        )
+
+    @property
+    def inner_faces(self) -> tuple[float, ...]:
+        """The depths (m below the front face) of the faces inside the target: its layers' interfaces and its rear
+        face, if it has one."""
+        depths, top = [], 0.0
+        for layer in self.layers or []:
+            if layer.thickness is not None:
+                top += layer.thickness
+                depths.append(top)
+        return tuple(depths)
+
+    def build_rear_face(self) -> FrontFace | None:
+        """The plane past which the whole body has perforated the target, facing out of its rear (a point's height
+        above it is its depth below the rear face); None for a half-space."""
+        return None if math.isinf(self.thickness) else self.face.behind(self.thickness)
+
     def build(self) -> ResistanceLaw | UserLaw | LayeredTarget:
-        """The law of a homogeneous target, or the layers."""
+        """The law of a homogeneous target, or the layers (a gap's law, and behind a slab's rear face,
+        :data:`~fem_loads.target.GAP`)."""
         if self.layers is None:
             return build_law(self.law)
-        # every layer but the last has its thickness (_layers_consistent)
-        thicknesses = tuple(layer.thickness for layer in self.layers[:-1] if layer.thickness is not None)
-        return LayeredTarget(thicknesses, tuple(build_law(layer.law) for layer in self.layers))
+        laws = tuple(GAP if layer.law == AIR else build_law(layer.law) for layer in self.layers)
+        thicknesses = tuple(layer.thickness for layer in self.layers if layer.thickness is not None)
+        return LayeredTarget(thicknesses, laws + ((GAP,) if len(thicknesses) == len(laws) else ()))
 
 
 class FrictionSpec(Strict):

@@ -362,6 +362,11 @@ def check_supported(scene: Scene) -> None:
             "target.law.strength_table: penetrate predict takes strength that grows with depth as depth_gradient"
             " only; drop the table (penetrate critical runs it)"
         )
+    if scene.target.inclination != 0.0:
+        raise InputError(
+            "target.inclination: penetrate predict needs a level target (inclination 0); the same shot into a"
+            " level target has impact.oblique_angle + inclination as its oblique angle"
+        )
     if effects.free_surface is not None:
         raise InputError("effects.free_surface: penetrate predict has no free-surface reduction; drop it")
     if not effects.separation:

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 from scipy import integrate
@@ -51,6 +51,11 @@ __all__ = [
     "axial_force",
     "nose_factors",
     "check_nose_alone_presses",
+    "Layer",
+    "target_layers",
+    "layered_axial_force",
+    "slab_run_1d",
+    "ballistic_limit_1d",
 ]
 
 
@@ -307,3 +312,128 @@ def _axial_depth_contact(
     # embedded: F depends on V alone; integrate until the speed falls to stop_speed
     rest = _integrate(rate, [p1, v1], stop_speed, rtol)
     return float(rest.y_events[0][0][0]) if len(rest.t_events[0]) else float(rest.y[0, -1]), v1
+
+
+class Layer(NamedTuple):
+    """A slice of the target along the axis of a normal impact: from ``top`` to ``bottom`` (m below the front face;
+    ``bottom`` may be ``inf``) with its ``law``, or None for a gap."""
+
+    top: float
+    bottom: float
+    law: ResistanceLaw | UserLaw | None
+
+
+def target_layers(thicknesses: list[float | None], laws: list[ResistanceLaw | UserLaw | None]) -> list[Layer]:
+    """The :class:`Layer` slices of layers given front to back by their thicknesses (m; None for the last: it
+    goes on forever) and laws (None: a gap)."""
+    layers, top = [], 0.0
+    for thickness, law in zip(thicknesses, laws):
+        bottom = math.inf if thickness is None else top + thickness
+        layers.append(Layer(top, bottom, law))
+        top = bottom
+    return layers
+
+
+_GAUSS_LAYER = np.polynomial.legendre.leggauss(400)
+
+
+def layered_axial_force(
+    profile: Profile,
+    layers: list[Layer],
+    depth: float,
+    speed: float,
+    contact_width: float = 0.0,
+    contact_incidence: float = 0.0,
+    contact: str = "one_sided",
+) -> float:
+    """Axial force (N) on the nose with its tip ``depth`` (m) below the front face at ``speed`` (m/s) in a target of
+    :class:`Layer` slices with sharp faces: :func:`axial_force`'s integral taken over the part of the nose inside
+    each slice by its own 400-point Gauss-Legendre rule (the integrand jumps at each face), gaps and the space
+    behind the last slice unloaded.  An element ``s`` behind the tip lies ``depth - s`` deep."""
+    width = contact_width + contact_incidence * speed
+    offset = 0.5 if contact == "centred" else 0.0
+    x, weights = _GAUSS_LAYER
+
+    def factor(normal_velocity: np.ndarray) -> np.ndarray:
+        return np.asarray(
+            contact_factor_scalars(normal_velocity, width > 0.0, 1.0 / width if width > 0.0 else 0.0, offset, 0.0)
+        )
+
+    force = 0.0
+    for layer in layers:
+        if layer.law is None:
+            continue
+        start, end = max(0.0, depth - layer.bottom), min(profile.nose_length, depth - layer.top)
+        if end > start:
+            s = start + 0.5 * (end - start) * (x + 1.0)
+            slope = profile.slope_at(s)
+            normal_velocity = speed * slope / np.sqrt(1.0 + slope**2)
+            stress = layer.law.normal_stress(normal_velocity, depth - s) * factor(normal_velocity)
+            force += 0.5 * (end - start) * float(np.sum(weights * 2 * np.pi * profile.radius_at(s) * slope * stress))
+        if profile.tip_radius > 0.0 and layer.top < depth < layer.bottom:  # a blunt nose's flat face, head on
+            face = float(layer.law.normal_stress(np.array([speed]), depth)[0] * factor(np.array([speed]))[0])
+            force += math.pi * profile.tip_radius**2 * face
+    return force
+
+
+def slab_run_1d(
+    profile: Profile,
+    layers: list[Layer],
+    mass: float,
+    speed: float,
+    stop_speed: float = 0.0,
+    rtol: float = 1e-10,
+    **contact_ramp: Any,
+) -> tuple[float, float]:
+    """A normal impact at ``speed`` (m/s) into the :class:`Layer` slices, integrated along the axis
+    (``dP/dt = V, m dV/dt = -F(P, V)``, :func:`layered_axial_force`, ``contact_ramp`` its contact keywords) until
+    the speed falls to ``stop_speed`` or the whole nose has passed the last slice's rear face (nothing behind the
+    nose presses in axial motion).
+
+    Returns
+    -------
+    residual_velocity : float
+        The speed (m/s) once the nose is through, NaN if the body stopped.
+    depth : float
+        The tip's depth (m) at the end.
+    """
+    check_nose_alone_presses(profile)
+    rear = max(layer.bottom for layer in layers if layer.law is not None)
+    if math.isinf(rear):
+        raise ValueError("the target has no rear face: the body cannot pass through it")
+
+    def rate(t: float, y: np.ndarray) -> list[float]:
+        return [y[1], -layered_axial_force(profile, layers, y[0], y[1], **contact_ramp) / mass]
+
+    # the force has kinks where a face passes the tip or the nose's base: stop at each and start again
+    kinks = sorted(
+        {top + at for layer in layers for top in (layer.top, layer.bottom) for at in (0.0, profile.nose_length)}
+    )
+    state = [0.0, speed]
+    for kink in [k for k in kinks if 0.0 < k <= rear + profile.nose_length]:
+        if state[0] >= kink:
+            continue
+        run = _integrate(rate, state, stop_speed, rtol, embedded_at=kink)
+        if len(run.t_events[0]) == 0:
+            return math.nan, float(run.y[0, -1]) if len(run.t_events[1]) == 0 else float(run.y_events[1][0][0])
+        state = [float(v) for v in run.y_events[0][0]]
+    return state[1], state[0]
+
+
+def ballistic_limit_1d(
+    profile: Profile, layers: list[Layer], mass: float, relative: float = 1e-6, **contact_ramp: Any
+) -> float:
+    """The lowest speed (m/s) at which :func:`slab_run_1d` passes the nose through the slices, by bisection to
+    ``relative``: below it the body stops inside."""
+    low, high = 1.0, 100.0
+    while math.isfinite(slab_run_1d(profile, layers, mass, low, **contact_ramp)[0]):
+        low /= 10.0  # a target so thin that even this speed goes through
+    while math.isnan(slab_run_1d(profile, layers, mass, high, **contact_ramp)[0]):
+        low, high = high, 2.0 * high
+    while high - low > relative * high:
+        middle = 0.5 * (low + high)
+        if math.isnan(slab_run_1d(profile, layers, mass, middle, **contact_ramp)[0]):
+            low = middle
+        else:
+            high = middle
+    return 0.5 * (low + high)

@@ -1355,3 +1355,50 @@ def test_a_user_law_is_used_or_refused_in_one_line(tmp_path_factory, case):
     compiled = [built.compiled()(v, z, *built.parameter_values) for v, z in zip(speeds, depths)]
     np.testing.assert_allclose(compiled, plain, rtol=1e-12)
     assert np.all(np.isfinite(plain)) and np.all(plain >= 0.0)
+
+
+# ---------------------------------------------------------------------------
+# targets: layers, gaps, slabs and inclined faces
+
+LAYER_LAWS = st.sampled_from(["soil", "air", "clay", {"model": "polynomial", "c0": 1e6}, 3, None])
+THICKNESSES = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True), st.sampled_from([-1.0, 0.0, 1e-9, 0.5, 2.0, 1e5, "1"])
+)
+LAYERS = st.lists(st.fixed_dictionaries({"law": LAYER_LAWS}, optional={"thickness": THICKNESSES}), max_size=5)
+INCLINATIONS = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True), st.sampled_from([-90.0, -89.999, 0.0, 30.0, 89.999, 90.0, 120.0])
+)
+TARGETS = st.fixed_dictionaries(
+    {}, optional={"layers": st.one_of(LAYERS, st.just("x")), "law": LAYER_LAWS, "inclination": INCLINATIONS}
+)
+
+
+@fuzz(300)
+@given(target=TARGETS)
+@example(target={"layers": [{"thickness": 1.0, "law": "soil"}, {"thickness": 0.5, "law": "air"}, {"law": "soil"}]})
+@example(target={"layers": [{"thickness": 2.0, "law": "soil"}], "inclination": 30.0})
+def test_a_target_is_used_or_refused_in_one_line(target):
+    """Any layers (gaps, slabs, bad thicknesses) and inclination: a valid target whose faces are consistent, or a
+    refusal in one line that names the target's field."""
+    try:
+        scene = load_scene(GOOD, [("target", target)])
+    except SceneError as exc:
+        check_error(str(exc), GOOD)
+        assert f"{GOOD}: target" in str(exc), str(exc)
+        OUTCOMES["targets"]["refused"] += 1
+        return
+    check_scene(scene)
+    OUTCOMES["targets"]["valid"] += 1
+    spec = scene.target
+    faces, thickness = spec.inner_faces, spec.thickness
+    assert all(math.isfinite(d) and d > 0.0 for d in faces) and list(faces) == sorted(faces)
+    normal = np.array(spec.face.normal)
+    assert abs(normal @ normal - 1.0) < 1e-12 and normal[1] == 0.0 and normal[2] > 0.0
+    built = spec.build()
+    if spec.layers is None:
+        assert math.isinf(thickness) and not faces
+        return
+    assert list(built.interfaces) == pytest.approx(list(faces), rel=1e-12)
+    assert built.rear_face == thickness or math.isinf(built.rear_face) and math.isinf(thickness)
+    gaps = [layer.law == "air" for layer in spec.layers]
+    assert not gaps[0] and not gaps[-1]
