@@ -100,6 +100,35 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
     )
     stability.add_argument("--json", action="store_true", help="print the map as one JSON object")
     stability.set_defaults(handler=stability_map)
+    limit = commands.add_parser(
+        "ballistic-limit",
+        help="find the lowest impact speed that perforates a target with a rear face (guided, resumable)",
+    )
+    add_scene_options(limit)
+    add_pool_options(limit, "runs/store")
+    limit.add_argument(
+        "--speeds",
+        type=speed_range,
+        default=(10.0, 2000.0),
+        metavar="LOW:HIGH",
+        help="the range of impact speeds searched, m/s (default 10:2000)",
+    )
+    limit.add_argument(
+        "--resolution",
+        type=positive_float,
+        default=1.0,
+        metavar="M/S",
+        help="search until a run that perforates and one that does not are this close (default 1 m/s)",
+    )
+    limit.add_argument(
+        "--guide",
+        choices=("auto", "none"),
+        default="auto",
+        help="auto (default): the first bracket around the 1-D model's limit where it applies (a normal impact"
+        " of a body of revolution without friction, docs/targets.md); none: split the range",
+    )
+    limit.add_argument("--json", action="store_true", help="print the result as one JSON object")
+    limit.set_defaults(handler=ballistic_limit)
     predict = commands.add_parser(
         "predict",
         help="predict both characteristic speeds without a full trajectory (reduced pitch-plane model, docs/theory.md)",
@@ -206,6 +235,31 @@ def convergent_speed(args: argparse.Namespace) -> int:
     if result.characteristic_convergent_velocity is None:
         return 1
     print(f"characteristic convergent velocity {result.characteristic_convergent_velocity:.1f} m/s")
+    return 0
+
+
+def ballistic_limit(args: argparse.Namespace) -> int:
+    from ..studies.ballistic import find_ballistic_limit
+
+    sweep, store = _inputs(args)
+    with study(args) as pool:
+        result = find_ballistic_limit(sweep, store, args.speeds, args.resolution, pool, args.guide == "auto")
+    if args.json:
+        print(json.dumps(result.as_dict()))
+        return 0 if result.ballistic_limit is not None else 1
+    print(f"guide: {result.guide}")
+    for run in result.runs:
+        residual = f"residual velocity {run.residual_velocity:8.2f} m/s" if run.perforated else ""
+        print(f"{run.speed:10.3f} m/s   {run.end_reason:11s} {residual}")
+    runs = f"{len(result.runs)} full runs in {result.rounds} round" + ("s" if result.rounds != 1 else "")
+    if result.ballistic_limit is None:
+        print(f"{result.message} ({runs}): widen --speeds")
+        return 1
+    assert result.bracket is not None  # a limit is found with its bracket
+    print(
+        f"ballistic limit {result.ballistic_limit:.2f} m/s (between {result.bracket[0]:g} and"
+        f" {result.bracket[1]:g} m/s; {runs})"
+    )
     return 0
 
 

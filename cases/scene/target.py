@@ -6,7 +6,14 @@ import functools
 import math
 from typing import Annotated, Any, Literal, Self
 
-from pydantic import Discriminator, Tag, field_validator, model_validator
+from pydantic import (
+    Discriminator,
+    SerializerFunctionWrapHandler,
+    Tag,
+    field_validator,
+    model_serializer,
+    model_validator,
+)
 
 from fem_loads.resistance import (
     LAW_FAMILIES,
@@ -283,6 +290,14 @@ class Target(Strict):
                 " target starts at its first material, nor the last, where it ends)"
             )
         return self
+
+    @model_serializer(mode="wrap")
+    def _without_unused_law(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
+        # a layered target's law is unused: left out, the dump reads back as the same target
+        data = handler(self)
+        if self.layers is not None:
+            data.pop("law", None)
+        return data
 
     @property
     def face(self) -> FrontFace:

@@ -210,6 +210,7 @@ def test_a_run_in_process_leaves_the_process_as_it_was(monkeypatch):
 STUDY_COMMANDS = {
     "sweep": [],
     "critical": [],
+    "ballistic-limit": [],
     "convergent": [],
     "compare": ["--laws", "soil"],
     "accuracy": [],
