@@ -51,6 +51,21 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _exit_line(s: RunSummary) -> list[str]:
+    """How the body left the target, if it did: through the rear face, or back out through the front face."""
+    if s.end_reason == "perforated":
+        return [
+            f"perforated     residual velocity {s.residual_velocity:.4g} m/s at t = {s.exit_time:.6g} s; axis"
+            f" {s.exit_axis_angle:.4g} deg from the rear face's normal, attack angle {s.exit_attack_angle:.4g} deg"
+        ]
+    if s.end_reason in ("exited", "ricocheted"):
+        return [
+            f"{s.end_reason:15s}out of the front face at {s.final_speed:.4g} m/s, t = {s.exit_time:.6g} s; velocity"
+            f" {s.exit_velocity_angle:.4g} deg from its normal, attack angle {s.exit_attack_angle:.4g} deg"
+        ]
+    return []
+
+
 def human_summary(s: RunSummary, scene: Scene) -> str:
     """The summary of a run for a person: a line each for the projectile, the end, depth, path, angles, time."""
     lines = [
@@ -58,7 +73,8 @@ def human_summary(s: RunSummary, scene: Scene) -> str:
         f"projectile     {s.mass:.4g} kg, centre of mass {s.centre_of_mass_from_tip:.4g} m behind the tip,"
         f" transverse inertia {s.transverse_inertia:.4g} kg m^2, {s.surface_points} surface points",
         f"end            {s.end_reason} at t = {s.final_time:.6g} s, speed {s.final_speed:.4g} m/s",
-        f"depth          {s.depth:.4f} m (nose tip below the surface)",
+        f"depth          {s.depth:.4f} m (nose tip below the front face)",
+        *_exit_line(s),
         f"path length    {s.path_length:.4f} m (centre of mass)",
         f"attack angle   max {s.max_attack_angle:.4g} deg, final {s.final_attack_angle:.4g} deg;"
         f" axis angle change {s.axis_angle_change:.4g} deg",

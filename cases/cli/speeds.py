@@ -98,6 +98,13 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
         metavar="DIR",
         help="where to write map.csv, .json, .md and map.png (default runs/map)",
     )
+    stability.add_argument(
+        "--quantity",
+        choices=("critical_velocity", "ballistic_limit"),
+        default="critical_velocity",
+        help="what each point searches: the critical impact velocity (default) or the ballistic limit of a"
+        " target with a rear face (then --guide auto is the 1-D model's guide, --resolution its, default 5 m/s)",
+    )
     stability.add_argument("--json", action="store_true", help="print the map as one JSON object")
     stability.set_defaults(handler=stability_map)
     limit = commands.add_parser(
@@ -310,6 +317,7 @@ def stability_map(args: argparse.Namespace) -> int:
             args.resolution,
             pool,
             args.guide,
+            args.quantity,
         )
     if args.json:
         print(json.dumps(record))

@@ -9,8 +9,8 @@ Sobol' points are a prefix of one sequence, so raising the number of runs keeps 
 samples (and their stored runs); a Latin hypercube is made for its size and cannot be extended.
 
 Each run's outcomes (:func:`outcomes`) are ``unstable`` (the axis turned by at least 30 degrees,
-:func:`~cases.studies.speeds.is_unstable`, as ``penetrate critical`` decides), ``exited`` and
-``stopped`` (its end reason) and ``failed`` (an error ended it).  :func:`estimate` gives each
+:func:`~cases.studies.speeds.is_unstable`, as ``penetrate critical`` decides), ``exited``, ``stopped``,
+``perforated`` and ``ricocheted`` (its end reason) and ``failed`` (an error ended it).  :func:`estimate` gives each
 outcome's probability with a 95 % Wilson score interval (:func:`wilson_interval`), and
 :func:`curve` the same in bins of one sampled key (``--by KEY=START:STOP:STEP``, :func:`parse_bins`).
 """
@@ -61,7 +61,7 @@ FORMS = {
     "choice": "choice:V1,V2,...",
 }
 DESIGNS = ("random", "sobol", "lhs")
-OUTCOMES = ("unstable", "exited", "stopped", "failed")
+OUTCOMES = ("unstable", "exited", "stopped", "failed", "perforated", "ricocheted")
 CONFIDENCE = 0.95
 _ALLOWED = "allowed: " + ", ".join(FORMS.values())
 _TINY = 2.0**-53  # unit points are kept inside (0, 1), where every ppf is finite
@@ -330,6 +330,8 @@ def outcomes(result: SweepResult) -> pd.DataFrame:
                 "exited": s is not None and s.end_reason == "exited",
                 "stopped": s is not None and s.end_reason == "stopped",
                 "failed": s is None,
+                "perforated": s is not None and s.end_reason == "perforated",
+                "ricocheted": s is not None and s.end_reason == "ricocheted",
             }
         )
     return pd.DataFrame(rows, columns=list(OUTCOMES), dtype=bool)
@@ -338,12 +340,14 @@ def outcomes(result: SweepResult) -> pd.DataFrame:
 def estimate(table: pd.DataFrame) -> dict[str, Estimate]:
     """Each outcome's :class:`Estimate` from an :func:`outcomes` table.
 
-    ``failed`` is counted over every run; ``unstable``, ``exited`` and ``stopped`` over the runs
-    that finished, so that a failed run counts neither for nor against them.
+    ``failed`` is counted over every run, the other outcomes over the runs that finished, so that a failed run
+    counts neither for nor against them.  Outcomes without a column in ``table`` are left out.
     """
     finished = int((~table["failed"]).sum())
     return {
-        name: Estimate.of(int(table[name].sum()), len(table) if name == "failed" else finished) for name in OUTCOMES
+        name: Estimate.of(int(table[name].sum()), len(table) if name == "failed" else finished)
+        for name in OUTCOMES
+        if name in table
     }
 
 

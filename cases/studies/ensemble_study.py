@@ -204,7 +204,13 @@ def _table(result: SweepResult) -> pd.DataFrame:
 
 
 #: the distributions an ensemble reports: run quantities and their units
-DISTRIBUTED = {"depth": "m", "path_length": "m", "axis_angle_change": "deg", "convergence_speed": "m/s"}
+DISTRIBUTED = {
+    "depth": "m",
+    "path_length": "m",
+    "axis_angle_change": "deg",
+    "convergence_speed": "m/s",
+    "residual_velocity": "m/s",
+}
 QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
 
 
@@ -254,7 +260,7 @@ def _markdown(record: dict, table: pd.DataFrame, name: str) -> str:
     lines += [
         "",
         "(quantiles over the finished runs; the convergence speed over the runs whose attack angle"
-        " peaked and fell below 0.1 degree)",
+        " peaked and fell below 0.1 degree, the residual velocity over the runs that perforated)",
     ]
     lines += ["", "| outcome | probability | 95 % interval |", "|---|---|---|"]
     for outcome in OUTCOMES:
@@ -327,7 +333,7 @@ def _curve_figure(record: dict, path: Path) -> None:
     fig, ax = subplots(1, 1, figsize=(7.6, 4.2))
     middles = [0.5 * (b["bin"][0] + b["bin"][1]) for b in record["curve"]]
     # an outcome that no run had would only lay its band over the others: left out, and said so
-    shown = [o for o in OUTCOMES if any(b[o] for b in record["curve"] if b[o] is not None and b[o] == b[o])]
+    shown = [o for o in OUTCOMES if any(b.get(o) for b in record["curve"] if b.get(o) is not None and b[o] == b[o])]
     for outcome in shown:
         p = [b[outcome] for b in record["curve"]]
         low, high = ([b["interval"][outcome][i] for b in record["curve"]] for i in (0, 1))

@@ -1,8 +1,10 @@
-"""``penetrate map``: the critical impact velocity over a grid of one or two scene inputs.
+"""``penetrate map``: the critical impact velocity, or the ballistic limit, over a grid of one or two scene inputs.
 
 Each point of the grid is a critical-speed search of the scene with those inputs set
 (:func:`~cases.studies.speeds.find_critical_velocities`, all points in lockstep on the pool's workers),
-guided by the reduced model where it applies and confirmed by full runs.  The runs are kept in the run
+guided by the reduced model where it applies and confirmed by full runs; or, with ``quantity =
+"ballistic_limit"``, a ballistic-limit search (:func:`~cases.studies.ballistic.find_ballistic_limit`, point after
+point, each on the pool's workers).  The runs are kept in the run
 store, so an interrupted map resumes: its searches replay their rounds from the store and run only what is
 missing.  The study writes ``map.csv`` (a row per point), ``map.json``, ``map.md`` and ``map.png`` (a
 contour of the critical speed over two inputs, or a curve over one).
@@ -24,13 +26,16 @@ from ..run import RunStore, atomic_write_text
 from ..run.persistence import json_safe
 from ..scene import InputError, Overrides
 from ..viz.figures import axis_label, quantity_unit, save_figure, subplots
+from .ballistic import find_ballistic_limit
 from .pool import Pool
 from .speeds import find_critical_velocities
 from .sweep import Sweep, grid, parse_grid
 
-__all__ = ["stability_map", "MAX_POINTS"]
+__all__ = ["stability_map", "MAX_POINTS", "QUANTITIES"]
 
 MAX_POINTS = 10_000  # points of one map
+#: what a map can show, with its title
+QUANTITIES = {"critical_velocity": "critical impact velocity", "ballistic_limit": "ballistic limit"}
 
 
 def _axes(overs: Sequence[str]) -> list[tuple[str, list[Any]]]:
@@ -61,8 +66,10 @@ def stability_map(
     resolution: float = 5.0,
     pool: Pool | None = None,
     guide: str = "auto",
+    quantity: str = "critical_velocity",
 ) -> dict:
-    """The critical impact velocity at every point of the grid ``overs``; writes the map into ``out``.
+    """The critical impact velocity (or the ballistic limit) at every point of the grid ``overs``; writes the map
+    into ``out``.
 
     Parameters
     ----------
@@ -75,41 +82,61 @@ def stability_map(
     out : path
         Where ``map.csv``, ``map.json``, ``map.md`` and ``map.png`` go.
     speeds, resolution, guide
-        As ``penetrate critical`` takes them (m/s).
+        As ``penetrate critical`` (or ``penetrate ballistic-limit``) takes them (m/s).
+    quantity : {"critical_velocity", "ballistic_limit"}
+        What each point searches.
 
     Returns
     -------
     dict
-        ``{"keys", "values", "points": [{KEY: value, ..., "critical_velocity", "bracket", "runs", "guide"}], ...}``.
+        ``{"keys", "values", "quantity", "points": [{KEY: value, ..., QUANTITY, "bracket", "runs", "guide"}],
+        ...}``.
     """
     start = time.perf_counter()
     axes = _axes(overs)
     keys = [key for key, _ in axes]
     points_grid = grid(dict(axes))  # the last key varies fastest
     bases = [Sweep.from_file(scene, overrides, [variation]) for variation in points_grid]
-    searches = find_critical_velocities(bases, store, speeds, resolution, pool, guide=guide)
     points = []
-    for variation, search in zip(points_grid, searches):
-        points.append(
-            {
-                **variation.values,
-                "critical_velocity": search.critical_velocity,
-                "bracket": search.bracket,
-                "runs": len(search.indicator),
-                "guide": search.guide.name,
-                "predicted_velocity": search.guide.predicted,
-                "message": search.message,
-            }
-        )
+    if quantity == "ballistic_limit":
+        for base, variation in zip(bases, points_grid):
+            limit = find_ballistic_limit(base, store, speeds, resolution, pool, guide != "none")
+            points.append(
+                {
+                    **variation.values,
+                    quantity: limit.ballistic_limit,
+                    "bracket": limit.bracket,
+                    "runs": len(limit.runs),
+                    "guide": "1-D" if limit.predicted is not None else "none",
+                    "predicted_velocity": limit.predicted,
+                    "message": limit.message,
+                }
+            )
+    else:
+        for variation, search in zip(
+            points_grid, find_critical_velocities(bases, store, speeds, resolution, pool, guide=guide)
+        ):
+            points.append(
+                {
+                    **variation.values,
+                    quantity: search.critical_velocity,
+                    "bracket": search.bracket,
+                    "runs": len(search.indicator),
+                    "guide": search.guide.name,
+                    "predicted_velocity": search.guide.predicted,
+                    "message": search.message,
+                }
+            )
     record = {
         "scene": str(scene),
+        "quantity": quantity,
         "keys": keys,
         "values": [values for _, values in axes],
         "speeds": list(speeds),
         "resolution": resolution,
         "points": points,
         "full_runs": sum(p["runs"] for p in points),
-        "guided": sum(p["guide"] == "reduced" for p in points),
+        "guided": sum(p["guide"] != "none" for p in points),
         "wall_time": time.perf_counter() - start,
     }
     _write(Path(out), record)
@@ -128,19 +155,20 @@ def _write(out: Path, record: dict) -> None:
 
 
 def _markdown(record: dict) -> str:
-    keys = record["keys"]
+    keys, quantity = record["keys"], record["quantity"]
+    title, guide = QUANTITIES[quantity], "the reduced model" if quantity == "critical_velocity" else "the 1-D model"
     lines = [
-        f"# Critical impact velocity of {record['scene']} over {' and '.join(keys)}",
+        f"# {title.capitalize()} of {record['scene']} over {' and '.join(keys)}",
         "",
-        f"{len(record['points'])} critical-speed searches in {record['speeds'][0]:g}-{record['speeds'][1]:g} m/s to"
-        f" {record['resolution']:g} m/s, {record['guided']} guided by the reduced model, {record['full_runs']} full"
-        " runs in all. A point without a critical speed says why.",
+        f"{len(record['points'])} searches in {record['speeds'][0]:g}-{record['speeds'][1]:g} m/s to"
+        f" {record['resolution']:g} m/s, {record['guided']} guided by {guide}, {record['full_runs']} full"
+        f" runs in all. A point without a {title} says why.",
         "",
-        "| " + " | ".join(keys) + " | critical velocity (m/s) | bracket (m/s) | full runs | guide |",
+        "| " + " | ".join(keys) + f" | {title} (m/s) | bracket (m/s) | full runs | guide |",
         "|" + "---|" * (len(keys) + 4),
     ]
     for p in record["points"]:
-        value = f"{p['critical_velocity']:.1f}" if p["critical_velocity"] is not None else p["message"]
+        value = f"{p[quantity]:.1f}" if p[quantity] is not None else p["message"]
         bracket = f"{p['bracket'][0]:g} - {p['bracket'][1]:g}" if p["bracket"] else "-"
         cells = [f"{p[k]:g}" for k in keys]
         lines.append("| " + " | ".join(cells) + f" | {value} | {bracket} | {p['runs']} | {p['guide']} |")
@@ -149,12 +177,10 @@ def _markdown(record: dict) -> str:
 
 
 def _figure(record: dict, path: Path) -> None:
-    keys, values = record["keys"], record["values"]
-    critical = np.array(
-        [np.nan if p["critical_velocity"] is None else p["critical_velocity"] for p in record["points"]]
-    )
+    keys, values, quantity = record["keys"], record["values"], record["quantity"]
+    critical = np.array([np.nan if p[quantity] is None else p[quantity] for p in record["points"]])
     fig, ax = subplots(1, 1, figsize=(7.0, 4.6))
-    label = axis_label("critical velocity", "m/s")
+    label = axis_label(QUANTITIES[quantity], "m/s")
     if len(keys) == 1:
         ax.plot(np.asarray(values[0], dtype=float), critical, marker="o")
         ax.set(xlabel=axis_label(keys[0], quantity_unit(keys[0])), ylabel=label)
@@ -166,7 +192,7 @@ def _figure(record: dict, path: Path) -> None:
             fig.colorbar(filled, ax=ax, label=label)
         ax.scatter(*np.meshgrid(x, y), c="k", s=6, zorder=3, clip_on=False)
         ax.set(xlabel=axis_label(keys[0], quantity_unit(keys[0])), ylabel=axis_label(keys[1], quantity_unit(keys[1])))
-    ax.set_title("critical impact velocity (points without one left blank)")
+    ax.set_title(f"{QUANTITIES[quantity]} (points without one left blank)")
     ax.grid(alpha=0.3)
     fig.tight_layout()
     save_figure(fig, path)

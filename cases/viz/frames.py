@@ -24,6 +24,7 @@ import numpy as np  # noqa: E402
 from ..run import atomic_write  # noqa: E402
 from .field import FieldEvaluator, SurfaceField, frame_rows  # noqa: E402
 from .panels import SidePanel  # noqa: E402
+from .target_view import LAYER_SHADES, add_target  # noqa: E402
 
 if TYPE_CHECKING:
     from pyvista import Camera, Plotter
@@ -45,6 +46,10 @@ __all__ = [
 STRESS_CMAP = "turbo"
 N_COLOURS = 256
 SOIL_LIGHT = (0.93, 0.88, 0.78)
+# the target's layers behind the body, light enough for the stresses in front of them: soil's tan, then the others
+LIGHT_SHADES = [SOIL_LIGHT] + [
+    (r + 0.65 * (1 - r), g + 0.65 * (1 - g), b + 0.65 * (1 - b)) for r, g, b in LAYER_SHADES[1:]
+]
 HIDDEN_COLOUR = (0.55, 0.55, 0.55)  # facets the target cannot reach (fem_loads.exposure): no stress colour
 BACKGROUND = "white"
 
@@ -173,14 +178,12 @@ class FrameRenderer:
         faces = np.hstack([np.full((len(surface.triangles), 1), 3), surface.triangles]).ravel()
         length = ev.length
         positions = ev.result.trajectory.position
-        # the target seen from the side: a tan backdrop below Z = 0 behind the body, and the surface line
+        # the target seen from the side: its layers as a backdrop behind the body, and its faces
         x_lo, x_hi = positions[:, 0].min() - 5 * length, positions[:, 0].max() + 5 * length
         z_lo = min(positions[:, 2].min(), 0.0) - 5 * length
+        z_hi = max(positions[:, 2].max(), 0.0) + 5 * length
         y_back = positions[:, 1].max() + 3 * length
-        soil = pv.Plane(
-            center=(0.5 * (x_lo + x_hi), y_back, 0.5 * z_lo), direction=(0, -1, 0), i_size=-z_lo, j_size=x_hi - x_lo
-        )
-        surface_line = pv.Line((x_lo, y_back - 0.01 * length, 0.0), (x_hi, y_back - 0.01 * length, 0.0))
+        target = ev.result.scene.target
         path = pv.lines_from_points(positions) if len(positions) > 1 else None
         arrow = {
             "start": (0, 0, 0),
@@ -225,15 +228,14 @@ class FrameRenderer:
                 },
             )
             self.meshes[name] = mesh
-            plotter.add_mesh(soil, color=SOIL_LIGHT, lighting=False)
-            plotter.add_mesh(surface_line, color="saddlebrown", line_width=3, lighting=False)
+            add_target(plotter, pv, target, (x_lo, x_hi, z_lo, z_hi), y_back, 0.01 * length, LIGHT_SHADES)
             if path is not None:
                 plotter.add_mesh(path, color=(0.45, 0.45, 0.45), line_width=1.0, lighting=False)
             plotter.add_mesh(self.arrow, color="black", lighting=lighting)
             self.texts[name] = plotter.add_text("", position="upper_edge", font_size=10, color="black")
             if row == len(self.fields) - 1:
                 plotter.add_text(
-                    "black arrow: velocity direction; tan: the target (Z < 0); grey line: path of the centre of mass",
+                    "black arrow: velocity direction; shaded: the target's layers; grey: the centre of mass's path",
                     position="lower_left",
                     font_size=8,
                     color="black",

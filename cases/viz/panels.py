@@ -32,6 +32,7 @@ from ..run import PreparedProjectile
 from ..scene import InputError
 from .field import FieldEvaluator
 from .figures import legend_outside, new_figure, save_figure
+from .target_view import LAYER_SHADES, target_view
 
 if TYPE_CHECKING:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -39,7 +40,7 @@ if TYPE_CHECKING:
 
 __all__ = ["SidePanel", "ring_stress", "default_station", "plot_histories", "plot_polar", "SOIL"]
 
-SOIL = (0.80, 0.70, 0.52)
+SOIL = LAYER_SHADES[0]
 
 
 class SidePanel:
@@ -55,11 +56,15 @@ class SidePanel:
         path_ax, speed_ax, angle_ax = self.figure.subplots(3, 1, gridspec_kw={"height_ratios": [1.4, 1, 1]})
         x, z = h["position_x"].to_numpy(), h["position_z"].to_numpy()
         span = max(np.ptp(x), np.ptp(z), evaluator.length)
-        path_ax.axhspan(min(z.min(), 0.0) - 0.3 * span, 0.0, color=SOIL, zorder=0)
-        path_ax.axhline(0.0, color="saddlebrown", lw=1.5)
+        box = (x.min() - 0.3 * span, x.max() + 0.3 * span, min(z.min(), 0.0) - 0.3 * span, 0.3 * span)
+        view = target_view(evaluator.result.scene.target, box)
+        for band, shade in zip(view.bands, view.shades):
+            path_ax.fill(band[:, 0], band[:, 1], color=shade, zorder=0, lw=0)
+        for face in view.faces:
+            path_ax.plot(face[:, 0], face[:, 1], color="saddlebrown", lw=1.5)
         path_ax.plot(x, z, color="0.35", lw=0.8)
         (self._axis_line,) = path_ax.plot([], [], color="crimson", lw=2.5, solid_capstyle="round")
-        path_ax.set_xlim(x.min() - 0.15 * span, x.max() + 0.15 * span)
+        path_ax.set_xlim(x.min() - 0.15 * span, x.max() + 0.15 * span)  # the faces' long lines cut at the view
         path_ax.set_ylim(min(z.min(), 0.0) - 0.1 * span, 0.15 * span)
         path_ax.set_aspect("equal", adjustable="box")
         path_ax.set_xlabel("X (m)", fontsize=8)

@@ -10,7 +10,7 @@ import numpy as np
 from ..run import atomic_write
 from .field import FieldEvaluator, SurfaceField
 from .frames import BACKGROUND, N_COLOURS, STRESS_CMAP, colour_range, png_bytes, pyvista_off_screen, space_titles
-from .panels import SOIL
+from .target_view import add_target
 
 __all__ = ["render_trajectory", "trajectory_rows"]
 
@@ -50,8 +50,8 @@ def render_trajectory(
 
     The instants are evenly spaced in path length (:func:`trajectory_rows`).  The bodies are drawn
     to scale at their true positions and attitudes, coloured by ``sigma_n`` on one colour bar (MPa)
-    spanning all of them, or ``clim``; each is labelled with its time and speed.  The target is the
-    tan region below the surface line ``Z = 0``.
+    spanning all of them, or ``clim``; each is labelled with its time and speed.  The target's layers are
+    shaded regions behind them (tan the first), its faces brown lines.
 
     Parameters
     ----------
@@ -94,18 +94,8 @@ def render_trajectory(
     try:
         plotter.set_background(BACKGROUND)
         behind = positions[:, 1].max() + 2 * length
-        soil = pv.Plane(
-            center=(0.5 * (left + right), behind, 0.5 * bottom),
-            direction=(0, -1, 0),
-            i_size=-bottom,
-            j_size=right - left,
-        )
-        plotter.add_mesh(soil, color=SOIL, lighting=False)
-        plotter.add_mesh(
-            pv.Line((left, behind - 0.01 * length, 0.0), (right, behind - 0.01 * length, 0.0)),
-            color="saddlebrown",
-            line_width=3,
-        )
+        top = centre[2] + half_height + length
+        add_target(plotter, pv, ev.result.scene.target, (left, right, bottom, top), behind, 0.01 * length)
         if len(positions) > 1:
             plotter.add_mesh(pv.lines_from_points(positions), color="black", line_width=2)
         faces = np.hstack([np.full((len(ev.surface.triangles), 1), 3), ev.surface.triangles]).ravel()
