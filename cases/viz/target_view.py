@@ -24,7 +24,8 @@ LAYER_SHADES = ((0.80, 0.70, 0.52), (0.62, 0.62, 0.62), (0.70, 0.58, 0.42), (0.5
 
 class TargetView:
     """``bands``: each material layer's polygon (``(k, 2)`` arrays of ``(X, Z)``, m) inside the box, with its
-    ``shades``; ``faces``: each face of the target (front, interfaces, rear) as a segment ``(2, 2)`` across it."""
+    ``shades`` (one per law, in the order the laws first appear); ``faces``: each face of the target (front,
+    interfaces, rear) as a segment ``(2, 2)`` across it."""
 
     def __init__(self, bands: list[np.ndarray], shades: list[tuple[float, float, float]], faces: list[np.ndarray]):
         self.bands, self.shades, self.faces = bands, shades, faces
@@ -61,6 +62,8 @@ def target_view(target: Target, box: tuple[float, float, float, float]) -> Targe
         depths.append(math.inf)
     bands: list[np.ndarray] = []
     shades: list[tuple[float, float, float]] = []
+    laws = [repr(layer.law) for layer in layers] or [repr(target.law)]
+    distinct = list(dict.fromkeys(law for law, material in zip(laws, materials) if material))
     for i, material in enumerate(materials):
         if not material:
             continue
@@ -69,7 +72,7 @@ def target_view(target: Target, box: tuple[float, float, float, float]) -> Targe
             band = _clip(band, -normal, depths[i + 1])  # at most depths[i + 1] deep
         if len(band) >= 3:
             bands.append(band)
-            shades.append(LAYER_SHADES[len(shades) % len(LAYER_SHADES)])
+            shades.append(LAYER_SHADES[distinct.index(laws[i]) % len(LAYER_SHADES)])  # one shade per law
     reach = math.hypot(x_hi - x_lo, z_hi - z_lo) + abs(x_lo) + abs(x_hi) + abs(z_lo) + abs(z_hi)
     faces = [np.array([-d * normal - reach * along, -d * normal + reach * along]) for d in depths if math.isfinite(d)]
     return TargetView(bands, shades, faces)
