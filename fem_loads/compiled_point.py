@@ -87,12 +87,13 @@ def setup(
         fraction = effects.surface_fraction if surface_depth > 0.0 else 1.0
         switches = Switches(
             True, True, inverse_width, effects.contact_offset, 0.0, with_friction, inverse_surface, fraction,
-            not motion.embedded, True,
+            effects.surface_front, effects.surface_rear, not motion.embedded, True,
         )  # fmt: skip
     else:
         switches = Switches(
             effects.separation, effects.smooth_contact, inverse_width, effects.contact_offset, motion.guard,
-            surface_depth > 0.0, inverse_surface, effects.surface_fraction, not motion.embedded, effects.smooth_entry,
+            surface_depth > 0.0, inverse_surface, effects.surface_fraction, effects.surface_front, effects.surface_rear,
+            not motion.embedded, effects.smooth_entry,
         )  # fmt: skip
     v = motion.v
     shared = Setup(

@@ -236,6 +236,8 @@ class DAFLLoads:
             surface is not None,
             1.0 / surface.depth if surface is not None else 0.0,
             surface.surface_fraction if surface is not None else 1.0,
+            surface.front if surface is not None else True,
+            surface.rear_face if surface is not None else math.inf,
             entering,
             bool(self.entry_smoothing),
         )

@@ -4,9 +4,9 @@ The DAFL stress of a point is its target's law times factors, and its friction s
 
     sigma = f(Vn, z) c(Vn) g(z) e(H) x,    tau = min(mu sigma, tau_s)
 
-with ``c`` the contact factor, ``g`` the free-surface reduction, ``e`` the entry factor, ``x`` the exposure
-(:func:`fem_loads.exposure.cell_exposure_scalars`) and ``tau`` the friction stress, along the slip by
-:func:`fem_loads.target.slip_factor_scalars`.
+with ``c`` the contact factor, ``g`` the free-surface reduction (at the distance from the nearest free face it
+applies at), ``e`` the entry factor, ``x`` the exposure (:func:`fem_loads.exposure.cell_exposure_scalars`) and
+``tau`` the friction stress, along the slip by :func:`fem_loads.target.slip_factor_scalars`.
 
 Each is written on floats and numpy arrays alike: the numpy path evaluates it on every point at once, and
 :mod:`fem_loads.native` compiles the same function for the compiled kernels.  A flag is one value for all the
@@ -16,6 +16,7 @@ every load calls; a new factor is one ``*_scalars`` function here and one line i
 
 from __future__ import annotations
 
+import math
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -28,6 +29,7 @@ __all__ = [
     "contact_factor_scalars",
     "entry_factor_scalars",
     "surface_factor_scalars",
+    "free_face_distance_scalars",
     "friction_stress_scalars",
 ]
 
@@ -43,6 +45,8 @@ class Switches(NamedTuple):
     surface: bool  #: the free-surface factor applies (its factor is exactly 1 at ``f0 = 1``)
     inverse_surface: float  #: ``1 / D`` (1/m)
     surface_fraction: float  #: ``f0``
+    surface_front: bool  #: the reduction applies near the front face
+    surface_rear: float  #: m: and near the rear face at this depth (``inf``: not)
     entering: bool  #: the entry factor applies (some point may be outside the target)
     smooth_entry: bool  #: points enter over their own extent (else sharply)
 
@@ -62,7 +66,8 @@ def point_stress_scalars(
     else:
         stress = np.maximum(stress, 0.0)
     if s.surface:
-        stress *= surface_factor_scalars(depth, s.inverse_surface, s.surface_fraction)
+        distance = free_face_distance_scalars(depth, s.surface_front, s.surface_rear)
+        stress *= surface_factor_scalars(distance, s.inverse_surface, s.surface_fraction)
     if s.entering:
         stress *= entry_factor_scalars(height, s.smooth_entry, inverse_entry)
     return stress
@@ -101,6 +106,16 @@ def surface_factor_scalars(depth: Any, inverse_depth: float, surface_fraction: f
     factor *= 1.0 - surface_fraction
     factor += surface_fraction
     return factor
+
+
+def free_face_distance_scalars(depth: Any, front: bool, rear: float) -> Any:
+    """The distance (m) of a point at ``depth`` (m below the front face) into the target from the nearest free face
+    the reduction applies at: the front face (``front``) and a rear face at depth ``rear`` (``inf``: none)."""
+    if rear == math.inf:
+        return depth  # the front face alone (a reduction without a face is refused before)
+    if front:
+        return np.minimum(depth, rear - depth)
+    return rear - depth
 
 
 def friction_stress_scalars(stress: Any, coefficient: float, cap: float) -> Any:

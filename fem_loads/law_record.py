@@ -51,6 +51,8 @@ EFFECTS = np.dtype(
         ("friction_cap", "f8"),  # tau_s (Pa; 0: none)
         ("surface_depth", "f8"),  # D (m) of the free-surface reduction (0: none)
         ("surface_fraction", "f8"),  # f0 of the free-surface reduction
+        ("surface_front", "b1"),  # it applies near the front face
+        ("surface_rear", "f8"),  # m: and near a rear face at this depth (inf: not)
         ("user_law", "i8"),  # the address of a user law's cfunc (0: the built-in law)
         ("max_radius", "f8"),  # m: the farthest point from the centre of mass
         ("half_entry", "f8"),  # m: half the longest entry length
@@ -127,6 +129,8 @@ def pack(
         "friction_cap": (friction.cap or 0.0) if friction is not None else 0.0,
         "surface_depth": surface.depth if surface is not None else 0.0,
         "surface_fraction": surface.surface_fraction if surface is not None else 0.0,
+        "surface_front": surface.front if surface is not None else True,
+        "surface_rear": surface.rear_face if surface is not None else np.inf,
         "user_law": address,
         "max_radius": loads.max_radius if max_radius is None else max_radius,
         "half_entry": 0.5 * entry_length,

@@ -314,7 +314,7 @@ def pitch_plane_load(
         cap_speed = math.sqrt((cap / mu - static) / dynamic)
     switches = Switches(
         True, width > 0.0, 1.0 / width if width > 0.0 else 0.0, effects.contact_offset, 0.0, False, 0.0, 1.0, True,
-        entry > 0.0,
+        math.inf, True, entry > 0.0,
     )  # fmt: skip
     fx = fz = my = 0.0
     breaks = np.empty(8)

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from .factors import entry_factor_scalars, friction_stress_scalars, surface_factor_scalars
+from .factors import entry_factor_scalars, free_face_distance_scalars, friction_stress_scalars, surface_factor_scalars
 from .resistance import ResistanceLaw
 from .user_law import UserLaw
 
@@ -154,17 +154,22 @@ class FreeSurface:
         Depth ``D`` (m) below which the full resistance acts.
     surface_fraction : float
         Fraction ``f0`` of the resistance at the surface itself, 0 <= f0 <= 1.
+    front : bool
+        The reduction applies near the front face (default).
+    rear_face : float
+        And near a rear face at this depth (m below the front face); ``inf`` (default): not.
     """
 
     depth: float
     surface_fraction: float = 0.0
+    front: bool = True
+    rear_face: float = math.inf
 
     def factor(self, depth: np.ndarray) -> np.ndarray:
-        """``f0 + (1 - f0) S(depth / D)`` (:func:`~fem_loads.factors.surface_factor_scalars`): ``f0`` at and above the
-        surface, 1 below ``D``."""
-        return np.asarray(
-            surface_factor_scalars(np.asarray(depth, dtype=float), 1.0 / self.depth, self.surface_fraction)
-        )
+        """``f0 + (1 - f0) S(d / D)`` (:func:`~fem_loads.factors.surface_factor_scalars`) at the distance ``d`` from
+        the nearest free face it applies at, of points at ``depth`` (m): ``f0`` at the face, 1 from ``D`` in."""
+        distance = free_face_distance_scalars(np.asarray(depth, dtype=float), self.front, self.rear_face)
+        return np.asarray(surface_factor_scalars(distance, 1.0 / self.depth, self.surface_fraction))
 
 
 @dataclass(frozen=True)

@@ -172,6 +172,16 @@ class Scene(Strict):
         return self
 
     @model_validator(mode="after")
+    def _free_faces_exist(self) -> Self:
+        surface = self.effects.free_surface
+        if surface is not None and "rear" in surface.faces and math.isinf(self.target.thickness):
+            raise ValueError(
+                'effects.free_surface.faces: "rear" needs a target with a rear face (allowed for this target:'
+                ' ["front"]; a slab\'s last layer has a thickness)'
+            )
+        return self
+
+    @model_validator(mode="after")
     def _kernel_covers_scene(self) -> Self:
         if self.numerics.kernel == "compiled" and not self.compilable:
             raise ValueError(
@@ -183,7 +193,7 @@ class Scene(Strict):
     def loads(self, quadrature: SurfaceQuadrature) -> DAFLLoads:
         """The DAFL load function over ``quadrature`` with exactly the effects the scene asks for."""
         effects = self.effects
-        free_surface = effects.free_surface.build() if effects.free_surface is not None else None
+        free_surface = effects.free_surface.build(self.target.thickness) if effects.free_surface is not None else None
         return DAFLLoads(
             quadrature,
             self.target.build(),

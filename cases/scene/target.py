@@ -363,11 +363,21 @@ class FrictionSpec(Strict):
 class FreeSurfaceSpec(Strict):
     """Linear free-surface reduction of the normal stress (docs/effects.md)."""
 
-    depth: Number = field(unit="m", gt=0.0, le=1e3, description="full resistance below this depth")
-    surface_fraction: Number = field(0.0, ge=0.0, le=1.0, description="fraction of it at the surface")
+    depth: Number = field(unit="m", gt=0.0, le=1e3, description="full resistance from this distance into the target")
+    surface_fraction: Number = field(0.0, ge=0.0, le=1.0, description="fraction of it at the face")
+    faces: list[Literal["front", "rear"]] = field(
+        ["front"],
+        min_length=1,
+        max_length=2,
+        description='the free faces it applies near: "front", and "rear" for the rear face of a target with one'
+        " (the faces of gaps are not reduced; docs/targets.md)",
+    )
 
-    def build(self) -> FreeSurface:
-        return FreeSurface(self.depth, self.surface_fraction)
+    def build(self, rear_face: float = math.inf) -> FreeSurface:
+        """The reduction, ``rear_face`` (m below the front face) the target's rear face (``inf``: none)."""
+        return FreeSurface(
+            self.depth, self.surface_fraction, "front" in self.faces, rear_face if "rear" in self.faces else math.inf
+        )
 
 
 class Effects(Strict):

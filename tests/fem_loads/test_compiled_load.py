@@ -13,7 +13,7 @@ from cases import load_scene, prepare_projectile, scene_path
 from cases.run.compiled import _import_compiled
 from dynamics.quaternion import normalize, rotation_matrix
 from fem_loads import DAFLLoads, ResistanceLaw, SurfaceQuadrature, resistance_law
-from fem_loads.target import FreeSurface, Friction, LayeredTarget
+from fem_loads.target import GAP, FreeSurface, Friction, LayeredTarget
 
 _, compiled = _import_compiled()  # numba's cache in the folder named for the compiled code
 
@@ -121,6 +121,7 @@ def test_lowest_height_equals_the_numpy_one(quadrature, mode):
         )
 
 
+SLAB = LayeredTarget((0.6,), (SOIL, GAP))
 LAYERS = LayeredTarget((0.2, 0.5), (SOIL, resistance_law("softer_soil"), ResistanceLaw(2e6, 1e3, c1=3e4)))
 #: every effect and law of the kernel, each alone and some together (with the default smooth switches)
 EFFECTS = {
@@ -135,6 +136,9 @@ EFFECTS = {
     "depth-gradient": {"law": ResistanceLaw(3e6, 1e3, k=2e6)},
     "table": {"law": ResistanceLaw(3e6, 1e3, strength_table=((0.0, 0.0), (0.3, 5e6), (1.0, 6e6)))},
     "all": {"law": LAYERS, "friction": Friction(0.2), "free_surface": FreeSurface(0.3), "contact": "centred"},
+    # a 0.6 m slab reduced near both faces, and near its rear face alone
+    "slab-both-faces": {"law": SLAB, "free_surface": FreeSurface(0.3, 0.2, rear_face=0.6)},
+    "slab-rear-face": {"law": SLAB, "free_surface": FreeSurface(0.3, 0.2, front=False, rear_face=0.6)},
 }
 
 

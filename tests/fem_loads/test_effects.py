@@ -212,3 +212,22 @@ def test_fast_friction_sums_equal_the_pointwise_definition(cap):
         scale = np.abs(ref_force).max() + 1.0
         np.testing.assert_allclose(force - base_force, ref_force, atol=1e-9 * scale)
         np.testing.assert_allclose(moment - base_moment, ref_moment, atol=1e-9 * scale)
+
+
+def test_the_free_surface_reduction_near_a_rear_face():
+    """``f0 + (1 - f0) S(d / D)`` at the distance ``d`` from the nearest face it applies at: both faces of a 0.6 m
+    slab, or its rear face alone."""
+    from fem_loads.ramps import smooth_step_scalars
+
+    depth, fraction, rear = 0.2, 0.3, 0.6
+    z = np.array([0.0, 0.05, 0.3, 0.55, 0.6])
+    both = FreeSurface(depth, fraction, rear_face=rear).factor(z)
+    closest = np.minimum(z, rear - z)
+    np.testing.assert_allclose(both, fraction + (1 - fraction) * smooth_step_scalars(closest / depth), rtol=1e-15)
+    assert both[0] == both[-1] == fraction and both[2] == 1.0
+    np.testing.assert_allclose(both[1], both[3], rtol=1e-12)  # the same distance from either face
+    rear_only = FreeSurface(depth, fraction, front=False, rear_face=rear).factor(z)
+    assert rear_only[0] == rear_only[1] == 1.0 and rear_only[-1] == fraction
+    assert np.array_equal(
+        FreeSurface(depth, fraction).factor(z), FreeSurface(depth, fraction, rear_face=np.inf).factor(z)
+    )

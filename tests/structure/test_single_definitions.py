@@ -92,6 +92,7 @@ def test_the_numpy_path_calls_the_same_definitions():
     assert dafl.slip_factor_scalars is target.slip_factor_scalars
     assert target.entry_factor_scalars is factors.entry_factor_scalars
     assert target.surface_factor_scalars is factors.surface_factor_scalars
+    assert target.free_face_distance_scalars is factors.free_face_distance_scalars
     assert target.friction_stress_scalars is factors.friction_stress_scalars
     assert "normal_stress_scalars(" in Path(resistance.__file__).read_text().split("def normal_stress(", 1)[1]
     assert "euler_scalars(" in Path(rigid_body.__file__).read_text().split("def accelerations(", 1)[1]
