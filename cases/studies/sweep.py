@@ -201,7 +201,10 @@ class SweepResult:
             row["key"] = run.key
             record = run.summary.record() if run.summary is not None else {"error": run.error}
             for name, value in record.items():
-                row[name] = json.dumps(value) if isinstance(value, (list, dict)) else value
+                # a number the record holds as null (NaN: not defined for this run) is NaN in the table, as read back
+                row[name] = (
+                    json.dumps(value) if isinstance(value, (list, dict)) else math.nan if value is None else value
+                )
             rows.append(row)
         import pandas as pd  # here: a search or a sweep without a table does not pay its import (0.25 s)
 

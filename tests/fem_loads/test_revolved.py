@@ -146,7 +146,7 @@ def _brute_force_rings(surface, law, friction, state, points=100_000):
 
     height, theta, (vx, vz), q = state
     width = DELTA * (math.hypot(vx, vz) + abs(q) * surface.max_radius)
-    switches = Switches(True, True, 1.0 / width, 0.0, 0.0, False, 0.0, 1.0, True, True)
+    switches = Switches(True, True, 1.0 / width, 0.0, 0.0, False, 0.0, 1.0, True, math.inf, True, True)
     phi = (np.arange(points) + 0.5) * math.pi / points
     c, s = np.cos(phi), np.sin(phi)
     load = np.zeros(3)
