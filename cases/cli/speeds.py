@@ -18,21 +18,26 @@ if TYPE_CHECKING:
 __all__ = ["register"]
 
 
-def _speed_options(parser: Parser) -> None:
+def _speed_options(
+    parser: Parser,
+    speeds: tuple[float, float] = (200.0, 1600.0),
+    resolution: float = 5.0,
+    pair: str = "a stable and an unstable run",
+) -> None:
     parser.add_argument(
         "--speeds",
         type=speed_range,
-        default=(200.0, 1600.0),
+        default=speeds,
         metavar="LOW:HIGH",
-        help="the range of impact speeds searched, m/s (default 200:1600; of a list or"
+        help=f"the range of impact speeds searched, m/s (default {speeds[0]:g}:{speeds[1]:g}; of a list or"
         " START:STOP:STEP only the lowest and highest count)",
     )
     parser.add_argument(
         "--resolution",
         type=positive_float,
-        default=5.0,
+        default=resolution,
         metavar="M/S",
-        help="search until a stable and an unstable run are this close (default 5 m/s)",
+        help=f"search until {pair} are this close (default {resolution:g} m/s)",
     )
 
 
@@ -113,20 +118,7 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
     )
     add_scene_options(limit)
     add_pool_options(limit, "runs/store")
-    limit.add_argument(
-        "--speeds",
-        type=speed_range,
-        default=(10.0, 2000.0),
-        metavar="LOW:HIGH",
-        help="the range of impact speeds searched, m/s (default 10:2000)",
-    )
-    limit.add_argument(
-        "--resolution",
-        type=positive_float,
-        default=1.0,
-        metavar="M/S",
-        help="search until a run that perforates and one that does not are this close (default 1 m/s)",
-    )
+    _speed_options(limit, (10.0, 2000.0), 1.0, "a run that perforates and one that does not")
     limit.add_argument(
         "--guide",
         choices=("auto", "none"),
