@@ -164,7 +164,7 @@ def test_a_single_threaded_process_forks_its_workers_and_they_give_the_table_one
     assert done.returncode == 0, done.stderr
     method, text = done.stdout.splitlines()[-2:]
     assert method == "fork"
-    forked = pd.read_json(io.StringIO(text), convert_dates=False)  # exit_time is a number of seconds
+    forked = pd.read_json(io.StringIO(text), dtype=False)  # as written: exit_time is seconds, not a date
     one = run_sweep(_sweep(), RunStore(tmp_path / "one"), Pool(workers=1, progress=False)).table()
     pd.testing.assert_frame_equal(_stable(forked), _stable(one), check_dtype=False)
 
