@@ -20,6 +20,7 @@ from cases.scene import Target
 from cases.viz import FieldEvaluator, save_figure, subplots
 from cases.viz.frames import render_snapshots
 from cases.viz.target_view import target_view
+from docs.measure import stamp
 
 HERE = Path(__file__).parent
 RENDERED = ("concrete_slab", "soil_over_sloping_concrete", "spaced_plates")
@@ -69,3 +70,5 @@ def renders() -> None:
 if __name__ == "__main__":
     convention()
     renders()
+    print()
+    print(stamp())  # the step counts behind the pictures hang on the processor
