@@ -111,11 +111,6 @@ class LayeredTarget:
         """The interfaces' depths (m below the surface), from the top down."""
         return np.cumsum(self.thicknesses)
 
-    @property
-    def rear_face(self) -> float:
-        """The depth (m) of the rear face, past which the target is empty (``inf`` for a half-space)."""
-        return float(self.interfaces[-1]) if self.laws[-1] == GAP else math.inf
-
     def normal_stress(
         self, normal_velocity: np.ndarray, depth: np.ndarray, lengths: np.ndarray | None = None
     ) -> np.ndarray:

@@ -15,6 +15,7 @@ import numpy as np
 
 from dynamics.convergence import crossing_speed_scalars
 from dynamics.quaternion import rotation_matrix
+from fem_loads.target import face_height_scalars
 
 from .runner import RunResult
 
@@ -124,7 +125,7 @@ def history_columns(result: RunResult) -> dict[str, np.ndarray]:
         "velocity_z": tr.velocity[:, 2],
         "speed": speed,
         "path_length": tr.path_length,
-        "tip_depth": face.offset - tip @ np.asarray(face.normal),  # below the front face
+        "tip_depth": -face_height_scalars(tip.T, face.normal, face.offset),  # below the front face
         "attitude_w": tr.attitude[:, 0],
         "attitude_x": tr.attitude[:, 1],
         "attitude_y": tr.attitude[:, 2],

@@ -40,7 +40,7 @@ from dynamics import (
 )
 from dynamics.integrators import Stepper
 from dynamics.quaternion import multiply, rotation_matrix
-from fem_loads.target import FrontFace
+from fem_loads.target import FrontFace, face_height_scalars
 
 from ..scene import Scene
 from .prepare import PreparedProjectile, prepare_projectile
@@ -315,7 +315,7 @@ class FaceCrossings(Event):
         speed = state.speed + float(np.linalg.norm(state.angular_velocity)) * self.reach
         if not speed > 0.0:
             return math.inf
-        depth = self.face.offset - float(np.asarray(self.face.normal) @ state.position)
+        depth = -face_height_scalars(state.position, self.face.normal, self.face.offset)
         return min(max(abs(depth - face) - self.reach, 0.0) + self.travel for face in self.depths) / speed
 
 

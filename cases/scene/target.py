@@ -308,14 +308,6 @@ class Target(Strict):
         return FrontFace((math.sin(angle), 0.0, math.cos(angle)), 0.0)
 
     @property
-    def thickness(self) -> float:
-        """The depth (m) of the rear face below the front face: ``inf`` for a half-space."""
-        layers = self.layers or []
-        return (
-            math.inf if not layers or layers[-1].thickness is None else sum(layer.thickness or 0.0 for layer in layers)
-        )
-
-    @property
     def inner_faces(self) -> tuple[float, ...]:
         """The depths (m below the front face) of the faces inside the target: its layers' interfaces and its rear
         face, if it has one."""
@@ -325,6 +317,12 @@ class Target(Strict):
                 top += layer.thickness
                 depths.append(top)
         return tuple(depths)
+
+    @property
+    def thickness(self) -> float:
+        """The depth (m) of the rear face below the front face: ``inf`` for a half-space."""
+        layers = self.layers or []
+        return math.inf if not layers or layers[-1].thickness is None else self.inner_faces[-1]
 
     def build_rear_face(self) -> FrontFace | None:
         """The plane past which the whole body has perforated the target, facing out of its rear (a point's height

@@ -20,13 +20,11 @@ import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 
-from fem_loads.target import LayeredTarget
-
 from ..run import RunStore, prepare_projectile
 from ..run.runner import PERFORATED
 from ..scene import InputError, Scene
 from .pool import Pool, study_progress
-from .reference import ballistic_limit_1d, check_nose_alone_presses, target_layers
+from .reference import ballistic_limit_1d, check_nose_alone_presses, scene_slices
 from .sweep import Sweep, Variation, run_sweep
 
 __all__ = ["LimitRun", "BallisticLimit", "find_ballistic_limit", "ballistic_guide", "check_rear_face"]
@@ -102,14 +100,7 @@ def ballistic_guide(scene: Scene) -> tuple[float | None, str]:
         check_nose_alone_presses(prepared.profile)
     except ValueError:
         return None, "unguided: the 1-D model does not apply (a flare behind the nose)"
-    built = target.build()
-    assert isinstance(built, LayeredTarget)  # a target with a rear face is layered
-    laws, layers = built.laws, target.layers or []
-    slices = target_layers(
-        [layer.thickness for layer in layers] + [None],
-        [None if layer.law == "air" else laws[i] for i, layer in enumerate(layers)] + [None],
-    )
-    limit = ballistic_limit_1d(prepared.profile, slices, prepared.mass.mass, **effects.contact_ramp)
+    limit = ballistic_limit_1d(prepared.profile, scene_slices(scene), prepared.mass.mass, **effects.contact_ramp)
     return limit, f"guided by the 1-D model of the nose through the target ({limit:.2f} m/s)"
 
 

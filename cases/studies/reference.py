@@ -35,7 +35,7 @@ from scipy.interpolate import BarycentricInterpolator
 
 from fem_loads.factors import contact_factor_scalars
 from fem_loads.resistance import ResistanceLaw
-from fem_loads.target import LayeredTarget
+from fem_loads.target import GAP, LayeredTarget
 from fem_loads.user_law import UserLaw
 from mesh.profile import ConeNose, OgiveNose, Profile
 
@@ -53,6 +53,8 @@ __all__ = [
     "check_nose_alone_presses",
     "Layer",
     "target_layers",
+    "scene_slices",
+    "scene_slab_1d",
     "layered_axial_force",
     "slab_run_1d",
     "ballistic_limit_1d",
@@ -332,6 +334,30 @@ def target_layers(thicknesses: list[float | None], laws: list[ResistanceLaw | Us
         layers.append(Layer(top, bottom, law))
         top = bottom
     return layers
+
+
+def scene_slices(scene: Scene) -> list[Layer]:
+    """The :class:`Layer` slices of a scene's target: each layer's law as the scene builds it, None for a gap."""
+    built = scene.target.build()
+    if not isinstance(built, LayeredTarget):
+        return target_layers([None], [built])
+    layers = scene.target.layers or []
+    return target_layers(
+        [layer.thickness for layer in layers], [None if law is GAP else law for law in built.laws[: len(layers)]]
+    )
+
+
+def scene_slab_1d(scene: Scene, prepared: PreparedProjectile) -> tuple[float, float]:
+    """:func:`slab_run_1d` of a scene's normal impact: its projectile's profile and mass, its target's slices, its
+    impact speed, stop speed and contact ramp (the residual velocity, m/s, NaN if the body stops; the tip depth, m)."""
+    return slab_run_1d(
+        prepared.profile,
+        scene_slices(scene),
+        prepared.mass.mass,
+        scene.impact.speed,
+        scene.numerics.stop_speed,
+        **scene.effects.contact_ramp,
+    )
 
 
 _GAUSS_LAYER = np.polynomial.legendre.leggauss(400)

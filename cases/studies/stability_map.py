@@ -97,36 +97,28 @@ def stability_map(
     keys = [key for key, _ in axes]
     points_grid = grid(dict(axes))  # the last key varies fastest
     bases = [Sweep.from_file(scene, overrides, [variation]) for variation in points_grid]
-    points = []
+    # each point's (value, bracket, full runs, guide, predicted speed, message)
     if quantity == "ballistic_limit":
-        for base, variation in zip(bases, points_grid):
-            limit = find_ballistic_limit(base, store, speeds, resolution, pool, guide != "none")
-            points.append(
-                {
-                    **variation.values,
-                    quantity: limit.ballistic_limit,
-                    "bracket": limit.bracket,
-                    "runs": len(limit.runs),
-                    "guide": "1-D" if limit.predicted is not None else "none",
-                    "predicted_velocity": limit.predicted,
-                    "message": limit.message,
-                }
+        limits = [find_ballistic_limit(base, store, speeds, resolution, pool, guide != "none") for base in bases]
+        found = [
+            (
+                s.ballistic_limit,
+                s.bracket,
+                len(s.runs),
+                "none" if s.predicted is None else "1-D",
+                s.predicted,
+                s.message,
             )
+            for s in limits
+        ]
     else:
-        for variation, search in zip(
-            points_grid, find_critical_velocities(bases, store, speeds, resolution, pool, guide=guide)
-        ):
-            points.append(
-                {
-                    **variation.values,
-                    quantity: search.critical_velocity,
-                    "bracket": search.bracket,
-                    "runs": len(search.indicator),
-                    "guide": search.guide.name,
-                    "predicted_velocity": search.guide.predicted,
-                    "message": search.message,
-                }
-            )
+        searches = find_critical_velocities(bases, store, speeds, resolution, pool, guide=guide)
+        found = [
+            (s.critical_velocity, s.bracket, len(s.indicator), s.guide.name, s.guide.predicted, s.message)
+            for s in searches
+        ]
+    names = (quantity, "bracket", "runs", "guide", "predicted_velocity", "message")
+    points = [{**variation.values, **dict(zip(names, point))} for variation, point in zip(points_grid, found)]
     record = {
         "scene": str(scene),
         "quantity": quantity,

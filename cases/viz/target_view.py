@@ -53,13 +53,9 @@ def target_view(target: Target, box: tuple[float, float, float, float]) -> Targe
     angle = math.radians(target.inclination)
     normal, along = np.array([math.sin(angle), math.cos(angle)]), np.array([math.cos(angle), -math.sin(angle)])
     layers = target.layers or []
-    depths, top = [0.0], 0.0
-    for layer in layers:
-        top = math.inf if layer.thickness is None else top + layer.thickness
-        depths.append(top)
+    # each layer's top and bottom: the front face, the inner faces, and the rear face or none
+    depths = [0.0, *target.inner_faces] + ([math.inf] if math.isinf(target.thickness) else [])
     materials = [layer.law != "air" for layer in layers] if layers else [True]
-    if not layers:
-        depths.append(math.inf)
     bands: list[np.ndarray] = []
     shades: list[tuple[float, float, float]] = []
     laws = [repr(layer.law) for layer in layers] or [repr(target.law)]

@@ -20,9 +20,8 @@ from cases.cli import main as penetrate
 from cases.run import prepare_projectile, run_scene, summarise
 from cases.scene import Scene
 from cases.scene.load import read_scene_data, scene_from_dict
-from cases.studies.reference import slab_run_1d, target_layers
+from cases.studies.reference import scene_slab_1d
 from docs.measure import stamp
-from fem_loads.target import LayeredTarget
 
 SOIL = "soil"
 STATIC = {"model": "polynomial", "c0": 17.18e6}  # rate independent: the same work through the same thickness
@@ -40,15 +39,7 @@ def slab(*layers: tuple[float, object]) -> dict:
 
 
 def one_d(scene: Scene) -> float:
-    prepared = prepare_projectile(scene)
-    layers = scene.target.layers or []
-    built = scene.target.build()
-    assert isinstance(built, LayeredTarget)  # a slab is layered
-    laws = [None if layer.law == "air" else built.laws[i] for i, layer in enumerate(layers)]
-    slices = target_layers([layer.thickness for layer in layers] + [None], laws + [None])
-    return slab_run_1d(prepared.profile, slices, prepared.mass.mass, scene.impact.speed, **scene.effects.contact_ramp)[
-        0
-    ]
+    return scene_slab_1d(scene, prepare_projectile(scene))[0]
 
 
 def main() -> None:

@@ -38,6 +38,7 @@ from cases import SHIPPED_SCENES, scene_path
 from cases.cli import main
 from cases.run import HISTORY_UNITS
 from cases.scene import Scene, SceneError, load_scene, parse_override, read_toml, scene_from_dict
+from fem_loads.target import GAP
 
 SCALE = float(os.environ.get("PENETRATE_FUZZ_SCALE", "1"))
 # the default run draws the same examples every time, so a change fails CI only for what it changed;
@@ -1399,6 +1400,8 @@ def test_a_target_is_used_or_refused_in_one_line(target):
         assert math.isinf(thickness) and not faces
         return
     assert list(built.interfaces) == pytest.approx(list(faces), rel=1e-12)
-    assert built.rear_face == thickness or math.isinf(built.rear_face) and math.isinf(thickness)
+    # a slab ends in the gap behind its rear face, at its thickness
+    assert (built.laws[-1] is GAP) == math.isfinite(thickness)
+    assert not math.isfinite(thickness) or built.interfaces[-1] == pytest.approx(thickness, rel=1e-12)
     gaps = [layer.law == "air" for layer in spec.layers]
     assert not gaps[0] and not gaps[-1]

@@ -18,7 +18,7 @@ from cases.run import prepare_projectile, run_scene
 from cases.run.summary import summarise
 from cases.scene import Scene, SceneError
 from cases.scene.load import read_scene_data, scene_from_dict
-from cases.studies.reference import Layer, slab_run_1d, target_layers
+from cases.studies.reference import Layer, scene_slab_1d
 from fem_loads.target import LayeredTarget
 
 SLAB = {"layers": [{"thickness": 2.0, "law": "soil"}]}
@@ -39,17 +39,8 @@ def shot(target: dict[str, Any], kernel: str = "numpy", **impact: float) -> Scen
 
 
 def one_d(scene: Scene) -> tuple[float, float]:
-    """:func:`slab_run_1d` of a test 2 scene: its profile, mass, speed and contact ramp, its target's slices."""
-    prepared = prepare_projectile(scene)
-    layers = scene.target.layers or []
-    built = scene.target.build()
-    assert isinstance(built, LayeredTarget)
-    slices = target_layers(
-        [layer.thickness for layer in layers] + [None],
-        [None if layer.law == "air" else built.laws[i] for i, layer in enumerate(layers)] + [None],
-    )
-    ramp = scene.effects.contact_ramp
-    return slab_run_1d(prepared.profile, slices, prepared.mass.mass, scene.impact.speed, **ramp)
+    """The 1-D nose through the scene's target (:func:`scene_slab_1d`): residual velocity (m/s) and tip depth (m)."""
+    return scene_slab_1d(scene, prepare_projectile(scene))
 
 
 @pytest.mark.parametrize("kernel", ["numpy", "compiled"])
