@@ -130,11 +130,11 @@ def dafl_kernel(
     """
     image_signs, point_signs = data[layout.DATA_IMAGE_SIGNS], data[layout.DATA_POINT_SIGNS]
     effects = data[layout.DATA_EFFECTS][0]
-    max_radius, half_entry = effects.max_radius, effects.half_entry
+    max_radius, reach = effects.max_radius, effects.reach
     for c in range(6):
         out[c] = 0.0
     height, up0, up1, up2 = face_frame(position, rotation, effects.face_normal, effects.face_offset)
-    if height - max_radius - half_entry >= 0.0:
+    if height - reach >= 0.0:
         return  # wholly outside the target
     images = image_signs.shape[0]
     # each image's generalised velocity (R^T V, omega) and up vector R^T n with its signs: exact sign changes,
@@ -153,7 +153,7 @@ def dafl_kernel(
     spin = math.sqrt(angular_velocity[0] ** 2 + angular_velocity[1] ** 2 + angular_velocity[2] ** 2)
     speed_scale = speed + spin * max_radius
     width = effects.contact_width + effects.contact_incidence * speed_scale if effects.smooth_contact else 0.0
-    embedded = height + max_radius + half_entry < 0.0
+    embedded = height + reach < 0.0
     motion = Motion(g, up, v, angular_velocity, height, width, effects.guard * speed_scale, embedded)
     sums = np.zeros((images, 6))
     friction = np.zeros(6)

@@ -141,7 +141,8 @@ class DAFLLoads:
         self.max_radius = float(np.sqrt(self._radius2.max()))
         # each point's entry length l: it carries load from l/2 above the surface to its full value l/2 below
         self._entry_length = self.entry_smoothing * np.sqrt(self._weights)
-        self._half_entry = 0.5 * float(self._entry_length.max()) if len(self._weights) else 0.0
+        #: ``r_max + l_max / 2`` (m): the bounding sphere widened by the entry band, beyond which no point is loaded
+        self.reach = self.max_radius + 0.5 * float(self._entry_length.max(initial=0.0))
         self._images = None
         self._hot_weights, self._hot_entry = self._weights, self._entry_length
         if q.mirror_images is not None:
@@ -210,7 +211,7 @@ class DAFLLoads:
     def _sphere(self, height: float) -> tuple[bool, bool]:
         """Whether the bounding sphere, widened by the entry band, is wholly inside the target and whether wholly
         outside, with the centre ``height`` (m) above the front face."""
-        return height + self.max_radius + self._half_entry < 0.0, height - self.max_radius - self._half_entry >= 0.0
+        return height + self.reach < 0.0, height - self.reach >= 0.0
 
     def lowest_height(self, position: np.ndarray, rotation: np.ndarray, face: FrontFace | None = None) -> float:
         """Height (m) of the lowest point of the loaded band above the front face (or ``face``), ``min(H - l/2)``;

@@ -21,7 +21,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .ramps import smooth_step_scalars
+from .ramps import add_term, smooth_step_scalars
 
 __all__ = [
     "Switches",
@@ -80,9 +80,7 @@ def contact_factor_scalars(
     without a fixed width) and ``offset`` 0 (one-sided: from 0 at ``Vn = 0`` to 1 at ``W``) or 1/2 (centred on
     ``Vn = 0``); sharp, 1 where ``Vn > threshold`` (m/s) and 0 elsewhere."""
     if smooth:
-        if offset != 0.0:
-            return smooth_step_scalars(normal_velocity * inverse_width + offset)
-        return smooth_step_scalars(normal_velocity * inverse_width)  # one-sided: an array pass fewer
+        return smooth_step_scalars(add_term(normal_velocity * inverse_width, offset))
     return (normal_velocity > threshold) * 1.0
 
 

@@ -55,7 +55,7 @@ EFFECTS = np.dtype(
         ("surface_rear", "f8"),  # m: and near a rear face at this depth (inf: not)
         ("user_law", "i8"),  # the address of a user law's cfunc (0: the built-in law)
         ("max_radius", "f8"),  # m: the farthest point from the centre of mass
-        ("half_entry", "f8"),  # m: half the longest entry length
+        ("reach", "f8"),  # m: max_radius widened by half the longest entry length (DAFLLoads.reach)
         ("needs_depth", "b1"),  # the stress depends on each point's depth (beyond entering)
         ("plain", "b1"),  # a polynomial law with both smooth ramps and separation: the SIMD loop
         ("face_normal", "f8", (3,)),  # n: the front face n . X = d (world frame; target.FrontFace)
@@ -110,9 +110,9 @@ def pack(
     ``entry_length`` (m; 0 sharp) and ``max_radius`` (m): the load's own by default (its longest point's entry
     length, its farthest point from the centre of mass); the rings give theirs."""
     law, friction, surface, face = loads.law, loads.friction, loads.free_surface, loads.front_face
+    max_radius = loads.max_radius if max_radius is None else max_radius
     if entry_length is None:
-        lengths = loads.point_arrays()["entry_length"]
-        entry_length = float(lengths.max()) if len(lengths) else 0.0
+        entry_length = float(loads.point_arrays()["entry_length"].max(initial=0.0))
     laws, tables, interfaces, address = pack_laws(law)
     smooth_contact = loads.contact_width > 0.0 or loads.contact_incidence > 0.0
     effects = np.zeros(1, dtype=EFFECTS)
@@ -132,8 +132,8 @@ def pack(
         "surface_front": surface.front if surface is not None else True,
         "surface_rear": surface.rear_face if surface is not None else np.inf,
         "user_law": address,
-        "max_radius": loads.max_radius if max_radius is None else max_radius,
-        "half_entry": 0.5 * entry_length,
+        "max_radius": max_radius,
+        "reach": max_radius + 0.5 * entry_length,
         "needs_depth": bool(law.depth_dependent),
         "plain": isinstance(law, ResistanceLaw)
         and law.c == 0.0

@@ -19,6 +19,7 @@ from numba.extending import intrinsic, overload, register_jitable
 from . import factors
 from .exposure import cell_exposure_scalars, corner_exposure, cube_cell_scalars, fine_exposure
 from .factors import entry_factor_scalars, friction_stress_scalars, point_stress_scalars
+from .ramps import add_term
 from .resistance import normal_stress_scalars, polynomial_stress_scalars
 from .target import face_frame_scalars, face_height_scalars, slip_factor_scalars
 from .user_law import MAX_PARAMETERS
@@ -43,6 +44,12 @@ def _clip_float(a, a_min, a_max):  # type: ignore[no-untyped-def]  # numba match
     """``np.clip`` on a float, which numba compiles only for arrays."""
     float_clip = lambda a, a_min, a_max: np.minimum(np.maximum(a, a_min), a_max)  # noqa: E731
     return float_clip if isinstance(a, types.Float) else None
+
+
+@overload(add_term, inline="always")
+def _add_term_always(value, term):  # type: ignore[no-untyped-def]
+    """:func:`~fem_loads.ramps.add_term` compiled: a branch on the term would stay in a loop's SIMD lanes."""
+    return lambda value, term: value + term
 
 
 # every *_scalars function of fem_loads.factors (its factors and the smooth step it imports) as numba sees them

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["smooth_step_scalars", "MAX_SLOPE"]
+__all__ = ["smooth_step_scalars", "add_term", "MAX_SLOPE"]
 
 MAX_SLOPE = 15.0 / 8.0  # the largest dS/dt, at t = 1/2
 
@@ -27,3 +27,11 @@ def smooth_step_scalars(t: Any) -> Any:
     step *= t
     step *= t
     return step
+
+
+def add_term(value: Any, term: float) -> Any:
+    """``value + term``: on an array in place, and skipped where ``term`` is 0 (an array pass fewer).  Compiled
+    (:mod:`fem_loads.native`) it is always added, so that a loop over the points keeps no branch."""
+    if term != 0.0:
+        value += term
+    return value

@@ -26,6 +26,8 @@ from typing import Any
 
 import numpy as np
 
+from .ramps import add_term
+
 __all__ = [
     "ResistanceLaw",
     "NAMED_LAWS",
@@ -58,8 +60,7 @@ def polynomial_stress_scalars(normal_velocity: Any, depth: Any, c0: float, k: fl
     # on arrays the augmented operations work in place (one temporary)
     stress = np.abs(normal_velocity)
     stress *= c2
-    if c1 != 0.0:
-        stress += c1
+    stress = add_term(stress, c1)
     stress *= normal_velocity
     stress += c0
     if k != 0.0:

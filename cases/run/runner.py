@@ -261,9 +261,8 @@ def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
         events.append(Event(PERFORATED, lambda st: lowest_height(st.position, st.attitude, rear), direction=1))
     inner_faces = scene.target.inner_faces
     if inner_faces and isinstance(control, ErrorControl):
-        reach = loads.max_radius + 0.5 * float(loads.point_arrays()["entry_length"].max(initial=0.0))
         travel = FACE_TRAVEL * prepared.nose_length
-        events.append(FaceCrossings(loads.front_face, inner_faces, reach, travel))
+        events.append(FaceCrossings(loads.front_face, inner_faces, loads.reach, travel))
     integrate_start = time.perf_counter()
     # one BLAS thread: the products over ~1e4 points gain nothing from threads, and threads that
     # wait for a busy core (a sweep runs one process per core) cost up to 50x; one thread also
