@@ -165,7 +165,7 @@ class CounterweightSpec(Strict):
     projectile's ``mass`` and centre of mass place it.
     """
 
-    density: Number = field(18000.0, unit="kg/m^3", gt=0.0, le=1e5)
+    density: Number = field(18000.0, unit="kg/m^3", gt=0.0, le=1e5, description="of the counterweight")
     start: Number | None = field(None, unit="m", ge=0.0, le=100.0, description="from the nose tip")
     end: Number | None = field(None, unit="m", gt=0.0, le=100.0, description="from the nose tip")
 
@@ -181,10 +181,12 @@ class CounterweightSpec(Strict):
 class MassPropertiesSpec(Strict):
     """Mass properties given directly instead of integrated over the mesh."""
 
-    mass: Number = field(unit="kg", gt=0.0, le=1e6)
+    mass: Number = field(unit="kg", gt=0.0, le=1e6, description="of the whole projectile")
     centre_of_mass: Number = field(unit="m", gt=0.0, le=100.0, description="from the nose tip")
-    axial_inertia: Number = field(unit="kg m^2", gt=0.0, le=1e9)
-    transverse_inertia: Number = field(unit="kg m^2", gt=0.0, le=1e9)
+    axial_inertia: Number = field(unit="kg m^2", gt=0.0, le=1e9, description="about the axis")
+    transverse_inertia: Number = field(
+        unit="kg m^2", gt=0.0, le=1e9, description="about an axis across the body through the centre of mass"
+    )
 
     @classmethod
     def of(cls, mass: MassProperties) -> Self:
@@ -214,10 +216,10 @@ Density = Annotated[Number, Field(gt=0.0, le=1e5)]
 class Projectile(Strict):
     """A projectile: an axisymmetric nose, cylindrical shank and flat tail, or any body read from a file."""
 
-    name: Label = ""
-    diameter: Number | None = field(None, unit="m", gt=0.0, le=10.0)
+    name: Label = field("", description="printed with the summary")
+    diameter: Number | None = field(None, unit="m", gt=0.0, le=10.0, description="of the shank")
     length: Number | None = field(None, unit="m", gt=0.0, le=100.0, description="nose tip to tail")
-    nose: NoseSpec | None = None
+    nose: NoseSpec | None = field(None, description="the nose's shape: one of the tables below")
     body: BodySpec | None = field(
         None, description="a measured body behind the nose (a boat tail, a flare); default: the cylinder to the tail"
     )
@@ -225,13 +227,25 @@ class Projectile(Strict):
     materials: dict[Label, Density] | None = field(
         None, unit="kg/m^3", description="density of a file's named solids or groups"
     )
-    body_density: Number | None = field(None, unit="kg/m^3", gt=0.0, le=1e5)
-    mass: Number | None = field(None, unit="kg", gt=0.0, le=1e6)
+    body_density: Number | None = field(
+        None, unit="kg/m^3", gt=0.0, le=1e5, description="of the case (with a counterweight)"
+    )
+    mass: Number | None = field(
+        None,
+        unit="kg",
+        gt=0.0,
+        le=1e6,
+        description="alone: a homogeneous body of this mass; with a counterweight: the whole",
+    )
     centre_of_mass: Number | None = field(
-        None, unit="m", gt=0.0, le=100.0, description="target centre of mass, from the nose tip"
+        None,
+        unit="m",
+        gt=0.0,
+        le=100.0,
+        description="the centre of mass to place the counterweight for, from the nose tip",
     )
     centre_of_mass_ratio: Number | None = field(
-        None, unit="Lc/L", gt=0.0, lt=1.0, description="target centre of mass over length"
+        None, unit="Lc/L", gt=0.0, lt=1.0, description="the same as a fraction of the length (Lc/L)"
     )
     interior: InteriorSpec | None = None
     counterweight: CounterweightSpec | None = None

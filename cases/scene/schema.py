@@ -28,7 +28,7 @@ MAX_MESH_CELLS = 2e6  # cells of mesh_size^3 in the projectile's bounding cylind
 class Impact(Strict):
     """Initial conditions; the tip (or, at grazing incidence, the lowest point) touches the surface."""
 
-    speed: Number = field(unit="m/s", gt=0.0, le=1e4)
+    speed: Number = field(unit="m/s", gt=0.0, le=1e4, description="of the centre of mass at impact")
     oblique_angle: Number = field(0.0, unit="deg", gt=-90.0, lt=90.0, description="velocity from the target normal")
     attack_angle: Number = field(
         0.0, unit="deg", ge=-90.0, le=90.0, description="axis from the velocity, in the vertical plane"
@@ -49,10 +49,16 @@ class Numerics(Strict):
     """Discretisation and integration settings."""
 
     mesh_size: Number = field(unit="m", gt=0.0, le=10.0, description="target element size")
-    geometry_order: Annotated[Literal[1, 2], BeforeValidator(not_boolean)] = 2
-    normals: Literal["exact", "mesh"] = "exact"
+    geometry_order: Annotated[Literal[1, 2], BeforeValidator(not_boolean)] = field(
+        2, description="1: flat tetrahedra; 2: curved (quadratic) ones, which follow a curved surface"
+    )
+    normals: Literal["exact", "mesh"] = field(
+        "exact", description="the surface points and normals of the exact shape, or of the mesh's facets"
+    )
     quadrature_order: Whole = field(2, ge=1, le=10, description="degree exact on each facet")
-    integrator: Literal["rk4", "dopri54"] = "rk4"
+    integrator: Literal["rk4", "dopri54"] = field(
+        "rk4", description="rk4: fixed steps of time_step; dopri54: adaptive Dormand-Prince steps to rtol"
+    )
     time_step: Number = field(
         2e-5,
         unit="s",
@@ -61,7 +67,7 @@ class Numerics(Strict):
         description="fixed step (rk4); the error control shortens no step below it (dopri54)",
     )
     rtol: Number = field(1e-6, gt=0.0, lt=1.0, description="relative tolerance (dopri54)")
-    time_limit: Number = field(1.0, unit="s", gt=0.0, le=100.0)
+    time_limit: Number = field(1.0, unit="s", gt=0.0, le=100.0, description="the run ends here at the latest")
     stop_speed: Number = field(
         0.5, unit="m/s", gt=0.0, le=1e3, description="the run ends when the speed falls below this"
     )
@@ -100,15 +106,15 @@ class Numerics(Strict):
 class Outputs(Strict):
     """What a run writes with --out."""
 
-    history: bool = True
+    history: bool = field(True, description="write history.csv, the state at every kept step")
     history_every: Whole = field(1, ge=1, le=1_000_000, description="keep every n-th step")
 
 
 class Scene(Strict):
     """A complete scene: projectile, target, impact, numerics and outputs."""
 
-    name: Label = ""
-    description: Label = ""
+    name: Label = field("", description="the scene's name in summaries and tables (default: the file's name)")
+    description: Label = field("", description="one line, printed with the summary")
     projectile: Projectile
     target: Target = Target()
     effects: Effects = Effects()

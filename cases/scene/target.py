@@ -342,7 +342,9 @@ class Target(Strict):
 class FrictionSpec(Strict):
     """Tangential stress opposite to the local slip."""
 
-    model: Literal["none", "coulomb", "capped"] = "none"
+    model: Literal["none", "coulomb", "capped"] = field(
+        "none", description="coulomb: tau = mu sigma_n; capped: tau = min(mu sigma_n, tau_s)"
+    )
     coefficient: Number = field(0.1, ge=0.0, le=5.0, description="mu")
     cap: Number | None = field(None, unit="Pa", gt=0.0, le=1e11, description="tau_s of the capped model")
 
@@ -413,8 +415,8 @@ class Effects(Strict):
         " velocity meets the body is unloaded (base recesses, grooves, the lee of fins); false loads every point"
         " with Vn > 0 (docs/geometry.md)",
     )
-    gravity: bool = False
-    gravity_acceleration: Number = field(9.80665, unit="m/s^2", ge=0.0, le=1e3)
+    gravity: bool = field(False, description="the projectile's weight acts during the run")
+    gravity_acceleration: Number = field(9.80665, unit="m/s^2", ge=0.0, le=1e3, description="g, downward (-Z)")
 
     @property
     def contact_ramp(self) -> dict[str, Any]:

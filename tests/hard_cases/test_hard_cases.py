@@ -162,9 +162,9 @@ def test_attack_decay_shipped_scene_at_10_mm_agrees():
 
 
 # ---------------------------------------------------------------------------------------------------
-# 2. just below and just above the critical speed of projectile #3 (908 m/s at 20 mm, 2e-5 s)
+# 2. just below and just above the critical speed of projectile #3 (910 m/s at 20 mm, 2e-5 s; 907.5-912.5 m/s)
 
-SIDES = {"below": 900.0, "above": 920.0}  # 0.9 % and 1.3 % from 908 m/s
+SIDES = {"below": 900.0, "above": 920.0}  # 1.1 % below and 1.1 % above 910 m/s
 LADDER = [(0.04, 4e-5), (0.02, 2e-5), (0.02, 1e-5)]
 LADDER_SLOW = [(0.02, 1e-5), (0.01, 2e-5), (0.01, 1e-5)]
 

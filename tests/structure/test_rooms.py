@@ -4,7 +4,7 @@ The rules:
 
 * every import between rooms is one the table of the rooms allows: ``[tool.penetrate.rooms]`` in
   pyproject.toml, the one place the rooms, their jobs and what each may import are written
-  (docs/architecture.md and the README print it); every room is in the table and every room in the
+  (docs/architecture.md prints it); every room is in the table and every room in the
   table exists; nothing imports the command line;
 * no import circle between modules (imports inside functions count too);
 * no module over 500 lines, no function over 80 logical lines of code (statements and clause headers,

@@ -1,0 +1,1 @@
+"""The tutorial's scene and the command that shows its output (docs/tutorial.md)."""
