@@ -63,3 +63,24 @@ def test_the_quick_readme_commands_run_as_written(line, tmp_path, monkeypatch, c
     if "--out" in line:
         out = Path(shlex.split(line)[shlex.split(line).index("--out") + 1])
         assert (out / "summary.json").is_file() and (out / "history.csv").is_file()
+
+
+def page_commands() -> list[tuple[str, str]]:
+    """Every ``penetrate`` command line of the bash blocks of docs/ (as the README's are read), with its page."""
+    found = []
+    for page in sorted((ROOT / "docs").rglob("*.md")):
+        for block in re.findall(r"```bash\n(.*?)```", page.read_text(), flags=re.S):
+            for line in re.sub(r"\\\n\s*", " ", block).splitlines():
+                line = line.split("  #")[0].split(" # ")[0].strip().removeprefix(".venv/bin/")
+                line = re.split(r" [>|] ", line)[0]  # the command, without a redirection or a pipe
+                if line.startswith("penetrate ") and " [" not in line:  # a usage synopsis is not a command
+                    found.append((page.relative_to(ROOT).as_posix(), line.removeprefix("penetrate ")))
+    return found
+
+
+@pytest.mark.parametrize(("page", "line"), page_commands())
+def test_each_command_of_the_docs_parses(page, line):
+    try:
+        build_parser().parse_args(shlex.split(line))
+    except SystemExit:
+        pytest.fail(f"{page}: penetrate {line}: not a valid command line")
