@@ -170,7 +170,11 @@ KINDS: dict[str, tuple[str, tuple[Page, ...]]] = {
 }
 
 #: the kinds of page a user reads: no commit hashes, history or module paths (except the Python API page)
-USER_KINDS = ("tutorial", "how-to", "reference", "explanation")
+USER_KINDS = ("tutorial", "how-to", "reference", "explanation", "evidence")
+#: the kinds whose words count against the budget (docs/README.md)
+BUDGET_KINDS = ("tutorial", "how-to", "reference", "explanation")
+#: the most words the README and the pages of BUDGET_KINDS may hold
+WORD_BUDGET = 30_000
 #: the user pages that name modules by necessity
 API_PAGES = ("docs/examples.md",)
 
@@ -207,9 +211,9 @@ def print_words() -> None:
     for name in ("readme", *KINDS):
         paths = ["README.md"] if name == "readme" else [page.path for page in pages(name)]
         count = sum(words((ROOT / path).read_text()) for path in paths if (ROOT / path).exists())
-        budget += count if name in ("readme", *USER_KINDS) else 0
+        budget += count if name in ("readme", *BUDGET_KINDS) else 0
         print(f"| {'the README' if name == 'readme' else KINDS[name][0]} | {count} |")
-    print(f"| **the README, tutorial, how-to, reference and explanation** | **{budget}** |")
+    print(f"| **the README, tutorial, how-to, reference and explanation** | **{budget}** (at most {WORD_BUDGET}) |")
 
 
 def main(argv: list[str] | None = None) -> None:

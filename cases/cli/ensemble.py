@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
-from .options import Parser, add_pool_options, add_scene_options, out_folder, overrides, positive_int, study
+from .options import Parser, add_pool_options, add_scene_options, out_folder, overrides, positive_int, print_json, study
 
 __all__ = ["register"]
 
@@ -94,7 +93,7 @@ def ensemble(args: argparse.Namespace) -> int:
             full_runs=args.full_runs,
         )
     if args.json:
-        print(json.dumps(record))
+        print_json(record)
     else:
         print((Path(args.out) / "ensemble.md").read_text())
     return 0

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from .options import (
@@ -14,6 +13,7 @@ from .options import (
     overrides,
     positive_float,
     positive_int,
+    print_json,
     study,
 )
 from .validate import SERIES_HELP
@@ -158,7 +158,7 @@ def run_fit(args: argparse.Namespace) -> int:
         return 1
     write_report(result, Path(args.out), title)
     if args.json:
-        print(json.dumps(result.record()))
+        print_json(result.record())
     else:
         print((Path(args.out) / "fit.md").read_text(), end="")
     if not result.converged:

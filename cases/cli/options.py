@@ -203,3 +203,13 @@ def environment_defaults(**values: str) -> Iterator[None]:
     finally:
         for name in added:
             os.environ.pop(name, None)
+
+
+def print_json(record: Any) -> None:
+    """Print ``record`` as one JSON object: NaN and infinities as null, never as the bare ``NaN`` strict readers
+    refuse (the run store's rule, :func:`~cases.run.persistence.json_safe`)."""
+    import json
+
+    from ..run.persistence import json_safe
+
+    print(json.dumps(json_safe(record), allow_nan=False))

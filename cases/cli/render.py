@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 
 from ..scene import InputError
-from .options import Parser, add_scene_options, overrides, positive_float, positive_int
+from .options import Parser, add_scene_options, overrides, positive_float, positive_int, print_json
 
 __all__ = ["register"]
 
@@ -122,7 +121,7 @@ def render(args: argparse.Namespace) -> int:
         colour_range=colour_range,
     )
     if args.json:
-        print(json.dumps(record))
+        print_json(record)
         return 0
     for item in record["instants"]:
         print(f"instant        {item['label'] or 'chosen'} at t = {item['time'] * 1e3:.3f} ms")

@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import json
 import os
 from typing import TYPE_CHECKING
 
-from .options import Parser, add_scene_options, environment_defaults, out_folder, overrides, quiet_start
+from .options import Parser, add_scene_options, environment_defaults, out_folder, overrides, print_json, quiet_start
 
 if TYPE_CHECKING:
     from ..run import RunSummary
@@ -40,7 +39,7 @@ def run(args: argparse.Namespace) -> int:
         if args.out:
             write_outputs(result, args.out, scene.outputs.history_every, history)
     if args.json:
-        print(json.dumps(summary.record()))
+        print_json(summary.record())
         return 0
     print(human_summary(summary, scene))
     if args.out:

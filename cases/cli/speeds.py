@@ -4,12 +4,11 @@ trajectories; ``penetrate predict``: the same two from the reduced pitch-plane m
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .options import Parser, add_pool_options, add_scene_options, out_folder, positive_float, study
+from .options import Parser, add_pool_options, add_scene_options, out_folder, positive_float, print_json, study
 
 if TYPE_CHECKING:
     from ..run import RunStore
@@ -186,7 +185,7 @@ def critical_speed(args: argparse.Namespace) -> int:
     with study(args) as pool:
         search = find_critical_velocity(sweep, store, args.speeds, args.resolution, pool, args.guess, args.guide)
     if args.json:
-        print(json.dumps(search.as_dict()))
+        print_json(search.as_dict())
         return 0 if search.critical_velocity is not None else 1
     print(f"guide: {search.guide.text}")
     for run in search.indicator:
@@ -219,7 +218,7 @@ def convergent_speed(args: argparse.Namespace) -> int:
     with study(args) as pool:
         result = measure_convergent_velocity(sweep, store, args.threshold, pool=pool, guide=args.guide)
     if args.json:
-        print(json.dumps(result.as_dict()))
+        print_json(result.as_dict())
         return 0 if result.characteristic_convergent_velocity is not None else 1
     print(f"guide: {result.guide.text}")
     for run in result.runs:
@@ -244,7 +243,7 @@ def ballistic_limit(args: argparse.Namespace) -> int:
     with study(args) as pool:
         result = find_ballistic_limit(sweep, store, args.speeds, args.resolution, pool, args.guide == "auto")
     if args.json:
-        print(json.dumps(result.as_dict()))
+        print_json(result.as_dict())
         return 0 if result.ballistic_limit is not None else 1
     print(f"guide: {result.guide}")
     for run in result.runs:
@@ -270,7 +269,7 @@ def predict_speeds(args: argparse.Namespace) -> int:
     result = predict(load_scene(args.scene, overrides(args)), args.speeds, args.resolution)
     found = result.characteristic_convergent_velocity is not None and result.critical_velocity is not None
     if args.json:
-        print(json.dumps(result.as_dict()))
+        print_json(result.as_dict())
         return 0 if found else 1
 
     def speed(value: float | None) -> str:
@@ -312,7 +311,7 @@ def stability_map(args: argparse.Namespace) -> int:
             args.quantity,
         )
     if args.json:
-        print(json.dumps(record))
+        print_json(record)
     else:
         print((Path(args.out) / "map.md").read_text())
     return 0

@@ -17,6 +17,7 @@ from .options import (
     out_folder,
     overrides,
     positive_float,
+    print_json,
     study,
 )
 from .speeds import speed_range
@@ -224,7 +225,6 @@ def compare_laws(args: argparse.Namespace) -> int:
 
 def _compare_series(args: argparse.Namespace, laws: list[tuple[str, object]]) -> int:
     from ..run import RunStore
-    from ..run.persistence import json_safe
     from ..studies.compare import compare_series
     from ..studies.series import read_series
     from .validate import report_failures
@@ -238,7 +238,7 @@ def _compare_series(args: argparse.Namespace, laws: list[tuple[str, object]]) ->
     with study(args) as pool:
         comparison = compare_series(series, overrides(args), laws, RunStore(args.store), args.out, pool)
     if args.json:
-        print(json.dumps(json_safe(comparison.record()), allow_nan=False))
+        print_json(comparison.record())
     else:
         out = Path(args.out)
         print((out / "compare.md").read_text())
@@ -283,14 +283,7 @@ def accuracy_study(args: argparse.Namespace) -> int:
             [int(q) for q in orders],
         )
     if args.json:
-        print(
-            json.dumps(
-                {
-                    "reference": {k: (None if isinstance(v, float) and v != v else v) for k, v in reference.items()},
-                    "settings": json.loads(table.to_json(orient="records")),
-                }
-            )
-        )
+        print_json({"reference": reference, "settings": json.loads(table.to_json(orient="records"))})
     else:
         print((Path(args.out) / "accuracy.md").read_text())
     return 0

@@ -3,17 +3,16 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
-from .options import SET_HELP, Parser, add_pool_options, out_folder, overrides, study
+from .options import SET_HELP, Parser, add_pool_options, out_folder, overrides, print_json, study
 
 __all__ = ["register", "SERIES_HELP"]
 
 SERIES_HELP = (
     "a test series: a CSV file of shots, one a row (scene, scene keys, measured.QUANTITY, sigma.QUANTITY, label,"
-    " group; docs/validation.md), or a shipped series' name"
+    " group; docs/series.md), or a shipped series' name"
 )
 
 
@@ -48,7 +47,6 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
 
 def validate(args: argparse.Namespace) -> int:
     from ..run import RunStore
-    from ..run.persistence import json_safe
     from ..scene import InputError
     from ..studies.series import read_series
     from ..studies.validate import validate as run_validation
@@ -61,7 +59,7 @@ def validate(args: argparse.Namespace) -> int:
         validation = run_validation(series, overrides(args), RunStore(args.store), pool, args.curve_points)
     write_validation(validation, args.out)
     if args.json:
-        print(json.dumps(json_safe(validation.record()), allow_nan=False))
+        print_json(validation.record())
     else:
         print((Path(args.out) / "validate.md").read_text(), end="")
     return report_failures("validate", validation.failed)

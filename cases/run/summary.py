@@ -112,7 +112,9 @@ class RunSummary(BaseModel):
     tetrahedra: int = _quantity("1", "tetrahedra of the mesh")
     steps: int | None = _quantity("1", "accepted steps")
     rejected_steps: int | None = _quantity("1", "steps retaken by the error control")
-    forced_steps: int | None = _quantity("1", "steps accepted above the tolerance at the step floor")
+    forced_steps: int | None = _quantity(
+        "1", "steps accepted above the tolerance at the error control's shortest step (numerics.time_step)"
+    )
     energy_rejections: int | None = _quantity("1", "steps retaken by the energy guard")
     energy_projections: int | None = _quantity("1", "accepted states whose sub-tolerance energy gain was removed")
     load_evaluations: int | None = _quantity("1", "calls of the load function")
@@ -316,8 +318,8 @@ def run_warnings(end_reason: str, statistics: dict) -> list[str]:
     forced = int(statistics.get("forced_steps") or 0)
     if forced > WARN_SHARE * steps:
         warnings.append(
-            f"{forced} of {steps} steps accepted above the tolerance at the step floor: the error control"
-            " cannot meet numerics.rtol here (docs/numerics.md, hard cases)"
+            f"{forced} of {steps} steps accepted above the tolerance at the shortest step (numerics.time_step): the"
+            " error control cannot meet numerics.rtol here (docs/numerics.md, hard cases)"
         )
     return warnings
 

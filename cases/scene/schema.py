@@ -93,7 +93,8 @@ class Numerics(Strict):
 
     @model_validator(mode="after")
     def _reachable_time_limit(self) -> Self:
-        # rk4 steps by time_step, and dopri54 shortens no step below it
+        # rk4 steps by time_step; dopri54's error control shortens no step below it, but an event, the energy guard
+        # or a sharp switch can, so this bounds the steps of rk4 and most of dopri54's
         if self.time_limit / self.time_step > MAX_STEPS:
             raise ValueError(
                 f"time_step = {self.time_step:g}: {self.time_limit / self.time_step:.3g} steps to reach"
