@@ -1,4 +1,4 @@
-"""Measure what each optional effect costs (docs/effects.md).
+"""Measure what each optional effect costs (docs/evidence-effects.md).
 
 Run: ``.venv/bin/python -m docs.effects_benchmark`` (about a minute).  Prints, for the
 shipped test 5 scene (Forrestal-Luk projectile, 20 mm mesh, 14 160 surface points):

@@ -148,6 +148,57 @@ KINDS: dict[str, tuple[str, tuple[Page, ...]]] = {
             Page("docs/paper.md", "The paper's study reproduced", "the instability study, with every gap"),
             Page("docs/paper/results.md", "The paper's study: tables and figures", "generated"),
             Page("docs/paper/variants.md", "The paper's variants", "friction, a conical nose, other soils"),
+            Page(
+                "docs/evidence-numerics.md",
+                "Numerics and the contact model: the evidence",
+                "the contact ramps measured down to their limits, the two kernels against each other, the hard cases",
+            ),
+            Page(
+                "docs/evidence-geometry.md",
+                "Projectiles from files: the evidence",
+                "files against the analytic bodies, what flat facets cost, mirror planes, exact normals, exposure, "
+                "the shipped non-axisymmetric bodies, the eroded nose",
+            ),
+            Page(
+                "docs/evidence-laws.md",
+                "Resistance laws: the evidence",
+                "every law family against a 1-D integration, six laws compared on test 2 and #3",
+            ),
+            Page(
+                "docs/evidence-effects.md",
+                "Effects: the evidence",
+                "friction against its closed form, a free surface on the concrete series, what each effect costs",
+            ),
+            Page(
+                "docs/evidence-targets.md",
+                "Targets: the evidence",
+                "slabs, gaps and inclined faces against the 1-D model of the nose, the ballistic-limit search",
+            ),
+            Page(
+                "docs/evidence-studies.md",
+                "Studies: the evidence",
+                "the 30-degree rule, the convergence speed, guided against unguided searches, a stability map of #3",
+            ),
+            Page(
+                "docs/evidence-ensembles.md",
+                "Ensembles: the evidence",
+                "the probability that #3 turns unstable under scattered disturbances, multi-fidelity against full runs",
+            ),
+            Page(
+                "docs/evidence-calibration.md",
+                "Calibration: the evidence",
+                "the soil fitted to Forrestal and Luk's shots, the family's interior fitted to #3 alone",
+            ),
+            Page(
+                "docs/evidence-theory.md",
+                "The reduced model: the evidence",
+                "predicted against measured characteristic speeds for the family, the variants and two other noses",
+            ),
+            Page(
+                "docs/evidence-rendering.md",
+                "Pictures: the evidence",
+                "a picture shows the integrated field; what a render costs",
+            ),
         ),
     ),
     "contributors": (
@@ -165,6 +216,32 @@ KINDS: dict[str, tuple[str, tuple[Page, ...]]] = {
             ),
             Page("docs/performance/scaling.md", "Scaling", "how times grow with points, steps, runs and workers"),
             Page("docs/robustness.md", "Robustness", "bad input, killed runs, reproducible bits, fuzzing"),
+            Page(
+                "docs/dev-numerics.md",
+                "Numerics: the code",
+                "where meshing, quadrature, integration and the compiled step live; the caches; numba",
+            ),
+            Page(
+                "docs/dev-geometry.md",
+                "Projectiles from files: code and tests",
+                "CAD files, volume meshes, mirror planes, exact-surface quadrature and exposure in the code",
+            ),
+            Page(
+                "docs/dev-laws.md",
+                "Laws, effects and targets: code and tests",
+                "the single law definition, compiling user laws, the friction sums, nose shapes",
+            ),
+            Page(
+                "docs/dev-studies.md",
+                "Studies: code and tests",
+                "where each study lives, forked and Dask workers, the run store, the guide's internals",
+            ),
+            Page("docs/dev-rendering.md", "Pictures: code and tests", "the viz modules, off-screen EGL, render tests"),
+            Page(
+                "docs/dev-evidence.md",
+                "The evidence pages: code and tests",
+                "the scripts behind the evidence tables, and which test checks which claim",
+            ),
         ),
     ),
 }

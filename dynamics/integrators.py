@@ -69,7 +69,7 @@ def path_increment_scalars(
 
     The chord ``|c|`` lengthened by ``theta^2 / 24``, ``theta`` the angle between ``a`` and ``b``: exact for a
     straight or circular path up to ``O(theta^4)``.  Not ``int |v| dt`` by the step's quadrature, whose stage
-    velocities swing sideways across a jump of the load (docs/numerics.md, Hard cases).
+    velocities swing sideways across a jump of the load (docs/numerics.md, "Time integration").
     """
     length = math.sqrt(cx * cx + cy * cy + cz * cz)
     dot = ax * bx + ay * by + az * bz

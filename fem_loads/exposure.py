@@ -4,11 +4,11 @@ The criterion: the soil moves past the body against the body's velocity ``V`` (i
 frame); a point meets it only if the ray from the point along ``V`` leaves the body without hitting it.  Its
 *exposure* ``e`` is 1 then and 0 otherwise, and multiplies its stresses (normal and friction).
 
-Computed once per body (:func:`exposure_table`) and kept with the quadrature, as docs/geometry.md (Exposure)
-explains and measures: no table for a point on the body's convex hull (a convex body has none); for every other
-point ``e`` at the nodes of a cube map of directions (:func:`cube_nodes`), rays along the surface within a cell's
-width of grazing (:func:`_exposed`), the cells whose nodes disagree refined (:data:`SUB_CELLS`), and ``e``
-bilinear between the (sub-)nodes: exactly 0 or 1 in a cell whose four nodes agree.
+Computed once per body (:func:`exposure_table`) and kept with the quadrature (docs/geometry.md explains it,
+docs/evidence-geometry.md measures it): no table for a point on the body's convex hull (a convex body has none);
+for every other point ``e`` at the nodes of a cube map of directions (:func:`cube_nodes`), rays along the surface
+within a cell's width of grazing (:func:`_exposed`), the cells whose nodes disagree refined (:data:`SUB_CELLS`),
+and ``e`` bilinear between the (sub-)nodes: exactly 0 or 1 in a cell whose four nodes agree.
 
 For the compiled kernel each cell also lists the points hidden at one of its corners (:attr:`Exposure.cell_rows`):
 an evaluation visits only those around the body's direction.  :func:`cube_cell_scalars` and

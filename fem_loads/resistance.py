@@ -170,8 +170,8 @@ def locking_cavity_expansion(
     """Spherical cavity expansion in an elastic-plastic-locking soil, rigid-locking limit: ``A sigma_0 + B rho_0 V^2``
     for a soil of strength ``sigma_0`` (Pa) and density ``rho_0`` (kg/m^3) that locks at the volumetric strain
     ``eta*`` (``locking_strain``), with ``A = (2/3)(1 - ln eta*)`` and
-    ``B = [3/2 - 2 eta*^(1/3) + eta*^(4/3)/2] / (1 - eta*) + eta*^(1/3)``; docs/effects.md derives them and compares
-    them with the paper's dynamic cavity-expansion laws."""
+    ``B = [3/2 - 2 eta*^(1/3) + eta*^(4/3)/2] / (1 - eta*) + eta*^(1/3)``; docs/evidence-laws.md derives them and
+    compares them with the paper's dynamic cavity-expansion laws."""
     if not (0.0 < locking_strain < 1.0):
         raise ValueError(f"locking_strain = {locking_strain}: must lie in (0, 1)")
     eta = locking_strain

@@ -12,7 +12,7 @@ estimate, set to zero
 where its sign would differ from the end chord's: a finite number at the tip (a pointed nose with a
 finite tip angle), and at the shoulder a table that flattens towards the shank meets it nearly
 tangentially, one that does not leaves a kink there (like a secant ogive).  The error for a smooth
-profile sampled every ``h`` is measured in tests/mesh/test_measured_nose.py and docs/numerics.md.
+profile sampled every ``h`` is measured in tests/mesh/test_measured_nose.py and docs/evidence-numerics.md.
 
 Each piece is a cubic in ``x``, hence a cubic Bezier curve with control points at the thirds of its
 interval (:meth:`NoseCurve.bezier`): the mesher draws the curve *exactly* as one B-spline.

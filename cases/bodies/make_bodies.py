@@ -15,7 +15,7 @@ STEP, millimetres):
 
 The third is the 155 mm family's #3 (``cases/paper_p3.toml``) with a solid nose, its steel body and
 tungsten counterweight as two solids, the nose cut in the same way (``eroded_p3.brep``, metres;
-:func:`eroded_p3`, whose angle and depth the eroded-nose study of docs/geometry.md varies).
+:func:`eroded_p3`, whose angle and depth the eroded-nose study of docs/evidence-geometry.md varies).
 
 This module imports nothing of the project: it only makes files, which the scenes read through
 ``projectile.geometry`` like any CAD file (docs/geometry.md).
@@ -74,7 +74,7 @@ def finned(occ) -> None:
     occ.fuse([(3, solid)], [(3, fin) for fin in fins])
 
 
-# The 155 mm family's #3 (docs/paper.md) with its nose eroded on one side, for the study of docs/geometry.md.
+# The 155 mm family's #3 (docs/paper.md) with its nose eroded on one side, for the study of docs/evidence-geometry.md.
 # The stand-in interior (a 10 mm wall all the way to 21 mm behind the tip) would open to any cut of the
 # nose; a penetrator's nose is solid, so here the cavity starts SOLID_NOSE behind the tip, and the
 # tungsten counterweight is placed again for #3's mass and centre of mass (:func:`p3_counterweight`).

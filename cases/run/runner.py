@@ -77,9 +77,9 @@ STOPPED, EXITED = "stopped", "exited"
 # the whole body has left the target's rear face; has left its front face without ever having been wholly inside
 PERFORATED, RICOCHETED = "perforated", "ricocheted"
 # attitude errors are measured against this angle (rad), not against a radian: the disturbances
-# of interest are of the order of a degree (docs/numerics.md, Hard cases)
+# of interest are of the order of a degree (docs/evidence-numerics.md)
 ANGLE_SCALE = 1e-2
-# the step floor below the time step: 10 halvings of the energy guard (docs/numerics.md, Hard cases)
+# the step floor below the time step: 10 halvings of the energy guard (docs/evidence-numerics.md)
 FLOOR_FRACTION = 2.0**-10
 # the longest step across a face inside the target, in nose lengths (FaceCrossings)
 FACE_TRAVEL = 0.25
@@ -293,7 +293,7 @@ class FaceCrossings(Event):
     interfaces and its rear face, at ``depths`` m below the front face ``face``), and at most ``travel`` while it
     overlaps one.  Why: across a face the load changes over the nose's length, and a Dormand-Prince step that
     jumps over the change is misjudged by its own error estimate (test 2 through a 2 m slab: 10 steps, the
-    residual speed 0.27 % high; docs/targets.md)."""
+    residual speed 0.27 % high; docs/evidence-targets.md)."""
 
     # set in __init__ (not dataclass fields: the class is not a dataclass of its own)
     face: FrontFace

@@ -113,7 +113,7 @@ class PowerLawSpec(DepthStrength):
 
 
 class MaterialLawSpec(Strict):
-    """A resistance law derived from material constants (docs/effects.md)."""
+    """A resistance law derived from material constants (docs/laws.md)."""
 
     model: Literal["locking_cavity_expansion"]
     sigma_0: Number = field(unit="Pa", gt=0.0, le=1e11, description="target strength")
@@ -361,7 +361,7 @@ class FrictionSpec(Strict):
 
 
 class FreeSurfaceSpec(Strict):
-    """Linear free-surface reduction of the normal stress (docs/effects.md)."""
+    """Free-surface reduction of the normal stress, a smooth ramp over its depth (docs/effects.md)."""
 
     depth: Number = field(unit="m", gt=0.0, le=1e3, description="full resistance from this distance into the target")
     surface_fraction: Number = field(0.0, ge=0.0, le=1.0, description="fraction of it at the face")

@@ -1,1 +1,1 @@
-"""The calibrations of docs/calibration.md: the soil fitted to the measured shots, the family's interior to #3."""
+"""The calibrations of docs/evidence-calibration.md: the soil fitted to the measured shots, the interior to #3."""

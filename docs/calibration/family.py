@@ -1,4 +1,4 @@
-"""The family's unknown interior calibrated on #3 alone, and the other members predicted (docs/calibration.md).
+"""The family's unknown interior calibrated on #3 alone, and the other members predicted (docs/evidence-calibration.md).
 
 Run from the repository root: ``python -m docs.calibration.family`` (several minutes from an empty
 store; runs are kept in ``runs/calibration-family-store``); it writes ``family.json`` beside itself, and

@@ -1,4 +1,4 @@
-"""The soil fitted to Forrestal and Luk's five measured shots (docs/calibration.md).
+"""The soil fitted to Forrestal and Luk's five measured shots (docs/evidence-calibration.md).
 
 Run from the repository root: ``python -m docs.calibration.soil`` (about a minute from an empty store; runs are kept in
 ``runs/calibration-soil-store`` and found again).  Every fit is ``penetrate fit``'s own
@@ -57,7 +57,7 @@ def main() -> None:
     try:
         # the two are nearly collinear on these shots: where along the valley the fit stops moves with changes
         # far below the runs' accuracy (another machine's round-off), so its figures are marked ~ (not compared
-        # by docs/regenerate.py --check); docs/calibration.md says so
+        # by docs/regenerate.py --check); docs/evidence-calibration.md says so
         both = run_fit(["target.law.A=0.5:4", "target.law.B=0.3:3"], tests)
         values = "; ".join(
             f"{k.rsplit('.', 1)[1]} = ~{v:.3f} +- ~{both.standard_errors[k]:.3f}" for k, v in both.parameters.items()

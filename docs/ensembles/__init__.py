@@ -1,1 +1,1 @@
-"""The ensemble study of docs/ensembles.md: the probability of instability against the impact speed."""
+"""The ensemble study of docs/evidence-ensembles.md: the probability of instability against the impact speed."""

@@ -1,4 +1,4 @@
-"""A multi-fidelity ensemble of #3 against an all-3-D one (docs/ensembles.md, "Multi-fidelity ensembles").
+"""A multi-fidelity ensemble of #3 against an all-3-D one (docs/evidence-ensembles.md, "Multi-fidelity ensembles").
 
 Run from the repository root: ``python -m docs.ensembles.multifidelity`` (about three minutes on 2 cores from
 an empty store; runs are kept in ``runs/multifidelity-store``).  #3 at 20 mm, the impact speed uniform on

@@ -1,4 +1,5 @@
-"""The probability that #3 turns unstable, against its impact speed, under scattered disturbances (docs/ensembles.md).
+"""The probability that #3 turns unstable, against its impact speed, under scattered disturbances
+(docs/evidence-ensembles.md).
 
 Run from the repository root: ``python -m docs.ensembles.study`` (a few minutes on 2 cores from an
 empty store; runs are kept in ``runs/ensembles-store`` and found again).  Three ensembles of

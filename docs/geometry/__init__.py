@@ -1,1 +1,1 @@
-"""The projectiles from files, the non-axisymmetric bodies and the eroded-nose study of docs/geometry.md."""
+"""The projectiles from files, the non-axisymmetric bodies and the eroded-nose study of docs/evidence-geometry.md."""

@@ -1,4 +1,4 @@
-"""The shipped non-axisymmetric bodies run as shipped (docs/geometry.md).
+"""The shipped non-axisymmetric bodies run as shipped (docs/evidence-geometry.md).
 
 Run from the repository root: ``python -m docs.geometry.bodies`` (a few seconds once the meshes are
 cached).  Prints a markdown table: for ``cases/eroded_test2.toml`` and ``cases/finned_test2.toml``

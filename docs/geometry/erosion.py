@@ -1,5 +1,5 @@
-"""The eroded-nose study the published one left out (docs/geometry.md): #3 at normal incidence and zero attack, its
-nose cut on one side by a plane of growing obliquity.
+"""The eroded-nose study the published one left out (docs/evidence-geometry.md): #3 at normal incidence and zero
+attack, its nose cut on one side by a plane of growing obliquity.
 
 Run from the repository root: ``python -m docs.geometry.erosion`` (a few minutes from an empty store; runs are
 kept in ``runs/erosion-store``).  It

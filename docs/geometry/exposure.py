@@ -1,4 +1,4 @@
-"""Surface the target cannot reach (docs/geometry.md, "Exposure"): what it changes and what it costs.
+"""Surface the target cannot reach (docs/evidence-geometry.md, "Exposure"): what it changes and what it costs.
 
 Run from the repository root: ``python -m docs.geometry.exposure`` (about a minute).  It writes three bodies
 with gmsh's own primitives (docs/geometry/cad_bodies.py): a 105 mm, 600 mm steel body with a CRH 2.5 ogive,

@@ -1,4 +1,5 @@
-"""Projectiles from files against the analytic scenes (docs/geometry.md): what each kind of file costs in accuracy.
+"""Projectiles from files against the analytic scenes (docs/evidence-geometry.md): what each kind of file costs in
+accuracy.
 
 Run from the repository root: ``python -m docs.geometry.files facets`` (about two minutes: the 5 mm meshes) or
 ``python -m docs.geometry.files files`` (about a minute).  The bodies are written by gmsh's own OpenCASCADE

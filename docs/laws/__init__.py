@@ -1,1 +1,1 @@
-"""The check of every law against the 1-D integration in docs/laws.md (python -m docs.laws.normal_impact)."""
+"""The check of every law against the 1-D integration in docs/evidence-laws.md (python -m docs.laws.normal_impact)."""

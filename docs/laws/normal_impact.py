@@ -1,5 +1,5 @@
 """Test 2 on a 10 mm mesh under each law family, a user's law and both contact ramps, against the 1-D integration
-of the same law over the exact profile: the table of docs/laws.md.  Run from the repository root::
+of the same law over the exact profile: the table of docs/evidence-laws.md.  Run from the repository root::
 
     python -m docs.laws.normal_impact
 """

@@ -1,1 +1,1 @@
-"""The rendering example and the rendering benchmark of docs/rendering.md."""
+"""The rendering example of docs/rendering.md and the rendering benchmark of docs/evidence-rendering.md."""

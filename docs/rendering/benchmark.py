@@ -1,4 +1,4 @@
-"""Measure what rendering costs (docs/rendering.md).
+"""Measure what rendering costs (docs/evidence-rendering.md).
 
 Run: ``.venv/bin/python -m docs.rendering.benchmark`` (about a minute and a half on 2 cores).
 Projectile #3 at 1120 m/s with the shipped numerics (10 mm mesh, RK4 at 10 us).  Prints:

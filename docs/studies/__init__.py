@@ -1,1 +1,1 @@
-"""The studies of docs/studies.md: guided searches against unguided ones, and a stability map."""
+"""The studies of docs/evidence-studies.md: guided searches against unguided ones, and a stability map."""

@@ -1,4 +1,4 @@
-"""Guided against unguided critical-speed searches on every shipped scene (docs/studies.md, "Guided searches").
+"""Guided against unguided critical-speed searches on every shipped scene (docs/evidence-studies.md, "Guided searches").
 
 Run from the repository root: ``python -m docs.studies.guided`` (about a minute on 2 cores; each search from
 an empty store of its own, so that neither reuses the other's runs).  Each shipped scene at its own numerics,

@@ -1,4 +1,4 @@
-"""A stability map of #3 and six of its points searched again without the guide (docs/studies.md).
+"""A stability map of #3 and six of its points searched again without the guide (docs/evidence-studies.md).
 
 Run from the repository root: ``python -m docs.studies.map`` (about a minute on 2 cores from an empty store;
 runs are kept in ``runs/map-store``).  ``penetrate map`` of the shipped #3 over 10 attack angles (0.5-5

@@ -1,1 +1,1 @@
-"""The checks and the pictures of docs/targets.md: slabs, gaps, inclined faces and the ballistic limit."""
+"""The checks (docs/evidence-targets.md) and pictures (docs/targets.md) of slabs, gaps and inclined faces."""

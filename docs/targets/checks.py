@@ -1,4 +1,4 @@
-"""The independent checks of docs/targets.md: slabs, gaps, inclined faces and the ballistic limit.
+"""The independent checks of docs/evidence-targets.md: slabs, gaps, inclined faces and the ballistic limit.
 
 Run: ``.venv/bin/python -m docs.targets.checks`` (about 40 s).  Every full run is test 2's projectile (Forrestal
 and Luk: 23.1 kg, 95.2 mm, CRH 3) with its soil law at 280 m/s, no free-surface reduction, no friction, the

@@ -1,1 +1,1 @@
-"""The reduced pitch-plane model's predictions against the simulator's measurements (docs/theory.md)."""
+"""The reduced pitch-plane model's predictions against the simulator's measurements (docs/evidence-theory.md)."""

@@ -1,4 +1,5 @@
-"""The reduced pitch-plane model's predictions against the simulator's measured characteristic speeds (docs/theory.md).
+"""The reduced pitch-plane model's predictions against the simulator's measured characteristic speeds
+(docs/evidence-theory.md).
 
 Run from the repository root: ``python -m docs.theory.compare`` (about two minutes from an empty store;
 runs are kept in ``runs/theory-store``).  Every scene is the paper study's (``paper_p3`` with its

@@ -4,7 +4,7 @@ Every run here sets its numerics explicitly (mesh size, facet quadrature, step),
 the shipped scenes' numerics does not change what is tested.  The default run (``./dev test``) takes
 about a minute on 2 cores; the ``slow`` variants (finer meshes and steps, very long runs) run in CI's
 second step (``./dev test -m slow``).  The measured figures and what failed before the fixes are in
-docs/numerics.md, "Hard cases".
+docs/evidence-numerics.md.
 """
 
 from __future__ import annotations
@@ -741,7 +741,7 @@ def test_each_contact_ramp_converges_to_its_own_limit_with_friction():
     own, some 70 % longer (an aligned shank unloaded: no friction drag on it).  Neither is the other's error.
 
     Pass: each sequence converges (its steps shrink, or it has settled to 1e-4); the centred one ends within
-    0.5 % of the sharp law and the one-sided one more than 30 % from it (measured: docs/model.md)."""
+    0.5 % of the sharp law and the one-sided one more than 30 % from it (measured: docs/evidence-numerics.md)."""
     friction = ("effects.friction.model=coulomb", "effects.friction.coefficient=0.1", "numerics.kernel=compiled")
     sharp = _run(FL5, *MM20, *friction, *SHARP, "numerics.integrator=rk4", "numerics.time_step=1e-5")[2].path_length
     incidences = (0.004, 0.002, 0.001)

@@ -70,7 +70,7 @@ def test_a_body_is_meshed_by_the_mirror_planes_it_has(folder, name):
     assert quadrature.mirror_planes == planes
     mass, _, inertia = occ_mass_properties(path, scale=1e-3)
     assert props.mass == pytest.approx(mass, rel=1e-4)
-    # the 20 mm mesh's own error in the transverse inertia: -2.1e-4 (docs/geometry.md)
+    # the 20 mm mesh's own error in the transverse inertia: -2.1e-4 (docs/evidence-geometry.md)
     assert props.inertia[1, 1] == pytest.approx(inertia[1, 1], rel=3e-4)
     # the exact surface closes the body: measured 3e-6 for bodies of revolution and fins, 2.4e-5 where a plane
     # cuts the ogive (the facets follow the cut's curve through their edge nodes, to third order in their size)
