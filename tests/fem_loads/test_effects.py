@@ -100,6 +100,7 @@ def test_friction_lowers_depth():
     assert rough.depth < 0.9 * plain.depth
 
 
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_two_layers_of_one_law_are_the_homogeneous_target():
     one, _ = _run("forrestal_luk_test5", *COARSE)
     two, _ = _run(

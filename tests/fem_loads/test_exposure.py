@@ -98,6 +98,7 @@ def _hits_shank(point: np.ndarray, direction: np.ndarray, radius: float, start: 
     return start < point[0] + first * direction[0] < end
 
 
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_the_finned_body_s_hidden_faces_carry_no_stress():
     """30 degrees of attack between two fins: on the fins' faces that move into the soil, the points whose ray
     along the body's motion (and along every direction within 10 degrees of it) meets the body's shank carry
@@ -329,6 +330,7 @@ def groove_wall(tmp_path_factory):
 
 
 @pytest.mark.parametrize("attack", [3.0, 5.0, 8.0])
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_a_groove_s_rear_wall_is_exposed_as_exact_rays_expose_it(groove_wall, attack):
     """At 3, 5 and 8 degrees of attack in every roll, the area of the groove's rear wall (facing forward) that the
     exposure leaves loaded is that of exact rays from the same points within 2 % (measured: +0.8, +0.3, +0.1 %;

@@ -116,6 +116,7 @@ def test_attack_decay_sharp_law_needs_forced_steps():
 
 
 @pytest.mark.parametrize("rtol", slow_except([1e-4, 1e-6], 1e-6))
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_attack_decay_both_integrators_agree(rtol):
     """Dormand-Prince (rtol 1e-4, 1e-6) against RK4 at 5e-6 s on test 5, 20 mm.
 
@@ -195,6 +196,7 @@ def _check_side(side: str, ladder: list[tuple[float, float]]) -> None:
 
 
 @pytest.mark.parametrize("side", SIDES)
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_near_critical_speed_converges_and_keeps_its_side(side):
     """Projectile #3, 1 deg attack, at 900 m/s (stable) and 920 m/s (unstable) on the ladder
     40 mm / 4e-5 s -> 20 mm / 2e-5 s -> 20 mm / 1e-5 s.
@@ -712,6 +714,7 @@ def test_the_moment_settles_after_convergence():
             assert np.abs(moment).max() > 0.5 * peak  # it does not settle
 
 
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_rk4_reaches_its_order_with_the_continuous_load():
     """Test 5, 20 mm, RK4 at 2e-5, 1e-5, 5e-6 and 2.5e-6 s.
 

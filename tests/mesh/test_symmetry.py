@@ -56,6 +56,7 @@ def _geometry(path: Path, **kw) -> FileGeometry:
 
 
 @pytest.mark.parametrize("name", list(BODIES))
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_a_body_is_meshed_by_the_mirror_planes_it_has(folder, name):
     """The mesh, its mass properties and its exact-surface quadrature have exactly the planes the body has; the
     mirrored mesh has the volume and inertia of the CAD solid (OpenCASCADE's) to the mesh's own error, and the
@@ -105,6 +106,7 @@ def test_a_declared_symmetry_the_body_lacks_is_one_line(folder, name, declared, 
 
 
 @pytest.mark.parametrize("name, declared", [("cut in x-z", "mirror_y"), ("four fins", "mirrors"), ("revolved", "none")])
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_a_declared_symmetry_is_the_one_meshed(folder, name, declared):
     mesh = build_file_mesh(_geometry(_file(folder, name), symmetry=declared), 0.02, 2)
     assert mirror_symmetric_axes(mesh) == SYMMETRIES[declared]

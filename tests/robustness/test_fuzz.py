@@ -1146,6 +1146,7 @@ class StableOrUnstable:
 )
 # found by CI: the smallest float as attack angle (a suggested angle computed from 10 ** -324 divided by zero)
 @example(unstable=False, low=1.0, width=9999.0, attack=5e-324, oblique=0.0)
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_a_critical_search_that_finds_nothing_names_the_option_that_would(
     tmp_path_factory, unstable, low, width, attack, oblique
 ):

@@ -39,6 +39,7 @@ def test_the_sources_are_what_the_steps_compile():
     assert not any(name.startswith(("cases.cli", "cases.studies", "mesh.cad", "mesh.symmetry")) for name in sources)
 
 
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_an_edit_of_any_compiled_module_names_a_new_cache_folder(tree):
     before = digest(tree)
     for name in compiled_sources(tree):

@@ -250,6 +250,7 @@ def test_a_body_of_revolution_from_a_file_flies_straight(folder, kernel):
 
 
 @pytest.mark.parametrize("kernel", ["numpy", "compiled"])
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_a_body_with_one_mirror_plane_moves_in_it(kernel):
     """The shipped eroded test 2 (its nose cut by a plane whose normal lies in the x-z plane: one mirror plane,
     y = 0), with 3 degrees of attack and 20 degrees of obliquity in that plane: it turns (by a degree or more), and

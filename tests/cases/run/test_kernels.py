@@ -110,6 +110,7 @@ VARIANTS = {
         ("paper_p3", {"numerics.mesh_size": 0.04, "impact.speed": 800.0}),
     ],
 )
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_compiled_and_numpy_kernels_agree_on_every_effect(name, overrides, variant):
     """1e-9 for test 2; #3 turns under some of these laws and effects (the polynomial law's, by 1e-6 relative),
     and there, as for the shipped scenes that turn, 10 rtol bounds the difference."""

@@ -58,6 +58,7 @@ def test_mass_properties_against_opencascade(name):
     assert np.abs(per_mass - inertia / volume).max() < 1e-4 * np.abs(inertia / volume).max()
 
 
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_the_finned_body_stays_on_its_axis():
     """Four fins at right angles: the load of a straight normal impact has no lateral resultant but for
     the mesh's own asymmetry (gmsh meshes the fins independently), so the path stays straight. Bound:

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pandas as pd
+import pytest
 
 from cases import scene_path
 from cases.run import RunStore
@@ -15,6 +16,7 @@ def test_pareto_front():
     assert _pareto(error, cost).tolist() == [True, True, False, True, False]
 
 
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_normal_impact_uses_the_exact_reference(tmp_path):
     table, reference = accuracy_study(
         scene_path("forrestal_luk_test2"),
@@ -60,6 +62,7 @@ def test_normal_impact_uses_the_exact_reference(tmp_path):
     assert {p.name for p in (tmp_path / "out").iterdir()} == {"accuracy.md", "accuracy.csv", "accuracy.png"}
 
 
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_contact_incidence_study_tends_to_the_sharp_law(tmp_path):
     """Test 2 at its own 20 mm mesh: the depth's change from the sharp law falls as the contact incidence
     does, and equals the change the independent 1-D integration gives with the same incidence within 15 %

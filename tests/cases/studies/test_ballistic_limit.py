@@ -56,6 +56,7 @@ def test_the_1d_limit_is_where_the_1d_runs_change(slab_scene: Path, limit_1d: fl
     assert math.isnan(below[0]) and 0.0 < above[0] < 0.05 * limit_1d
 
 
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_the_ballistic_limit_agrees_with_the_1d_model_in_few_runs(
     slab_scene: Path, limit_1d: float, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -75,6 +76,7 @@ def test_the_ballistic_limit_agrees_with_the_1d_model_in_few_runs(
     assert sorted(p.name for p in store.rglob("*")) == stored
 
 
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_an_unguided_search_splits_the_range(
     slab_scene: Path, limit_1d: float, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

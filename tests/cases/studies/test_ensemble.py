@@ -221,6 +221,7 @@ def _ensemble(tmp_path, count, *extra):
     )
 
 
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_ensemble_command_on_test_2(tmp_path, capsys):
     """A few runs of test 2 (280 m/s +- 30): every run stops; the outputs' structure; -n raised runs only the new."""
     assert _ensemble(tmp_path, 5, "--by", "impact.speed=250:310:30", "--json") == 0

@@ -80,6 +80,7 @@ def test_two_parameters_from_one_scene(store):
     assert correlation.shape == (2, 2) and np.allclose(np.diag(correlation), 1.0) and correlation[0, 1] < -0.5
 
 
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_one_and_two_parameters_from_several_scenes(store, tmp_path):
     """Depths at 150, 280 and 600 m/s: B alone, then A and B (the static term rules the slow shot)."""
     rng = np.random.default_rng(3)

@@ -112,6 +112,7 @@ def test_a_scene_or_key_the_reduced_model_cannot_take_is_refused_in_one_line(nam
     assert str(error.value).endswith("use --fidelity full")
 
 
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_a_multi_fidelity_ensemble_says_how_many_full_runs_it_made(tmp_path):
     record = run_ensemble(
         scene_path("paper_p3"),

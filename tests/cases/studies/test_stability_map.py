@@ -24,6 +24,7 @@ def mapped(tmp_path_factory):
     return folder, record
 
 
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_each_point_is_the_critical_search_of_its_scene(mapped):
     folder, record = mapped
     assert record["keys"] == ["impact.attack_angle", "impact.oblique_angle"]

@@ -237,6 +237,7 @@ def _cli_sweep(store, out, *extra):
     return args + list(extra)
 
 
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_killed_sweep_loses_nothing_and_resumes(tmp_path):
     store, out = tmp_path / "store", tmp_path / "table.csv"
     log = tmp_path / "stderr.txt"
@@ -264,6 +265,7 @@ def test_killed_sweep_loses_nothing_and_resumes(tmp_path):
     assert len(resumed) == 6
 
 
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_dask_local_cluster_gives_the_same_table(tmp_path):
     distributed = pytest.importorskip("distributed")
     sweep = _sweep(speeds=(1000, 1200))
@@ -275,6 +277,7 @@ def test_dask_local_cluster_gives_the_same_table(tmp_path):
     pd.testing.assert_frame_equal(_stable(remote), _stable(local), check_exact=True)
 
 
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_dask_scheduler_and_worker_processes_give_the_same_table(tmp_path):
     """A cluster of separate ``dask scheduler`` and ``dask worker`` processes, as on a real cluster: the
     workers import this project themselves (nothing is shared with this process) and report the code

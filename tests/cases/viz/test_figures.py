@@ -230,6 +230,7 @@ def test_the_helpers_label_units_from_the_project_records():
     assert quantity_unit("no.such.key") is None and axis_label("x", None) == "x"
 
 
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_every_axis_of_every_figure_says_its_unit(every_figure):
     out, drawn = every_figure
     assert len(drawn) == 12
