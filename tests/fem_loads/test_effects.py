@@ -110,6 +110,7 @@ def test_two_layers_of_one_law_are_the_homogeneous_target():
     np.testing.assert_allclose(two.trajectory.velocity, one.trajectory.velocity, rtol=1e-13, atol=1e-10)
 
 
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_a_stiffer_layer_decelerates_faster():
     soft, soft_h = _run("forrestal_luk_test2", *COARSE)
     layered, layered_h = _run("forrestal_luk_test2", *COARSE, ("target.layers", SOFT_OVER_STIFF))

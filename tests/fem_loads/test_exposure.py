@@ -132,6 +132,7 @@ def test_the_finned_body_s_hidden_faces_carry_no_stress():
     assert (without.sigma_n[hidden] > 0.0).all()  # the same points, every Vn > 0 loaded
 
 
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_a_convex_body_has_no_table_and_loads_as_before():
     for name in ("forrestal_luk_test2", "eroded_test2"):
         scene = load_scene(scene_path(name))

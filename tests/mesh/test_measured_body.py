@@ -112,6 +112,7 @@ def _flare_axial_force(speed: float) -> float:
 
 
 @pytest.mark.parametrize("speed", slow_except([100.0, 800.0], 800.0))
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_a_flare_presses_in_axial_motion(speed):
     """Fully embedded, axial, sharp switches: the mesh's DAFL (10 mm) within 5e-3 and the ring-by-ring load
     within 1e-6 of the nose's closed form plus the flare's exact integral; the 1-D references refuse a flare

@@ -272,6 +272,7 @@ def test_a_range_at_the_schemas_top_suggests_a_larger_disturbance(monkeypatch, b
     assert result.fix == "a larger disturbance may turn it (--set impact.attack_angle=2)"
 
 
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_the_command_ends_a_stable_range_with_the_options_to_change(monkeypatch, capsys, tmp_path):
     """The acceptance case: #3 without its disturbance (every run stable) ends with the options to change."""
     from cases.cli import main

@@ -63,6 +63,7 @@ def test_one_parameter_from_one_scene(store):
     assert abs(result.observations[0]["residual"]) < 1e-6
 
 
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_two_parameters_from_one_scene(store):
     """Depth and stopping time of one shot tell A from B (the time weighs the slow end, where A rules)."""
     rng = np.random.default_rng(2)

@@ -148,6 +148,7 @@ print(table.to_json())
 """
 
 
+@pytest.mark.slow  # seconds of runs: CI's slow step
 def test_a_single_threaded_process_forks_its_workers_and_they_give_the_table_one_worker_gives(tmp_path):
     """Workers forked from a process with one thread (they start with its imports and loaded machine code) give
     the runs one worker gives; a process with another thread running spawns its workers instead."""
