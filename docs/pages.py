@@ -281,16 +281,23 @@ def print_map() -> None:
         print()
 
 
+def _words_of(paths: list[str]) -> int:
+    return sum(words((ROOT / path).read_text()) for path in paths if (ROOT / path).exists())
+
+
+def budget_words() -> int:
+    """The words of the README and the pages of :data:`BUDGET_KINDS`, which :data:`WORD_BUDGET` bounds."""
+    return _words_of(["README.md", *(page.path for page in pages(*BUDGET_KINDS))])
+
+
 def print_words() -> None:
     print("| pages | words |")
     print("|---|---|")
-    budget = 0
-    for name in ("readme", *KINDS):
-        paths = ["README.md"] if name == "readme" else [page.path for page in pages(name)]
-        count = sum(words((ROOT / path).read_text()) for path in paths if (ROOT / path).exists())
-        budget += count if name in ("readme", *BUDGET_KINDS) else 0
-        print(f"| {'the README' if name == 'readme' else KINDS[name][0]} | {count} |")
-    print(f"| **the README, tutorial, how-to, reference and explanation** | **{budget}** (at most {WORD_BUDGET}) |")
+    print(f"| the README | {_words_of(['README.md'])} |")
+    for heading, listed in KINDS.values():
+        print(f"| {heading} | {_words_of([page.path for page in listed])} |")
+    total = f"**{budget_words()}** (at most {WORD_BUDGET})"
+    print(f"| **the README, tutorial, how-to, reference and explanation** | {total} |")
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -28,7 +28,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as folder:
         for name, what, quantity in SERIES:
             validation = validate(read_series(name), None, RunStore(folder), Pool(progress=False), curve_points=0)
-            [(_, summary)] = [(q, s) for q, s in validation.summary.items()]
+            [summary] = validation.summary.values()  # the series' one quantity
             print(
                 f"* {what}: {summary['shots']} shots, {quantity} predicted with a mean error of "
                 f"{summary['mean_abs_error_percent']:.1f} % (bias {summary['bias_percent']:+.1f} %)."

@@ -12,20 +12,20 @@ from cases.cli import build_parser, main
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def readme_commands() -> list[str]:
-    """Every ``penetrate`` command line of the README's bash blocks (continuations joined, comments cut)."""
-    blocks = re.findall(r"```bash\n(.*?)```", (ROOT / "README.md").read_text(), flags=re.S)
+def commands(page: Path) -> list[str]:
+    """Every ``penetrate`` command line of a page's bash blocks (continuations joined, comments, a redirection or a
+    pipe cut; a usage synopsis with ``[...]`` left out), without the ``penetrate``."""
     lines = []
-    for block in blocks:
-        joined = re.sub(r"\\\n\s*", " ", block)
-        for line in joined.splitlines():
-            line = line.split("  #")[0].split(" # ")[0].strip()
-            if line.startswith(".venv/bin/penetrate "):
-                lines.append(line.removeprefix(".venv/bin/penetrate "))
+    for block in re.findall(r"```bash\n(.*?)```", page.read_text(), flags=re.S):
+        for line in re.sub(r"\\\n\s*", " ", block).splitlines():
+            line = line.split("  #")[0].split(" # ")[0].strip().removeprefix(".venv/bin/")
+            line = re.split(r" [>|] ", line)[0]
+            if line.startswith("penetrate ") and " [" not in line:
+                lines.append(line.removeprefix("penetrate "))
     return lines
 
 
-COMMANDS = readme_commands()
+COMMANDS = commands(ROOT / "README.md")
 
 
 def test_the_readme_shows_commands():
@@ -66,16 +66,12 @@ def test_the_quick_readme_commands_run_as_written(line, tmp_path, monkeypatch, c
 
 
 def page_commands() -> list[tuple[str, str]]:
-    """Every ``penetrate`` command line of the bash blocks of docs/ (as the README's are read), with its page."""
-    found = []
-    for page in sorted((ROOT / "docs").rglob("*.md")):
-        for block in re.findall(r"```bash\n(.*?)```", page.read_text(), flags=re.S):
-            for line in re.sub(r"\\\n\s*", " ", block).splitlines():
-                line = line.split("  #")[0].split(" # ")[0].strip().removeprefix(".venv/bin/")
-                line = re.split(r" [>|] ", line)[0]  # the command, without a redirection or a pipe
-                if line.startswith("penetrate ") and " [" not in line:  # a usage synopsis is not a command
-                    found.append((page.relative_to(ROOT).as_posix(), line.removeprefix("penetrate ")))
-    return found
+    """Every ``penetrate`` command line of the pages of docs/, with its page."""
+    return [
+        (page.relative_to(ROOT).as_posix(), line)
+        for page in sorted((ROOT / "docs").rglob("*.md"))
+        for line in commands(page)
+    ]
 
 
 @pytest.mark.parametrize(("page", "line"), page_commands())
