@@ -34,6 +34,21 @@ ROOT = Path(__file__).resolve().parents[1]
 PYTHON = sys.executable
 
 
+def penetrate_output(arguments: list[str]) -> str:
+    """What ``penetrate ARGUMENTS`` prints, run in this process; a command that fails stops the page's script."""
+    import contextlib
+    import io
+
+    from cases.cli import main
+
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        status = main(arguments)
+    if status:
+        raise SystemExit(f"penetrate {' '.join(arguments)} ended with {status}")
+    return printed.getvalue()
+
+
 def stamp() -> str:
     """The line that says where and when a figure was measured."""
     model = platform.processor() or platform.machine()

@@ -9,19 +9,16 @@ same scene turned about Y.
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import tempfile
 from pathlib import Path
 
 from cases import scene_path
-from cases.cli import main as penetrate
 from cases.run import prepare_projectile, run_scene, summarise
 from cases.scene import Scene
 from cases.scene.load import read_scene_data, scene_from_dict
 from cases.studies.reference import scene_slab_1d
-from docs.measure import stamp
+from docs.measure import penetrate_output, stamp
 
 SOIL = "soil"
 STATIC = {"model": "polynomial", "c0": 17.18e6}  # rate independent: the same work through the same thickness
@@ -87,11 +84,8 @@ def main() -> None:
         scene_file.write_text(
             head + '[target]\nlayers = [{ thickness = 2.0, law = "soil" }]\n' + rest[rest.index("\n[impact]") :]
         )
-        with contextlib.redirect_stdout(io.StringIO()) as out:
-            penetrate(
-                ["ballistic-limit", str(scene_file), "--store", str(Path(folder) / "store"), "--json", "--no-progress"]
-            )
-        limit = json.loads(out.getvalue())
+        arguments = ["ballistic-limit", str(scene_file), "--store", str(Path(folder) / "store"), "--json"]
+        limit = json.loads(penetrate_output([*arguments, "--no-progress"]))
     predicted, (low, high) = limit["predicted_limit"], limit["bracket"]
     runs = {run["speed"]: run["end_reason"] for run in limit["runs"]}
     # the bracket comes from full runs: the full model's limit lies in it, whatever guided the first runs there

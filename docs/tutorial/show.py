@@ -7,22 +7,14 @@ Usage (from the repository root)::
 
 from __future__ import annotations
 
-import contextlib
-import io
 import sys
 
-from cases.cli import main as penetrate
-from docs.measure import stamp
+from docs.measure import penetrate_output, stamp
 
 
 def show(arguments: list[str]) -> str:
     """The command's standard output in a ``text`` block, then the stamp (its step counts hang on round-off)."""
-    output = io.StringIO()
-    with contextlib.redirect_stdout(output):
-        status = penetrate(arguments)
-    if status:
-        raise SystemExit(f"penetrate {' '.join(arguments)} ended with {status}")
-    return f"```text\n{output.getvalue().rstrip()}\n```\n\n{stamp()}"
+    return f"```text\n{penetrate_output(arguments).rstrip()}\n```\n\n{stamp()}"
 
 
 if __name__ == "__main__":
