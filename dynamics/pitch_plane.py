@@ -13,16 +13,9 @@ Newton-Euler: ``m dv/dt = R F - m g e_Z``, ``I dq/dt = M_y``, with ``F = (F_x, F
 kernel in the body frame.  The body is turned by ``theta = pi/2 - phi`` about the world ``Y`` axis; a straight
 downward axis is ``phi = 0`` exactly, so its sine and cosine are exact and a symmetric start stays exactly straight.
 
-A load kernel is a compiled function ``load(data, height, sin_theta, cos_theta, v_x, v_z, q, out)``
-writing ``F_x``, ``F_z`` (N) and ``M_y`` (N m) into ``out`` (:func:`fem_loads.revolved.pitch_plane_load`),
-with ``lowest(data, height, sin_theta, cos_theta)`` the height of the body's lowest point.  As the step of
-:mod:`dynamics.compiled`, :func:`trajectory` takes them as arguments and is inlined where they are globals.
-
 :func:`trajectory` steps by :class:`~dynamics.integrators.DormandPrince54`'s tableau under
-:class:`~dynamics.control.ErrorControl`'s rule (:func:`~dynamics.control.step_factor_scalars`), and ends when the
-body stops (speed below ``stop_speed``), leaves the target (lowest point back above the surface after having been
-in), its axis has turned by ``turn_limit``, the time limit passes, or, when asked, the attack angle has converged
-(:mod:`dynamics.convergence`).
+:class:`~dynamics.control.ErrorControl`'s rule, with a compiled load kernel and lowest point (:data:`PlaneLoad`,
+:data:`LowestPoint`) as arguments, inlined where they are globals as in :mod:`dynamics.compiled`.
 """
 
 from __future__ import annotations
@@ -71,8 +64,10 @@ OUTCOME_FIELDS = (
 _A, _B_ERROR = np.ascontiguousarray(DormandPrince54.A), np.ascontiguousarray(DormandPrince54.b_error)
 _STATES = 6
 
-# the compiled functions :func:`trajectory` is given (module docstring)
+#: ``load(data, height, sin_theta, cos_theta, v_x, v_z, q, out)``: ``F_x``, ``F_z`` (N) and ``M_y`` (N m, body
+#: frame) into ``out`` (:func:`fem_loads.revolved.pitch_plane_load`)
 PlaneLoad = Callable[[tuple[np.ndarray, ...], float, float, float, float, float, float, np.ndarray], None]
+#: ``lowest(data, height, sin_theta, cos_theta)``: the height (m) of the body's lowest point
 LowestPoint = Callable[[tuple[np.ndarray, ...], float, float, float], float]
 
 
@@ -150,8 +145,10 @@ def trajectory(
     ends: PlaneEnds,
 ) -> tuple[int, float, float, float, float, float, float, int, int, int]:
     """Integrate from ``y0`` (``(X, Z, phi, v_X, v_Z, q)``) to an end; returns the :data:`OUTCOME_FIELDS` (SI units,
-    angles in rad).  ``load`` and ``lowest`` are the compiled load kernel and the lowest point's height (module
-    docstring), both given ``data``."""
+    angles in rad).  ``load`` and ``lowest`` are given ``data``.  The run ends when the body stops (speed below
+    ``stop_speed``), leaves the target (its lowest point back above the surface after having been in), its axis has
+    turned by ``turn_limit``, the time limit passes, or, when asked, the attack angle has converged
+    (:mod:`dynamics.convergence`)."""
     rtol, scales, first_step, max_step = control
     stop_speed, time_limit, turn_limit, threshold, peak_floor, stop_when_converged = ends
     k = np.empty((7, _STATES))

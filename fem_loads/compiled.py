@@ -8,7 +8,7 @@ exactly symmetric normal load.
 
 The kernel takes its arrays as one tuple (:func:`kernel_data`), so the compiled Runge-Kutta step
 (:mod:`dynamics.compiled`) calls it without knowing what it computes, and a user's law as the address of its
-``cfunc`` (:data:`USER_LAW_SIGNATURE`): the kernel is compiled and cached once for every law.
+``cfunc`` (:meth:`~fem_loads.user_law.UserLaw.compiled`): the kernel is compiled and cached once for every law.
 """
 
 from __future__ import annotations
@@ -28,15 +28,10 @@ from .compiled_point import (
     point_motion,
     setup,
 )
-from .kernel_layout import KERNEL_ARRAYS, kernel_data, supports
+from .kernel_layout import KERNEL_ARRAYS, kernel_data
 from .native import face_frame
-from .user_law import user_law_signature
 
-__all__ = ["dafl_kernel", "lowest_height_kernel", "kernel_data", "supports", "KERNEL_ARRAYS", "USER_LAW_SIGNATURE"]
-
-#: how the kernel calls a user's law (:func:`~fem_loads.user_law.user_law_signature`)
-USER_LAW_SIGNATURE = user_law_signature()
-
+__all__ = ["dafl_kernel", "lowest_height_kernel", "kernel_data", "KERNEL_ARRAYS"]
 
 # fastmath: reassociation (and fused multiply-adds) let the per-image sums over the points run in SIMD
 # lanes; each image runs the same machine code on its own signs, so mirrored images still get

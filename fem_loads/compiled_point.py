@@ -24,6 +24,7 @@ from .native import (
     point_stress,
     polynomial_stress,
     slip_factor,
+    switches,
 )
 
 __all__ = [
@@ -78,32 +79,16 @@ def setup(
     free surface; both constants in the loop that passes them, so that its switches are constants too and the loop
     keeps no branch that differs from point to point."""
     effects, law = data[layout.DATA_EFFECTS][0], data[layout.DATA_LAWS][0]
-    first, count = law.table_first, law.table_count
-    width, surface_depth = motion.width, effects.surface_depth
-    inverse_width = 1.0 / width if width > 0.0 else 0.0
-    inverse_surface = 1.0 / surface_depth if surface_depth > 0.0 else 0.0
-    if plain:
-        # without a free surface its factor with f0 = 1 is exactly 1
-        fraction = effects.surface_fraction if surface_depth > 0.0 else 1.0
-        switches = Switches(
-            True, True, inverse_width, effects.contact_offset, 0.0, with_friction, inverse_surface, fraction,
-            effects.surface_front, effects.surface_rear, not motion.embedded, True,
-        )  # fmt: skip
-    else:
-        switches = Switches(
-            effects.separation, effects.smooth_contact, inverse_width, effects.contact_offset, motion.guard,
-            surface_depth > 0.0, inverse_surface, effects.surface_fraction, effects.surface_front, effects.surface_rear,
-            not motion.embedded, effects.smooth_entry,
-        )  # fmt: skip
+    first, count, width = law.table_first, law.table_count, motion.width
     v = motion.v
     shared = Setup(
-        effects.needs_depth or surface_depth > 0.0 or not motion.embedded,
+        effects.needs_depth or effects.surface_depth > 0.0 or not motion.embedded,
         (effects.friction, effects.friction_cap, width, v[0] * v[0] + v[1] * v[1] + v[2] * v[2]),
         data[layout.DATA_INTERFACES].shape[0] > 0,
         effects.user_law,
         law,
         (law.c0, law.k, law.c1, law.c2),
-        switches,
+        switches(effects, width, motion.guard, not motion.embedded, plain, with_friction),
     )
     arrays = (
         data[layout.DATA_POINTS],

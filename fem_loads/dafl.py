@@ -14,12 +14,14 @@ A mirror-symmetric quadrature is evaluated as its images' rows and summed in mir
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 from typing import NamedTuple
 
 import numpy as np
 
-from .factors import Switches, point_stress_scalars
+from .factors import point_stress_scalars, switches_scalars
 from .images import MirrorImages
+from .law_record import EFFECTS, pack_effects
 from .quadrature import SurfaceQuadrature
 from .resistance import ResistanceLaw
 from .target import (
@@ -125,8 +127,6 @@ class DAFLLoads:
         self.contact_width, self.entry_smoothing = float(contact_width), float(entry_smoothing)
         self.contact_incidence, self.contact = float(contact_incidence), contact
         self.front_face = front_face
-        self._smooth_contact = self.contact_width > 0.0 or self.contact_incidence > 0.0
-        self._contact_offset = 0.5 if contact == "centred" else 0.0
         q = quadrature
         # [n | r x n]: one product gives Vn = n.V + (r x n).omega, and the weighted stresses times
         # it give force and moment together; stored transposed, (6, n), for row-combining products
@@ -156,6 +156,9 @@ class DAFLLoads:
         # the points that can be hidden, and each image's signs (k, 3), its direction in the part's frame
         self.exposure = q.exposure if exposure and q.exposure is not None and len(q.exposure.columns) else None
         self._exposure_signs = self._images.point_signs if self._images is not None else np.ones((1, 3))
+        # the effects as every kernel reads them (law_record.EFFECTS), in Python numbers
+        effects = pack_effects(self)
+        self._effects = SimpleNamespace(**{name: effects[name][0].tolist() for name in EFFECTS.names})
 
     def __len__(self) -> int:
         return len(self._weights)
@@ -219,29 +222,9 @@ class DAFLLoads:
         heights = self.heights(position, rotation, face)
         return float((heights - 0.5 * self._entry_length).min() if self.entry_smoothing else heights.min())
 
-    def _inverse_width(self, speed_scale: float) -> float:
-        """``1 / W``, ``W = w + delta U`` the contact width (m/s) at the speed scale ``U``; 0 for a body at rest
-        with ``w = 0`` (every ``Vn`` is then 0, and so is the factor)."""
-        width = self.contact_width + self.contact_incidence * speed_scale
-        return 1.0 / width if width > 0.0 else 0.0
-
-    def _switches(self, speed_scale: float, entering: bool) -> Switches:
-        """The factors' :class:`~fem_loads.factors.Switches` at the speed scale ``U`` (m/s)."""
-        surface = self.free_surface
-        return Switches(
-            self.separation,
-            self._smooth_contact,
-            self._inverse_width(speed_scale),
-            self._contact_offset,
-            self.normal_velocity_guard * speed_scale,
-            surface is not None,
-            1.0 / surface.depth if surface is not None else 0.0,
-            surface.surface_fraction if surface is not None else 1.0,
-            surface.front if surface is not None else True,
-            surface.rear_face if surface is not None else math.inf,
-            entering,
-            bool(self.entry_smoothing),
-        )
+    def _width(self, speed_scale: float) -> float:
+        """``W = w + delta U``, the contact width (m/s) at the speed scale ``U`` (0 with sharp contact)."""
+        return self.contact_width + self.contact_incidence * speed_scale
 
     def _stress(
         self, frame: tuple[float, ...], velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray
@@ -262,14 +245,15 @@ class DAFLLoads:
         depth: np.ndarray | float = -heights if needs_depth and heights is not None else 0.0
         # the law at max(Vn, 0) with separation; a built-in law is finite everywhere, and below the one-sided
         # ramp its value is multiplied by zero, so there it is evaluated at Vn itself
-        exact = not self.separation or (isinstance(self.law, ResistanceLaw) and not self._contact_offset)
+        exact = not self.separation or (isinstance(self.law, ResistanceLaw) and not self._effects.contact_offset)
         law_velocity = normal_velocity if exact else np.maximum(normal_velocity, 0.0)
         if isinstance(self.law, LayeredTarget):  # the layers blended across their interfaces
             lengths = self._hot_entry if self.entry_smoothing else None
             stress = self.law.normal_stress(law_velocity, np.broadcast_to(depth, normal_velocity.shape), lengths)
         else:
             stress = self.law.normal_stress(law_velocity, depth)
-        switches = self._switches(speed_scale, heights is not None)
+        guard = self.normal_velocity_guard * speed_scale
+        switches = switches_scalars(self._effects, self._width(speed_scale), guard, heights is not None, False, False)
         stress = point_stress_scalars(stress, normal_velocity, depth, heights, self._hot_inverse_entry, switches)
         if self.exposure is not None:
             self._expose(stress, body_velocity)
@@ -359,11 +343,7 @@ class DAFLLoads:
         r_dot_w = points @ w
         speed2 = float(v @ v) + 2.0 * (points @ np.cross(v, w)) + float(w @ w) * self._radius2 - r_dot_w**2  # |u|^2
         slip2 = np.maximum(speed2 - normal_velocity**2, 0.0)
-        width = 0.0
-        if self._smooth_contact:
-            # a body at rest with w = 0 has no width (and no slip)
-            inverse = self._inverse_width(math.sqrt(float(v @ v)) + math.sqrt(float(w @ w)) * self.max_radius)
-            width = 1.0 / inverse if inverse > 0.0 else 0.0
+        width = self._width(math.sqrt(float(v @ v)) + math.sqrt(float(w @ w)) * self.max_radius)
         return np.sqrt(slip2), slip_factor_scalars(slip2, width, float(v @ v)), r_dot_w
 
     def _friction_load(

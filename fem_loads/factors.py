@@ -12,6 +12,11 @@ Each is written on floats and numpy arrays alike: the numpy path evaluates it on
 :mod:`fem_loads.native` compiles the same function for the compiled kernels.  A flag is one value for all the
 points, so a compiled loop that passes a constant keeps no branch.  :func:`point_stress_scalars` is the pipeline
 every load calls; a new factor is one ``*_scalars`` function here and one line in it.
+
+The ramps (the contact, entry and free-surface factors, and the layers' blend) are the quintic smooth step
+``S(t) = t^3 (10 - 15 t + 6 t^2)`` on [0, 1], 0 below and 1 above (:func:`smooth_step_scalars`): two continuous
+derivatives, so that a Runge-Kutta step across a switch keeps its order, and slope at most ``S'(1/2) = 15/8``
+(docs/model.md).
 """
 
 from __future__ import annotations
@@ -21,10 +26,12 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .ramps import add_term, smooth_step_scalars
-
 __all__ = [
+    "smooth_step_scalars",
+    "add_term",
+    "MAX_SLOPE",
     "Switches",
+    "switches_scalars",
     "point_stress_scalars",
     "contact_factor_scalars",
     "entry_factor_scalars",
@@ -32,6 +39,30 @@ __all__ = [
     "free_face_distance_scalars",
     "friction_stress_scalars",
 ]
+
+MAX_SLOPE = 15.0 / 8.0  # the largest dS/dt, at t = 1/2
+
+
+def smooth_step_scalars(t: Any) -> Any:
+    """``S(clip(t, 0, 1))`` on a float or an array."""
+    t = np.clip(t, 0.0, 1.0)  # on an array one pass where maximum then minimum take two
+    # t^3 (10 + t (6 t - 15)); on an array the augmented operations work in place (no temporaries)
+    step = 6.0 * t
+    step -= 15.0
+    step *= t
+    step += 10.0
+    step *= t
+    step *= t
+    step *= t
+    return step
+
+
+def add_term(value: Any, term: float) -> Any:
+    """``value + term``: on an array in place, and skipped where ``term`` is 0 (an array pass fewer).  Compiled
+    (:mod:`fem_loads.native`) it is always added, so that a loop over the points keeps no branch."""
+    if term != 0.0:
+        value += term
+    return value
 
 
 class Switches(NamedTuple):
@@ -49,6 +80,29 @@ class Switches(NamedTuple):
     surface_rear: float  #: m: and near the rear face at this depth (``inf``: not)
     entering: bool  #: the entry factor applies (some point may be outside the target)
     smooth_entry: bool  #: points enter over their own extent (else sharply)
+
+
+def switches_scalars(effects: Any, width: float, guard: float, entering: bool, plain: bool, surface: bool) -> Switches:
+    """The :class:`Switches` of the effects record ``effects`` (:data:`~fem_loads.law_record.EFFECTS`, or an object
+    with its fields) at the contact width ``width`` (m/s; 0: sharp, or a body at rest without a fixed width), the
+    sharp switch's threshold ``guard`` (m/s) and ``entering``.  ``plain`` (the record's ``plain``): its switches as
+    constants, for the compiled loop that passes it as one, with the free-surface factor where ``surface`` (without
+    a free surface it is exactly 1)."""
+    depth = effects.surface_depth
+    return Switches(
+        plain or effects.separation,
+        plain or effects.smooth_contact,
+        1.0 / width if width > 0.0 else 0.0,
+        effects.contact_offset,
+        guard,
+        surface if plain else depth > 0.0,
+        1.0 / depth if depth > 0.0 else 0.0,
+        effects.surface_fraction if depth > 0.0 else 1.0,
+        effects.surface_front,
+        effects.surface_rear,
+        entering,
+        plain or effects.smooth_entry,
+    )
 
 
 def point_stress_scalars(

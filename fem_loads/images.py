@@ -96,10 +96,6 @@ class MirrorImages:
         """Per-point values that the images share (weights), as the images' rows, shape (k, m): the part's repeated."""
         return np.tile(values[self.images[0]], (len(self.images), 1))
 
-    def gather(self, values: np.ndarray) -> np.ndarray:
-        """Per-point values, shape (n,), as the images' rows, shape (k, m)."""
-        return values[self.images]
-
     def scatter(self, rows: np.ndarray) -> np.ndarray:
         """The images' rows, shape (k, m), as per-point values in the quadrature's order."""
         values = np.empty(self.images.size)

@@ -7,9 +7,9 @@ import numpy as np
 
 from . import images
 from .dafl import DAFLLoads
-from .law_record import compilable, pack
+from .law_record import pack_effects, pack_laws
 
-__all__ = ["KERNEL_ARRAYS", "kernel_data", "supports"]  # and each array's index, DATA_*
+__all__ = ["KERNEL_ARRAYS", "kernel_data"]  # and each array's index, DATA_*
 
 # the index of each array in the kernel's data (:func:`kernel_data`), a plain tuple of arrays, which numba's
 # dispatcher types in C (a named tuple, or a function object in it, costs more per call from Python)
@@ -33,14 +33,9 @@ DATA_EXPOSURE_FINE = 15  # (h,), int: a refined cell's sub-nodes hidden, a bit e
 KERNEL_ARRAYS = tuple(name[5:].lower() for name in list(globals()) if name.startswith("DATA_"))
 
 
-def supports(loads: DAFLLoads) -> bool:
-    """Whether :func:`dafl_kernel` computes ``loads``: :func:`~fem_loads.law_record.compilable` of its target."""
-    return compilable(loads.law)
-
-
 def kernel_data(loads: DAFLLoads) -> tuple[np.ndarray, ...]:
-    """The arrays and records of :func:`dafl_kernel` for ``loads`` (see :func:`supports`), in the order of
-    :data:`KERNEL_ARRAYS`."""
+    """The arrays and records of :func:`dafl_kernel` for ``loads`` (its target
+    :func:`~fem_loads.law_record.compilable`), in the order of :data:`KERNEL_ARRAYS`."""
     quadrature = loads.quadrature
     if quadrature.mirror_images is not None:
         index = quadrature.mirror_images[0]
@@ -53,7 +48,7 @@ def kernel_data(loads: DAFLLoads) -> tuple[np.ndarray, ...]:
         image_signs, point_signs = np.ones((1, 6)), np.ones((1, 3))
     arrays = loads.point_arrays()
     entry_length = arrays["entry_length"][index]
-    laws, tables, interfaces, effects = pack(loads)
+    laws, tables, interfaces, address = pack_laws(loads.law)
 
     def contiguous(array: np.ndarray) -> np.ndarray:
         return np.ascontiguousarray(array, dtype=float)
@@ -66,7 +61,7 @@ def kernel_data(loads: DAFLLoads) -> tuple[np.ndarray, ...]:
         contiguous(0.5 * entry_length),
         contiguous(image_signs),
         contiguous(point_signs),
-        effects,
+        pack_effects(loads, address),
         laws,
         tables,
         contiguous(interfaces),

@@ -3,20 +3,21 @@
 :data:`LAW` (one record per layer: the coefficients of :func:`~fem_loads.resistance.normal_stress_scalars`, a user
 law's parameters, where its strength table lies) and :data:`EFFECTS` (the ramps, friction, free surface, front face
 and what the mesh kernel derives from them once) are numpy structured arrays that numba reads by field name.
-:func:`pack` builds both, for the mesh kernel and the rings alike; :func:`compilable` is the one rule of which
-targets the compiled kernels take.
+:func:`pack_laws` and :func:`pack_effects` build them, for the mesh kernel and the rings alike (the numpy load reads
+the effects record too); :func:`compilable` is the one rule of which targets the compiled kernels take.
 """
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
-from .dafl import DAFLLoads
 from .resistance import ResistanceLaw
 from .target import LayeredTarget
 from .user_law import MAX_PARAMETERS, UserLaw
 
-__all__ = ["LAW", "EFFECTS", "COEFFICIENTS", "pack", "pack_laws", "compilable"]
+__all__ = ["LAW", "EFFECTS", "COEFFICIENTS", "pack_laws", "pack_effects", "compilable"]
 
 #: the built-in law's coefficients in the record, in the order ResistanceLaw.coefficients gives them
 COEFFICIENTS = ("c0", "k", "c1", "c2", "c", "n")
@@ -101,19 +102,18 @@ def pack_laws(law: ResistanceLaw | UserLaw | LayeredTarget) -> tuple[np.ndarray,
     return records, np.ascontiguousarray(np.concatenate(tables, axis=1)), np.asarray(interfaces, float), address
 
 
-def pack(
-    loads: DAFLLoads, entry_length: float | None = None, max_radius: float | None = None
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(laws, tables, interfaces, effects)``: the target's law of ``loads`` by :func:`pack_laws` and one
-    :data:`EFFECTS` record (shape (1,)) of its effects, the one place both the mesh kernel
-    (:func:`~fem_loads.kernel_layout.kernel_data`) and the rings (:func:`~fem_loads.revolved.ring_data`) pack them.
-    ``entry_length`` (m; 0 sharp) and ``max_radius`` (m): the load's own by default (its longest point's entry
-    length, its farthest point from the centre of mass); the rings give theirs."""
+def pack_effects(
+    loads: Any, address: int = 0, entry_length: float | None = None, max_radius: float | None = None
+) -> np.ndarray:
+    """One :data:`EFFECTS` record (shape (1,)) of the effects of ``loads`` (a :class:`~fem_loads.dafl.DAFLLoads`),
+    for the mesh kernel (:func:`~fem_loads.kernel_layout.kernel_data`), the rings
+    (:func:`~fem_loads.revolved.ring_data`) and the numpy load alike.  ``address``: the user law's
+    (:func:`pack_laws`; 0: none); ``entry_length`` (m; 0 sharp) and ``max_radius`` (m): the load's own by default
+    (its longest point's entry length, its farthest point from the centre of mass); the rings give theirs."""
     law, friction, surface, face = loads.law, loads.friction, loads.free_surface, loads.front_face
     max_radius = loads.max_radius if max_radius is None else max_radius
     if entry_length is None:
         entry_length = float(loads.point_arrays()["entry_length"].max(initial=0.0))
-    laws, tables, interfaces, address = pack_laws(law)
     smooth_contact = loads.contact_width > 0.0 or loads.contact_incidence > 0.0
     effects = np.zeros(1, dtype=EFFECTS)
     values = {
@@ -146,4 +146,4 @@ def pack(
     }
     for name, value in values.items():
         effects[name] = value
-    return laws, tables, interfaces, effects
+    return effects

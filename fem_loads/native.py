@@ -18,8 +18,7 @@ from numba.extending import intrinsic, overload, register_jitable
 
 from . import factors
 from .exposure import cell_exposure_scalars, corner_exposure, cube_cell_scalars, fine_exposure
-from .factors import entry_factor_scalars, friction_stress_scalars, point_stress_scalars
-from .ramps import add_term
+from .factors import add_term, entry_factor_scalars, friction_stress_scalars, point_stress_scalars, switches_scalars
 from .resistance import normal_stress_scalars, polynomial_stress_scalars
 from .target import face_frame_scalars, face_height_scalars, slip_factor_scalars
 from .user_law import MAX_PARAMETERS
@@ -32,6 +31,7 @@ __all__ = [
     "entry_factor",
     "friction_stress",
     "point_stress",
+    "switches",
     "face_frame",
     "cube_cell",
     "cell_exposure",
@@ -48,7 +48,7 @@ def _clip_float(a, a_min, a_max):  # type: ignore[no-untyped-def]  # numba match
 
 @overload(add_term, inline="always")
 def _add_term_always(value, term):  # type: ignore[no-untyped-def]
-    """:func:`~fem_loads.ramps.add_term` compiled: a branch on the term would stay in a loop's SIMD lanes."""
+    """:func:`~fem_loads.factors.add_term` compiled: a branch on the term would stay in a loop's SIMD lanes."""
     return lambda value, term: value + term
 
 
@@ -58,6 +58,7 @@ for _name, _function in vars(factors).items():
     if _name.endswith("_scalars") and callable(_function):
         register_jitable(inline="always", error_model="numpy")(_function)
 point_stress = njit(inline="always", error_model="numpy")(point_stress_scalars)
+switches = njit(inline="always", error_model="numpy")(switches_scalars)
 entry_factor = njit(inline="always", error_model="numpy")(entry_factor_scalars)
 friction_stress = njit(inline="always", error_model="numpy")(friction_stress_scalars)
 slip_factor = njit(inline="always", error_model="numpy")(slip_factor_scalars)

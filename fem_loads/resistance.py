@@ -26,14 +26,13 @@ from typing import Any
 
 import numpy as np
 
-from .ramps import add_term
+from .factors import add_term
 
 __all__ = [
     "ResistanceLaw",
     "NAMED_LAWS",
     "LAW_FAMILIES",
     "resistance_law",
-    "register_law",
     "locking_cavity_expansion",
     "concrete_cavity_expansion",
     "concrete_strength_factor",
@@ -206,13 +205,6 @@ NAMED_LAWS: dict[str, ResistanceLaw] = {
     "soil_dynamic_cavity_expansion": ResistanceLaw(20.268e6, 2239.1, "soil_dynamic_cavity_expansion"),
     "softer_soil": ResistanceLaw(13.521e6, 1925.6, "softer_soil"),
 }
-
-
-def register_law(name: str, law: ResistanceLaw) -> None:
-    """Add a law to the registry under ``name`` (scenes can then name it)."""
-    if not name or not name.replace("_", "").isalnum():
-        raise ValueError(f"law name {name!r}: use letters, digits and underscores")
-    NAMED_LAWS[name] = law
 
 
 def resistance_law(name: str) -> ResistanceLaw:

@@ -28,8 +28,8 @@ from mesh import Profile
 
 from .dafl import DAFLLoads
 from .factors import Switches
-from .law_record import pack
-from .native import entry_factor, friction_stress, law_stress, point_stress, slip_factor
+from .law_record import pack_effects, pack_laws
+from .native import entry_factor, friction_stress, law_stress, point_stress, slip_factor, switches
 from .resistance import ResistanceLaw
 from .target import LEVEL
 from .user_law import UserLaw
@@ -128,7 +128,7 @@ def revolved_surface(
 
 
 def ring_data(loads: DAFLLoads, surface: RevolvedSurface) -> tuple[np.ndarray, np.ndarray]:
-    """The law and effects records (:func:`~fem_loads.law_record.pack`) of a mesh load's own law and effects, with
+    """The law and effects records (:mod:`fem_loads.law_record`) of a mesh load's own law and effects, with
     the rings' radius and one entry length for every ring: the mesh's at its median point (``entry_smoothing`` times
     the square root of its weight).  Refuses what the rings do not integrate: a strength table, layers, a free
     surface, contact without separation, and a face that is not level."""
@@ -142,8 +142,8 @@ def ring_data(loads: DAFLLoads, surface: RevolvedSurface) -> tuple[np.ndarray, n
     if loads.front_face != LEVEL:
         raise ValueError("the ring model takes a level target face")
     entry_length = loads.entry_smoothing * math.sqrt(float(np.median(loads.quadrature.weights)))
-    laws, _, _, effects = pack(loads, entry_length, surface.max_radius)
-    return laws, effects
+    laws, _, _, address = pack_laws(law)
+    return laws, pack_effects(loads, address, entry_length, surface.max_radius)
 
 
 _NO_TABLE = np.zeros(0)
@@ -312,10 +312,7 @@ def pitch_plane_load(
     cap_speed = math.inf  # no cap
     if quadratic and mu > 0.0 and cap > mu * static and dynamic > 0.0:
         cap_speed = math.sqrt((cap / mu - static) / dynamic)
-    switches = Switches(
-        True, width > 0.0, 1.0 / width if width > 0.0 else 0.0, effects.contact_offset, 0.0, False, 0.0, 1.0, True,
-        math.inf, True, entry > 0.0,
-    )  # fmt: skip
+    ring_switches = switches(effects, width, 0.0, True, False, False)
     fx = fz = my = 0.0
     breaks = np.empty(8)
     for i in range(rings.shape[0]):
@@ -332,7 +329,7 @@ def pitch_plane_load(
             j0 = math.pi * (static + dynamic * (a * a + 0.5 * b * b))
             j1 = math.pi * dynamic * a * b
         elif b == 0.0 and h1 == 0.0 and (mu == 0.0 or q == 0.0):
-            j0, jx = _uniform_ring(a, h0, vx, n_axial, n_radial, law, effects, switches, width)
+            j0, jx = _uniform_ring(a, h0, vx, n_axial, n_radial, law, effects, ring_switches, width)
         else:
             count = _breaks(breaks, a, b, h0, h1, start, full, entry, cap_speed)
             for m in range(count - 1):
@@ -347,7 +344,7 @@ def pitch_plane_load(
                     j1 += d1
                 else:
                     ring, motion = (x, rho, n_axial, n_radial), (a, b, h0, h1, vx, vz, q)
-                    d0, d1, dx, dz, dm = _gauss_arc(low, high, ring, motion, law, effects, switches, width)
+                    d0, d1, dx, dz, dm = _gauss_arc(low, high, ring, motion, law, effects, ring_switches, width)
                     j0, j1, jx, jz, jm = j0 + d0, j1 + d1, jx + dx, jz + dz, jm + dm
         # both halves of the ring: dF = -(sigma n + tau t) w dphi, dM = r x dF
         fx -= 2.0 * w * (n_axial * j0 + jx)
@@ -377,7 +374,7 @@ class PitchPlaneLoad:
     ----------
     surface : RevolvedSurface
     law : tuple of ndarray
-        The law and effects records of :func:`ring_data` (or of :func:`~fem_loads.law_record.pack`).
+        The law and effects records of :func:`ring_data` (or of :mod:`fem_loads.law_record`).
     """
 
     def __init__(self, surface: RevolvedSurface, law: tuple[np.ndarray, np.ndarray]) -> None:

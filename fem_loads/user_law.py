@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["UserLaw", "user_law", "user_law_signature", "LawError", "MAX_PARAMETERS", "PROBE_SPEEDS", "PROBE_DEPTHS"]
+__all__ = ["UserLaw", "user_law", "LawError", "MAX_PARAMETERS", "PROBE_SPEEDS", "PROBE_DEPTHS"]
 
 MAX_PARAMETERS = 8  # the compiled kernel passes the parameters as this many floats
 #: the probe grid (m/s, m): a law must give finite stresses >= 0 on all of it
@@ -195,7 +195,7 @@ def _probe(law: UserLaw, shown: str) -> None:
 @functools.cache
 def _compile(source: str, digest: str, count: int) -> Any:
     """``cfunc`` of the law with its parameters as :data:`MAX_PARAMETERS` floats (the unused ones ignored)."""
-    from numba import cfunc, njit
+    from numba import cfunc, njit, types  # numba imported here: a scene that names no user law needs none
     from numba.core.errors import NumbaExperimentalFeatureWarning
 
     path, name = source.rsplit(":", 1)
@@ -210,12 +210,5 @@ def _compile(source: str, digest: str, count: int) -> Any:
     )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
-        return cfunc(user_law_signature(), error_model="numpy")(namespace["stress"])
-
-
-def user_law_signature() -> Any:
-    """``(Vn, z, p_1 .. p_8) -> sigma`` (m/s, m, the law's parameters; Pa): the numba signature with which the
-    compiled kernel calls a user's law (numba imported only here: a scene that names no user law needs none)."""
-    from numba import types
-
-    return types.float64(*([types.float64] * (2 + MAX_PARAMETERS)))
+        signature = types.float64(*([types.float64] * (2 + MAX_PARAMETERS)))  # (Vn, z, p_1 .. p_8) -> sigma
+        return cfunc(signature, error_model="numpy")(namespace["stress"])

@@ -118,11 +118,11 @@ def mirrored_states(rng, count: int = 20):
 
 
 def ring_records(law, entry_length: float = 0.0, max_radius: float = 0.0, **effects):
-    """The rings' law and effects records (``fem_loads.law_record.pack``) of a load of ``law`` with ``effects`` (the
+    """The rings' law and effects records (``fem_loads.law_record``) of a load of ``law`` with ``effects`` (the
     keyword arguments of ``DAFLLoads``, a guard of 0 and no effect by default), without a mesh."""
     from types import SimpleNamespace
 
-    from fem_loads.law_record import pack
+    from fem_loads.law_record import pack_effects, pack_laws
     from fem_loads.target import LEVEL
 
     loads = SimpleNamespace(
@@ -130,5 +130,5 @@ def ring_records(law, entry_length: float = 0.0, max_radius: float = 0.0, **effe
         separation=True, friction=None, free_surface=None, front_face=LEVEL,
     )  # fmt: skip
     loads.__dict__.update(effects)
-    laws, _, _, records = pack(loads, entry_length, max_radius)
-    return laws, records
+    laws, _, _, address = pack_laws(law)
+    return laws, pack_effects(loads, address, entry_length, max_radius)

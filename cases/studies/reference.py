@@ -11,7 +11,7 @@ target (no friction), an element at distance ``s`` behind the tip has
 and ``G`` of the whole nose is ``pi a^2 N``.  Once the nose is embedded the
 motion has a closed form (docs/validation.md).  With a contact width ``w``
 (the stress of an element rises from 0 at ``Vn = 0`` to the full law at
-``Vn = W = w + delta V``, :mod:`fem_loads.ramps`) the force is
+``Vn = W = w + delta V``, :func:`fem_loads.factors.smooth_step_scalars`) the force is
 
     F(P, V) = int_0^P' 2 pi r r' (A sigma_0 + B rho_0 V^2 sin^2) S(V sin / W) ds,
 

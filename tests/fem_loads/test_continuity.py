@@ -14,7 +14,7 @@ import pytest
 from support import meshed
 
 from fem_loads import DAFLLoads, mass_properties, resistance_law, surface_quadrature
-from fem_loads.ramps import MAX_SLOPE, smooth_step_scalars
+from fem_loads.factors import MAX_SLOPE, smooth_step_scalars
 from fem_loads.target import FreeSurface, Friction, LayeredTarget
 from mesh import BODY, OgiveNose, Profile, ProjectileGeometry
 

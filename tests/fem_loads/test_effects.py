@@ -219,7 +219,7 @@ def test_fast_friction_sums_equal_the_pointwise_definition(cap):
 def test_the_free_surface_reduction_near_a_rear_face():
     """``f0 + (1 - f0) S(d / D)`` at the distance ``d`` from the nearest face it applies at: both faces of a 0.6 m
     slab, or its rear face alone."""
-    from fem_loads.ramps import smooth_step_scalars
+    from fem_loads.factors import smooth_step_scalars
 
     depth, fraction, rear = 0.2, 0.3, 0.6
     z = np.array([0.0, 0.05, 0.3, 0.55, 0.6])

@@ -113,7 +113,7 @@ def test_the_smooth_step_s_coefficients_appear_in_one_function():
                 }
                 if {6.0, 15.0, 10.0} <= numbers:
                     holders.append(f"{path.relative_to(ROOT)}:{node.name}")
-    assert holders == ["fem_loads/ramps.py:smooth_step_scalars"], holders
+    assert holders == ["fem_loads/factors.py:smooth_step_scalars"], holders
 
 
 def _functions_calling(tree: ast.AST, names: set[str]) -> list[ast.FunctionDef]:

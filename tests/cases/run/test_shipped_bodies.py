@@ -16,7 +16,7 @@ from cases.run import initial_state, prepare_projectile
 from cases.scene.target import build_law
 from docs.geometry.cad_bodies import occ_mass_properties
 from dynamics.quaternion import rotation_matrix
-from fem_loads.ramps import smooth_step_scalars
+from fem_loads.factors import smooth_step_scalars
 
 SCENES = {"eroded": "cases/eroded_test2.toml", "finned": "cases/finned_test2.toml"}
 FILES = {"eroded": "cases/bodies/eroded_test2.step", "finned": "cases/bodies/finned_test2.step"}
