@@ -158,7 +158,7 @@ class DAFLLoads:
         self._exposure_signs = self._images.point_signs if self._images is not None else np.ones((1, 3))
         # the effects as every kernel reads them (law_record.EFFECTS), in Python numbers
         effects = pack_effects(self)
-        self._effects = SimpleNamespace(**{name: effects[name][0].tolist() for name in EFFECTS.names})
+        self._effects = SimpleNamespace(**{name: effects[name][0].tolist() for name in EFFECTS.names or ()})
 
     def __len__(self) -> int:
         return len(self._weights)
