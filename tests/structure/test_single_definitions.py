@@ -32,6 +32,7 @@ NATIVE = {
     "entry_factor": ("factors", "entry_factor_scalars"),
     "friction_stress": ("factors", "friction_stress_scalars"),
     "point_stress": ("factors", "point_stress_scalars"),
+    "switches": ("factors", "switches_scalars"),
     "face_frame": ("target", "face_frame_scalars"),
     "cube_cell": ("exposure", "cube_cell_scalars"),
     "cell_exposure": ("exposure", "cell_exposure_scalars"),
@@ -89,6 +90,7 @@ def test_the_numpy_path_calls_the_same_definitions():
     from fem_loads import dafl, factors, resistance, target
 
     assert dafl.point_stress_scalars is factors.point_stress_scalars
+    assert dafl.switches_scalars is factors.switches_scalars
     assert dafl.slip_factor_scalars is target.slip_factor_scalars
     assert target.entry_factor_scalars is factors.entry_factor_scalars
     assert target.surface_factor_scalars is factors.surface_factor_scalars
@@ -186,6 +188,20 @@ def test_the_factor_checks_find_a_copy():
     assert _cap_takers("def tau(s, mu, cap):\n    return min(mu * s, cap)\n") == ["tau"]
     assert _cap_takers("def tau(s, f):\n    return np.minimum(f.coefficient * s, f.cap)\n") == ["tau"]
     assert _ramp_callers("def load(vn):\n    return contact_factor(vn, True, 1.0, 0.0, 0.0)\n") == []
+
+
+def _switches_builders(source: str) -> list[str]:
+    return [f.name for f in _functions_calling(ast.parse(source), {"Switches"})]
+
+
+def test_the_switches_are_built_from_the_effects_in_one_function():
+    """Every load's :class:`~fem_loads.factors.Switches` come from ``switches_scalars`` (numpy, mesh kernel, rings)."""
+    holders = []
+    for path in _modules():
+        holders += [f"{path.relative_to(ROOT)}:{name}" for name in _switches_builders(path.read_text())]
+    assert holders == ["fem_loads/factors.py:switches_scalars"], holders
+    # control: a kernel that builds its own is found
+    assert _switches_builders("def setup(e):\n    return factors.Switches(True, True, 0.0)\n") == ["setup"]
 
 
 #: the loads: each multiplies a point's law value by its factors through the pipeline, point_stress_scalars
