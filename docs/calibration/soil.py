@@ -78,6 +78,8 @@ def main() -> None:
             [("effects.friction", {"model": "coulomb", "coefficient": 0.05})],
         ),
     ):
+        # the runs a fit takes hang on its stopping test, which round-off tips: another machine's took 35 runs
+        # where this one took 30 for the same value to every printed digit, so the count is marked ~ (not compared)
         result = run_fit(parameters, tests, overrides)
         key = next(iter(result.parameters))
         error = result.standard_errors[key]
@@ -88,7 +90,7 @@ def main() -> None:
             shown += " (at its bound)"
         print(
             f"| {name} | `{key}` | {shown} | {fitted_cells(result)} | "
-            f"{residual_cells(result)} | {_rms(result):.3f} | {result.runs} |"
+            f"{residual_cells(result)} | {_rms(result):.3f} | ~{result.runs} |"
         )
     print()
     print("Leave one out (B alone, A = 1.718): fitted on the other four, the left-out shot predicted:")
