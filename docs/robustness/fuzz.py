@@ -77,6 +77,12 @@ PROPERTIES = {  # test -> (property, what is generated)
         " arguments, function name and parameters; used, with finite stresses >= 0 equal on both paths, or"
         " refused in one line naming target.law",
     ),
+    "test_a_target_is_used_or_refused_in_one_line": (
+        "targets",
+        "0-5 layers with any thickness (any float, NaN, inf, 0, negatives, text) or none, laws named, unknown,"
+        " tables or numbers (air for a gap), and any inclination; used with its faces in order and consistent,"
+        " or refused in one line naming the target",
+    ),
     "test_valid_runs_write_finite_numbers": (
         "valid runs",
         "speeds, angles, spins, integrators, friction, history"
