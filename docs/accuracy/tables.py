@@ -65,7 +65,12 @@ def mesh(study: Path) -> None:
     turns = _turns(table)
     print(
         f"{reference} Each cell: the setting's relative depth error at RK4 {step:g} s"
-        + ("; in brackets, its axis-turn error (deg)." if turns else ".")
+        + (
+            "; in brackets, its axis-turn error (deg), marked ~: round-off alone (another processor's, or the impact"
+            " speed 1e-13 apart) moves a turning run's axis by up to about 1e-3 deg on the coarse meshes."
+            if turns
+            else "."
+        )
     )
     print()
     print("| normals, order, points per facet | " + " | ".join(f"{s * 1e3:g} mm" for s in sizes) + " | order |")
@@ -83,7 +88,8 @@ def mesh(study: Path) -> None:
             elif not np.isfinite(d):  # the finest setting is the reference of a non-plain scene
                 cells.append("reference")
             else:
-                cells.append(_error(d) + (f" ({_error(float(by_size.loc[s, 'axis_angle_error']))})" if turns else ""))
+                turn = _error(float(by_size.loc[s, "axis_angle_error"]))
+                cells.append(_error(d) + (f" ({'~' if turn[0].isdigit() else ''}{turn})" if turns else ""))
         label = (
             f"{normals}, P{int(geometry)}"
             + (" (flat facets)" if geometry == 1 and normals == "mesh" else "")
