@@ -44,6 +44,7 @@ from cases.studies import (  # noqa: E402
 from cases.studies.paper.plan import PAPER_RATIOS, STUDY_NUMERICS, VARIANTS, study_base  # noqa: E402
 from cases.studies.predict import RINGS, predict  # noqa: E402
 from cases.viz.figures import legend_below  # noqa: E402
+from docs.measure import stamp  # noqa: E402
 from docs.record import study_main  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
@@ -252,6 +253,10 @@ def report(record: dict) -> None:
         f"predicts in {1e3 * shipped['prediction']:.1f} ms where `penetrate run` integrates for "
         f"{1e3 * shipped['run']:.0f} ms: {shipped['prediction'] / shipped['run']:.4f}x (medians of five, alternating)."
     )
+    # the costs are this machine's, and a measured convergent speed moves with round-off by a few hundredths of a
+    # per cent, which can tip an error's last printed digit (the capped-friction #3 on two processors)
+    print()
+    print(stamp())
 
 
 def figure(record: dict) -> None:
