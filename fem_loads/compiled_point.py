@@ -125,7 +125,7 @@ def point_motion(
     return n, r, normal_velocity, z
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def layered_stress(
     data: tuple[np.ndarray, ...], normal_velocity: float, depth: float, smooth: bool, inverse_length: float
 ) -> float:
