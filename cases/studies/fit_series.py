@@ -92,10 +92,11 @@ def fit_series(
 ) -> FitResult:
     """Fit ``parameters`` to the measured shots of ``series`` that ``holdout`` leaves in (the training shots).
 
-    The held-out shots are then predicted at the fitted values, and at the scenes' own values, and reported
-    apart from the fit (``FitResult.predictions``).  ``folds`` >= 2 adds a k-fold cross-validation of the
-    training shots (``FitResult.cross_validation``): each fold fitted on the others and predicted, which says
-    how well the calibration predicts shots it has not seen.  ``seed`` draws a held-out fraction and the folds.
+    The held-out shots are then predicted at the fitted values, and before the fit at each shot's own values (its
+    scene and columns, nothing of the fit set: ``penetrate validate``'s run of it), and reported apart from the
+    fit (``FitResult.predictions``).  ``folds`` >= 2 adds a k-fold cross-validation of the training shots
+    (``FitResult.cross_validation``): each fold fitted on the others and predicted, which says how well the
+    calibration predicts shots it has not seen.  ``seed`` draws a held-out fraction and the folds.
     """
     if not parameters:
         raise InputError("--param: give at least one parameter, KEY=LO:HI (without one, use penetrate validate)")
@@ -116,7 +117,7 @@ def fit_series(
         kept_out = series.subset(held)
         result.predictions = {
             "held_out": held,
-            **_predict(kept_out, settings, result.parameters, result.starts, store, pool),
+            **_predict(kept_out, settings, result.parameters, store, pool),
         }
     if folds:
         result.cross_validation = _cross_validate(
@@ -158,13 +159,17 @@ def _predict(
     series: Series,
     settings: list[tuple[str, Any]],
     fitted: dict[str, float],
-    starts: dict[str, float],
     store: RunStore,
     pool: Pool | None,
 ) -> dict[str, Any]:
-    """The shots of ``series`` predicted at the fitted values and at the scenes' own (the start): their rows and
-    error summaries per quantity."""
-    result = run_sweep(combined(series, series.parts(settings, [fitted, starts])), store, pool)
+    """The shots of ``series`` predicted at the fitted values and before the fit: their rows and error summaries
+    per quantity.
+
+    Before the fit, each shot is its own scene with nothing of the fit set (the run ``penetrate validate`` makes
+    of it): a fitted key keeps the shot's own value, one its scene or a column gives or a formula fills in (such
+    as concrete's ``S`` from its compressive strength), which may differ from shot to shot.  The fit's start
+    (``FitResult.starts``) is the first training shot's value alone."""
+    result = run_sweep(combined(series, series.parts(settings, [fitted, {}])), store, pool)
     rows = prediction_rows(series, result)
     start_rows = prediction_rows(series, result, offset=len(series.shots))
     return {
@@ -202,7 +207,7 @@ def _cross_validate(
             result = _fit_shots(series.subset(kept), settings, parameters, store, pool, step, max_evaluations)
         except NotIdentifiable as exc:
             raise NotIdentifiable(f"fold {fold + 1} of {folds} (left out: {', '.join(left_out)}): {exc}") from None
-        predicted = _predict(series.subset(left_out), settings, result.parameters, result.starts, store, pool)
+        predicted = _predict(series.subset(left_out), settings, result.parameters, store, pool)
         fold_rows = [{"fold": fold + 1, **row} for row in predicted["rows"]]
         rows += fold_rows
         entries.append(
