@@ -7,7 +7,7 @@ What it may import is written once, in pyproject.toml's [tool.penetrate.rooms].
 from .control import ENERGY_TOLERANCE, NON_FINITE, STEP_FLOOR, EnergyGuard, ErrorControl, FixedStep, StepControl
 from .integrators import METHODS, RK4, DormandPrince54, RungeKutta
 from .rigid_body import LoadFunction, RigidBody, State
-from .simulate import MAX_STEPS, TIME_LIMIT, Event, SpeedBelow, Trajectory, simulate
+from .simulate import MAX_STEPS, TIME_LIMIT, AdvanceEnds, Event, SpeedBelow, Trajectory, simulate
 
 __all__ = [
     "RigidBody",
@@ -24,6 +24,7 @@ __all__ = [
     "ENERGY_TOLERANCE",
     "Event",
     "SpeedBelow",
+    "AdvanceEnds",
     "Trajectory",
     "simulate",
     "TIME_LIMIT",

@@ -16,9 +16,10 @@ import numpy as np
 
 from .control import ACCEPT, END, RETAKE, EnergyGuard, StepControl
 from .integrators import Evaluation, Stepper, evaluate
+from .quaternion import rotation_scalars
 from .rigid_body import LoadFunction, RigidBody, State
 
-__all__ = ["Event", "SpeedBelow", "Trajectory", "simulate", "find_root", "TIME_LIMIT", "MAX_STEPS"]
+__all__ = ["Event", "SpeedBelow", "AdvanceEnds", "Trajectory", "simulate", "find_root", "TIME_LIMIT", "MAX_STEPS"]
 
 TIME_LIMIT, MAX_STEPS = "time_limit", "max_steps"
 
@@ -83,6 +84,30 @@ class SpeedBelow(Event):
         if not deceleration > 0.0 or speed <= self.threshold:
             return math.inf
         return (speed - 0.5 * self.threshold) / deceleration
+
+
+class AdvanceEnds(Event):
+    """The body no longer advances nose first and is slow: its velocity along its axis (body ``x``) is zero or
+    negative and its speed at most ``slow`` (m/s).
+
+    The event function is ``max(v . x, |v| - slow)``, continuous, negative exactly in that region; the run ends where
+    it falls through zero.  Why a stop: a resistance law acts on the surface that presses into the target, so a body
+    that moves back along its own tunnel meets nothing and would drift on with what speed it kept
+    (docs/numerics.md, "The end of a run").
+    """
+
+    slow: float  # set in __init__ (not a dataclass field: the class is not a dataclass of its own)
+
+    def __init__(self, name: str, slow: float) -> None:
+        super().__init__(name, lambda state: max(advance_speed(state), state.speed - slow), -1)
+        object.__setattr__(self, "slow", slow)
+
+
+def advance_speed(state: State) -> float:
+    """The velocity of the centre of mass along the body's axis (m/s): positive while it moves nose first."""
+    matrix = rotation_scalars(*state.attitude.tolist())  # row by row: the axis is its first column
+    vx, vy, vz = state.velocity.tolist()
+    return vx * matrix[0] + vy * matrix[3] + vz * matrix[6]
 
 
 @dataclass

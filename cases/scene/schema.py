@@ -69,7 +69,19 @@ class Numerics(Strict):
     rtol: Number = field(1e-6, gt=0.0, lt=1.0, description="relative tolerance (dopri54)")
     time_limit: Number = field(1.0, unit="s", gt=0.0, le=100.0, description="the run ends here at the latest")
     stop_speed: Number = field(
-        0.5, unit="m/s", gt=0.0, le=1e3, description="the run ends when the speed falls below this"
+        0.5,
+        unit="m/s",
+        gt=0.0,
+        le=1e3,
+        description="the run ends when the speed falls below this, or below 3 % of the impact speed when that is"
+        " less",
+    )
+    slow_fraction: Number = field(
+        0.1,
+        gt=0.0,
+        lt=1.0,
+        description="of the impact speed: a body this slow or slower that no longer moves nose first has stopped"
+        " (docs/numerics.md, the end of a run)",
     )
     normal_velocity_guard: Number = field(
         1e-9, ge=0.0, le=1e-3, description="relative guard on Vn = 0 (sharp contact only)"

@@ -11,6 +11,7 @@ from dynamics import (
     RK4,
     STEP_FLOOR,
     TIME_LIMIT,
+    AdvanceEnds,
     DormandPrince54,
     EnergyGuard,
     ErrorControl,
@@ -121,6 +122,31 @@ def test_dry_friction_stops_at_its_exact_place_whatever_the_step(method, step):
     assert tr.time[-1] == pytest.approx((v0 - stop) / deceleration, rel=1e-9)
     assert tr.path_length[-1] == pytest.approx((v0**2 - stop**2) / (2 * deceleration), rel=1e-9)
     assert len(tr.time) <= max(30, (v0 - stop) / deceleration / step + 3)  # no creeping
+
+
+@pytest.mark.parametrize("method", [RK4, DormandPrince54])
+@pytest.mark.parametrize("slow", [3.0, 1.5])
+def test_advance_ends_where_the_body_stops_moving_nose_first_while_slow(method, slow):
+    """A constant force against the axis of a turned body that also drifts sideways at 2 m/s: the velocity along the
+    axis is ``v0 - a t`` and the speed ``sqrt((v0 - a t)^2 + 2^2)``.  The advance ends at ``t = v0 / a``, where the
+    speed is 2 m/s: with ``slow`` = 3 m/s the run ends there, exactly; with ``slow`` = 1.5 m/s the body is never that
+    slow and runs to the time limit (the sideways drift keeps it above the stop speed too)."""
+    v0, deceleration, drift = 40.0, 2.0e3, 2.0
+    attitude = from_rotation_matrix(Rotation.from_rotvec([0.2, -0.7, 0.4]).as_matrix())
+    axis, side = rotation_matrix(attitude)[:, 0], rotation_matrix(attitude)[:, 1]
+    force = -BODY.mass * deceleration * axis
+    loads = lambda x, v, r, w: (force, np.zeros(3))  # noqa: E731
+    start = State(0.0, np.zeros(3), v0 * axis + drift * side, attitude, np.zeros(3))
+    control = FixedStep(7e-4) if method is RK4 else ErrorControl(1e-8, first_step=1e-4)
+    events = [SpeedBelow("stopped", 0.5), AdvanceEnds("advance ends", slow)]
+    tr = simulate(BODY, loads, start, method(), control, time_limit=0.05, events=events)
+    if slow > drift:
+        assert tr.end_reason == "advance ends"
+        assert tr.time[-1] == pytest.approx(v0 / deceleration, rel=1e-10)
+        assert float(tr.velocity[-1] @ axis) == pytest.approx(0.0, abs=1e-8)
+    else:
+        assert tr.end_reason == TIME_LIMIT
+        assert float(tr.velocity[-1] @ axis) < 0.0
 
 
 def test_rising_event_is_located():
