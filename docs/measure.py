@@ -51,14 +51,18 @@ def penetrate_output(arguments: list[str]) -> str:
 
 def stamp() -> str:
     """The line that says where and when a figure was measured."""
-    model = platform.processor() or platform.machine()
+    model, flags = platform.processor() or platform.machine(), set()
     try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                model = line.split(":", 1)[1].strip()
-                break
-    except OSError:
+        info = dict(line.split(":", 1) for line in Path("/proc/cpuinfo").read_text().split("\n\n")[0].splitlines())
+        info = {key.strip(): value.strip() for key, value in info.items()}
+        model, flags = info.get("model name", model), set(info.get("flags", "").split())
+    except (OSError, ValueError):
         pass
+    # the widest vector instructions: numpy and numba sum in another order with another width, and a run near a
+    # threshold can move a printed digit between two processors that share a name (AMD EPYC with and without them)
+    vectors = next((name for flag, name in (("avx512f", "AVX-512"), ("avx2", "AVX2")) if flag in flags), "")
+    if vectors:
+        model = f"{model}, {vectors}"
     today = datetime.date.today().isoformat()
     return f"_measured {today} on {os.cpu_count()} cores ({model}), Python {platform.python_version()}_"
 
