@@ -2,19 +2,32 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import Annotated, Any, Self
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 from pydantic.json_schema import JsonDict
 from pydantic_core import PydanticCustomError
+
+from .plausible import Plausible, as_extra, check_plausible
 
 __all__ = ["Strict", "Number", "Whole", "Label", "field", "not_boolean"]
 
 
-def field(default: Any = ..., *, unit: str = "", description: str = "", **limits: Any) -> Any:
-    """A model field with its unit recorded for error messages (``json_schema_extra["unit"]``)."""
-    extra: JsonDict | None = {"unit": unit} if unit else None
-    return Field(default, description=description, json_schema_extra=extra, **limits)
+def field(
+    default: Any = ...,
+    *,
+    unit: str = "",
+    description: str = "",
+    plausible: Plausible | None = None,
+    **limits: Any,
+) -> Any:
+    """A model field with its unit recorded for error messages (``json_schema_extra["unit"]``) and, for a physical
+    quantity, the range it plausibly takes (``plausible``, one of :mod:`.plausible`'s; checked by every
+    :class:`Strict` model after its fields, beyond the hard ``limits``)."""
+    extra: JsonDict = {"unit": unit} if unit else {}
+    if plausible is not None:
+        extra["plausible"] = as_extra(plausible)
+    return Field(default, description=description, json_schema_extra=extra or None, **limits)
 
 
 def not_boolean(value: object) -> object:
@@ -39,6 +52,18 @@ Label = Annotated[str, BeforeValidator(_one_line)]
 
 
 class Strict(BaseModel):
-    """Forbids unknown keys and non-finite numbers; validates defaults too."""
+    """Forbids unknown keys and non-finite numbers; validates defaults too; fills in the values a formula gives
+    (:meth:`_fill_in`) and then refuses a physical input outside its plausible range (:mod:`.plausible`), before
+    any check of a subclass that ties fields together."""
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, validate_default=True)
+
+    @model_validator(mode="after")
+    def _plausible_inputs(self) -> Self:
+        self._fill_in()
+        check_plausible(self)
+        return self
+
+    def _fill_in(self) -> None:
+        """Fill in the fields a formula gives from the others, each checked against its field's own limits and
+        refused naming the input it came from (none here; :class:`~.target.ConcreteLawSpec` fills ``S``)."""

@@ -17,6 +17,7 @@ from pydantic_core import ErrorDetails
 
 from fem_loads.resistance import NAMED_LAWS
 
+from .plausible import plausible_of, slip_hint
 from .schema import Scene
 from .target import LAW_TAGS
 
@@ -91,6 +92,16 @@ def _allowed_range(info: Any, name: str) -> str:
     return f"{lower}{name}{upper}{unit}"
 
 
+def _slip_hint(info: Any, given: Any) -> str:
+    """The value a number outside its field's hard range probably meant, when its field has a plausible range and
+    a usual slip of its unit lands in it (``projectile.diameter = 155``: 0.155, 155 mm), or ''."""
+    plausible = plausible_of(info)
+    if plausible is None or isinstance(given, bool) or not isinstance(given, (int, float)):
+        return ""
+    extra = info.json_schema_extra or {}
+    return slip_hint(float(given), str(extra.get("unit", "")), plausible.low, plausible.high)
+
+
 def _show(value: Any) -> str:
     if isinstance(value, float) and not math.isfinite(value):
         return str(value)
@@ -113,6 +124,9 @@ def _explain_one(error: ErrorDetails) -> str:
         return f"{name}: unknown key (allowed here: {', '.join(known)})"
     if kind == "missing":
         return f"{name}: missing (required)"
+    if kind == "implausible":  # a value outside its plausible range (.plausible), named by its model
+        where = ctx["field"] if name == "scene" else f"{name}.{ctx['field']}"
+        return f"{where} = {ctx['shown']}: {ctx['text']}"
     if kind in ("union_tag_not_found", "union_tag_invalid"):
         tags = ", ".join(_tags(_field_at(loc)[1]))
         if kind == "union_tag_not_found":
@@ -145,6 +159,8 @@ def _explain_one(error: ErrorDetails) -> str:
         rule = error["msg"][0].lower() + error["msg"][1:]
     allowed = _allowed_range(info, name)
     suffix = f" (allowed: {allowed})" if allowed and kind not in ("value_error",) else ""
+    if kind in bounds and (hint := _slip_hint(info, given)):
+        suffix += f"; {hint}"
     if kind == "value_error" and not loc:
         return rule  # a rule across sections names its fields itself
     if kind == "value_error" or isinstance(given, dict):

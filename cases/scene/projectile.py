@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import TYPE_CHECKING, Annotated, Literal, Self
 
 from pydantic import Field, model_validator
@@ -25,6 +26,7 @@ from mesh.imported import MATERIAL_BASE, FileGeometry
 
 from .base import Label, Number, Strict, field
 from .geometry_file import GeometryFileSpec
+from .plausible import BODY_LENGTH, DENSITY, DIAMETER, POSITION, WALL, number, slip_hint
 
 if TYPE_CHECKING:
     from fem_loads import MassProperties
@@ -51,6 +53,11 @@ DEFAULT_BODY_DENSITY = 7850.0  # steel (kg/m^3)
 # lightest mean density (kg/m^3) over the bounding cylinder: far below any hard projectile (balsa is 150);
 # a 1e-300 kg projectile overflowed the first step (math domain error)
 MIN_MEAN_DENSITY = 100.0
+#: how a mass is held to the body's size (Projectile._buildable), said in its fields' descriptions
+MASS_RANGE = (
+    f"; over the bounding cylinder of an analytic body, a mean density of {MIN_MEAN_DENSITY:g} to"
+    f" {DENSITY.high:g} kg/m^3 (the densest solid)"
+)
 
 
 class OgiveNoseSpec(Strict):
@@ -98,7 +105,7 @@ class BluntNoseSpec(Strict):
 
     shape: Literal["blunt"]
     crh: Number = field(unit="calibres", ge=0.5, le=100.0)
-    flat_radius: Number = field(unit="m", gt=0.0, le=5.0, description="radius of the flat front face")
+    flat_radius: Number = field(unit="m", gt=0.0, le=5.0, plausible=WALL, description="radius of the flat front face")
 
     def build(self) -> BluntOgiveNose:
         return BluntOgiveNose(self.crh, self.flat_radius)
@@ -151,8 +158,8 @@ NoseSpec = Annotated[
 class InteriorSpec(Strict):
     """A cavity a wall thickness inside the outer profile."""
 
-    wall_thickness: Number = field(unit="m", gt=0.0, le=10.0, description="radial wall thickness")
-    tail_thickness: Number = field(unit="m", gt=0.0, le=100.0, description="tail plate thickness")
+    wall_thickness: Number = field(unit="m", gt=0.0, le=10.0, plausible=WALL, description="radial wall thickness")
+    tail_thickness: Number = field(unit="m", gt=0.0, le=100.0, plausible=WALL, description="tail plate thickness")
 
     def build(self) -> Interior:
         return Interior(self.wall_thickness, self.tail_thickness)
@@ -165,9 +172,13 @@ class CounterweightSpec(Strict):
     projectile's ``mass`` and centre of mass place it.
     """
 
-    density: Number = field(18000.0, unit="kg/m^3", gt=0.0, le=1e5, description="of the counterweight")
-    start: Number | None = field(None, unit="m", ge=0.0, le=100.0, description="from the nose tip")
-    end: Number | None = field(None, unit="m", gt=0.0, le=100.0, description="from the nose tip")
+    density: Number = field(
+        18000.0, unit="kg/m^3", gt=0.0, le=1e5, plausible=DENSITY, description="of the counterweight"
+    )
+    start: Number | None = field(
+        None, unit="m", ge=0.0, le=100.0, plausible=replace(POSITION, zero=True), description="from the nose tip"
+    )
+    end: Number | None = field(None, unit="m", gt=0.0, le=100.0, plausible=POSITION, description="from the nose tip")
 
     @model_validator(mode="after")
     def _both_or_neither(self) -> Self:
@@ -181,8 +192,9 @@ class CounterweightSpec(Strict):
 class MassPropertiesSpec(Strict):
     """Mass properties given directly instead of integrated over the mesh."""
 
-    mass: Number = field(unit="kg", gt=0.0, le=1e6, description="of the whole projectile")
-    centre_of_mass: Number = field(unit="m", gt=0.0, le=100.0, description="from the nose tip")
+    # the mass is held to the body's size by Projectile._buildable (a mean density a solid can have)
+    mass: Number = field(unit="kg", gt=0.0, le=1e6, description="of the whole projectile" + MASS_RANGE)
+    centre_of_mass: Number = field(unit="m", gt=0.0, le=100.0, plausible=POSITION, description="from the nose tip")
     axial_inertia: Number = field(unit="kg m^2", gt=0.0, le=1e9, description="about the axis")
     transverse_inertia: Number = field(
         unit="kg m^2", gt=0.0, le=1e9, description="about an axis across the body through the centre of mass"
@@ -217,31 +229,35 @@ class Projectile(Strict):
     """A projectile: an axisymmetric nose, cylindrical shank and flat tail, or any body read from a file."""
 
     name: Label = field("", description="printed with the summary")
-    diameter: Number | None = field(None, unit="m", gt=0.0, le=10.0, description="of the shank")
-    length: Number | None = field(None, unit="m", gt=0.0, le=100.0, description="nose tip to tail")
+    diameter: Number | None = field(None, unit="m", gt=0.0, le=10.0, plausible=DIAMETER, description="of the shank")
+    length: Number | None = field(
+        None, unit="m", gt=0.0, le=100.0, plausible=BODY_LENGTH, description="nose tip to tail"
+    )
     nose: NoseSpec | None = field(None, description="the nose's shape: one of the tables below")
     body: BodySpec | None = field(
         None, description="a measured body behind the nose (a boat tail, a flare); default: the cylinder to the tail"
     )
     geometry: GeometryFileSpec | None = None
     materials: dict[Label, Density] | None = field(
-        None, unit="kg/m^3", description="density of a file's named solids or groups"
+        None, unit="kg/m^3", plausible=DENSITY, description="density of a file's named solids or groups"
     )
     body_density: Number | None = field(
-        None, unit="kg/m^3", gt=0.0, le=1e5, description="of the case (with a counterweight)"
+        None, unit="kg/m^3", gt=0.0, le=1e5, plausible=DENSITY, description="of the case (with a counterweight)"
     )
+    # the mass is held to the body's size by _buildable (a mean density a solid can have), not to a range
     mass: Number | None = field(
         None,
         unit="kg",
         gt=0.0,
         le=1e6,
-        description="alone: a homogeneous body of this mass; with a counterweight: the whole",
+        description="alone: a homogeneous body of this mass; with a counterweight: the whole" + MASS_RANGE,
     )
     centre_of_mass: Number | None = field(
         None,
         unit="m",
         gt=0.0,
         le=100.0,
+        plausible=POSITION,
         description="the centre of mass to place the counterweight for, from the nose tip",
     )
     centre_of_mass_ratio: Number | None = field(
@@ -338,11 +354,22 @@ class Projectile(Strict):
         mass = self.mass_properties.mass if self.mass_properties is not None else self.mass
         assert self.diameter is not None and self.length is not None  # an analytic projectile has both (_shape)
         lightest = MIN_MEAN_DENSITY * 0.25 * math.pi * self.diameter**2 * self.length
+        field_name = "mass_properties.mass" if self.mass_properties is not None else "mass"
         if mass is not None and mass < lightest:
-            field_name = "mass_properties.mass" if self.mass_properties is not None else "mass"
             raise ValueError(
                 f"{field_name} = {mass:g}: lighter than {MIN_MEAN_DENSITY:g} kg/m^3 over the bounding"
                 f" cylinder (allowed: {field_name} >= {lightest:.3g} kg for this diameter and length)"
+            )
+        # the plausible range of a mass: no solid is denser than DENSITY.high (a mass in grams is 1000 times too
+        # heavy); the cylinder's radius is the widest of the shank and a measured body (a flare)
+        radius = max([self.diameter / 2, *(r for _, r in (self.body.points if self.body else []))])
+        heaviest = DENSITY.high * math.pi * radius**2 * self.length
+        if mass is not None and mass > heaviest:
+            hint = slip_hint(mass, "kg", lightest, heaviest)
+            raise ValueError(
+                f"{field_name} = {number(mass)} kg: denser than {number(DENSITY.high)} kg/m^3, the densest solid, over"
+                f" the bounding cylinder (allowed: {field_name} <= {heaviest:.3g} kg for this diameter and length)"
+                + (f"; {hint}" if hint else "")
             )
         return self
 

@@ -16,6 +16,7 @@ from pydantic import BeforeValidator, model_validator
 from fem_loads import DAFLLoads, SurfaceQuadrature
 
 from .base import Label, Number, Strict, Whole, field, not_boolean
+from .plausible import MESH_SIZE, slip_hint
 from .projectile import Projectile
 from .target import Effects, Target, UserLawSpec
 
@@ -48,7 +49,7 @@ class Impact(Strict):
 class Numerics(Strict):
     """Discretisation and integration settings."""
 
-    mesh_size: Number = field(unit="m", gt=0.0, le=10.0, description="target element size")
+    mesh_size: Number = field(unit="m", gt=0.0, le=10.0, plausible=MESH_SIZE, description="target element size")
     geometry_order: Annotated[Literal[1, 2], BeforeValidator(not_boolean)] = field(
         2, description="1: flat tetrahedra; 2: curved (quadratic) ones, which follow a curved surface"
     )
@@ -156,11 +157,21 @@ class Scene(Strict):
                 " pi/4 diameter^2 length)"
             )
         if size > p.diameter:  # describes nothing of the cross-section; gmsh fails on such meshes (HXT, Newton)
+            # the plausible range of a mesh size is this projectile's: finest to its diameter (mm for m is likely)
+            hint = slip_hint(size, "m", finest, p.diameter)
             raise ValueError(
                 f"numerics.mesh_size = {size:g}: coarser than the projectile (allowed: numerics.mesh_size"
-                f" <= projectile.diameter = {p.diameter:g} m)"
+                f" <= projectile.diameter = {p.diameter:g} m)" + (f"; {hint}" if hint else "")
             )
         return self
+
+    @property
+    def warnings(self) -> list[str]:
+        """What the scene's inputs alone make doubtful, one plain-language line each (empty when nothing needs
+        saying): an empirical law used outside the range of the data it was fitted to (:attr:`Target.warnings`).
+        Such a scene runs: these are lines for a run summary's warnings, as ``numerics_warnings`` gives the
+        numerics'."""
+        return self.target.warnings
 
     @property
     def compilable(self) -> bool:

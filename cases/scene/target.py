@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import math
+from dataclasses import replace
 from typing import Annotated, Any, Literal, Self
 
 from pydantic import (
@@ -27,7 +28,9 @@ from fem_loads.resistance import (
 from fem_loads.target import GAP, LEVEL, FreeSurface, Friction, FrontFace, LayeredTarget
 from fem_loads.user_law import LawError, UserLaw, user_law
 
+from . import plausible as ranges
 from .base import Label, Number, Strict, field
+from .plausible import implausible, number, slip_hint, upper_limit
 
 __all__ = [
     "LawSpec",
@@ -51,10 +54,16 @@ class DepthStrength(Strict):
     """Strength that grows with depth below the surface, on top of any built-in law's own."""
 
     depth_gradient: Number = field(
-        0.0, unit="Pa/m", ge=0.0, le=1e10, description="k: the strength grows by k per metre below the surface"
+        0.0,
+        unit="Pa/m",
+        ge=0.0,
+        le=1e10,
+        plausible=ranges.STRENGTH_GRADIENT,
+        description="k: the strength grows by k per metre below the surface",
     )
     strength_table: list[tuple[Number, Number]] | None = field(
         None,
+        plausible=replace(ranges.STATIC_STRENGTH, column=1, column_name="extra strength", unit="Pa"),
         description="[depth (m), extra strength (Pa)] rows with increasing depths, linear between them",
         min_length=1,
         max_length=100,
@@ -80,9 +89,9 @@ class LawSpec(DepthStrength):
 
     model: Literal["cavity_expansion"] = "cavity_expansion"
     A: Number = field(ge=0.0, le=1e3, description="static coefficient")
-    sigma_0: Number = field(unit="Pa", gt=0.0, le=1e11, description="target strength")
+    sigma_0: Number = field(unit="Pa", gt=0.0, le=1e11, plausible=ranges.STRENGTH, description="target strength")
     B: Number = field(ge=0.0, le=1e3, description="dynamic coefficient")
-    rho_0: Number = field(unit="kg/m^3", gt=0.0, le=1e5, description="target density")
+    rho_0: Number = field(unit="kg/m^3", gt=0.0, le=1e5, plausible=ranges.DENSITY, description="target density")
 
     def build(self) -> ResistanceLaw:
         return ResistanceLaw(self.A * self.sigma_0, self.B * self.rho_0, "cavity expansion", **self._depth())
@@ -92,9 +101,14 @@ class PolynomialLawSpec(DepthStrength):
     """A polynomial law ``sigma_n = c0 + c1 Vn + c2 Vn^2``."""
 
     model: Literal["polynomial"]
-    c0: Number = field(unit="Pa", ge=0.0, le=1e11, description="strength at the surface")
+    c0: Number = field(
+        unit="Pa", ge=0.0, le=1e11, plausible=ranges.STATIC_STRENGTH, description="strength at the surface"
+    )
+    # no plausible range for c1: a fitted viscous term may be negligibly small, and no unit slip is usual
     c1: Number = field(0.0, unit="Pa s/m", ge=0.0, le=1e10, description="coefficient of Vn")
-    c2: Number = field(0.0, unit="kg/m^3", ge=0.0, le=1e6, description="coefficient of Vn^2")
+    c2: Number = field(
+        0.0, unit="kg/m^3", ge=0.0, le=1e6, plausible=ranges.DYNAMIC_DENSITY, description="coefficient of Vn^2"
+    )
 
     def build(self) -> ResistanceLaw:
         return ResistanceLaw(self.c0, self.c2, "polynomial", c1=self.c1, **self._depth())
@@ -104,7 +118,10 @@ class PowerLawSpec(DepthStrength):
     """A power law ``sigma_n = c0 + c Vn^n``."""
 
     model: Literal["power"]
-    c0: Number = field(unit="Pa", ge=0.0, le=1e11, description="strength at the surface")
+    c0: Number = field(
+        unit="Pa", ge=0.0, le=1e11, plausible=ranges.STATIC_STRENGTH, description="strength at the surface"
+    )
+    # no plausible range for c: its unit, Pa (s/m)^n, and so its size, depend on the fitted n
     c: Number = field(unit="Pa (s/m)^n", ge=0.0, le=1e11, description="coefficient of Vn^n")
     n: Number = field(gt=0.0, le=10.0, description="exponent")
 
@@ -116,8 +133,8 @@ class MaterialLawSpec(Strict):
     """A resistance law derived from material constants (docs/laws.md)."""
 
     model: Literal["locking_cavity_expansion"]
-    sigma_0: Number = field(unit="Pa", gt=0.0, le=1e11, description="target strength")
-    rho_0: Number = field(unit="kg/m^3", gt=0.0, le=1e5, description="target density")
+    sigma_0: Number = field(unit="Pa", gt=0.0, le=1e11, plausible=ranges.STRENGTH, description="target strength")
+    rho_0: Number = field(unit="kg/m^3", gt=0.0, le=1e5, plausible=ranges.DENSITY, description="target density")
     locking_strain: Number = field(gt=0.0, lt=1.0, description="volumetric strain eta* at locking")
 
     def build(self) -> ResistanceLaw:
@@ -130,9 +147,15 @@ class ConcreteLawSpec(Strict):
 
     model: Literal["concrete"]
     compressive_strength: Number = field(
-        unit="Pa", gt=0.0, le=1e9, description="f'c: the unconfined compressive strength"
+        unit="Pa",
+        gt=0.0,
+        le=1e9,
+        plausible=ranges.CONCRETE_STRENGTH,
+        description="f'c: the unconfined compressive strength",
     )
-    density: Number = field(unit="kg/m^3", gt=0.0, le=1e5, description="rho: the concrete's density")
+    density: Number = field(
+        unit="kg/m^3", gt=0.0, le=1e5, plausible=ranges.DENSITY, description="rho: the concrete's density"
+    )
     S: Number | None = field(
         None,
         ge=0.0,
@@ -140,11 +163,36 @@ class ConcreteLawSpec(Strict):
         description="the static coefficient; filled in from f'c by Frew et al.'s fit when not given",
     )
 
-    @model_validator(mode="after")
-    def _fill_strength_factor(self) -> Self:
-        if self.S is None:
-            self.S = concrete_strength_factor(self.compressive_strength)
-        return self
+    def _fill_in(self) -> None:
+        """``S`` from f'c by Frew et al.'s fit, held to the limit its field states: a tiny f'c (35 for 35 MPa)
+        gives an ``S`` of thousands, refused naming f'c and the value it probably meant."""
+        if self.S is not None:
+            return
+        factor = concrete_strength_factor(self.compressive_strength)
+        limit = upper_limit(type(self).model_fields["S"])
+        if factor > limit:
+            strength = self.compressive_strength
+            hint = slip_hint(strength, "Pa", ranges.CONCRETE_STRENGTH.low, ranges.CONCRETE_STRENGTH.high)
+            raise implausible(
+                "S",
+                f"{number(factor, 3)} filled in from compressive_strength = {number(strength)} Pa by Frew et al.'s fit",
+                f"allowed S <= {number(limit)}; is compressive_strength in Pa?" + (f" {hint}" if hint else ""),
+            )
+        self.S = factor
+
+    def data_range_warnings(self, where: str) -> list[str]:
+        """A filled-in ``S`` for an f'c outside the concrete Frew et al. fitted it to is an extrapolation: one line
+        naming the source and its range (``where``: the law's dotted path)."""
+        strength, factor, (low, high) = self.compressive_strength, self.S, (ranges.FREW_FIT.low, ranges.FREW_FIT.high)
+        if factor is None or low <= strength <= high:
+            return []
+        if not math.isclose(factor, concrete_strength_factor(strength), rel_tol=1e-12):
+            return []  # S given: the fit is not used
+        return [
+            f"{where}.compressive_strength = {number(strength / 1e6)} MPa lies outside the {number(low / 1e6)}-"
+            f"{number(high / 1e6)} MPa of the concrete and grout that Frew et al. fitted S to (Int. J. Impact Eng."
+            f" 21, 1998): S = {number(factor, 3)} is an extrapolation; give {where}.S, or fit it (docs/laws.md)"
+        ]
 
     def build(self) -> ResistanceLaw:
         return concrete_cavity_expansion(self.compressive_strength, self.density, self.S)
@@ -248,7 +296,7 @@ class LayerSpec(Strict):
     """One layer of a layered target, or a gap (``law = "air"``); the last layer without a thickness goes on
     forever, with one the target ends at its rear face."""
 
-    thickness: Number | None = field(None, unit="m", gt=0.0, le=1e4)
+    thickness: Number | None = field(None, unit="m", gt=0.0, le=1e4, plausible=ranges.LAYER)
     law: LawChoice = field(description='a named law, a table of its coefficients, or "air" for a gap')
 
     _known_name = field_validator("law")(
@@ -324,6 +372,18 @@ class Target(Strict):
         layers = self.layers or []
         return math.inf if not layers or layers[-1].thickness is None else self.inner_faces[-1]
 
+    @property
+    def warnings(self) -> list[str]:
+        """Plain-language doubts about the target's laws, one line each (empty when none): an empirical law used
+        outside the data it was fitted to (:attr:`~.schema.Scene.warnings`)."""
+        if self.layers is None:
+            laws = [("target.law", self.law)]
+        else:
+            laws = [(f"target.layers.{index}.law", layer.law) for index, layer in enumerate(self.layers)]
+        return [
+            line for where, law in laws if isinstance(law, ConcreteLawSpec) for line in law.data_range_warnings(where)
+        ]
+
     def build_rear_face(self) -> FrontFace | None:
         """The plane past which the whole body has perforated the target, facing out of its rear (a point's height
         above it is its depth below the rear face); None for a half-space."""
@@ -346,7 +406,9 @@ class FrictionSpec(Strict):
         "none", description="coulomb: tau = mu sigma_n; capped: tau = min(mu sigma_n, tau_s)"
     )
     coefficient: Number = field(0.1, ge=0.0, le=5.0, description="mu")
-    cap: Number | None = field(None, unit="Pa", gt=0.0, le=1e11, description="tau_s of the capped model")
+    cap: Number | None = field(
+        None, unit="Pa", gt=0.0, le=1e11, plausible=ranges.SHEAR_STRENGTH, description="tau_s of the capped model"
+    )
 
     @model_validator(mode="after")
     def _cap_for_capped(self) -> Self:
@@ -363,7 +425,13 @@ class FrictionSpec(Strict):
 class FreeSurfaceSpec(Strict):
     """Free-surface reduction of the normal stress, a smooth ramp over its depth (docs/effects.md)."""
 
-    depth: Number = field(unit="m", gt=0.0, le=1e3, description="full resistance from this distance into the target")
+    depth: Number = field(
+        unit="m",
+        gt=0.0,
+        le=1e3,
+        plausible=ranges.FREE_SURFACE_DEPTH,
+        description="full resistance from this distance into the target",
+    )
     surface_fraction: Number = field(0.0, ge=0.0, le=1.0, description="fraction of it at the face")
     faces: list[Literal["front", "rear"]] = field(
         ["front"],

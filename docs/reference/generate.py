@@ -196,13 +196,27 @@ def default_of(info: FieldInfo) -> str:
     return "not set" if value is None or value is PydanticUndefined else toml(value)
 
 
+def plausible_range(info: FieldInfo) -> str:
+    """The range a physical input plausibly takes (a value outside it is refused as a likely slip of unit), in
+    the field's unit and, where it differs, in the unit the message also gives: ``1e5 to 5e8 Pa, about 0.1-500
+    MPa``; ``""`` for a field without one."""
+    from cases.scene.plausible import plausible_of
+
+    plausible = plausible_of(info)
+    if plausible is None:
+        return ""
+    text = plausible.allowed(plausible.unit or unit_of(info))
+    return f"each {plausible.column_name}: {text}" if plausible.column is not None else text
+
+
 def key_row(key: str, info: FieldInfo, kind: str | None = None) -> list[str]:
-    """A table row: key, type, unit, default, allowed range, description."""
+    """A table row: key, type, unit, default, allowed range, plausible range, description."""
     annotation = info.annotation
     within = ["each number " + ", ".join(inner)] if (inner := inner_bounds(annotation)) else []
     limits = ", ".join(bounds(info.metadata) + within)
     kind = kind or describe(annotation)
-    return [f"`{key}`", kind, unit_of(info), default_of(info), limits, plain(info.description)]
+    row = [f"`{key}`", kind, unit_of(info), default_of(info), limits, plausible_range(info)]
+    return [*row, plain(info.description)]
 
 
 def alternative(key: str, model: type[BaseModel]) -> tuple[str, str]:
@@ -217,7 +231,7 @@ def alternative(key: str, model: type[BaseModel]) -> tuple[str, str]:
     return f"[{key}]: {first}", doc[len(first) + 1 :].strip()
 
 
-SCENE_HEADER = ("key", "type or allowed values", "unit", "default", "allowed range", "description")
+SCENE_HEADER = ("key", "type or allowed values", "unit", "default", "allowed range", "plausible range", "description")
 
 
 def model_tables(model: type[BaseModel], prefix: str, title: str, level: str, seen: dict[str, str]) -> list[str]:
