@@ -89,7 +89,7 @@ def normal_impact() -> None:
         law,
         result.prepared.mass.mass,
         280.0,
-        scene.numerics.stop_speed,
+        scene.stop_speed,
         **scene.effects.contact_ramp,
     )
     print(

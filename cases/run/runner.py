@@ -43,7 +43,7 @@ from dynamics.integrators import Stepper
 from dynamics.quaternion import multiply, rotation_matrix
 from fem_loads.target import FrontFace, face_height_scalars
 
-from ..scene import Numerics, Scene
+from ..scene import Scene
 from .prepare import PreparedProjectile, prepare_projectile
 
 if TYPE_CHECKING:
@@ -61,7 +61,6 @@ __all__ = [
     "step_control",
     "WithGravity",
     "STOPPED",
-    "STOP_FLOOR_FRACTION",
     "stop_events",
     "EXITED",
     "PERFORATED",
@@ -79,9 +78,6 @@ LowestHeight = Callable[..., float]
 STOPPED, EXITED = "stopped", "exited"
 # the whole body has left the target's rear face; has left its front face without ever having been wholly inside
 PERFORATED, RICOCHETED = "perforated", "ricocheted"
-# the stop speed is at most this share of the impact speed: a body that stops under a static resistance F from a
-# speed v still travels m v^2 / (2 F), which is at most (v / V0)^2 = 0.1 % of its depth (docs/numerics.md)
-STOP_FLOOR_FRACTION = 0.03
 # attitude errors are measured against this angle (rad), not against a radian: the disturbances
 # of interest are of the order of a degree (docs/evidence-numerics.md)
 ANGLE_SCALE = 1e-2
@@ -258,7 +254,7 @@ def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
     # the energy guard (in integrate) needs loads that only dissipate: gravity and no-separation can do work
     state = initial_state(scene, prepared) if initial is None else initial
     events = [
-        *stop_events(numerics, float(np.linalg.norm(state.velocity))),
+        *stop_events(scene),
         # every surface point back above the surface after having been inside
         Event(EXITED, lambda st: lowest_height(st.position, st.attitude), direction=1),
     ]
@@ -293,12 +289,13 @@ def run_scene(scene: Scene, initial: State | None = None) -> RunResult:
     return RunResult(scene, prepared, trajectory, end - start, end - integrate_start)
 
 
-def stop_events(numerics: Numerics, impact_speed: float) -> list[Event]:
-    """The two ends of a run that stops inside the target (m/s, ``impact_speed``: at the start of the run): its speed
-    falls below ``numerics.stop_speed`` (at most :data:`STOP_FLOOR_FRACTION` of the impact speed), or the body,
-    slower than ``numerics.slow_fraction`` of the impact speed, no longer moves nose first."""
-    floor = min(numerics.stop_speed, STOP_FLOOR_FRACTION * impact_speed)
-    return [SpeedBelow(STOPPED, floor), AdvanceEnds(STOPPED, numerics.slow_fraction * impact_speed)]
+def stop_events(scene: Scene) -> list[Event]:
+    """The two ends of a run that stops inside the target: its speed falls below :attr:`Scene.stop_speed`, or the
+    body, slower than ``numerics.slow_fraction`` of the impact speed, stops moving nose first (docs/numerics.md)."""
+    return [
+        SpeedBelow(STOPPED, scene.stop_speed),
+        AdvanceEnds(STOPPED, scene.numerics.slow_fraction * scene.impact.speed),
+    ]
 
 
 class FaceCrossings(Event):

@@ -177,6 +177,7 @@ def summarise(result: RunResult, history: pd.DataFrame | Mapping[str, np.ndarray
             )
         },
         warnings=run_warnings(result.trajectory.end_reason, stats)
+        + result.scene.warnings
         + numerics_warnings(result.scene.numerics)
         + entry_warnings(result.scene, result.prepared.nose_length)
         + axis_warnings(result.prepared),

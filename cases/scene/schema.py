@@ -20,9 +20,12 @@ from .plausible import MESH_SIZE, slip_hint
 from .projectile import Projectile
 from .target import Effects, Target, UserLawSpec
 
-__all__ = ["Scene", "Impact", "Numerics", "Outputs", "MAX_STEPS", "MAX_MESH_CELLS"]
+__all__ = ["Scene", "Impact", "Numerics", "Outputs", "MAX_STEPS", "MAX_MESH_CELLS", "STOP_SPEED_FRACTION"]
 
 MAX_STEPS = 5_000_000  # dynamics.simulate's max_steps: no run takes more than time_limit / time_step
+# the stop speed is at most this share of the impact speed V0: from a speed v, a body under a static resistance F
+# still travels m v^2 / (2 F), at most (v / V0)^2 of its depth, here 0.1 % (docs/numerics.md, the end of a run)
+STOP_SPEED_FRACTION = 0.03
 MAX_MESH_CELLS = 2e6  # cells of mesh_size^3 in the projectile's bounding cylinder (about 1e7 tetrahedra)
 
 
@@ -74,8 +77,7 @@ class Numerics(Strict):
         unit="m/s",
         gt=0.0,
         le=1e3,
-        description="the run ends when the speed falls below this, or below 3 % of the impact speed when that is"
-        " less",
+        description="the run ends when the speed falls below this, or below 3 % of the impact speed when that is less",
     )
     slow_fraction: Number = field(
         0.1,
@@ -103,6 +105,11 @@ class Numerics(Strict):
         " step in machine code, after about 0.4 s of loading per process) or auto (compiled in"
         " studies, whose workers load it once, numpy for a single run)",
     )
+
+    def stop_speed_at(self, impact_speed: float) -> float:
+        """The speed (m/s) below which a run at ``impact_speed`` (m/s) has stopped: ``stop_speed``, at most
+        :data:`STOP_SPEED_FRACTION` of the impact speed."""
+        return min(self.stop_speed, STOP_SPEED_FRACTION * impact_speed)
 
     @model_validator(mode="after")
     def _reachable_time_limit(self) -> Self:
@@ -172,6 +179,11 @@ class Scene(Strict):
         Such a scene runs: these are lines for a run summary's warnings, as ``numerics_warnings`` gives the
         numerics'."""
         return self.target.warnings
+
+    @property
+    def stop_speed(self) -> float:
+        """The speed (m/s) below which a run of this scene has stopped (:meth:`Numerics.stop_speed_at`)."""
+        return self.numerics.stop_speed_at(self.impact.speed)
 
     @property
     def compilable(self) -> bool:

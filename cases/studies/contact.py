@@ -110,7 +110,7 @@ def contact_study(
                 law,
                 prepared.mass.mass,
                 base.impact.speed,
-                base.numerics.stop_speed,
+                base.stop_speed,
                 contact_incidence=w,
             )[0]
             for w in values

@@ -176,7 +176,7 @@ class ReducedModel:
             PlaneBody(self.mass, self.inertia, self.gravity),
             PlaneSteps(self.rtol, scales, 1e-3 * length / speed, math.inf),
             PlaneEnds(
-                numerics.stop_speed,
+                numerics.stop_speed_at(speed),
                 numerics.time_limit if time_limit is None else time_limit,
                 math.radians(turn_limit),
                 math.radians(CONVERGENCE_THRESHOLD),

@@ -220,7 +220,7 @@ def scene_depth_1d(scene: Scene, prepared: PreparedProjectile) -> float:
         law,
         prepared.mass.mass,
         scene.impact.speed,
-        scene.numerics.stop_speed,
+        scene.stop_speed,
         **scene.effects.contact_ramp,
     )
     return depth
@@ -355,7 +355,7 @@ def scene_slab_1d(scene: Scene, prepared: PreparedProjectile) -> tuple[float, fl
         scene_slices(scene),
         prepared.mass.mass,
         scene.impact.speed,
-        scene.numerics.stop_speed,
+        scene.stop_speed,
         **scene.effects.contact_ramp,
     )
 

@@ -57,7 +57,7 @@ def facets(folder: Path) -> None:
         scene.target.build(),
         scene.projectile.mass,
         scene.impact.speed,
-        scene.numerics.stop_speed,
+        scene.stop_speed,
         **scene.effects.contact_ramp,
     )
     print("| mesh | 20 mm | 10 mm | 5 mm |")

@@ -127,7 +127,7 @@ def test_blunt_normal_impact_matches_the_1d_integration():
         scene.target.build(),
         result.prepared.mass.mass,
         280.0,
-        scene.numerics.stop_speed,
+        scene.stop_speed,
         **scene.effects.contact_ramp,
     )
     assert summarise(result).depth == pytest.approx(reference, rel=1e-3)

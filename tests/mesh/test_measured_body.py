@@ -144,7 +144,7 @@ def test_a_boat_tail_goes_as_deep_as_its_nose_says():
         scene.target.build(),
         result.prepared.mass.mass,
         scene.impact.speed,
-        scene.numerics.stop_speed,
+        scene.stop_speed,
         **scene.effects.contact_ramp,
     )
     assert depth == pytest.approx(reference, rel=5e-4)

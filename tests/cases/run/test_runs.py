@@ -68,7 +68,7 @@ def test_sharp_normal_impact_matches_the_closed_form():
     result, history = _run("forrestal_luk_test2", *SHARP)
     scene = result.scene
     profile, law, mass = result.prepared.profile, scene.target.build(), result.prepared.mass.mass
-    stop = scene.numerics.stop_speed
+    stop = scene.stop_speed
     reference, v_embedded = axial_depth_1d(profile, law, mass, scene.impact.speed, stop)
     depth = history["tip_depth"].max()
     assert depth == pytest.approx(reference, rel=1e-3)
