@@ -24,9 +24,10 @@ def _block(command: str, text: str) -> str:
 
 @pytest.fixture
 def costs(tmp_path, monkeypatch):
-    """The recorded costs in a scratch file (a test never writes the repository's)."""
+    """The recorded costs and inputs in scratch files (a test never writes the repository's)."""
     path = tmp_path / "costs.json"
     monkeypatch.setattr(regenerate, "COSTS", path)
+    monkeypatch.setattr(regenerate, "INPUTS", tmp_path / "inputs.json")
     return path
 
 
@@ -227,7 +228,7 @@ def test_a_block_keeps_the_largest_cost_seen():
 
 def test_no_check_writes_the_repository(capsys):
     """The digest check on the repository leaves the recorded costs and every page as they were."""
-    watched = [regenerate.COSTS, *regenerate.pages()]
+    watched = [regenerate.COSTS, regenerate.INPUTS, *regenerate.pages()]
     before = {p: p.stat().st_mtime_ns for p in watched}
     regenerate.check()
     assert {p: p.stat().st_mtime_ns for p in watched} == before
