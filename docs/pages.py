@@ -31,7 +31,7 @@ KINDS: dict[str, tuple[str, tuple[Page, ...]]] = {
                 "docs/tutorial.md",
                 "Your first runs",
                 "a shipped scene, a scene of your own projectile, reading the summary, a sweep over impact speed, "
-                "a picture of the stress",
+                "a picture of the stress, an oblique shell into concrete (a half-space, a slab, its ballistic limit)",
             ),
         ),
     ),
