@@ -1,25 +1,39 @@
 """Fuzzing the hard cases of the integration: strong and weak targets, small and large projectiles, slow and fast
-impacts, coarse and fine fixed steps and tolerances.
+impacts, coarse and fine fixed steps and tolerances; normal impacts, and oblique, yawed and turning ones into
+half-spaces, slabs, two layers and inclined targets.
 
 Each drawn scene is run twice: with the drawn numerics, and with Dormand-Prince at rtol 1e-9 on the same mesh
 (the converged reference in time).  The drawn run must end within 2 % of the reference's depth and by twice its
 stop time, or carry a warning that says why it may not; no fixed-step run may end by the time limit without a
-warning.  The draws are derandomised (the same every run) and few in the default suite; the slow variant draws
-more; ``PENETRATE_FUZZ_SCALE=N`` multiplies both and draws new ones (docs/numerics.md, "The end of a run").
+warning.  In three dimensions the run's end must also agree with its trajectory, a body that leaves by the front
+face must keep more than ``numerics.slow_fraction`` of its speed, and the kinetic energy must never rise.  Two
+known failures of these (a stop after a step that turned the velocity, in a run warned of its step; a body that
+hooks round in soil and leaves nose first, slowly) are passed by the property with a hypothesis event and held
+each by a strict xfail test, as are two runs found silent about their error.  The draws are derandomised (the same
+every run) and few in the default suite; the slow variants draw more; ``PENETRATE_FUZZ_SCALE=N`` multiplies both
+and draws new ones (docs/numerics.md, "The end of a run").
 """
 
 from __future__ import annotations
 
 import functools
+import json
 import math
 import os
 
+import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
-from cases import run_scene, summarise
-from cases.scene import scene_from_dict
+from cases import run_scene, scene_path, summarise
+from cases.run import RunResult, RunSummary
+from cases.run.runner import REST_TRAVEL
+from cases.scene import read_scene_data, scene_from_dict
+from cases.scene.schema import MAX_STEPS
+from dynamics import ENERGY_TOLERANCE
+from dynamics.quaternion import exp_map, multiply, rotation_matrix
+from dynamics.simulate import advance_speed
 
 SCALE = float(os.environ.get("PENETRATE_FUZZ_SCALE", "1"))
 EXPLORING = "PENETRATE_FUZZ_SCALE" in os.environ
@@ -103,3 +117,411 @@ def test_hard_runs_end_near_the_converged_run_or_say_why(draw):
 @given(hard_scenes)
 def test_hard_runs_end_near_the_converged_run_or_say_why_many(draw):
     check(draw)
+
+
+# ---------------------------------------------------------------------------
+# oblique, yawed and turning shots: three dimensions
+
+LEAVING = ("exited", "ricocheted")
+PHYSICAL_ENDS = ("stopped", "exited", "ricocheted", "perforated")
+# a run stops below numerics.stop_speed, or below this share of the impact speed when that is less (its description)
+STOP_SPEED_SHARE = 0.03
+TIME_LIMIT = 2.0  # s
+#: the projectiles: a table, its mesh size (about a third of the diameter) and its length (m); two diameters
+#: and the finned body, so that every draw reuses one of four meshes
+BODIES = {
+    "ogive CRH 3, L/D 8": ({"diameter": 0.03, "length": 0.24, "nose": {"shape": "ogive", "crh": 3.0}}, 0.01, 0.24),
+    "cone 12 deg, L/D 12": (
+        {"diameter": 0.03, "length": 0.36, "nose": {"shape": "cone", "half_angle": 12.0}},
+        0.01,
+        0.36,
+    ),
+    "ogive CRH 1.5, L/D 3": ({"diameter": 0.1, "length": 0.3, "nose": {"shape": "ogive", "crh": 1.5}}, 0.033, 0.3),
+    # test 2 with four thin tail fins (cases/finned_test2.toml): 95.2 mm, 1.4 m, L/D 14.7, not axisymmetric
+    "finned test 2": (None, 0.032, 1.4),
+}
+
+
+@functools.cache
+def finned_body() -> dict:
+    return read_scene_data(scene_path("finned_test2"))["projectile"]
+
+
+def polynomial(static: float, density: float) -> dict:
+    return {"model": "polynomial", "c0": static, "c2": density}
+
+
+def concrete(strength: float, density: float) -> dict:
+    return {"model": "concrete", "compressive_strength": strength, "density": density}
+
+
+strong_laws = st.one_of(
+    st.builds(concrete, st.floats(20e6, 60e6), st.floats(2200.0, 2500.0)),  # inside Frew et al.'s fit: no warning
+    st.builds(polynomial, log_uniform(1e8, 1e9), st.floats(2000.0, 2700.0)),
+)
+weak_laws = st.builds(polynomial, log_uniform(1e6, 2e7), st.floats(1400.0, 2200.0))
+laws = st.one_of(strong_laws, weak_laws)
+
+
+@st.composite
+def targets(draw) -> dict:
+    """A half-space, a slab (thickness 0.3-3 body lengths: perforation is possible), or two layers (the first
+    0.3-3 body lengths, the second a half-space or a slab of as much); level or inclined by up to 30 deg."""
+    kind = draw(st.sampled_from(["half-space", "slab", "two layers"]))
+    first = draw(laws)
+    if kind == "half-space":
+        target: dict = {"law": first}
+    elif kind == "slab":
+        target = {"layers": [{"thickness_lengths": draw(st.floats(0.3, 3.0)), "law": first}]}
+    else:
+        second = {"law": draw(laws)}
+        if draw(st.booleans()):
+            second["thickness_lengths"] = draw(st.floats(0.3, 3.0))
+        target = {"layers": [{"thickness_lengths": draw(st.floats(0.3, 3.0)), "law": first}, second]}
+    target["inclination"] = draw(st.one_of(st.just(0.0), st.floats(0.0, 30.0)))
+    return target
+
+
+oblique_scenes = st.fixed_dictionaries(
+    {
+        "body": st.sampled_from(list(BODIES)),
+        "target": targets(),
+        "speed": st.floats(100.0, 1000.0),
+        "obliquity": st.floats(0.0, 80.0),  # deg, the velocity from the front face's inward normal
+        "attack_angle": st.floats(-15.0, 15.0),
+        "yaw_angle": st.floats(-10.0, 10.0),
+        # spin, pitch and yaw rates (body x, y, z) in units of the impact speed over the body's length
+        "rates": st.tuples(*[st.floats(-0.05, 0.05)] * 3),
+        "integrator": st.sampled_from(["rk4", "rk4", "dopri54"]),
+        "fraction": log_uniform(2e-3, 0.5),
+        "rtol": log_uniform(1e-8, 1e-2),
+    }
+)
+
+
+def oblique_scene_data(draw: dict) -> dict:
+    """The drawn shot with coarse numerics in space (about a third of the diameter, second order)."""
+    table, mesh_size, length = BODIES[draw["body"]]
+    target = dict(draw["target"])
+    if "layers" in target:
+        target["layers"] = [
+            {"law": layer["law"], **({"thickness": layer["thickness_lengths"] * length} if len(layer) > 1 else {})}
+            for layer in target["layers"]
+        ]
+    rate = draw["speed"] / length
+    return {
+        "projectile": finned_body() if table is None else table,
+        "target": target,
+        "impact": {
+            "speed": draw["speed"],
+            # the obliquity is the face's: the front face leans by the inclination towards +X
+            "oblique_angle": draw["obliquity"] - target["inclination"],
+            "attack_angle": draw["attack_angle"],
+            "yaw_angle": draw["yaw_angle"],
+            "angular_velocity": [r * rate for r in draw["rates"]],
+        },
+        "numerics": {"mesh_size": mesh_size, "quadrature_order": 2, "kernel": "compiled", "time_limit": TIME_LIMIT},
+    }
+
+
+def _reference_key(draw: dict) -> str:
+    return json.dumps({k: v for k, v in draw.items() if k not in ("integrator", "fraction", "rtol")}, sort_keys=True)
+
+
+@functools.lru_cache(maxsize=16)
+def oblique_reference(key: str) -> tuple[RunResult, RunSummary]:
+    """The drawn shot at Dormand-Prince rtol 1e-9 on the same mesh."""
+    data = oblique_scene_data(json.loads(key))
+    data["numerics"].update({"integrator": "dopri54", "rtol": 1e-9})
+    result = run_scene(scene_from_dict(data))
+    return result, summarise(result)
+
+
+def kinetic_energies(result: RunResult) -> np.ndarray:
+    """Translational plus rotational kinetic energy (J) at every recorded state."""
+    trajectory, mass = result.trajectory, result.prepared.mass
+    spin = trajectory.angular_velocity
+    rotational = np.einsum("ni,ij,nj->n", spin, mass.inertia, spin)
+    return 0.5 * mass.mass * np.sum(trajectory.velocity**2, axis=1) + 0.5 * rotational
+
+
+#: a diagnosed defect of the stop rule, held by test_a_step_that_turns_the_velocity_is_no_stop (strict xfail)
+KNOWN_STOP_WHILE_MOVING = (
+    "a fixed step that the run warns does not resolve the entry (it carries the body further than its nose) can"
+    " turn the velocity by more than 90 deg; the stop event takes that as the velocity passing through zero"
+    " (SpeedBelow.fired: before . after <= 0) and locates the stop where the velocity along the step's first"
+    " heading falls to the stop speed, so the run ends 'stopped' while the body still moves (at 14-15 % of its"
+    " impact speed in the draws that found it); the step limit that keeps a step short of the stop sees no"
+    " deceleration at the step's start, where the body only touches the target"
+)
+
+
+#: a property of the end rule, held by test_a_body_that_leaves_nose_first_keeps_a_tenth_of_its_speed (strict xfail)
+KNOWN_SLOW_BROACH = (
+    "a body that hooks round in a weak target and climbs back out nose first leaves slower than slow_fraction of"
+    " its impact speed: the end rule stops only a slow body that no longer moves nose first (docs/numerics.md: a"
+    " body that leaves 'was moving nose first or faster than slow_fraction'); a 30 mm CRH 3 ogive of 8 calibres"
+    " into 1-2.7 MPa soil, turning, converged (Dormand-Prince rtol 1e-9): at 678 m/s and 21 deg it turns its axis"
+    " by 250 deg, climbs from 2.35 m and leaves at 55 m/s (8.1 %); at 999 m/s and 80 deg it turns by 180 deg"
+    " and leaves a 0.6 m slab's front face at 17.6 m/s (1.8 %), both with attack angles under 0.4 deg"
+)
+
+
+def unresolved_entry(result: RunResult) -> bool:
+    """Whether the run's fixed step carries the body further than its nose at the impact speed (a warning)."""
+    numerics = result.scene.numerics
+    travel = numerics.time_step * result.scene.impact.speed
+    return numerics.integrator == "rk4" and travel > result.prepared.nose_length
+
+
+def check_trajectory(result: RunResult, summary: RunSummary, why: tuple, known: bool = True) -> None:
+    """The end reason agrees with the last state; a body that leaves keeps more than the slow fraction of its
+    speed; the kinetic energy never rises from one recorded state to the next (no gravity, separation on: the
+    loads only dissipate, and the energy guard removes any gain).  ``known``: pass a run that shows one of the
+    known failures (:data:`KNOWN_STOP_WHILE_MOVING`, :data:`KNOWN_SLOW_BROACH`) with a hypothesis event instead of
+    failing it, a strict xfail test holds each."""
+    scene, trajectory = result.scene, result.trajectory
+    impact_speed = scene.impact.speed
+    loads = scene.loads(result.prepared.quadrature)
+    rear = scene.target.build_rear_face()
+    end = summary.end_reason
+    position, velocity = trajectory.position[-1], trajectory.velocity[-1]
+    attitude, spin = trajectory.attitude[-1], trajectory.angular_velocity[-1]
+    speed = float(np.linalg.norm(velocity))
+
+    def lowest(face=None, at: float = 0.0) -> float:
+        """The lowest loaded point's height above the front face (or ``face``), ``at`` s after the last state
+        under the last state's rigid motion."""
+        moved = multiply(attitude, exp_map(spin * at))
+        return loads.lowest_height(position + velocity * at, rotation_matrix(moved), face)
+
+    length = result.prepared.length
+    # the events are located to 1e-12 of a step: far less than this in height
+    near = 1e-9 * length
+    if end == "stopped":
+        assert lowest() < 0.0, ("stopped outside the target", lowest(), *why)
+        if rear is not None:
+            assert lowest(rear) < 0.0, ("stopped past the rear face", lowest(rear), *why)
+        numerics = scene.numerics
+        floor = min(numerics.stop_speed, STOP_SPEED_SHARE * impact_speed)
+        slow = numerics.slow_fraction * impact_speed
+        if trajectory.statistics.get("stopped_at_step_floor"):
+            # the steps failed at the floor near rest: slow, braked, and at most REST_TRAVEL of the path left to
+            # travel under the last load (docs/numerics.md, the end of a run)
+            deceleration = -float(trajectory.force[-1] @ velocity) / (result.prepared.mass.mass * speed)
+            left = speed**2 / (2 * deceleration) if deceleration > 0.0 else math.inf
+            path = float(trajectory.path_length[-1])
+            assert speed <= slow and left <= REST_TRAVEL * path, ("stopped at the floor while moving", left, *why)
+        else:
+            # the stop speed is located on the velocity along its direction at the last step's start (SpeedBelow):
+            # the speed itself may exceed it by what the velocity turned within the step (4 % in coarse RK4 steps
+            # here), but not the slow fraction of the impact speed
+            last, before = trajectory.state(-1), trajectory.state(-2)
+            along = float(last.velocity @ (before.velocity / before.speed))
+            advance = advance_speed(last)  # along the axis, as the event computes it
+            stopped = (along <= floor or advance <= 0.0) and speed <= slow
+            if known and not stopped and unresolved_entry(result):
+                event(f"known: {KNOWN_STOP_WHILE_MOVING}")  # test_a_step_that_turns_the_velocity_is_no_stop
+            else:
+                assert stopped, ("stopped while moving", speed, along, advance, floor, slow, *why)
+    elif end in (*LEAVING, "perforated"):
+        face = rear if end == "perforated" else None
+        dt = 1e-7 * length / max(speed, 1e-300)
+        height, later = lowest(face), lowest(face, dt)
+        assert -near <= height <= near, (f"{end} away from its face", height, *why)
+        assert later > height, (f"{end} moving inwards", height, later, *why)
+    if end in LEAVING and not speed > scene.numerics.slow_fraction * impact_speed:
+        if known and advance_speed(trajectory.state(-1)) > 0.0:
+            event(f"known: {KNOWN_SLOW_BROACH}")  # test_a_body_that_leaves_nose_first_keeps_a_tenth_of_its_speed
+        else:
+            raise AssertionError((f"{end} slowly", speed, *why))
+    energy = kinetic_energies(result)
+    gains = energy[1:] / energy[:-1] - 1.0
+    assert np.all(gains <= ENERGY_TOLERANCE), ("energy gained", float(np.max(gains)), int(np.argmax(gains)), *why)
+
+
+def check_oblique(draw: dict) -> None:
+    """The drawn shot with its drawn numerics and at Dormand-Prince rtol 1e-9: each run's end agrees with its
+    trajectory (:func:`check_trajectory`); the drawn run ends as the converged one, within 2 % of its depth and,
+    when it stops, by twice its stop time, or carries a warning; when the converged run itself ends numerically
+    the drawn run warns."""
+    reference, converged = oblique_reference(_reference_key(draw))
+    check_trajectory(reference, converged, ("reference", draw))
+    data = oblique_scene_data(draw)
+    if draw["integrator"] == "rk4":
+        # no shorter than the scene allows: at most MAX_STEPS steps to the time limit
+        step = min(0.01, max(draw["fraction"] * converged.final_time, TIME_LIMIT / MAX_STEPS))
+        data["numerics"].update({"integrator": "rk4", "time_step": step})
+    else:
+        data["numerics"].update({"integrator": "dopri54", "rtol": draw["rtol"]})
+    result = run_scene(scene_from_dict(data))
+    summary = summarise(result)
+    why = (
+        draw,
+        (summary.end_reason, summary.depth, summary.final_time, summary.final_speed, summary.warnings),
+        (converged.end_reason, converged.depth, converged.final_time, converged.final_speed, converged.warnings),
+    )
+    check_trajectory(result, summary, why)
+    if converged.end_reason not in PHYSICAL_ENDS:  # the reference itself ended numerically: the run must say so
+        assert summary.warnings, why
+        return
+    depth_error = abs(summary.depth - converged.depth)
+    close = summary.end_reason == converged.end_reason and depth_error <= 0.02 * abs(converged.depth)
+    if converged.end_reason == "stopped":
+        close = close and summary.final_time <= 2 * converged.final_time
+    assert close or summary.warnings, why
+
+
+@fuzz(5)
+@given(oblique_scenes)
+def test_oblique_runs_end_as_their_trajectory_says_near_the_converged_run(draw):
+    """Obliquity 0-80 deg (from the face), attack -15-15 deg, yaw -10-10 deg, spin, pitch and yaw rates up to 0.05
+    of the speed over the length, 100-1000 m/s; a half-space, a slab, two layers, level or inclined by up to 30 deg,
+    of concrete (20-60 MPa), a strong polynomial (1e8-1e9 Pa) or a weak soil (1e6-2e7 Pa); three steel bodies of
+    L/D 3-12 and the finned test 2 body; RK4 at a step of 0.002-0.5 of the converged run's end time, or
+    Dormand-Prince at rtol 1e-8-1e-2 (:func:`check_oblique`)."""
+    check_oblique(draw)
+
+
+@pytest.mark.slow
+@fuzz(36)
+@given(oblique_scenes)
+def test_oblique_runs_end_as_their_trajectory_says_near_the_converged_run_many(draw):
+    """The same property, more draws (CI's slow step)."""
+    check_oblique(draw)
+
+
+#: found by the slow property: an oblique shot into strong layers at one RK4 step of a tenth of the converged run's
+#: 7.8 ms; the step reverses the velocity, and the run ends 'stopped' at 87 m/s of its 573 m/s, moving into the
+#: target at 83 m/s
+TURNED_IN_ONE_STEP = {
+    "body": "ogive CRH 3, L/D 8",
+    "target": {
+        "layers": [
+            {"thickness_lengths": 0.5862601447781386, "law": polynomial(1e8, 2239.1)},
+            {"law": polynomial(1e8, 2239.1)},
+        ],
+        "inclination": 0.0,
+    },
+    "speed": 573.1950228665506,
+    "obliquity": 73.35026179439771,
+    "attack_angle": -9.334642075217705,
+    "yaw_angle": -0.99999,
+    "rates": (2e-05, -0.045003726630698716, 0.028949731682046245),
+    "integrator": "rk4",
+    "fraction": 0.10000230261160267,
+    "rtol": 0.002,
+}
+
+
+@pytest.mark.xfail(strict=True, raises=AssertionError, reason=KNOWN_STOP_WHILE_MOVING)
+def test_a_step_that_turns_the_velocity_is_no_stop():
+    """The draw of the slow property that found the defect: 'stopped' after one step, still at 15 % of the impact
+    speed, neither below the stop speed nor moving backwards along its axis.  The run warns that its step does not
+    resolve the entry; the property passes such runs with a hypothesis event ('known: ...'), this test holds the
+    assertion."""
+    data = oblique_scene_data(TURNED_IN_ONE_STEP)
+    data["numerics"].update({"integrator": "rk4", "time_step": 7.845263113485082e-04})  # the draw's step
+    result = run_scene(scene_from_dict(data))
+    summary = summarise(result)
+    if not (summary.end_reason == "stopped" and unresolved_entry(result) and summary.warnings):
+        pytest.fail(f"the draw no longer shows the defect's conditions: {summary}")  # not an expected failure
+    check_trajectory(result, summary, (TURNED_IN_ONE_STEP, summary), known=False)
+
+
+#: found by the slow property at PENETRATE_FUZZ_SCALE (random draws): a 30 mm CRH 3 ogive of 8 calibres into 1 MPa
+#: soil at 678 m/s and 21 deg, spinning and pitching at 0.023 and 0.016 of its speed over its length
+BROACHING = {
+    "body": "ogive CRH 3, L/D 8",
+    "target": {"law": polynomial(1e6, 2115.869946236102), "inclination": 0.0},
+    "speed": 678.0378211475903,
+    "obliquity": 20.871315748615412,
+    "attack_angle": 0.0,
+    "yaw_angle": 0.0,
+    "rates": (0.02305803768704741, 0.015881787451446167, 0.0),
+}
+
+
+@pytest.mark.xfail(strict=True, raises=AssertionError, reason=KNOWN_SLOW_BROACH)
+def test_a_body_that_leaves_nose_first_keeps_a_tenth_of_its_speed():
+    """The converged run (Dormand-Prince, rtol 1e-9) of the broaching shot: ``exited``, nose first, at 8.1 % of
+    its impact speed.  The property passes such runs with a hypothesis event ('known: ...'); this test holds the
+    assertion."""
+    reference, converged = oblique_reference(_reference_key(BROACHING))
+    if not (converged.end_reason == "exited" and converged.exit_attack_angle < 90.0):
+        pytest.fail(f"the shot no longer leaves nose first: {converged}")  # not the expected failure
+    check_trajectory(reference, converged, (BROACHING, converged), known=False)
+
+
+#: found by the slow property at PENETRATE_FUZZ_SCALE: the finned test 2 body grazing 1 MPa soil at 79.7 deg with its
+#: axis 91 deg from the face's inward normal (attack angle 11.4 deg), at RK4 steps of a tenth of the 11 ms run
+FINNED_GRAZING = {
+    "body": "finned test 2",
+    "target": {
+        "layers": [{"thickness_lengths": 0.8650086675547413, "law": polynomial(1e6, 1860.0)}],
+        "inclination": 0.0,
+    },
+    "speed": 378.78988505268023,
+    "obliquity": 79.72884121632725,
+    "attack_angle": 11.446137075347856,
+    "yaw_angle": 0.0,
+    "rates": (-0.02681486383010065, 0.0, -0.03160007613415017),
+}
+KNOWN_FINNED_NOSE = (
+    "a file's body measures its nose to where it first reaches its largest radius (PreparedProjectile.nose_length),"
+    " which for the finned body is the fins' leading edge, 1.25 m behind the tip, not the ogive's 0.158 m; so the"
+    " warning of a fixed step that carries the body further than its nose (summary.entry_warnings) stays silent"
+    " up to steps 7.9 times too long: at 1.11 ms (0.42 m a step, 10 steps) the grazing shot ricochets with a tip"
+    " depth of 1.70 mm against the converged 4.32 mm, and no warning (its twice-the-step check moves the path by"
+    " 0.84 % and the axis by 0.1 deg, inside their limits)"
+)
+
+
+@pytest.mark.xfail(strict=True, raises=AssertionError, reason=KNOWN_FINNED_NOSE)
+def test_a_finned_body_is_warned_of_a_step_longer_than_its_nose():
+    """The grazing shot at RK4 steps of 1.11 ms against the same at 0.11 ms (within 0.06 % of the depth at
+    Dormand-Prince rtol 1e-9): within 2 % of its depth, or warned."""
+
+    def run(time_step: float) -> RunSummary:
+        data = oblique_scene_data(FINNED_GRAZING)
+        data["numerics"].update({"integrator": "rk4", "time_step": time_step})
+        return summarise(run_scene(scene_from_dict(data)))
+
+    coarse, fine = run(1.1099e-3), run(1.1e-4)
+    if not (coarse.end_reason == fine.end_reason == "ricocheted" and not fine.warnings):
+        pytest.fail(f"the shot no longer ricochets at both steps: {coarse}, {fine}")  # not the expected failure
+    assert abs(coarse.depth - fine.depth) <= 0.02 * fine.depth or coarse.warnings, (coarse, fine)
+
+
+#: found by the slow property at PENETRATE_FUZZ_SCALE: the finned test 2 body into a strong target (6.1e8 Pa) at
+#: 162 m/s, 2 deg, attack 5.1 deg and turning at about 0.04 of its speed over its length about every axis; the
+#: converged run rebounds with its nose part way in and stops at 1.37 ms, 0.1395 m deep, moving sideways at 11 m/s
+FINNED_REBOUND = {
+    "body": "finned test 2",
+    "target": {"law": polynomial(605494470.3861153, 2425.3755382638783), "inclination": 0.0},
+    "speed": 162.4230713313935,
+    "obliquity": 2.0491238555312923,
+    "attack_angle": 5.115846980509666,
+    "yaw_angle": 0.0,
+    "rates": (0.04193674755361246, 0.03812859731875899, 0.04489903230753696),
+}
+KNOWN_FEW_STEPS = (
+    "five RK4 steps of 0.5 ms (0.081 m a step, half the ogive nose) end 'stopped' 4.1 % deeper than the converged"
+    " run (0.1452 against 0.1395 m) with no warning: the check of a run of fewer than 1000 fixed steps integrates it"
+    " again at twice its step and finds the path moved by 0.44 % and the axis by 0.3 deg, inside their limits (1 %,"
+    " 0.5 deg), but that run's energy guard retook 4 of its 4 steps, and it ends 3.0 % deep itself: both err the"
+    " same way (at 0.25 ms the depth is 1.6 % deep, at 0.1 ms 0.9 %)"
+)
+
+
+@pytest.mark.xfail(strict=True, raises=AssertionError, reason=KNOWN_FEW_STEPS)
+def test_a_run_of_a_few_coarse_steps_ends_near_the_converged_run_or_warns():
+    """The rebounding shot at RK4 steps of 0.5 ms (0.365 of the converged end time): within 2 % of the converged
+    depth, or warned."""
+    _, converged = oblique_reference(_reference_key(FINNED_REBOUND))
+    data = oblique_scene_data(FINNED_REBOUND)
+    data["numerics"].update({"integrator": "rk4", "time_step": 4.9937e-4})
+    summary = summarise(run_scene(scene_from_dict(data)))
+    if not (summary.end_reason == converged.end_reason == "stopped" and not converged.warnings):
+        pytest.fail(f"the shot no longer stops at both steps: {summary}, {converged}")  # not the expected failure
+    assert abs(summary.depth - converged.depth) <= 0.02 * converged.depth or summary.warnings, (summary, converged)
