@@ -11,9 +11,11 @@ import signal
 import socket
 import subprocess
 import sys
+import typing
 from collections.abc import Iterator
 
 import pytest
+from pydantic import BaseModel
 
 from mesh import ProjectileGeometry, ProjectileMesh, build_mesh
 
@@ -132,3 +134,13 @@ def ring_records(law, entry_length: float = 0.0, max_radius: float = 0.0, **effe
     loads.__dict__.update(effects)
     laws, _, _, address = pack_laws(law)
     return laws, pack_effects(loads, address, entry_length, max_radius)
+
+
+def schema_models(annotation: object) -> list[type[BaseModel]]:
+    """The pydantic models a scene field's annotation may hold, through Annotated, unions, lists and dicts."""
+    origin, args = typing.get_origin(annotation), typing.get_args(annotation)
+    if origin is typing.Annotated:
+        return schema_models(args[0])
+    if args and origin is not typing.Literal:
+        return [m for a in args for m in schema_models(a)]
+    return [annotation] if isinstance(annotation, type) and issubclass(annotation, BaseModel) else []

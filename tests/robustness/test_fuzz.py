@@ -33,6 +33,7 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 from pydantic import BaseModel
+from support import schema_models
 
 from cases import SHIPPED_SCENES, scene_path
 from cases.cli import main
@@ -86,15 +87,6 @@ def report_outcomes(request):
 # the schema, walked
 
 
-def _models(annotation) -> list[type[BaseModel]]:
-    origin, args = typing.get_origin(annotation), typing.get_args(annotation)
-    if origin is typing.Annotated:
-        return _models(args[0])
-    if args and origin is not typing.Literal:
-        return [m for a in args for m in _models(a)]
-    return [annotation] if isinstance(annotation, type) and issubclass(annotation, BaseModel) else []
-
-
 def _schema_paths(models=(Scene,), prefix=()) -> dict[tuple, object]:
     """Every field path of the schema (through unions and lists, whose index is 0) -> its FieldInfo."""
     paths = {}
@@ -102,7 +94,7 @@ def _schema_paths(models=(Scene,), prefix=()) -> dict[tuple, object]:
         for name, info in model.model_fields.items():
             path = prefix + (name,)
             paths.setdefault(path, info)
-            inner = _models(info.annotation)
+            inner = schema_models(info.annotation)
             if inner:
                 listed = typing.get_origin(info.annotation) is list or any(
                     typing.get_origin(a) is list for a in typing.get_args(info.annotation)

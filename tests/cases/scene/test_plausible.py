@@ -4,10 +4,10 @@ value it probably meant; concrete's S, filled in from f'c, is held to its own li
 the data of Frew et al.'s fit warns; values at the edges of every plausible range are accepted."""
 
 import math
-import typing
 
 import pytest
 from pydantic import BaseModel
+from support import schema_models
 
 from cases import SHIPPED_SCENES, scene_path
 from cases.scene import Scene, SceneError, apply_overrides, load_scene, read_scene_data, scene_from_dict
@@ -273,16 +273,6 @@ def test_the_smallest_and_largest_projectiles_are_accepted(diameter, length):
     assert scene.projectile.diameter == diameter and scene.projectile.mass == pytest.approx(0.999 * heaviest)
 
 
-def _models(annotation: object) -> list[type[BaseModel]]:
-    """The models an annotation may hold, through Annotated, unions, lists and dicts."""
-    origin, args = typing.get_origin(annotation), typing.get_args(annotation)
-    if origin is typing.Annotated:
-        return _models(args[0])
-    if args and origin is not typing.Literal:
-        return [m for a in args for m in _models(a)]
-    return [annotation] if isinstance(annotation, type) and issubclass(annotation, BaseModel) else []
-
-
 def test_every_si_quantity_of_the_schema_has_a_plausible_range_or_a_reason():
     """The one table: every field in Pa, Pa/m, kg/m^3 or m names a range of cases/scene/plausible.py, but for the
     few held to the body otherwise (the mass, by its mean density; a measured profile, by the shank radius)."""
@@ -298,7 +288,7 @@ def test_every_si_quantity_of_the_schema_has_a_plausible_range_or_a_reason():
             physical = extra.get("unit") in ("Pa", "Pa/m", "kg/m^3", "m")
             if physical and plausible_of(info) is None and (model, name) not in exempt:
                 missing.append(f"{model.__name__}.{name}")
-            for inner in _models(info.annotation):
+            for inner in schema_models(info.annotation):
                 walk(inner)
 
     walk(Scene)
