@@ -1,13 +1,13 @@
-"""What a generated block's command depends on: the repository's files it reads, and one digest of them.
+"""What a generated block's command depends on: the repository's files it reads, and a digest of each.
 
 A regeneration runs each command traced: every Python process the command starts loads ``docs/trace/sitecustomize.py``
 (that folder comes first on its ``PYTHONPATH``), whose audit hook lists each file the process opens under the
 repository's root.  The files it read and did not write (a module read from its cached byte code counts as its
-source), less the pages themselves and what git ignores (run stores), are the block's inputs; they and one digest of
-their contents are kept in ``docs/inputs.json``.  Python source is digested as its syntax tree, so a comment or a
+source), less the pages themselves and what git ignores (run stores), are the block's inputs; each one's digest is
+kept in ``docs/inputs.json``.  Python source is digested as its syntax tree, so a comment or a
 re-wrapped line changes nothing, while any change of code or data does.
 
-The digest check (``./dev docs --check``, CI's first step) recomputes every block's digest from its files: a block
+The digest check (``./dev docs --check``, CI's first step) recomputes the digests of every block's files: a block
 whose inputs changed since it was generated fails, so the change that could move a block's result fails its own CI,
 whatever the day.  ``./dev docs --stale`` regenerates those blocks and nothing else.
 """
@@ -80,7 +80,7 @@ def digest(files: list[str], root: Path) -> str:
 
 
 def load(path: Path) -> dict[str, dict]:
-    """The recorded inputs, by block key: ``{"digest": ..., "files": [...]}``."""
+    """The recorded inputs, by block key: ``{"digests": {file: digest}}``."""
     return json.loads(path.read_text()) if path.exists() else {}
 
 
@@ -89,17 +89,10 @@ def save(path: Path, records: dict[str, dict]) -> None:
 
 
 def changed(record: dict, root: Path) -> list[str]:
-    """The files of a block's record whose contents moved its digest (all of them listed if the digest moved but no
-    single file can be named), or an empty list when the digest holds."""
-    files = record["files"]
-    if digest(files, root) == record["digest"]:
-        return []
-    named = [
-        name for name in files if name in record.get("digests", {}) and digest([name], root) != record["digests"][name]
-    ]
-    return named or files
+    """The files of a block's record whose contents changed since it was made (empty: its inputs hold)."""
+    return [name for name, recorded in record["digests"].items() if digest([name], root) != recorded]
 
 
 def record(files: list[str], root: Path) -> dict:
-    """A block's record: its files, their joint digest and each one's own (to name what changed)."""
-    return {"digest": digest(files, root), "files": files, "digests": {name: digest([name], root) for name in files}}
+    """A block's record: the digest of each file it read, by name."""
+    return {"digests": {name: digest([name], root) for name in files}}
