@@ -60,7 +60,10 @@ class Event:
 class SpeedBelow(Event):
     """The speed falls below ``threshold`` (m/s), or a step carries the velocity through zero and out again.
 
-    Inside the step the event is located on the velocity along its direction at the step's start.  No step
+    Through zero means the velocity reverses (``before . after <= 0``) and the straight line between its values at
+    the step's ends passes within ``threshold`` of zero: a step that only turns the velocity by more than 90 degrees
+    at speed is no stop.  Inside the step the event is located on the velocity along its direction at the step's
+    start.  No step
     reaches past the stop: :meth:`step_limit` is the time the deceleration at its start takes to bring the speed to
     half the threshold (why: docs/numerics.md, "The end of a run").
     """
@@ -72,7 +75,16 @@ class SpeedBelow(Event):
         object.__setattr__(self, "threshold", threshold)
 
     def fired(self, before: State, after: State, g_before: float, g_after: float) -> bool:
-        return g_before > 0.0 and (g_after <= 0.0 or float(before.velocity @ after.velocity) <= 0.0)
+        if not g_before > 0.0:
+            return False
+        if g_after <= 0.0:
+            return True
+        start, change = before.velocity, after.velocity - before.velocity
+        if float(start @ after.velocity) > 0.0:
+            return False
+        # the closest approach to zero of the straight line from the step's first velocity to its last
+        share = min(1.0, max(0.0, -float(start @ change) / float(change @ change)))
+        return float(np.linalg.norm(start + share * change)) <= self.threshold
 
     def locator(self, before: State) -> Callable[[State], float]:
         heading = before.velocity / before.speed

@@ -352,14 +352,25 @@ def body_frame(mesh: ProjectileMesh) -> tuple[ProjectileMesh, float]:
 def outline(mesh: ProjectileMesh) -> BodyOutline:
     """Length, diameter and nose length of a body-frame mesh (tip at the origin).
 
-    The nose ends where the outer surface first reaches 99.9 % of its largest
-    distance from the axis.
+    The diameter is twice the outer surface's largest distance from the axis.  The nose ends where that distance,
+    taken over the surface from the tip back, first reaches 99.9 % of the value it then holds over the next
+    diameter of length (at that station) or two surface edges, whichever is longer: the shoulder where the body
+    stops widening, not fins or a flare further back.
     """
-    nodes = mesh.points[np.unique(mesh.outer[:, :3])]
-    radius = np.hypot(nodes[:, 1], nodes[:, 2])
-    widest = radius.max()
+    outer = mesh.outer[:, :3]
+    nodes = mesh.points[np.unique(outer)]
+    behind = -nodes[:, 0]
+    order = np.argsort(behind, kind="stable")
+    behind = behind[order]
+    widest_so_far = np.maximum.accumulate(np.hypot(nodes[order, 1], nodes[order, 2]))
+    corners = mesh.points[outer]
+    edge = float(np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2).max())
+    reach = np.maximum(2.0 * widest_so_far, 2.0 * edge)
+    # the widest radius within the reach behind each node, and the first node already within 0.1 % of it
+    ahead = widest_so_far[np.searchsorted(behind, behind + reach, side="right") - 1]
+    shoulder = int(np.argmax(widest_so_far >= 0.999 * ahead))
     return BodyOutline(
-        length=float(-nodes[:, 0].min()),
-        diameter=float(2.0 * widest),
-        nose_length=float(-nodes[radius >= 0.999 * widest, 0].max()),
+        length=float(behind[-1]),
+        diameter=float(2.0 * widest_so_far[-1]),
+        nose_length=float(behind[shoulder]),
     )

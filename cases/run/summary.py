@@ -19,7 +19,17 @@ from dynamics.quaternion import rotation_matrix
 from ..scene import Numerics, Scene
 from .history import ATTACK_ANGLE_SPEED_FRACTION, HISTORY_UNITS, attack_angle_peak, history_columns, history_csv
 from .persistence import atomic_write, atomic_write_text, json_safe
-from .runner import COARSE_ERROR, COARSE_TURN, EXITED, PERFORATED, RICOCHETED, STOPPED, RunResult, run_scene
+from .runner import (
+    COARSE_ERROR,
+    COARSE_TURN,
+    EXITED,
+    PERFORATED,
+    RICOCHETED,
+    STOPPED,
+    WARN_SHARE,
+    RunResult,
+    run_scene,
+)
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -37,8 +47,6 @@ __all__ = [
     "WARN_SHARE",
 ]
 
-# a share of steps above which retaken or forced steps mean the numerics do not suit the scene
-WARN_SHARE = 0.1
 # a Dormand-Prince tolerance above this is warned of: the integration error alone can reach per cents
 LOOSE_RTOL = 1e-3
 MAX_STORED_HISTORY_ROWS = 4000  # histories in a run store are thinned to about this many rows

@@ -7,11 +7,11 @@ Each drawn scene is run twice: with the drawn numerics, and with Dormand-Prince 
 stop time, or carry a warning that says why it may not; no fixed-step run may end by the time limit without a
 warning.  In three dimensions the run's end must also agree with its trajectory, a body that leaves by the front
 face must keep more than ``numerics.slow_fraction`` of its speed or move nose first (a body that hooks round in soil
-and climbs out, slowly), and the kinetic energy must never rise.  One known failure of these (a stop after a step
-that turned the velocity, in a run warned of its step) is passed by the property with a hypothesis event and held
-by a strict xfail test, as are two runs found silent about their error.  The draws are derandomised (the same
-every run) and few in the default suite; the slow variants draw more; ``PENETRATE_FUZZ_SCALE=N`` multiplies both
-and draws new ones (docs/numerics.md, "The end of a run").
+and climbs out, slowly), and the kinetic energy must never rise.  Three draws that once failed (a stop after a step
+that turned the velocity; a finned body's nose measured to its fins; a run of five coarse steps judged by a check
+that erred as it did) are kept as tests of their own.  The draws are derandomised (the same every run) and few in
+the default suite; the slow variants draw more; ``PENETRATE_FUZZ_SCALE=N`` multiplies both and draws new ones
+(docs/numerics.md, "The end of a run").
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ import os
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, event, given, settings
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from cases import run_scene, scene_path, summarise
@@ -243,17 +243,6 @@ def kinetic_energies(result: RunResult) -> np.ndarray:
     return 0.5 * mass.mass * np.sum(trajectory.velocity**2, axis=1) + 0.5 * rotational
 
 
-#: a diagnosed defect of the stop rule, held by test_a_step_that_turns_the_velocity_is_no_stop (strict xfail)
-KNOWN_STOP_WHILE_MOVING = (
-    "a fixed step that the run warns does not resolve the entry (it carries the body further than its nose) can"
-    " turn the velocity by more than 90 deg; the stop event takes that as the velocity passing through zero"
-    " (SpeedBelow.fired: before . after <= 0) and locates the stop where the velocity along the step's first"
-    " heading falls to the stop speed, so the run ends 'stopped' while the body still moves (at 14-15 % of its"
-    " impact speed in the draws that found it); the step limit that keeps a step short of the stop sees no"
-    " deceleration at the step's start, where the body only touches the target"
-)
-
-
 #: what the broaching shot shows (test_a_body_that_hooks_round_climbs_out_nose_first)
 SLOW_BROACH = (
     "a body that hooks round in a weak target and climbs back out nose first leaves slower than slow_fraction of"
@@ -272,12 +261,10 @@ def unresolved_entry(result: RunResult) -> bool:
     return numerics.integrator == "rk4" and travel > result.prepared.nose_length
 
 
-def check_trajectory(result: RunResult, summary: RunSummary, why: tuple, known: bool = True) -> None:
+def check_trajectory(result: RunResult, summary: RunSummary, why: tuple) -> None:
     """The end reason agrees with the last state; a body that leaves keeps more than the slow fraction of its
     speed; the kinetic energy never rises from one recorded state to the next (no gravity, separation on: the
-    loads only dissipate, and the energy guard removes any gain).  ``known``: pass a run that shows one of the
-    known failure (:data:`KNOWN_STOP_WHILE_MOVING`) with a hypothesis event instead of
-    failing it, a strict xfail test holds each."""
+    loads only dissipate, and the energy guard removes any gain)."""
     scene, trajectory = result.scene, result.trajectory
     impact_speed = scene.impact.speed
     loads = scene.loads(result.prepared.quadrature)
@@ -318,10 +305,7 @@ def check_trajectory(result: RunResult, summary: RunSummary, why: tuple, known: 
             along = float(last.velocity @ (before.velocity / before.speed))
             advance = advance_speed(last)  # along the axis, as the event computes it
             stopped = (along <= floor or advance <= 0.0) and speed <= slow
-            if known and not stopped and unresolved_entry(result):
-                event(f"known: {KNOWN_STOP_WHILE_MOVING}")  # test_a_step_that_turns_the_velocity_is_no_stop
-            else:
-                assert stopped, ("stopped while moving", speed, along, advance, floor, slow, *why)
+            assert stopped, ("stopped while moving", speed, along, advance, floor, slow, *why)
     elif end in (*LEAVING, "perforated"):
         face = rear if end == "perforated" else None
         dt = 1e-7 * length / max(speed, 1e-300)
@@ -390,8 +374,8 @@ def test_oblique_runs_end_as_their_trajectory_says_near_the_converged_run_many(d
 
 
 #: found by the slow property: an oblique shot into strong layers at one RK4 step of a tenth of the converged run's
-#: 7.8 ms; the step reverses the velocity, and the run ends 'stopped' at 87 m/s of its 573 m/s, moving into the
-#: target at 83 m/s
+#: 7.8 ms; the step turns the velocity by more than 90 deg at speed, which the stop event once took for a pass
+#: through zero: the run ended 'stopped' at 87 m/s of its 573 m/s, moving into the target at 83 m/s
 TURNED_IN_ONE_STEP = {
     "body": "ogive CRH 3, L/D 8",
     "target": {
@@ -412,19 +396,16 @@ TURNED_IN_ONE_STEP = {
 }
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=KNOWN_STOP_WHILE_MOVING)
 def test_a_step_that_turns_the_velocity_is_no_stop():
-    """The draw of the slow property that found the defect: 'stopped' after one step, still at 15 % of the impact
-    speed, neither below the stop speed nor moving backwards along its axis.  The run warns that its step does not
-    resolve the entry; the property passes such runs with a hypothesis event ('known: ...'), this test holds the
-    assertion."""
+    """The draw that found it: a step of a run warned that its step does not resolve the entry turns the velocity
+    by more than 90 deg while the body keeps 15 % of its impact speed.  A stop needs the velocity to pass within the
+    stop speed of zero (SpeedBelow), so the run goes on, and its end agrees with its trajectory."""
     data = oblique_scene_data(TURNED_IN_ONE_STEP)
     data["numerics"].update({"integrator": "rk4", "time_step": 7.845263113485082e-04})  # the draw's step
     result = run_scene(scene_from_dict(data))
     summary = summarise(result)
-    if not (summary.end_reason == "stopped" and unresolved_entry(result) and summary.warnings):
-        pytest.fail(f"the draw no longer shows the defect's conditions: {summary}")  # not an expected failure
-    check_trajectory(result, summary, (TURNED_IN_ONE_STEP, summary), known=False)
+    assert unresolved_entry(result) and summary.warnings, summary  # the draw's conditions
+    check_trajectory(result, summary, (TURNED_IN_ONE_STEP, summary))
 
 
 #: found by the slow property at PENETRATE_FUZZ_SCALE (random draws): a 30 mm CRH 3 ogive of 8 calibres into 1 MPa
@@ -446,7 +427,7 @@ def test_a_body_that_hooks_round_climbs_out_nose_first():
     reference, converged = oblique_reference(_reference_key(BROACHING))
     assert converged.end_reason == "exited" and converged.exit_attack_angle < 1.0, converged
     assert converged.final_speed < 0.1 * BROACHING["speed"], converged
-    check_trajectory(reference, converged, (BROACHING, converged), known=False)
+    check_trajectory(reference, converged, (BROACHING, converged))
 
 
 #: found by the slow property at PENETRATE_FUZZ_SCALE: the finned test 2 body grazing 1 MPa soil at 79.7 deg with its
@@ -463,20 +444,12 @@ FINNED_GRAZING = {
     "yaw_angle": 0.0,
     "rates": (-0.02681486383010065, 0.0, -0.03160007613415017),
 }
-KNOWN_FINNED_NOSE = (
-    "a file's body measures its nose to where it first reaches its largest radius (PreparedProjectile.nose_length),"
-    " which for the finned body is the fins' leading edge, 1.25 m behind the tip, not the ogive's 0.158 m; so the"
-    " warning of a fixed step that carries the body further than its nose (summary.entry_warnings) stays silent"
-    " up to steps 7.9 times too long: at 1.11 ms (0.42 m a step, 10 steps) the grazing shot ricochets with a tip"
-    " depth of 1.70 mm against the converged 4.32 mm, and no warning (its twice-the-step check moves the path by"
-    " 0.84 % and the axis by 0.1 deg, inside their limits)"
-)
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=KNOWN_FINNED_NOSE)
 def test_a_finned_body_is_warned_of_a_step_longer_than_its_nose():
-    """The grazing shot at RK4 steps of 1.11 ms against the same at 0.11 ms (within 0.06 % of the depth at
-    Dormand-Prince rtol 1e-9): within 2 % of its depth, or warned."""
+    """The grazing shot at RK4 steps of 1.11 ms (0.42 m a step) ricochets with a tip depth of 1.70 mm against 4.32 mm
+    at 0.11 ms: it is warned that its step carries the body further than its nose, the ogive's 0.158 m (a file's
+    body once measured its nose to its widest point, the fins' leading edge 1.25 m back, and stayed silent)."""
 
     def run(time_step: float) -> RunSummary:
         data = oblique_scene_data(FINNED_GRAZING)
@@ -484,9 +457,9 @@ def test_a_finned_body_is_warned_of_a_step_longer_than_its_nose():
         return summarise(run_scene(scene_from_dict(data)))
 
     coarse, fine = run(1.1099e-3), run(1.1e-4)
-    if not (coarse.end_reason == fine.end_reason == "ricocheted" and not fine.warnings):
-        pytest.fail(f"the shot no longer ricochets at both steps: {coarse}, {fine}")  # not the expected failure
-    assert abs(coarse.depth - fine.depth) <= 0.02 * fine.depth or coarse.warnings, (coarse, fine)
+    assert coarse.end_reason == fine.end_reason == "ricocheted" and not fine.warnings, (coarse, fine)
+    assert abs(coarse.depth - fine.depth) > 0.02 * fine.depth, (coarse, fine)  # the error the warning is for
+    assert any("more than its nose (0.158 m)" in line for line in coarse.warnings), coarse.warnings
 
 
 #: found by the slow property at PENETRATE_FUZZ_SCALE: the finned test 2 body into a strong target (6.1e8 Pa) at
@@ -501,23 +474,16 @@ FINNED_REBOUND = {
     "yaw_angle": 0.0,
     "rates": (0.04193674755361246, 0.03812859731875899, 0.04489903230753696),
 }
-KNOWN_FEW_STEPS = (
-    "five RK4 steps of 0.5 ms (0.081 m a step, half the ogive nose) end 'stopped' 4.1 % deeper than the converged"
-    " run (0.1452 against 0.1395 m) with no warning: the check of a run of fewer than 1000 fixed steps integrates it"
-    " again at twice its step and finds the path moved by 0.44 % and the axis by 0.3 deg, inside their limits (1 %,"
-    " 0.5 deg), but that run's energy guard retook 4 of its 4 steps, and it ends 3.0 % deep itself: both err the"
-    " same way (at 0.25 ms the depth is 1.6 % deep, at 0.1 ms 0.9 %)"
-)
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=KNOWN_FEW_STEPS)
 def test_a_run_of_a_few_coarse_steps_ends_near_the_converged_run_or_warns():
-    """The rebounding shot at RK4 steps of 0.5 ms (0.365 of the converged end time): within 2 % of the converged
-    depth, or warned."""
+    """The rebounding shot at five RK4 steps of 0.5 ms ends 4.1 % deeper than the converged run, and is warned.  Its
+    run at twice the step moves the path by only 0.44 %, but that run's energy guard retook all its steps and errs
+    as this one does, so the check goes on to half the step (1.6 % deep) and warns."""
     _, converged = oblique_reference(_reference_key(FINNED_REBOUND))
     data = oblique_scene_data(FINNED_REBOUND)
     data["numerics"].update({"integrator": "rk4", "time_step": 4.9937e-4})
     summary = summarise(run_scene(scene_from_dict(data)))
-    if not (summary.end_reason == converged.end_reason == "stopped" and not converged.warnings):
-        pytest.fail(f"the shot no longer stops at both steps: {summary}, {converged}")  # not the expected failure
-    assert abs(summary.depth - converged.depth) <= 0.02 * converged.depth or summary.warnings, (summary, converged)
+    assert summary.end_reason == converged.end_reason == "stopped" and not converged.warnings, (summary, converged)
+    assert abs(summary.depth - converged.depth) > 0.02 * converged.depth, (summary, converged)
+    assert any("fixed steps, and the same run at half numerics.time_step" in line for line in summary.warnings), summary

@@ -305,3 +305,13 @@ def test_a_body_drawn_about_its_axis_keeps_the_files_line():
     assert _placed(rod + [0.3, 1e-4, -1e-4], None).origin == (0.0, 0.0, 0.0)
     off = _placed(rod + [0.3, 0.0, 1e-2], None)
     assert off.origin == pytest.approx((0.0, 0.0, 1e-2), abs=1e-12)
+
+
+def test_a_finned_body_measures_its_nose_to_the_shoulder_not_the_fins():
+    """The shipped finned body (test 2's CRH 3 ogive of 95.2 mm with four tail fins from 1.25 m): its nose is the
+    tangent ogive's, ``d sqrt(CRH - 1/4)``, and its diameter the fins' span; the widest point is 1.25 m back."""
+    step = Path(__file__).resolve().parents[2] / "cases" / "bodies" / "finned_test2.step"
+    mesh, _, _ = body(step, "mm", size=0.032)
+    sizes = outline(mesh)
+    assert sizes.nose_length == pytest.approx(0.0952 * math.sqrt(3.0 - 0.25), rel=0.02)
+    assert sizes.length == pytest.approx(1.4, rel=1e-9) and sizes.diameter > 1.5 * 0.0952
