@@ -23,13 +23,15 @@ from .compiled_point import (
     Motion,
     exposure_correction,
     image_friction,
+    layered_point_stress,
+    plain_layer_stresses,
     plain_stress,
     point_law_stress,
     point_motion,
     setup,
 )
 from .kernel_layout import KERNEL_ARRAYS, kernel_data
-from .native import face_frame
+from .native import face_frame, point_stress
 
 __all__ = ["dafl_kernel", "lowest_height_kernel", "kernel_data", "KERNEL_ARRAYS"]
 
@@ -47,12 +49,13 @@ def _sums(
     friction: np.ndarray,
     plain: bool,
     with_friction: bool,
+    layered: bool,
 ) -> None:
     """Each image's ``sum sigma w [n | r x n]`` into ``sums``; the friction's force and moment (body frame) into
-    ``friction``.  ``plain`` and ``with_friction`` (:func:`~fem_loads.compiled_point.setup`) are constants in each
-    of the three functions that inline this one, each a loop of its own without the others' branches: the plain
-    law with its SIMD lanes (no calls, and no branches that differ from point to point), with friction and the
-    free surface or not, and every other law."""
+    ``friction``.  ``plain``, ``with_friction`` (:func:`~fem_loads.compiled_point.setup`) and ``layered`` are
+    constants in each of the four functions that inline this one, each a loop of its own without the others'
+    branches: the plain law with its SIMD lanes (no calls, and no branches that differ from point to point), with
+    friction and the free surface or not; any other one law; and layers."""
     s, (points, normal_arm, point_signs, weights, inverse_entry, depths, stresses) = setup(
         data, motion, plain, with_friction
     )
@@ -60,19 +63,27 @@ def _sums(
     with_height, rule, polynomial, switches = s.with_height, s.friction, s.polynomial, s.switches
     vt, wt = (v[0], v[1], v[2]), (w[0], w[1], w[2])
     mu = rule[0]
+    layer_stresses = np.empty(weights.shape[0] if plain and layered else 0)
+    reach = data[layout.DATA_EFFECTS][0].reach
     for k in range(sums.shape[0]):
         gk = (g[k, 0], g[k, 1], g[k, 2], g[k, 3], g[k, 4], g[k, 5])
         upk = (up[k, 0], up[k, 1], up[k, 2])
         sy, sz = point_signs[k, 1], point_signs[k, 2]
+        if plain and layered:
+            plain_layer_stresses(data, normal_arm, points, inverse_entry, gk, upk, height, reach, layer_stresses)
         a0 = a1 = a2 = a3 = a4 = a5 = 0.0
         f0 = f1 = f2 = f3 = f4 = f5 = 0.0
         for j in range(weights.shape[0]):
             n, r, normal_velocity, z = point_motion(normal_arm, points, j, gk, upk, height, with_height)
             weight, inverse = weights[j], inverse_entry[j]
-            if plain:
+            if plain and layered:
+                stress = point_stress(layer_stresses[j], normal_velocity, -z, z, inverse, switches) * weight
+            elif plain:
                 stress = plain_stress(polynomial, switches, weight, inverse, normal_velocity, z)
+            elif layered:
+                stress = layered_point_stress(data, s, weight, inverse, normal_velocity, z)
             else:
-                stress = point_law_stress(data, s, depths, stresses, weight, inverse, normal_velocity, z)
+                stress = point_law_stress(s, depths, stresses, weight, inverse, normal_velocity, z)
             a0 += stress * n[0]
             a1 += stress * n[1]
             a2 += stress * n[2]
@@ -94,20 +105,33 @@ def _sums(
 @njit(cache=True, error_model="numpy", fastmath=_FAST)
 def _plain_sums(data: tuple[np.ndarray, ...], motion: Motion, sums: np.ndarray, friction: np.ndarray) -> None:
     """:func:`_sums` of the plain law without friction or free surface (the shipped scenes' load)."""
-    _sums(data, motion, sums, friction, True, False)
+    _sums(data, motion, sums, friction, True, False, False)
 
 
 @njit(cache=True, error_model="numpy", fastmath=_FAST)
 def _plain_friction_sums(data: tuple[np.ndarray, ...], motion: Motion, sums: np.ndarray, friction: np.ndarray) -> None:
     """:func:`_sums` of the plain law with friction or a free surface (a coefficient of 0 leaves no friction; without
     a free surface its factor is exactly 1)."""
-    _sums(data, motion, sums, friction, True, True)
+    _sums(data, motion, sums, friction, True, True, False)
 
 
 @njit(cache=True, error_model="numpy", fastmath=_FAST)
-def _general_sums(data: tuple[np.ndarray, ...], motion: Motion, sums: np.ndarray, friction: np.ndarray) -> None:
-    """:func:`_sums` of every other law and switch."""
-    _sums(data, motion, sums, friction, False, True)
+def _plain_layers_sums(data: tuple[np.ndarray, ...], motion: Motion, sums: np.ndarray, friction: np.ndarray) -> None:
+    """:func:`_sums` of layers of plain laws (a slab of concrete, soil over concrete), friction and free surface
+    included: the layers' blend in a pass of its own per layer, the rest as the plain loop."""
+    _sums(data, motion, sums, friction, True, True, True)
+
+
+@njit(cache=True, error_model="numpy", fastmath=_FAST)
+def _law_sums(data: tuple[np.ndarray, ...], motion: Motion, sums: np.ndarray, friction: np.ndarray) -> None:
+    """:func:`_sums` of every other law and switch, on a target of one law."""
+    _sums(data, motion, sums, friction, False, True, False)
+
+
+@njit(cache=True, error_model="numpy", fastmath=_FAST)
+def _layered_sums(data: tuple[np.ndarray, ...], motion: Motion, sums: np.ndarray, friction: np.ndarray) -> None:
+    """:func:`_sums` of layers (a slab is one layer over the space behind it)."""
+    _sums(data, motion, sums, friction, False, True, True)
 
 
 @njit(cache=True, error_model="numpy")
@@ -152,12 +176,16 @@ def dafl_kernel(
     motion = Motion(g, up, v, angular_velocity, height, width, effects.guard * speed_scale, embedded)
     sums = np.zeros((images, 6))
     friction = np.zeros(6)
-    if effects.plain and (effects.friction > 0.0 or effects.surface_depth > 0.0):
+    if effects.plain and data[layout.DATA_INTERFACES].shape[0] > 0:
+        _plain_layers_sums(data, motion, sums, friction)
+    elif effects.plain and (effects.friction > 0.0 or effects.surface_depth > 0.0):
         _plain_friction_sums(data, motion, sums, friction)
     elif effects.plain:
         _plain_sums(data, motion, sums, friction)
+    elif data[layout.DATA_INTERFACES].shape[0] == 0:
+        _law_sums(data, motion, sums, friction)
     else:
-        _general_sums(data, motion, sums, friction)
+        _layered_sums(data, motion, sums, friction)
     if data[layout.DATA_EXPOSURE_COLUMNS].shape[0] > 0:
         exposure_correction(data, motion, effects.plain, sums, friction)
     body = np.empty(6)

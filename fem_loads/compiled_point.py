@@ -8,7 +8,7 @@ and the correction of the hidden ones compute each point's stress with the same 
 from __future__ import annotations
 
 import math
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -20,7 +20,10 @@ from .native import (
     cube_cell,
     entry_factor,
     friction_stress,
+    in_contact,
     law_stress,
+    law_value,
+    law_values,
     point_stress,
     polynomial_stress,
     slip_factor,
@@ -33,7 +36,9 @@ __all__ = [
     "setup",
     "point_motion",
     "plain_stress",
+    "plain_layer_stresses",
     "point_law_stress",
+    "layered_point_stress",
     "image_friction",
     "exposure_correction",
 ]
@@ -58,9 +63,9 @@ class Setup(NamedTuple):
 
     with_height: bool  #: the stress needs each point's height (a depth-dependent law, the free surface, entering)
     friction: tuple[float, float, float, float]  #: ``(mu, cap, W, |v|^2)`` for :func:`image_friction`
-    layered: bool
     address: int  #: the user law's cfunc (0: the built-in law)
-    law: Any  #: the first layer's :data:`~fem_loads.law_record.LAW` record
+    coefficients: tuple[float, float, float, float, float, float]  #: the first layer's law (:func:`law_values`)
+    parameters: tuple[float, float, float, float, float, float, float, float]  #: and its user law's parameters
     polynomial: tuple[float, float, float, float]  #: its ``(c0, k, c1, c2)``, the plain law's
     switches: Switches
 
@@ -81,13 +86,14 @@ def setup(
     effects, law = data[layout.DATA_EFFECTS][0], data[layout.DATA_LAWS][0]
     first, count, width = law.table_first, law.table_count, motion.width
     v = motion.v
+    coefficients, parameters = law_values(law)
     shared = Setup(
         effects.needs_depth or effects.surface_depth > 0.0 or not motion.embedded,
         (effects.friction, effects.friction_cap, width, v[0] * v[0] + v[1] * v[1] + v[2] * v[2]),
-        data[layout.DATA_INTERFACES].shape[0] > 0,
         effects.user_law,
-        law,
-        (law.c0, law.k, law.c1, law.c2),
+        coefficients,
+        parameters,
+        (coefficients[0], coefficients[1], coefficients[2], coefficients[3]),
         switches(effects, width, motion.guard, not motion.embedded, plain, with_friction),
     )
     arrays = (
@@ -153,6 +159,39 @@ def layered_stress(
 
 
 @njit(cache=True, inline="always", error_model="numpy")
+def plain_layer_stresses(
+    data: tuple[np.ndarray, ...],
+    normal_arm: np.ndarray,
+    points: np.ndarray,
+    inverse_entry: np.ndarray,
+    g: tuple[float, ...],
+    up: tuple[float, float, float],
+    height: float,
+    reach: float,
+    buffer: np.ndarray,
+) -> None:
+    """Each point's law stress (Pa) on layers of plain laws into ``buffer``: the layers' polynomials at
+    ``max(Vn, 0)`` blended across each interface as :func:`layered_stress` blends them, in one pass over the points
+    per layer that the body reaches (its centre's ``height`` above the front face give or take ``reach``, m), so
+    that each pass keeps the SIMD lanes of the plain loop.  An infinite interface above the first layer and below
+    the last gives their blend factors exactly 1 and 0 without a branch."""
+    interfaces, laws = data[layout.DATA_INTERFACES], data[layout.DATA_LAWS]
+    last = interfaces.shape[0]
+    shallowest, deepest = -height - reach, -height + reach
+    buffer[:] = 0.0
+    for layer in range(last + 1):
+        top = interfaces[layer - 1] if layer > 0 else -math.inf
+        bottom = interfaces[layer] if layer < last else math.inf
+        if deepest < top or shallowest > bottom:
+            continue  # every point's share of this layer is exactly zero
+        c0, k, c1, c2, _, _ = law_values(laws[layer])[0]
+        for j in range(buffer.shape[0]):
+            _, _, normal_velocity, z = point_motion(normal_arm, points, j, g, up, height, True)
+            share = entry_factor(top + z, True, inverse_entry[j]) - entry_factor(bottom + z, True, inverse_entry[j])
+            buffer[j] += share * polynomial_stress(max(normal_velocity, 0.0), -z, c0, k, c1, c2)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def plain_stress(
     polynomial: tuple[float, float, float, float],
     switches: Switches,
@@ -171,7 +210,6 @@ def plain_stress(
 
 @njit(cache=True, inline="always", error_model="numpy")
 def point_law_stress(
-    data: tuple[np.ndarray, ...],
     s: Setup,
     depths: np.ndarray,
     stresses: np.ndarray,
@@ -180,15 +218,27 @@ def point_law_stress(
     normal_velocity: float,
     z: float,
 ) -> float:
-    """:func:`plain_stress` under any law: one law with its strength table ``depths``, ``stresses``, or the layers
-    blended.  A loop calls it only where its law is not plain: its arguments (``data``, arrays) cost reference
-    counting per point that the plain loop would not keep its SIMD lanes with."""
+    """:func:`plain_stress` under any one law: the :class:`Setup`'s, with its strength table ``depths``,
+    ``stresses``.  A loop calls it only where its law is not plain: a law other than the polynomial keeps the loop
+    from its SIMD lanes."""
+    if s.switches.separation and not in_contact(normal_velocity, s.switches):
+        return 0.0  # the law unevaluated where the contact factor is zero: the separating half of the surface
     # without separation the law's odd extension to Vn < 0 (cut at 0 by the pipeline)
     law_velocity = max(normal_velocity, 0.0) if s.switches.separation else normal_velocity
-    if s.layered:
-        stress = layered_stress(data, law_velocity, -z, s.switches.smooth_entry, inverse_entry)
-    else:
-        stress = law_stress(s.law, s.address, law_velocity, -z, depths, stresses)
+    stress = law_value(s.coefficients, s.parameters, s.address, law_velocity, -z, depths, stresses)
+    return point_stress(stress, normal_velocity, -z, z, inverse_entry, s.switches) * weight
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def layered_point_stress(
+    data: tuple[np.ndarray, ...], s: Setup, weight: float, inverse_entry: float, normal_velocity: float, z: float
+) -> float:
+    """:func:`point_law_stress` of the layers blended (:func:`layered_stress`).  Only the layered loop calls it: its
+    ``data`` costs reference counting per point that the one-law loops do without."""
+    if s.switches.separation and not in_contact(normal_velocity, s.switches):
+        return 0.0
+    law_velocity = max(normal_velocity, 0.0) if s.switches.separation else normal_velocity
+    stress = layered_stress(data, law_velocity, -z, s.switches.smooth_entry, inverse_entry)
     return point_stress(stress, normal_velocity, -z, z, inverse_entry, s.switches) * weight
 
 
@@ -242,6 +292,7 @@ def exposure_correction(
     if v[0] == 0.0 and v[1] == 0.0 and v[2] == 0.0:
         return  # no direction of motion, no shadow
     resolution = round(math.sqrt((start.shape[0] - 1) / 6.0))  # 6 N^2 cells
+    layered = data[layout.DATA_INTERFACES].shape[0] > 0
     s, (points, normal_arm, point_signs, weights, inverse_entry, depths, stresses) = setup(data, motion, plain, True)
     switches = s.switches
     vt, wt = (v[0], v[1], v[2]), (w[0], w[1], w[2])
@@ -266,10 +317,12 @@ def exposure_correction(
             ):
                 continue  # below the contact ramp (or where it is below 1e-14), or the sharp switch: nothing to hide
             weight, inverse = weights[p], inverse_entry[p]
-            if plain:
+            if plain and not layered:
                 stress = plain_stress(s.polynomial, s.switches, weight, inverse, normal_velocity, z)
+            elif layered:
+                stress = layered_point_stress(data, s, weight, inverse, normal_velocity, z)
             else:
-                stress = point_law_stress(data, s, depths, stresses, weight, inverse, normal_velocity, z)
+                stress = point_law_stress(s, depths, stresses, weight, inverse, normal_velocity, z)
             if stress == 0.0:
                 continue
             change = (exposure - 1.0) * stress

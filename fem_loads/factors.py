@@ -127,6 +127,16 @@ def point_stress_scalars(
     return stress
 
 
+def in_contact_scalars(normal_velocity: float, switches: Switches) -> bool:
+    """Whether a point at ``Vn`` (m/s) has a nonzero contact factor (:func:`contact_factor_scalars`; with
+    separation): above the smooth ramp's foot, or above the sharp switch's threshold.  A point's law need not be
+    evaluated where it has not."""
+    s = switches
+    if s.smooth_contact:
+        return normal_velocity * s.inverse_width + s.contact_offset > 0.0
+    return normal_velocity > s.threshold
+
+
 def contact_factor_scalars(
     normal_velocity: Any, smooth: bool, inverse_width: float, offset: float, threshold: float
 ) -> Any:

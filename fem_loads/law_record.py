@@ -4,7 +4,8 @@
 law's parameters, where its strength table lies) and :data:`EFFECTS` (the ramps, friction, free surface, front face
 and what the mesh kernel derives from them once) are numpy structured arrays that numba reads by field name.
 :func:`pack_laws` and :func:`pack_effects` build them, for the mesh kernel and the rings alike (the numpy load reads
-the effects record too); :func:`compilable` is the one rule of which targets the compiled kernels take.
+the effects record too); :func:`compilable` is the one rule of which targets the compiled kernels take, and
+:func:`in_lanes` of which loads they compute in SIMD lanes.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from .resistance import ResistanceLaw
 from .target import LayeredTarget
 from .user_law import MAX_PARAMETERS, UserLaw
 
-__all__ = ["LAW", "EFFECTS", "COEFFICIENTS", "pack_laws", "pack_effects", "compilable"]
+__all__ = ["LAW", "EFFECTS", "COEFFICIENTS", "pack_laws", "pack_effects", "compilable", "in_lanes"]
 
 #: the built-in law's coefficients in the record, in the order ResistanceLaw.coefficients gives them
 COEFFICIENTS = ("c0", "k", "c1", "c2", "c", "n")
@@ -58,7 +59,7 @@ EFFECTS = np.dtype(
         ("max_radius", "f8"),  # m: the farthest point from the centre of mass
         ("reach", "f8"),  # m: max_radius widened by half the longest entry length (DAFLLoads.reach)
         ("needs_depth", "b1"),  # the stress depends on each point's depth (beyond entering)
-        ("plain", "b1"),  # a polynomial law with both smooth ramps and separation: the SIMD loop
+        ("plain", "b1"),  # polynomial laws (one, or each layer's) with both smooth ramps and separation: SIMD loops
         ("face_normal", "f8", (3,)),  # n: the front face n . X = d (world frame; target.FrontFace)
         ("face_offset", "f8"),  # d (m)
     ]
@@ -67,6 +68,19 @@ EFFECTS = np.dtype(
 
 def _laws(law: ResistanceLaw | UserLaw | LayeredTarget) -> tuple[ResistanceLaw | UserLaw, ...]:
     return law.laws if isinstance(law, LayeredTarget) else (law,)
+
+
+def in_lanes(
+    law: ResistanceLaw | UserLaw | LayeredTarget, separation: bool, smooth_contact: bool, smooth_entry: bool
+) -> bool:
+    """Whether the compiled kernel computes this load in SIMD lanes (its plain loops, the effects record's
+    ``plain``): built-in polynomial laws, one or each layer's, depth terms included (no power term, no strength
+    table), with separation and both smooth ramps, the contact's and the entry's.  It computes any other load point
+    by point, slower than the numpy path (docs/performance.md)."""
+    polynomial = all(
+        isinstance(each, ResistanceLaw) and each.c == 0.0 and not each.strength_table for each in _laws(law)
+    )
+    return polynomial and separation and smooth_contact and smooth_entry
 
 
 def compilable(law: ResistanceLaw | UserLaw | LayeredTarget) -> bool:
@@ -135,12 +149,7 @@ def pack_effects(
         "max_radius": max_radius,
         "reach": max_radius + 0.5 * entry_length,
         "needs_depth": bool(law.depth_dependent),
-        "plain": isinstance(law, ResistanceLaw)
-        and law.c == 0.0
-        and not law.strength_table
-        and loads.separation
-        and smooth_contact
-        and entry_length > 0.0,
+        "plain": in_lanes(law, loads.separation, smooth_contact, entry_length > 0.0),
         "face_normal": face.normal,
         "face_offset": face.offset,
     }

@@ -18,14 +18,22 @@ from numba.extending import intrinsic, overload, register_jitable
 
 from . import factors
 from .exposure import cell_exposure_scalars, corner_exposure, cube_cell_scalars, fine_exposure
-from .factors import add_term, entry_factor_scalars, friction_stress_scalars, point_stress_scalars, switches_scalars
-from .resistance import normal_stress_scalars, polynomial_stress_scalars
+from .factors import (
+    add_term,
+    entry_factor_scalars,
+    friction_stress_scalars,
+    in_contact_scalars,
+    point_stress_scalars,
+    switches_scalars,
+)
+from .resistance import normal_stress_scalars, polynomial_stress_scalars, table_stress_scalars
 from .target import face_frame_scalars, face_height_scalars, slip_factor_scalars
 from .user_law import MAX_PARAMETERS
 
 __all__ = [
     "call_user_law",
     "slip_factor",
+    "in_contact",
     "builtin_stress",
     "polynomial_stress",
     "entry_factor",
@@ -36,6 +44,8 @@ __all__ = [
     "cube_cell",
     "cell_exposure",
     "law_stress",
+    "law_value",
+    "law_values",
 ]
 
 
@@ -44,6 +54,26 @@ def _clip_float(a, a_min, a_max):  # type: ignore[no-untyped-def]  # numba match
     """``np.clip`` on a float, which numba compiles only for arrays."""
     float_clip = lambda a, a_min, a_max: np.minimum(np.maximum(a, a_min), a_max)  # noqa: E731
     return float_clip if isinstance(a, types.Float) else None
+
+
+@overload(table_stress_scalars, inline="always")
+def _table_stress_at_a_point(depth, table_depths, table_stresses):  # type: ignore[no-untyped-def]
+    """:func:`~fem_loads.resistance.table_stress_scalars` at one depth as ``np.interp`` computes it, without the
+    arrays numba's ``np.interp`` builds for a single value (an allocation per point)."""
+    if not isinstance(depth, types.Float):
+        return lambda depth, table_depths, table_stresses: np.interp(depth, table_depths, table_stresses)
+
+    def at_a_point(depth, table_depths, table_stresses):  # type: ignore[no-untyped-def]
+        last = table_depths.shape[0] - 1
+        if depth <= table_depths[0]:
+            return table_stresses[0]
+        if depth >= table_depths[last]:
+            return table_stresses[last]
+        j = np.searchsorted(table_depths, depth, side="right") - 1  # table_depths[j] <= depth < table_depths[j + 1]
+        slope = (table_stresses[j + 1] - table_stresses[j]) / (table_depths[j + 1] - table_depths[j])
+        return slope * (depth - table_depths[j]) + table_stresses[j]
+
+    return at_a_point
 
 
 @overload(add_term, inline="always")
@@ -62,6 +92,7 @@ switches = njit(inline="always", error_model="numpy")(switches_scalars)
 entry_factor = njit(inline="always", error_model="numpy")(entry_factor_scalars)
 friction_stress = njit(inline="always", error_model="numpy")(friction_stress_scalars)
 slip_factor = njit(inline="always", error_model="numpy")(slip_factor_scalars)
+in_contact = njit(inline="always", error_model="numpy")(in_contact_scalars)
 # the centre's height as numba sees it inside the face's frame
 register_jitable(error_model="numpy")(face_height_scalars)
 face_frame = njit(inline="always", error_model="numpy")(face_frame_scalars)
@@ -109,13 +140,37 @@ call_user_law: Callable[..., float] = _call_user_law_intrinsic
 
 
 @njit(cache=True, inline="always", error_model="numpy")
+def law_values(law: Any) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """A :data:`~fem_loads.law_record.LAW` record's built-in coefficients ``(c0, k, c1, c2, c, n)`` and its user
+    law's parameters, as tuples of floats: what a loop over the points reads once, not once per point."""
+    u = law.user
+    return (law.c0, law.k, law.c1, law.c2, law.c, law.n), (u[0], u[1], u[2], u[3], u[4], u[5], u[6], u[7])
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def law_value(
+    coefficients: tuple[float, ...],
+    parameters: tuple[float, ...],
+    address: int,
+    normal_velocity: float,
+    depth: float,
+    depths: np.ndarray,
+    stresses: np.ndarray,
+) -> float:
+    """The stress (Pa) of one law at ``Vn`` (m/s) and depth (m): the user's function at ``address`` with its
+    ``parameters``, or (``address`` 0) the built-in law with its ``coefficients`` (:func:`law_values`) and the
+    strength table ``depths``, ``stresses`` (empty: none)."""
+    if address != 0:
+        u = parameters
+        return call_user_law(address, normal_velocity, depth, u[0], u[1], u[2], u[3], u[4], u[5], u[6], u[7])
+    c0, k, c1, c2, c, n = coefficients
+    return builtin_stress(normal_velocity, depth, c0, k, c1, c2, c, n, depths, stresses)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def law_stress(
     law: Any, address: int, normal_velocity: float, depth: float, depths: np.ndarray, stresses: np.ndarray
 ) -> float:
-    """The stress (Pa) of one layer's law, a :data:`~fem_loads.law_record.LAW` record, at ``Vn`` (m/s) and depth (m):
-    the user's function at ``address`` with the record's parameters, or (``address`` 0) the built-in law with its
-    coefficients and the strength table ``depths``, ``stresses`` (empty: none)."""
-    if address != 0:
-        u = law.user
-        return call_user_law(address, normal_velocity, depth, u[0], u[1], u[2], u[3], u[4], u[5], u[6], u[7])
-    return builtin_stress(normal_velocity, depth, law.c0, law.k, law.c1, law.c2, law.c, law.n, depths, stresses)
+    """:func:`law_value` of one layer's law, a :data:`~fem_loads.law_record.LAW` record."""
+    coefficients, parameters = law_values(law)
+    return law_value(coefficients, parameters, address, normal_velocity, depth, depths, stresses)

@@ -88,8 +88,14 @@ def normal_stress_scalars(
     if c != 0.0:
         stress += c * np.sign(normal_velocity) * np.abs(normal_velocity) ** n
     if table_depths.shape[0] > 0:
-        stress += np.interp(depth, table_depths, table_stresses)
+        stress += table_stress_scalars(depth, table_depths, table_stresses)
     return stress
+
+
+def table_stress_scalars(depth: Any, table_depths: np.ndarray, table_stresses: np.ndarray) -> Any:
+    """The strength table's stress (Pa) at ``depth`` (m; a float or an array): linear between its rows, the first
+    and last rows' values beyond them (``np.interp``)."""
+    return np.interp(depth, table_depths, table_stresses)
 
 
 _NO_TABLE = np.zeros(0)

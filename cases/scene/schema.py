@@ -103,7 +103,8 @@ class Numerics(Strict):
         "auto",
         description="how the steps are computed: numpy (the reference), compiled (numba: the whole Runge-Kutta"
         " step in machine code, after about 0.4 s of loading per process) or auto (compiled in"
-        " studies, whose workers load it once, numpy for a single run)",
+        " studies, whose workers load it once, where it is the faster: polynomial laws with the smooth ramps;"
+        " numpy for a single run and for any other law)",
     )
 
     def stop_speed_at(self, impact_speed: float) -> float:
@@ -193,13 +194,24 @@ class Scene(Strict):
 
         return compilable(self.target.build())
 
+    @property
+    def compiled_is_faster(self) -> bool:
+        """Whether the compiled kernel computes this scene's load in SIMD lanes (:func:`fem_loads.law_record.in_lanes`),
+        3.5-8 times faster than numpy; any other load it computes point by point, slower than numpy (a power term,
+        a strength table, a user's law: docs/performance.md)."""
+        from fem_loads.law_record import in_lanes
+
+        ramp = self.effects.contact_ramp
+        smooth_contact = ramp["contact_width"] > 0.0 or ramp["contact_incidence"] > 0.0
+        return in_lanes(self.target.build(), self.effects.separation, smooth_contact, self.numerics.entry_smoothing > 0)
+
     def with_kernel(self, many_runs: bool) -> Scene:
         """This scene with ``numerics.kernel`` resolved: ``auto`` is ``compiled`` in a process that runs
-        many scenes (a study's worker loads the compiled code once, about 0.4 s) when the scene is
-        :attr:`compilable`, else ``numpy``."""
+        many scenes (a study's worker loads the compiled code once, about 0.4 s) when the compiled kernel is the
+        faster for the scene (:attr:`compiled_is_faster`), else ``numpy``."""
         if self.numerics.kernel != "auto":
             return self
-        kernel = "compiled" if many_runs and self.compilable else "numpy"
+        kernel = "compiled" if many_runs and self.compiled_is_faster else "numpy"
         return self.model_copy(update={"numerics": self.numerics.model_copy(update={"kernel": kernel})})
 
     @model_validator(mode="after")

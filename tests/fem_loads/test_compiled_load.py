@@ -158,3 +158,16 @@ def test_kernel_computes_every_effect_as_numpy_does(quadrature, effect, sharp, d
         reference = np.concatenate(loads(*state))
         scale = max(np.abs(reference).max(), 1.0)
         np.testing.assert_allclose(_kernel_load(loads, state), reference, rtol=0, atol=1e-11 * scale)
+
+
+def test_the_compiled_strength_table_is_np_interp_at_every_depth():
+    """A point's table stress in compiled code (without numba's np.interp, which builds arrays for one value) equals
+    ``np.interp`` exactly: before the first row, on each row, between rows, and past the last."""
+    from numba import njit
+
+    from fem_loads.resistance import table_stress_scalars
+
+    at_a_point = njit(lambda depth, depths, stresses: table_stress_scalars(depth, depths, stresses))
+    depths, stresses = np.array([0.0, 0.3, 0.3 + 1e-9, 1.0, 4.0]), np.array([1e6, 5e6, -2e6, 6.5e6, 6.5e6])
+    for depth in (-1.0, 0.0, 1e-300, 0.1, 0.3, 0.3 + 5e-10, 0.7, 1.0, 2.5, 4.0, 9.0):
+        assert at_a_point(depth, depths, stresses) == np.interp(depth, depths, stresses), depth

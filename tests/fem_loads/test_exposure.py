@@ -143,12 +143,24 @@ def test_a_convex_body_has_no_table_and_loads_as_before():
         np.testing.assert_array_equal(np.concatenate(scene.loads(q)(*state)), np.concatenate(off(*state)))
 
 
+#: the compiled kernel's loops: the plain law, layers of plain laws (an interface 2 m down, which the states
+#: straddle), and any other law (a power term)
+TARGETS = {
+    "plain": {},
+    "layers": {
+        "target.layers": [{"thickness": 2.0, "law": "soil"}, {"law": {"model": "polynomial", "c0": 8e6, "c2": 1500.0}}]
+    },
+    "power": {"target.law": {"model": "power", "c0": 17.18e6, "c": 5000.0, "n": 1.9}},
+}
+
+
+@pytest.mark.parametrize("target", list(TARGETS))
 @pytest.mark.parametrize(
     "friction", [None, {"model": "coulomb", "coefficient": 0.2}, {"model": "capped", "coefficient": 0.3, "cap": 2e6}]
 )
-def test_the_compiled_kernel_hides_what_the_numpy_load_hides(friction):
+def test_the_compiled_kernel_hides_what_the_numpy_load_hides(friction, target):
     scene, prepared = _finned()
-    overrides = {"effects.friction": friction} if friction else {}
+    overrides = {**TARGETS[target], **({"effects.friction": friction} if friction else {})}
     loads = load_scene(scene_path("finned_test2"), overrides).loads(prepared.quadrature)
     assert loads.exposure is not None
     _, layout = compiled_modules()

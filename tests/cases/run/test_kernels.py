@@ -23,6 +23,7 @@ import pytest
 
 import cases
 from cases import SHIPPED_SCENES, load_scene, run_scene, scene_path
+from docs.performance.kernels import FAMILIES, timed
 
 LAWS = Path(cases.__file__).parent / "laws" / "soil_laws.py"
 OVERBURDEN = {"c0": 1.718e7, "c2": 2282.22, "unit_weight": 1.8e4, "lateral_ratio": 0.5}
@@ -71,48 +72,58 @@ def test_auto_is_numpy_for_one_run_and_compiled_for_a_study():
     assert scene.numerics.kernel == "auto"
     assert scene.with_kernel(many_runs=False).numerics.kernel == "numpy"
     assert scene.with_kernel(many_runs=True).numerics.kernel == "compiled"
-    friction = load_scene(scene_path("forrestal_luk_test2"), {"effects.friction.model": "coulomb"})
-    assert friction.with_kernel(many_runs=True).numerics.kernel == "compiled"  # the kernel has every effect
     mixed = load_scene(scene_path("forrestal_luk_test2"), MIXED_LAYERS)
     assert mixed.with_kernel(many_runs=True).numerics.kernel == "numpy"  # the kernel calls one user function
     explicit = load_scene(scene_path("forrestal_luk_test2"), {"numerics.kernel": "numpy"})
     assert explicit.with_kernel(many_runs=True).numerics.kernel == "numpy"
 
 
-def test_compiled_kernel_refuses_layers_of_a_user_law_and_a_built_in_one():
-    from cases import InputError
-
-    with pytest.raises(InputError, match="numerics.kernel"):
-        load_scene(scene_path("forrestal_luk_test2"), {**MIXED_LAYERS, "numerics.kernel": "compiled"})
-
-
-#: every effect and law family the compiled step computes, as variants of test 2 and #3 (at 800 m/s on a 40 mm
-#: mesh, where the shipped law keeps it stable)
-VARIANTS = {
-    "coulomb": {"effects.friction.model": "coulomb", "effects.friction.coefficient": 0.1},
-    "capped": {"effects.friction.model": "capped", "effects.friction.coefficient": 0.3, "effects.friction.cap": 3e6},
-    "free surface": {"effects.free_surface.depth": 0.5, "effects.free_surface.surface_fraction": 0.3},
-    "layers": {"target.layers": [{"thickness": 1.0, "law": "softer_soil"}, {"law": "soil"}]},
-    "centred": {"effects.contact": "centred"},
+#: auto's kernel in a study for test 2 under each law family and target (docs/performance/kernels.py), and for the
+#: sharp contact and no separation, which leave the SIMD lanes too
+AUTO_IN_A_STUDY = {
+    **{
+        label: (
+            "compiled"
+            if label in ("test 2, friction", "test 2, depth gradient", "test 2, two layers", "test 2, concrete family")
+            else "numpy"
+        )
+        for label in FAMILIES
+    },
+    "sharp contact": "numpy",
+    "no separation": "numpy",
+}
+OTHER_OVERRIDES = {
+    "sharp contact": {"effects.contact_width": 0.0, "effects.contact_incidence": 0.0},
     "no separation": {"effects.separation": False},
-    "polynomial": {"target.law": {"model": "polynomial", "c0": 1.5e7, "c1": 2e4, "c2": 1500.0}},
-    "power": {"target.law": {"model": "power", "c0": 1.5e7, "c": 3e4, "n": 1.5}},
-    "overburden": {"target.law": {"A": 1.718, "sigma_0": 1e7, "B": 1.227, "rho_0": 1860.0, "depth_gradient": 2e6}},
-    "user law": {"target.law": {"function": f"{LAWS}:overburden", "parameters": OVERBURDEN}},
 }
 
 
-@pytest.mark.parametrize("variant", list(VARIANTS))
-@pytest.mark.parametrize(
-    ("name", "overrides"),
-    [
-        ("forrestal_luk_test2", {"numerics.mesh_size": 0.03}),
-        ("paper_p3", {"numerics.mesh_size": 0.04, "impact.speed": 800.0}),
-    ],
-)
-@pytest.mark.slow  # seconds of runs: CI's slow step
-def test_compiled_and_numpy_kernels_agree_on_every_effect(name, overrides, variant):
-    """1e-9 for test 2; #3 turns under some of these laws and effects (the polynomial law's, by 1e-6 relative),
-    and there, as for the shipped scenes that turn, 10 rtol bounds the difference."""
-    difference, bound = _compare(name, {**overrides, **VARIANTS[variant]})
-    assert difference <= bound
+@pytest.mark.parametrize("label", list(AUTO_IN_A_STUDY))
+def test_auto_is_compiled_in_a_study_only_where_the_load_runs_in_simd_lanes(label):
+    """Polynomial laws (depth terms, layers and friction included) with the smooth ramps and separation run in the
+    compiled kernel's SIMD lanes, 4-9 times faster than numpy; any other law or switch runs point by point, no
+    faster than numpy (docs/performance.md), and auto keeps those on numpy."""
+    overrides = FAMILIES.get(label) or OTHER_OVERRIDES[label]
+    scene = load_scene(scene_path("forrestal_luk_test2"), overrides)
+    assert scene.with_kernel(many_runs=True).numerics.kernel == AUTO_IN_A_STUDY[label]
+
+
+#: the measured cases: shipped and layered scenes in the lanes, and the paper's #3 (30 432 points) under a power
+#: law and a user's law, point by point; on test 2's 14 160 points those two are a toss-up (docs/performance.md)
+MEASURED = {
+    "concrete_slab": ("concrete_slab", {}),
+    "test 2, two layers": ("forrestal_luk_test2", FAMILIES["test 2, two layers"]),
+    "#3, power law": ("paper_p3", FAMILIES["test 2, power law"]),
+    "#3, user law": ("paper_p3", FAMILIES["test 2, user law"]),
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("label", list(MEASURED))
+def test_auto_picks_the_faster_kernel_as_measured(label):
+    """The measurement behind the rule (docs/performance/kernels.py, the minimum of 3 alternating runs): auto's kernel
+    in a study integrates the scene at least as fast as the other, within the 15 % that timings of a few tens of
+    milliseconds wander on a shared machine."""
+    measured = timed(*MEASURED[label], 3)
+    other = "numpy" if measured["auto"] == "compiled" else "compiled"
+    assert measured["time"][measured["auto"]] <= 1.15 * measured["time"][other], measured["time"]
