@@ -15,6 +15,7 @@ whatever the day.  ``./dev docs --stale`` regenerates those blocks and nothing e
 from __future__ import annotations
 
 import ast
+import functools
 import hashlib
 import json
 import os
@@ -63,12 +64,18 @@ def _content(path: Path) -> bytes:
     """What of a file counts: Python source as its syntax tree (comments and layout do not count), else its bytes."""
     if not path.exists():
         return b"(missing)"
-    if path.suffix == ".py":
-        try:
-            return ast.dump(ast.parse(path.read_text())).encode()
-        except (SyntaxError, UnicodeDecodeError):
-            pass
-    return path.read_bytes()
+    raw = path.read_bytes()
+    return _syntax_tree(raw) if path.suffix == ".py" else raw
+
+
+@functools.lru_cache(maxsize=512)
+def _syntax_tree(source: bytes) -> bytes:
+    """Python ``source``'s syntax tree, dumped (its bytes when it does not parse): once per source text in a
+    process, since one check reads the same modules for most of its 91 blocks."""
+    try:
+        return ast.dump(ast.parse(source.decode())).encode()
+    except (SyntaxError, UnicodeDecodeError):
+        return source
 
 
 def digest(files: list[str], root: Path) -> str:
