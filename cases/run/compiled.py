@@ -17,8 +17,10 @@ compiles afresh.
 from __future__ import annotations
 
 import ast
+import contextlib
 import functools
 import hashlib
+import json
 import os
 import sys
 from collections.abc import Callable
@@ -28,7 +30,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .persistence import cache_dir
+from .persistence import atomic_write_text, cache_dir
 
 if TYPE_CHECKING:  # imported where used, after use_numba_cache
     from dynamics import RigidBody, RungeKutta
@@ -95,7 +97,37 @@ def _imports(name: str, root: Path) -> list[tuple[str, list[str] | None]]:
 def compiled_sources(root: Path = ROOT) -> list[str]:
     """The project modules behind the compiled entry points: the closure of :data:`ENTRY_MODULES` under their
     imports.  A module is followed whole; a name imported from a package is followed to the module its
-    ``__init__`` takes it from (the package's other modules are not what the compiled code uses)."""
+    ``__init__`` takes it from (the package's other modules are not what the compiled code uses).
+
+    Parsing the modules to follow their imports takes a quarter of a second, which every process that loads the
+    compiled step would pay: the closure is kept in the cache folder under the signature of the project's Python
+    files (names, sizes and modification times), and found again while none of them changed."""
+    signature = hashlib.sha256(str(root).encode())
+    for package in PROJECT_PACKAGES:
+        for path in sorted((root / package).rglob("*.py")):
+            stat = path.stat()
+            signature.update(f"{path.relative_to(root)}\0{stat.st_mtime_ns}\0{stat.st_size}\n".encode())
+    return list(_kept_closure(root, signature.hexdigest()))
+
+
+@functools.lru_cache(maxsize=8)
+def _kept_closure(root: Path, signature: str) -> tuple[str, ...]:
+    """:func:`compiled_sources` as kept for ``signature``, or found afresh and kept."""
+    kept = cache_dir() / "numba" / f"sources-{hashlib.sha256(str(root).encode()).hexdigest()[:12]}.json"
+    try:
+        record = json.loads(kept.read_text())
+        if record["signature"] == signature:
+            return tuple(record["modules"])
+    except (OSError, ValueError, KeyError, TypeError):
+        pass  # none kept yet, or unreadable: find it
+    modules = tuple(_closure(root))
+    with contextlib.suppress(OSError):  # a read-only cache: found again next time
+        atomic_write_text(kept, json.dumps({"signature": signature, "modules": modules}))
+    return modules
+
+
+def _closure(root: Path) -> list[str]:
+    """The closure of :data:`ENTRY_MODULES` under their imports (:func:`compiled_sources`), found by parsing."""
     modules: set[str] = set()
     seen: set[tuple[str, tuple[str, ...] | None]] = set()
     parsed: dict[str, list[tuple[str, list[str] | None]]] = {}
