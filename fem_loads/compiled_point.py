@@ -16,6 +16,8 @@ from numba import njit
 from . import kernel_layout as layout
 from .factors import Switches
 from .native import (
+    Coefficients,
+    Parameters,
     cell_exposure,
     cube_cell,
     entry_factor,
@@ -64,8 +66,8 @@ class Setup(NamedTuple):
     with_height: bool  #: the stress needs each point's height (a depth-dependent law, the free surface, entering)
     friction: tuple[float, float, float, float]  #: ``(mu, cap, W, |v|^2)`` for :func:`image_friction`
     address: int  #: the user law's cfunc (0: the built-in law)
-    coefficients: tuple[float, float, float, float, float, float]  #: the first layer's law (:func:`law_values`)
-    parameters: tuple[float, float, float, float, float, float, float, float]  #: and its user law's parameters
+    coefficients: Coefficients  #: the first layer's law (:func:`~fem_loads.native.law_values`)
+    parameters: Parameters  #: and its user law's parameters
     polynomial: tuple[float, float, float, float]  #: its ``(c0, k, c1, c2)``, the plain law's
     switches: Switches
 

@@ -49,6 +49,11 @@ __all__ = [
 ]
 
 
+#: a built-in law's coefficients ``(c0, k, c1, c2, c, n)`` and a user law's parameters, as the loops read them
+Coefficients = tuple[float, float, float, float, float, float]
+Parameters = tuple[float, float, float, float, float, float, float, float]
+
+
 @overload(np.clip, inline="always")
 def _clip_float(a, a_min, a_max):  # type: ignore[no-untyped-def]  # numba matches the names, without annotations
     """``np.clip`` on a float, which numba compiles only for arrays."""
@@ -140,7 +145,7 @@ call_user_law: Callable[..., float] = _call_user_law_intrinsic
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def law_values(law: Any) -> tuple[tuple[float, ...], tuple[float, ...]]:
+def law_values(law: Any) -> tuple[Coefficients, Parameters]:
     """A :data:`~fem_loads.law_record.LAW` record's built-in coefficients ``(c0, k, c1, c2, c, n)`` and its user
     law's parameters, as tuples of floats: what a loop over the points reads once, not once per point."""
     u = law.user
@@ -149,8 +154,8 @@ def law_values(law: Any) -> tuple[tuple[float, ...], tuple[float, ...]]:
 
 @njit(cache=True, inline="always", error_model="numpy")
 def law_value(
-    coefficients: tuple[float, ...],
-    parameters: tuple[float, ...],
+    coefficients: Coefficients,
+    parameters: Parameters,
     address: int,
     normal_velocity: float,
     depth: float,
