@@ -25,6 +25,7 @@ and these references refuse it (:func:`check_nose_alone_presses`).
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, NamedTuple
@@ -252,7 +253,11 @@ def _integrate(
     return integrate.solve_ivp(rate, (0.0, horizon), start, method="DOP853", rtol=rtol, atol=1e-14, events=events)
 
 
-_GAUSS = np.polynomial.legendre.leggauss(2000)
+@functools.cache
+def _gauss(points: int) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Legendre nodes and weights on [-1, 1], computed on first use (2000 points take half a second, which
+    every process importing this module would pay)."""
+    return np.polynomial.legendre.leggauss(points)
 
 
 def axial_force(
@@ -275,7 +280,7 @@ def axial_force(
     width = contact_width + contact_incidence * speed
     offset = 0.5 if contact == "centred" else 0.0
     extent = min(max(depth, 0.0), profile.nose_length)
-    x, weights = _GAUSS
+    x, weights = _gauss(2000)
     s = 0.5 * extent * (x + 1.0)
     slope = profile.slope_at(s)
     sine = slope / np.sqrt(1.0 + slope**2)
@@ -360,9 +365,6 @@ def scene_slab_1d(scene: Scene, prepared: PreparedProjectile) -> tuple[float, fl
     )
 
 
-_GAUSS_LAYER = np.polynomial.legendre.leggauss(400)
-
-
 def layered_axial_force(
     profile: Profile,
     layers: list[Layer],
@@ -378,7 +380,7 @@ def layered_axial_force(
     behind the last slice unloaded.  An element ``s`` behind the tip lies ``depth - s`` deep."""
     width = contact_width + contact_incidence * speed
     offset = 0.5 if contact == "centred" else 0.0
-    x, weights = _GAUSS_LAYER
+    x, weights = _gauss(400)
 
     def factor(normal_velocity: np.ndarray) -> np.ndarray:
         return np.asarray(
