@@ -64,13 +64,15 @@ def _sums(
     vt, wt = (v[0], v[1], v[2]), (w[0], w[1], w[2])
     mu = rule[0]
     layer_stresses = np.empty(weights.shape[0] if plain and layered else 0)
+    table_stresses = np.empty(weights.shape[0] if plain and layered and data[layout.DATA_TABLES].shape[1] else 0)
     reach = data[layout.DATA_EFFECTS][0].reach
     for k in range(sums.shape[0]):
         gk = (g[k, 0], g[k, 1], g[k, 2], g[k, 3], g[k, 4], g[k, 5])
         upk = (up[k, 0], up[k, 1], up[k, 2])
         sy, sz = point_signs[k, 1], point_signs[k, 2]
         if plain and layered:
-            plain_layer_stresses(data, normal_arm, points, inverse_entry, gk, upk, height, reach, layer_stresses)
+            buffers = (layer_stresses, table_stresses)
+            plain_layer_stresses(data, normal_arm, points, inverse_entry, gk, upk, height, reach, buffers)
         a0 = a1 = a2 = a3 = a4 = a5 = 0.0
         f0 = f1 = f2 = f3 = f4 = f5 = 0.0
         for j in range(weights.shape[0]):
@@ -117,8 +119,17 @@ def _plain_friction_sums(data: tuple[np.ndarray, ...], motion: Motion, sums: np.
 
 @njit(cache=True, error_model="numpy", fastmath=_FAST)
 def _plain_layers_sums(data: tuple[np.ndarray, ...], motion: Motion, sums: np.ndarray, friction: np.ndarray) -> None:
-    """:func:`_sums` of layers of plain laws (a slab of concrete, soil over concrete), friction and free surface
-    included: the layers' blend in a pass of its own per layer, the rest as the plain loop."""
+    """:func:`_sums` of layers of plain laws (a slab of concrete, soil over concrete) or of one plain law with a
+    strength table, without friction or free surface: the layers' blend and the tables in passes of their own,
+    the rest as the plain loop."""
+    _sums(data, motion, sums, friction, True, False, True)
+
+
+@njit(cache=True, error_model="numpy", fastmath=_FAST)
+def _plain_layers_friction_sums(
+    data: tuple[np.ndarray, ...], motion: Motion, sums: np.ndarray, friction: np.ndarray
+) -> None:
+    """:func:`_plain_layers_sums` with friction or a free surface."""
     _sums(data, motion, sums, friction, True, True, True)
 
 
@@ -176,9 +187,13 @@ def dafl_kernel(
     motion = Motion(g, up, v, angular_velocity, height, width, effects.guard * speed_scale, embedded)
     sums = np.zeros((images, 6))
     friction = np.zeros(6)
-    if effects.plain and data[layout.DATA_INTERFACES].shape[0] > 0:
+    blended = data[layout.DATA_INTERFACES].shape[0] > 0 or data[layout.DATA_TABLES].shape[1] > 0
+    rubbing = effects.friction > 0.0 or effects.surface_depth > 0.0
+    if effects.plain and blended and rubbing:
+        _plain_layers_friction_sums(data, motion, sums, friction)
+    elif effects.plain and blended:
         _plain_layers_sums(data, motion, sums, friction)
-    elif effects.plain and (effects.friction > 0.0 or effects.surface_depth > 0.0):
+    elif effects.plain and rubbing:
         _plain_friction_sums(data, motion, sums, friction)
     elif effects.plain:
         _plain_sums(data, motion, sums, friction)

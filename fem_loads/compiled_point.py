@@ -39,6 +39,7 @@ __all__ = [
     "point_motion",
     "plain_stress",
     "plain_layer_stresses",
+    "table_stresses",
     "point_law_stress",
     "layered_point_stress",
     "image_friction",
@@ -161,6 +162,37 @@ def layered_stress(
 
 
 @njit(cache=True, inline="always", error_model="numpy")
+def table_stresses(
+    table: np.ndarray,
+    points: np.ndarray,
+    up: tuple[float, float, float],
+    height: float,
+    depths_reached: tuple[float, float],
+    buffer: np.ndarray,
+) -> None:
+    """Each point's strength-table stress (Pa) into ``buffer``, in SIMD lanes: ``np.interp`` of the depth as the
+    sum of the table's segments, each clipped to its own depths, ``s_0 + sum_m slope_m (clip(d, d_m, d_m+1) - d_m)``
+    (the same piecewise-linear function, the first and last rows' values beyond them).  A segment wholly above
+    the shallowest depth the body reaches adds its whole rise to every point, one wholly below adds nothing: a
+    pass over the points only for the segments the body spans (``depths_reached``, m; ``table``: depths and
+    stresses, shape (2, rows))."""
+    shallowest, deepest = depths_reached
+    base = table[1, 0]
+    for m in range(table.shape[1] - 1):
+        if table[0, m + 1] <= shallowest:
+            base += table[1, m + 1] - table[1, m]
+    buffer[:] = base
+    for m in range(table.shape[1] - 1):
+        low, high = table[0, m], table[0, m + 1]
+        if high <= shallowest or low >= deepest:
+            continue
+        slope = (table[1, m + 1] - table[1, m]) / (high - low)
+        for j in range(buffer.shape[0]):
+            depth = -(height + (up[0] * points[0, j] + up[1] * points[1, j] + up[2] * points[2, j]))
+            buffer[j] += slope * (min(max(depth, low), high) - low)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def plain_layer_stresses(
     data: tuple[np.ndarray, ...],
     normal_arm: np.ndarray,
@@ -170,14 +202,16 @@ def plain_layer_stresses(
     up: tuple[float, float, float],
     height: float,
     reach: float,
-    buffer: np.ndarray,
+    buffers: tuple[np.ndarray, np.ndarray],
 ) -> None:
-    """Each point's law stress (Pa) on layers of plain laws into ``buffer``: the layers' polynomials at
-    ``max(Vn, 0)`` blended across each interface as :func:`layered_stress` blends them, in one pass over the points
-    per layer that the body reaches (its centre's ``height`` above the front face give or take ``reach``, m), so
-    that each pass keeps the SIMD lanes of the plain loop.  An infinite interface above the first layer and below
-    the last gives their blend factors exactly 1 and 0 without a branch."""
-    interfaces, laws = data[layout.DATA_INTERFACES], data[layout.DATA_LAWS]
+    """Each point's law stress (Pa) on layers of plain laws into ``buffers[0]``: the layers' polynomials and
+    strength tables at ``max(Vn, 0)`` blended across each interface as :func:`layered_stress` blends them, in one
+    pass over the points per layer that the body reaches (its centre's ``height`` above the front face give or take
+    ``reach``, m), and a table's in passes of their own into ``buffers[1]`` (:func:`table_stresses`), so that each
+    pass keeps the SIMD lanes of the plain loop.  One law is one layer.  An infinite interface above the first layer
+    and below the last gives their blend factors exactly 1 and 0 without a branch."""
+    interfaces, laws, tables = data[layout.DATA_INTERFACES], data[layout.DATA_LAWS], data[layout.DATA_TABLES]
+    buffer, table_buffer = buffers
     last = interfaces.shape[0]
     shallowest, deepest = -height - reach, -height + reach
     buffer[:] = 0.0
@@ -186,11 +220,19 @@ def plain_layer_stresses(
         bottom = interfaces[layer] if layer < last else math.inf
         if deepest < top or shallowest > bottom:
             continue  # every point's share of this layer is exactly zero
-        c0, k, c1, c2, _, _ = law_values(laws[layer])[0]
+        law = laws[layer]
+        c0, k, c1, c2, _, _ = law_values(law)[0]
+        with_table = law.table_count > 0
+        if with_table:
+            table = tables[:, law.table_first : law.table_first + law.table_count]
+            table_stresses(table, points, up, height, (shallowest, deepest), table_buffer)
         for j in range(buffer.shape[0]):
             _, _, normal_velocity, z = point_motion(normal_arm, points, j, g, up, height, True)
             share = entry_factor(top + z, True, inverse_entry[j]) - entry_factor(bottom + z, True, inverse_entry[j])
-            buffer[j] += share * polynomial_stress(max(normal_velocity, 0.0), -z, c0, k, c1, c2)
+            stress = polynomial_stress(max(normal_velocity, 0.0), -z, c0, k, c1, c2)
+            if with_table:
+                stress += table_buffer[j]
+            buffer[j] += share * stress
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -294,7 +336,8 @@ def exposure_correction(
     if v[0] == 0.0 and v[1] == 0.0 and v[2] == 0.0:
         return  # no direction of motion, no shadow
     resolution = round(math.sqrt((start.shape[0] - 1) / 6.0))  # 6 N^2 cells
-    layered = data[layout.DATA_INTERFACES].shape[0] > 0
+    # layers, or a strength table: the plain loops blend them in passes of their own, the point here
+    blended = data[layout.DATA_INTERFACES].shape[0] > 0 or data[layout.DATA_TABLES].shape[1] > 0
     s, (points, normal_arm, point_signs, weights, inverse_entry, depths, stresses) = setup(data, motion, plain, True)
     switches = s.switches
     vt, wt = (v[0], v[1], v[2]), (w[0], w[1], w[2])
@@ -319,9 +362,9 @@ def exposure_correction(
             ):
                 continue  # below the contact ramp (or where it is below 1e-14), or the sharp switch: nothing to hide
             weight, inverse = weights[p], inverse_entry[p]
-            if plain and not layered:
+            if plain and not blended:
                 stress = plain_stress(s.polynomial, s.switches, weight, inverse, normal_velocity, z)
-            elif layered:
+            elif blended:
                 stress = layered_point_stress(data, s, weight, inverse, normal_velocity, z)
             else:
                 stress = point_law_stress(s, depths, stresses, weight, inverse, normal_velocity, z)

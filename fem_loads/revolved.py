@@ -195,7 +195,12 @@ def _breaks(
         if entry > 0.0:
             count = _add_break(breaks, count, (0.5 * entry - h0) / h1)  # nothing above this one
     breaks[count] = 1.0
-    breaks[: count + 1].sort()
+    for i in range(2, count):  # insertion sort: at most five values between -1 and 1
+        value, j = breaks[i], i - 1
+        while breaks[j] > value:
+            breaks[j + 1] = breaks[j]
+            j -= 1
+        breaks[j + 1] = value
     return count + 1
 
 

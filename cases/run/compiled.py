@@ -39,6 +39,7 @@ if TYPE_CHECKING:  # imported where used, after use_numba_cache
 
 __all__ = [
     "compiled_step",
+    "compiled_load_function",
     "compiled_modules",
     "precompile",
     "numba_cache_folder",
@@ -188,9 +189,11 @@ def numba_cache_folder() -> Path:
     return (Path(root) if root else cache_dir() / "numba") / _sources_digest()
 
 
+@functools.cache
 def use_numba_cache() -> None:
     """Point numba's cache at :func:`numba_cache_folder`, once per process, before any compiled module is
-    imported (numba fixes a function's cache folder when its module defines it)."""
+    imported (numba fixes a function's cache folder when its module defines it).  Once per process: a later
+    call would find the folder set or the modules imported, after 6 ms of looking (the sources' signature)."""
     if not all(name in sys.modules for name in compiled_sources()):
         from numba import config
 
@@ -254,6 +257,15 @@ def _dafl_step() -> Callable[..., None]:
     return dafl_step
 
 
+def compiled_load_function(loads: DAFLLoads, weight: np.ndarray | None = None) -> CompiledLoad:
+    """The compiled form of a scene's ``loads`` (a ``DAFLLoads``; plus ``weight``, N, world frame, when given):
+    the same load function, callable from Python, for code that evaluates loads without a run (the load-only
+    turn boundary of ``penetrate paper``)."""
+    announce_compiling("dafl_step")
+    step, load = _import_compiled()
+    return step.CompiledLoad(load.dafl_kernel, load.kernel_data(loads), _dafl_step(), weight)
+
+
 def compiled_step(
     loads: DAFLLoads, method: RungeKutta, body: RigidBody, weight: np.ndarray | None
 ) -> tuple[CompiledLoad, CompiledRungeKutta, Callable[..., float]]:
@@ -264,14 +276,13 @@ def compiled_step(
     ``method``, and ``lowest_height(position, attitude, face=None)`` for the exit events
     (:meth:`fem_loads.DAFLLoads.lowest_height`).
     """
-    announce_compiling("dafl_step")
+    compiled_load = compiled_load_function(loads, weight)
     step, load = _import_compiled()
     from dynamics.quaternion import rotation_matrix
     from fem_loads.kernel_layout import DATA_EFFECTS
     from fem_loads.target import FrontFace
 
-    data = load.kernel_data(loads)
-    compiled_load = step.CompiledLoad(load.dafl_kernel, data, _dafl_step(), weight)
+    data = compiled_load.data
     compiled_method = step.CompiledRungeKutta(method)
     _warm(compiled_load, compiled_method, body, data, load.lowest_height_kernel)
     facing: dict[FrontFace, tuple[np.ndarray, ...]] = {}

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
-from fem_loads import DAFLLoads
+from dynamics.rigid_body import LoadFunction
 
 __all__ = ["TurnBoundary", "pitch_moment", "turn_boundary"]
 
@@ -41,7 +41,7 @@ SPEEDS = np.arange(100.0, 3001.0, 25.0)  # m/s: the grid on which sign changes a
 MAX_PITCH_RATE = 1e4  # rad/s: a steady-turn iteration beyond this has no fixed point
 
 
-def pitch_moment(loads: DAFLLoads, mass: float, speed: float, attack: float, steady_turn: bool) -> float:
+def pitch_moment(loads: LoadFunction, mass: float, speed: float, attack: float, steady_turn: bool) -> float:
     """``M_y`` (N m) at ``speed`` (m/s) and ``attack`` (rad), without or with the steady-turn pitch rate.
 
     NaN when the steady-turn pitch rate has no fixed point.
@@ -62,7 +62,7 @@ def pitch_moment(loads: DAFLLoads, mass: float, speed: float, attack: float, ste
     return float(moment[1])
 
 
-def _crossing(loads: DAFLLoads, mass: float, attack: float, steady_turn: bool, speeds: np.ndarray) -> float | None:
+def _crossing(loads: LoadFunction, mass: float, attack: float, steady_turn: bool, speeds: np.ndarray) -> float | None:
     """The highest speed where ``M_y`` changes sign, refined by Brent's method."""
     values = np.array([pitch_moment(loads, mass, v, attack, steady_turn) for v in speeds])
     finite = np.isfinite(values[:-1]) & np.isfinite(values[1:])
@@ -87,7 +87,7 @@ class TurnBoundary:
 
 
 def turn_boundary(
-    loads: DAFLLoads,
+    loads: LoadFunction,
     mass: float,
     attack_angles: Sequence[float] = tuple(range(1, 21)),
     speeds: Sequence[float] | np.ndarray | None = None,

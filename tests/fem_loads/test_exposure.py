@@ -143,10 +143,19 @@ def test_a_convex_body_has_no_table_and_loads_as_before():
         np.testing.assert_array_equal(np.concatenate(scene.loads(q)(*state)), np.concatenate(off(*state)))
 
 
-#: the compiled kernel's loops: the plain law, layers of plain laws (an interface 2 m down, which the states
-#: straddle), and any other law (a power term)
+#: the compiled kernel's loops: the plain law, a plain law with a strength table and layers of plain laws (a row and
+#: an interface 2 m down, which the states straddle: both are read in passes of their own), and any other law (a
+#: power term)
 TARGETS = {
     "plain": {},
+    "table": {
+        "target.law": {
+            "model": "polynomial",
+            "c0": 17.18e6,
+            "c2": 2282.2,
+            "strength_table": [[0.0, 0.0], [2.0, 4e6], [3.0, 5e6]],
+        }
+    },
     "layers": {
         "target.layers": [{"thickness": 2.0, "law": "soil"}, {"law": {"model": "polynomial", "c0": 8e6, "c2": 1500.0}}]
     },

@@ -8,6 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from dynamics.rigid_body import LoadFunction
+
 from ... import scene_path
 from ...run import CONVERGENCE_THRESHOLD, RunStore, StoredRun, attack_angle_peak, convergence_speed, prepare_projectile
 from ...scene import load_scene
@@ -118,7 +120,14 @@ def interpolate(xs: Sequence[float], ys: Sequence[float | None], x: float) -> fl
 
 
 def load_boundary(ratio: float) -> TurnBoundary:
-    """The load-only boundaries (:mod:`~cases.studies.prediction`) of the projectile at ``ratio``."""
+    """The load-only boundaries (:mod:`~cases.studies.prediction`) of the projectile at ``ratio``: the load on
+    the kernel a study's worker would run it on (the compiled one for the paper's law, 4-5 times faster here)."""
     scene = load_scene(scene_path("paper_p3"), {**STUDY_NUMERICS, "projectile.centre_of_mass_ratio": ratio})
     prepared = prepare_projectile(scene)
-    return turn_boundary(scene.loads(prepared.quadrature), prepared.mass.mass, attack_angles=tuple(range(1, 31)))
+    loads = scene.loads(prepared.quadrature)
+    function: LoadFunction = loads
+    if scene.with_kernel(many_runs=True).numerics.kernel == "compiled":
+        from ...run.compiled import compiled_load_function
+
+        function = compiled_load_function(loads)
+    return turn_boundary(function, prepared.mass.mass, attack_angles=tuple(range(1, 31)))

@@ -7,7 +7,7 @@ import time
 from pathlib import Path
 
 from ...run import RunStore, atomic_write_text
-from ..pool import Pool
+from ..pool import Pool, map_local
 from ..prediction import TurnBoundary
 from ..speeds import find_critical_velocities
 from . import figures
@@ -38,7 +38,8 @@ def reproduce(out: str | Path, store: RunStore, pool: Pool | None = None) -> dic
     convergent = {d: [characteristic(runs[(d, r)]) for r in ratios] for d in HEADLINE}
     convergent.update({d: [characteristic(runs[(d, P3)])] for d in SINGLE})
     fits = {"critical": linear_fit(ratios, critical), "convergent": linear_fit(ratios, convergent["attack 1"])}
-    boundaries = [load_boundary(r) for r in ratios]
+    # one projectile's boundary per local worker: the pool's width, on this machine even with a cluster
+    boundaries = map_local(load_boundary, [(r,) for r in ratios], study.pool.width)
     _figures(study, out, runs, ratios, critical, convergent, fits, boundaries)
     wall_time = time.perf_counter() - start
     record = {

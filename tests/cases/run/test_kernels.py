@@ -84,7 +84,14 @@ AUTO_IN_A_STUDY = {
     **{
         label: (
             "compiled"
-            if label in ("test 2, friction", "test 2, depth gradient", "test 2, two layers", "test 2, concrete family")
+            if label
+            in (
+                "test 2, friction",
+                "test 2, depth gradient",
+                "test 2, two layers",
+                "test 2, concrete family",
+                "test 2, strength table",
+            )
             else "numpy"
         )
         for label in FAMILIES
@@ -100,9 +107,9 @@ OTHER_OVERRIDES = {
 
 @pytest.mark.parametrize("label", list(AUTO_IN_A_STUDY))
 def test_auto_is_compiled_in_a_study_only_where_the_load_runs_in_simd_lanes(label):
-    """Polynomial laws (depth terms, layers and friction included) with the smooth ramps and separation run in the
-    compiled kernel's SIMD lanes, 4-9 times faster than numpy; any other law or switch runs point by point, no
-    faster than numpy (docs/performance.md), and auto keeps those on numpy."""
+    """Polynomial laws (depth terms, strength tables, layers and friction included) with the smooth ramps and
+    separation run in the compiled kernel's SIMD lanes, 4-11 times faster than numpy; any other law or switch runs
+    point by point, no faster than numpy (docs/performance.md), and auto keeps those on numpy."""
     overrides = FAMILIES.get(label) or OTHER_OVERRIDES[label]
     scene = load_scene(scene_path("forrestal_luk_test2"), overrides)
     assert scene.with_kernel(many_runs=True).numerics.kernel == AUTO_IN_A_STUDY[label]
@@ -136,6 +143,10 @@ def test_compiled_kernel_refuses_layers_of_a_user_law_and_a_built_in_one():
         load_scene(scene_path("forrestal_luk_test2"), {**MIXED_LAYERS, "numerics.kernel": "compiled"})
 
 
+#: a strength table whose rows the runs cross (m, Pa)
+TABLE = [[0.0, 0.0], [0.5, 4e6], [1.0, 5e6], [3.0, 9e6]]
+
+
 #: every effect and law family the compiled step computes, as variants of test 2 and #3 (at 800 m/s on a 40 mm
 #: mesh, where the shipped law keeps it stable)
 VARIANTS = {
@@ -147,6 +158,12 @@ VARIANTS = {
     "no separation": {"effects.separation": False},
     "polynomial": {"target.law": {"model": "polynomial", "c0": 1.5e7, "c1": 2e4, "c2": 1500.0}},
     "power": {"target.law": {"model": "power", "c0": 1.5e7, "c": 3e4, "n": 1.5}},
+    "strength table": {"target.law": {"model": "polynomial", "c0": 1e7, "c2": 2000.0, "strength_table": TABLE}},
+    "table and friction": {
+        "target.law": {"model": "polynomial", "c0": 1e7, "c2": 2000.0, "strength_table": TABLE},
+        "effects.friction.model": "coulomb",
+        "effects.friction.coefficient": 0.1,
+    },
     "overburden": {"target.law": {"A": 1.718, "sigma_0": 1e7, "B": 1.227, "rho_0": 1860.0, "depth_gradient": 2e6}},
     "user law": {"target.law": {"function": f"{LAWS}:overburden", "parameters": OVERBURDEN}},
 }
