@@ -80,7 +80,7 @@ def path_increment_scalars(
 
 class Stepper(Protocol):
     """What the driver (:func:`~dynamics.simulate.simulate`) and the step control ask of a method: a
-    :class:`RungeKutta`, or the compiled step that wraps one (:class:`~dynamics.compiled.CompiledRungeKutta`)."""
+    :class:`RungeKutta`, or the compiled step that wraps one (:class:`~dynamics.compiled_rk.CompiledRungeKutta`)."""
 
     error_order: int
 

@@ -15,7 +15,7 @@ downward axis is ``phi = 0`` exactly, so its sine and cosine are exact and a sym
 
 :func:`trajectory` steps by :class:`~dynamics.integrators.DormandPrince54`'s tableau under
 :class:`~dynamics.control.ErrorControl`'s rule, with a compiled load kernel and lowest point (:data:`PlaneLoad`,
-:data:`LowestPoint`) as arguments, inlined where they are globals as in :mod:`dynamics.compiled`.
+:data:`LowestPoint`) as arguments, inlined where they are globals as in :mod:`dynamics.compiled_rk`.
 """
 
 from __future__ import annotations
@@ -65,7 +65,7 @@ _A, _B_ERROR = np.ascontiguousarray(DormandPrince54.A), np.ascontiguousarray(Dor
 _STATES = 6
 
 #: ``load(data, height, sin_theta, cos_theta, v_x, v_z, q, out)``: ``F_x``, ``F_z`` (N) and ``M_y`` (N m, body
-#: frame) into ``out`` (:func:`fem_loads.revolved.pitch_plane_load`)
+#: frame) into ``out`` (:func:`fem_loads.kernels.rings.pitch_plane_load`)
 PlaneLoad = Callable[[tuple[np.ndarray, ...], float, float, float, float, float, float, np.ndarray], None]
 #: ``lowest(data, height, sin_theta, cos_theta)``: the height (m) of the body's lowest point
 LowestPoint = Callable[[tuple[np.ndarray, ...], float, float, float], float]

@@ -5,7 +5,7 @@ angular velocity ``omega`` read ``dq/dt = q * (0, omega) / 2``.
 
 The functions, called several times per stage of every step, unpack their 3- and 4-vectors to Python floats
 (numpy's per-call overhead is most of the cost at this size).  The arithmetic is in the ``*_scalars``
-functions, on floats only, so that the compiled step (:mod:`dynamics.compiled`) compiles the same expressions.
+functions, on floats only, so that the compiled step (:mod:`dynamics.compiled_rk`) compiles the same expressions.
 """
 
 from __future__ import annotations

@@ -21,7 +21,7 @@ import numpy as np
 
 from .factors import point_stress_scalars, switches_scalars
 from .images import MirrorImages
-from .law_record import EFFECTS, pack_effects
+from .kernels.records import EFFECTS, pack_effects
 from .quadrature import SurfaceQuadrature
 from .resistance import ResistanceLaw
 from .target import (
@@ -156,7 +156,7 @@ class DAFLLoads:
         # the points that can be hidden, and each image's signs (k, 3), its direction in the part's frame
         self.exposure = q.exposure if exposure and q.exposure is not None and len(q.exposure.columns) else None
         self._exposure_signs = self._images.point_signs if self._images is not None else np.ones((1, 3))
-        # the effects as every kernel reads them (law_record.EFFECTS), in Python numbers
+        # the effects as every kernel reads them (kernels.records.EFFECTS), in Python numbers
         effects = pack_effects(self)
         self._effects = SimpleNamespace(**{name: effects[name][0].tolist() for name in EFFECTS.names or ()})
 

@@ -9,7 +9,7 @@ applies at), ``e`` the entry factor, ``x`` the exposure (:func:`fem_loads.exposu
 ``tau`` the friction stress, along the slip by :func:`fem_loads.target.slip_factor_scalars`.
 
 Each is written on floats and numpy arrays alike: the numpy path evaluates it on every point at once, and
-:mod:`fem_loads.native` compiles the same function for the compiled kernels.  A flag is one value for all the
+:mod:`fem_loads.kernels.native` compiles the same function for the compiled kernels.  A flag is one value for all the
 points, so a compiled loop that passes a constant keeps no branch.  :func:`point_stress_scalars` is the pipeline
 every load calls; a new factor is one ``*_scalars`` function here and one line in it.
 
@@ -59,7 +59,7 @@ def smooth_step_scalars(t: Any) -> Any:
 
 def add_term(value: Any, term: float) -> Any:
     """``value + term``: on an array in place, and skipped where ``term`` is 0 (an array pass fewer).  Compiled
-    (:mod:`fem_loads.native`) it is always added, so that a loop over the points keeps no branch."""
+    (:mod:`fem_loads.kernels.native`) it is always added, so that a loop over the points keeps no branch."""
     if term != 0.0:
         value += term
     return value
@@ -83,7 +83,7 @@ class Switches(NamedTuple):
 
 
 def switches_scalars(effects: Any, width: float, guard: float, entering: bool, plain: bool, surface: bool) -> Switches:
-    """The :class:`Switches` of the effects record ``effects`` (:data:`~fem_loads.law_record.EFFECTS`, or an object
+    """The :class:`Switches` of the effects record ``effects`` (:data:`~fem_loads.kernels.records.EFFECTS`, or an object
     with its fields) at the contact width ``width`` (m/s; 0: sharp, or a body at rest without a fixed width), the
     sharp switch's threshold ``guard`` (m/s) and ``entering``.  ``plain`` (the record's ``plain``): its switches as
     constants, for the compiled loop that passes it as one, with the free-surface factor where ``surface`` (without

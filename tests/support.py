@@ -120,11 +120,11 @@ def mirrored_states(rng, count: int = 20):
 
 
 def ring_records(law, entry_length: float = 0.0, max_radius: float = 0.0, **effects):
-    """The rings' law and effects records (``fem_loads.law_record``) of a load of ``law`` with ``effects`` (the
+    """The rings' law and effects records (``fem_loads.kernels.records``) of a load of ``law`` with ``effects`` (the
     keyword arguments of ``DAFLLoads``, a guard of 0 and no effect by default), without a mesh."""
     from types import SimpleNamespace
 
-    from fem_loads.law_record import pack_effects, pack_laws
+    from fem_loads.kernels.records import pack_effects, pack_laws
     from fem_loads.target import LEVEL
 
     loads = SimpleNamespace(

@@ -1,10 +1,10 @@
 """The compiled step of a run (``numerics.kernel = "compiled"``), with numba's cache named for its code.
 
 The compiled step of the DAFL load (:mod:`.dafl_step`) inlines the Runge-Kutta step of
-:mod:`dynamics.compiled` (with the arithmetic of :mod:`dynamics.quaternion` and
-:mod:`dynamics.integrators`) and calls the load kernel of :mod:`fem_loads.compiled`; the reduced
+:mod:`dynamics.compiled_rk` (with the arithmetic of :mod:`dynamics.quaternion` and
+:mod:`dynamics.integrators`) and calls the load kernel of :mod:`fem_loads.kernels.mesh_loop`; the reduced
 pitch-plane trajectory of ``penetrate predict`` (:mod:`.pitch_plane_step`) inlines the driver of
-:mod:`dynamics.pitch_plane` and calls the ring load of :mod:`fem_loads.revolved`.  numba keeps the
+:mod:`dynamics.pitch_plane` and calls the ring load of :mod:`fem_loads.kernels.rings`.  numba keeps the
 machine code in the cache of the joining file and notices changes of that file alone, not of the
 modules it inlines and calls.  So numba's cache lives in a folder named for the digest of all
 these sources (:func:`compiled_sources`: the closure of the entry points' modules under their imports) and
@@ -34,7 +34,7 @@ from .persistence import atomic_write_text, cache_dir
 
 if TYPE_CHECKING:  # imported where used, after use_numba_cache
     from dynamics import RigidBody, RungeKutta
-    from dynamics.compiled import CompiledLoad, CompiledRungeKutta
+    from dynamics.compiled_rk import CompiledLoad, CompiledRungeKutta
     from fem_loads import DAFLLoads
 
 __all__ = [
@@ -239,15 +239,16 @@ def announce_compiling(entry: str) -> None:
 
 def _import_compiled() -> tuple[ModuleType, ModuleType]:
     use_numba_cache()
-    from dynamics import compiled as step
-    from fem_loads import compiled as load
+    from dynamics import compiled_rk as step
+    from fem_loads.kernels import mesh_loop as load
 
     return step, load
 
 
 def compiled_modules() -> tuple[ModuleType, ModuleType]:
-    """``(dynamics.compiled, fem_loads.compiled)``, imported with numba's cache in :func:`numba_cache_folder`: for
-    code that calls or times the compiled kernels itself (the load benchmark, docs/performance/loads.py)."""
+    """``(dynamics.compiled_rk, fem_loads.kernels.mesh_loop)``, imported with numba's cache in
+    :func:`numba_cache_folder`: for code that calls or times the compiled kernels itself (the load benchmark,
+    docs/performance/loads.py)."""
     return _import_compiled()
 
 
@@ -271,15 +272,15 @@ def compiled_step(
 ) -> tuple[CompiledLoad, CompiledRungeKutta, Callable[..., float]]:
     """The compiled load, Runge-Kutta step and exit height for a scene's loads (a ``DAFLLoads``).
 
-    Returns ``(load, method, lowest_height)``: a :class:`~dynamics.compiled.CompiledLoad` (plus
-    ``weight``, N, world frame, when given), the :class:`~dynamics.compiled.CompiledRungeKutta` of
+    Returns ``(load, method, lowest_height)``: a :class:`~dynamics.compiled_rk.CompiledLoad` (plus
+    ``weight``, N, world frame, when given), the :class:`~dynamics.compiled_rk.CompiledRungeKutta` of
     ``method``, and ``lowest_height(position, attitude, face=None)`` for the exit events
     (:meth:`fem_loads.DAFLLoads.lowest_height`).
     """
     compiled_load = compiled_load_function(loads, weight)
     step, load = _import_compiled()
     from dynamics.quaternion import rotation_matrix
-    from fem_loads.kernel_layout import DATA_EFFECTS
+    from fem_loads.kernels.layout import DATA_EFFECTS
     from fem_loads.target import FrontFace
 
     data = compiled_load.data

@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from dynamics.compiled import Body, Start, Tableau, rk_step
-from fem_loads.compiled import dafl_kernel
+from dynamics.compiled_rk import Body, Start, Tableau, rk_step
+from fem_loads.kernels.mesh_loop import dafl_kernel
 
 __all__ = ["dafl_step"]
 
@@ -23,5 +23,5 @@ def dafl_step(
     has_given: bool,
     out: np.ndarray,
 ) -> None:
-    """:func:`dynamics.compiled.rk_step` with the load :func:`fem_loads.compiled.dafl_kernel`."""
+    """:func:`dynamics.compiled_rk.rk_step` with the load :func:`fem_loads.kernels.mesh_loop.dafl_kernel`."""
     rk_step(dafl_kernel, data, body, method, start, h, given, has_given, out)

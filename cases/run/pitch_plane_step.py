@@ -1,5 +1,5 @@
 """The compiled reduced trajectory: the pitch-plane driver of :mod:`dynamics.pitch_plane` with the ring load of
-:mod:`fem_loads.revolved` (imported through :func:`.compiled.use_numba_cache` first, which names numba's cache
+:mod:`fem_loads.kernels.rings` (imported through :func:`.compiled.use_numba_cache` first, which names numba's cache
 folder for this code).  The load is a global here, so numba can cache the whole trajectory."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import numpy as np
 from numba import njit
 
 from dynamics.pitch_plane import PlaneBody, PlaneEnds, PlaneSteps, trajectory
-from fem_loads.revolved import lowest_height, pitch_plane_load
+from fem_loads.kernels.rings import lowest_height, pitch_plane_load
 
 __all__ = ["pitch_plane_trajectory"]
 
@@ -43,7 +43,7 @@ def pitch_plane_trajectory(
     control: PlaneSteps,
     ends: PlaneEnds,
 ) -> tuple[int, float, float, float, float, float, float, int, int, int]:
-    """:func:`dynamics.pitch_plane.trajectory` with the load :func:`fem_loads.revolved.pitch_plane_load` on ``rings``
-    under the records ``laws`` and ``effects`` (:func:`fem_loads.revolved.ring_data`; the lowest point on
+    """:func:`dynamics.pitch_plane.trajectory` with the load :func:`fem_loads.kernels.rings.pitch_plane_load` on
+    ``rings`` under the records ``laws`` and ``effects`` (:func:`fem_loads.kernels.rings.ring_data`; the lowest point on
     ``outline``); returns its :data:`~dynamics.pitch_plane.OUTCOME_FIELDS`."""
     return trajectory(_load, _lowest, (rings, laws, effects, outline), y0, body, control, ends)

@@ -49,7 +49,7 @@ from .prepare import PreparedProjectile, prepare_projectile
 
 if TYPE_CHECKING:
     from dynamics import RungeKutta
-    from dynamics.compiled import CompiledLoad, CompiledRungeKutta
+    from dynamics.compiled_rk import CompiledLoad, CompiledRungeKutta
     from fem_loads import DAFLLoads
 
 __all__ = [

@@ -188,18 +188,18 @@ class Scene(Strict):
 
     @property
     def compilable(self) -> bool:
-        """Whether the compiled kernel computes this scene's load (:func:`fem_loads.law_record.compilable` of its
+        """Whether the compiled kernel computes this scene's load (:func:`fem_loads.kernels.records.compilable` of its
         target): every law and effect, except layers whose laws are not all built in or all one user function."""
-        from fem_loads.law_record import compilable
+        from fem_loads.kernels.records import compilable
 
         return compilable(self.target.build())
 
     @property
     def compiled_is_faster(self) -> bool:
-        """Whether the compiled kernel computes this scene's load in SIMD lanes (:func:`fem_loads.law_record.in_lanes`),
-        4-11 times faster than numpy; any other load it computes point by point, no faster than numpy (a power
-        term, a user's law: docs/performance.md)."""
-        from fem_loads.law_record import in_lanes
+        """Whether the compiled kernel computes this scene's load in SIMD lanes
+        (:func:`fem_loads.kernels.records.in_lanes`), 4-11 times faster than numpy; any other load it computes point
+        by point, no faster than numpy (a power term, a user's law: docs/performance.md)."""
+        from fem_loads.kernels.records import in_lanes
 
         effects, smooth_entry = self.effects, self.numerics.entry_smoothing > 0
         return in_lanes(self.target.build(), effects.separation, not effects.sharp_contact, smooth_entry)

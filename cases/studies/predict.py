@@ -3,7 +3,7 @@
 The model (docs/theory.md derives it and says what it neglects):
 
 * **Loads.**  The scene's DAFL (its law, contact and entry ramps, friction) integrated over the
-  exact surface of revolution ring by ring (:mod:`fem_loads.revolved`): in pitch-plane motion the
+  exact surface of revolution ring by ring (:mod:`fem_loads.kernels.rings`): in pitch-plane motion the
   normal velocity and the height are linear in ``cos phi`` around each ring, so the stress is
   integrated between the law's switches in closed form, without a mesh or its quadrature points.
 * **Motion.**  Three degrees of freedom in the vertical plane (:mod:`dynamics.pitch_plane`), the
@@ -85,7 +85,7 @@ class ReducedModel:
     rtol : float
         The reduced runs' relative tolerance.
     rings : dict
-        The rings' counts (:func:`fem_loads.revolved.revolved_surface`).
+        The rings' counts (:func:`fem_loads.kernels.rings.revolved_surface`).
     """
 
     def __init__(
@@ -94,7 +94,7 @@ class ReducedModel:
         check_supported(scene)
         announce_compiling("pitch_plane_step")
         use_numba_cache()
-        from fem_loads.revolved import revolved_surface, ring_data
+        from fem_loads.kernels.rings import revolved_surface, ring_data
 
         from ..run.pitch_plane_step import pitch_plane_trajectory
 

@@ -52,7 +52,7 @@ void dafl(long n, const double *normal_arm /* 6 x n */, const double *points /* 
     }
 }
 """
-# the licence numba's kernel has (reassociation, fused multiply-adds; fem_loads/compiled.py), and no more
+# the licence numba's kernel has (reassociation, fused multiply-adds; fem_loads/kernels/mesh_loop.py), and no more
 C_FLAGS = [
     "-O3",
     "-march=native",

@@ -54,7 +54,7 @@ def test_a_user_page_carries_no_history(page):
 
 @pytest.mark.parametrize(
     "text",
-    ["fixed in 3f9a2c1", "the old rule (no longer used)", "see fem_loads/dafl.py", "dynamics.compiled is"],
+    ["fixed in 3f9a2c1", "the old rule (no longer used)", "see fem_loads/dafl.py", "dynamics.compiled_rk is"],
 )
 def test_the_patterns_catch_history(text, tmp_path):
     page = tmp_path / "page.md"

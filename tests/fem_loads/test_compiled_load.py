@@ -1,4 +1,4 @@
-"""The compiled DAFL kernel (fem_loads/compiled.py) computes the numpy load: on random states, in every
+"""The compiled DAFL kernel (fem_loads/kernels/mesh_loop.py) computes the numpy load: on random states, in every
 switch mode, with and without mirror quarters; symmetric states stay exactly symmetric."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from cases import load_scene, prepare_projectile, scene_path
 from cases.run.compiled import _import_compiled
 from dynamics.quaternion import normalize, rotation_matrix
 from fem_loads import DAFLLoads, ResistanceLaw, SurfaceQuadrature, resistance_law
-from fem_loads.law_record import compilable
+from fem_loads.kernels.records import compilable
 from fem_loads.target import GAP, FreeSurface, Friction, LayeredTarget
 
 _, compiled = _import_compiled()  # numba's cache in the folder named for the compiled code

@@ -725,7 +725,7 @@ def test_rk4_reaches_its_order_with_the_continuous_load():
     entering and every switch at Vn = 0 is a jump RK4 crosses at first order.
     """
     steps = (2e-5, 1e-5, 5e-6, 2.5e-6)
-    # on the compiled step, which reaches the order as the Python step does (tests/dynamics/test_compiled_step.py)
+    # on the compiled step, which reaches the order as the Python step does (tests/dynamics/test_compiled_rk.py)
     records = [
         _run(FL5, *MM20, "numerics.integrator=rk4", f"numerics.time_step={h}", "numerics.kernel=compiled")[2]
         for h in steps

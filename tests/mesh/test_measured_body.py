@@ -12,7 +12,7 @@ from cases import load_scene, run_scene, scene_path, summarise
 from cases.scene import SceneError
 from cases.studies.reference import axial_depth_1d, check_nose_alone_presses, embedded_axial_force
 from fem_loads import DAFLLoads, mass_properties, resistance_law, surface_quadrature
-from fem_loads.revolved import PitchPlaneLoad, revolved_surface
+from fem_loads.kernels.rings import PitchPlaneLoad, revolved_surface
 from mesh import (
     BODY,
     Interior,

@@ -24,7 +24,7 @@ ROOT = Path(__file__).resolve().parents[2]
 PACKAGES = ("mesh", "fem_loads", "dynamics", "cases", "docs")
 compiled_modules()  # numba's cache in the folder named for the compiled code
 
-#: the compiled forms :mod:`fem_loads.native` makes, and the module of each one definition
+#: the compiled forms :mod:`fem_loads.kernels.native` makes, and the module of each one definition
 NATIVE = {
     "slip_factor": ("target", "slip_factor_scalars"),
     "builtin_stress": ("resistance", "normal_stress_scalars"),
@@ -37,7 +37,7 @@ NATIVE = {
     "cube_cell": ("exposure", "cube_cell_scalars"),
     "cell_exposure": ("exposure", "cell_exposure_scalars"),
 }
-#: compiled functions of :mod:`fem_loads.native` with no plain twin (they read the kernels' records)
+#: compiled functions of :mod:`fem_loads.kernels.native` with no plain twin (they read the kernels' records)
 NATIVE_ONLY = ("law_stress", "call_user_law")
 #: the functions that may call the smooth step: the factors
 RAMP_CALLERS = [
@@ -51,9 +51,9 @@ def _definitions() -> list[tuple[object, object]]:
     """(compiled form, the one definition) pairs."""
     import importlib
 
-    from dynamics import compiled as compiled_step
+    from dynamics import compiled_rk as compiled_step
     from dynamics import pitch_plane, rigid_body
-    from fem_loads import native
+    from fem_loads.kernels import native
 
     pairs = [
         (getattr(native, name), getattr(importlib.import_module(f"fem_loads.{module}"), function))
@@ -71,14 +71,15 @@ def test_each_compiled_form_is_the_one_definition(index):
     assert getattr(compiled, "py_func", None) is definition, (compiled, definition)
 
 
-@pytest.mark.parametrize("module", ["compiled", "compiled_point", "revolved"])
+@pytest.mark.parametrize("module", ["mesh_loop", "point", "rings"])
 def test_the_kernels_take_every_compiled_form_from_one_module(module):
-    """A kernel's ``point_stress`` (and every other name :mod:`fem_loads.native` makes) is native's own object."""
+    """A kernel's ``point_stress`` (and every other name :mod:`fem_loads.kernels.native` makes) is native's own
+    object."""
     import importlib
 
-    from fem_loads import native
+    from fem_loads.kernels import native
 
-    kernel = importlib.import_module(f"fem_loads.{module}")
+    kernel = importlib.import_module(f"fem_loads.kernels.{module}")
     shared = [name for name in (*NATIVE, *NATIVE_ONLY) if hasattr(kernel, name)]
     assert shared, module
     assert all(getattr(kernel, name) is getattr(native, name) for name in shared)
@@ -205,7 +206,7 @@ def test_the_switches_are_built_from_the_effects_in_one_function():
 
 
 #: the loads: each multiplies a point's law value by its factors through the pipeline, point_stress_scalars
-LOADS = ("fem_loads/dafl.py", "fem_loads/compiled_point.py", "fem_loads/revolved.py")
+LOADS = ("fem_loads/dafl.py", "fem_loads/kernels/point.py", "fem_loads/kernels/rings.py")
 #: the factors the pipeline applies (the entry factor is also the layers' blend, and the rings' early exit)
 PIPELINE_FACTORS = {"contact_factor", "contact_factor_scalars", "surface_factor", "surface_factor_scalars"}
 

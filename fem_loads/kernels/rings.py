@@ -26,13 +26,13 @@ from numba import njit
 
 from mesh import Profile
 
-from .dafl import DAFLLoads
-from .factors import Switches
-from .law_record import pack_effects, pack_laws
+from ..dafl import DAFLLoads
+from ..factors import Switches
+from ..resistance import ResistanceLaw
+from ..target import LEVEL
+from ..user_law import UserLaw
 from .native import entry_factor, friction_stress, law_stress, point_stress, slip_factor, switches
-from .resistance import ResistanceLaw
-from .target import LEVEL
-from .user_law import UserLaw
+from .records import pack_effects, pack_laws
 
 __all__ = [
     "RevolvedSurface",
@@ -128,7 +128,7 @@ def revolved_surface(
 
 
 def ring_data(loads: DAFLLoads, surface: RevolvedSurface) -> tuple[np.ndarray, np.ndarray]:
-    """The law and effects records (:mod:`fem_loads.law_record`) of a mesh load's own law and effects, with
+    """The law and effects records (:mod:`fem_loads.kernels.records`) of a mesh load's own law and effects, with
     the rings' radius and one entry length for every ring: the mesh's at its median point (``entry_smoothing`` times
     the square root of its weight).  Refuses what the rings do not integrate: a strength table, layers, a free
     surface, contact without separation, and a face that is not level."""
@@ -379,7 +379,7 @@ class PitchPlaneLoad:
     ----------
     surface : RevolvedSurface
     law : tuple of ndarray
-        The law and effects records of :func:`ring_data` (or of :mod:`fem_loads.law_record`).
+        The law and effects records of :func:`ring_data` (or of :mod:`fem_loads.kernels.records`).
     """
 
     def __init__(self, surface: RevolvedSurface, law: tuple[np.ndarray, np.ndarray]) -> None:

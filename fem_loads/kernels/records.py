@@ -14,9 +14,9 @@ from typing import Any
 
 import numpy as np
 
-from .resistance import ResistanceLaw
-from .target import LayeredTarget
-from .user_law import MAX_PARAMETERS, UserLaw
+from ..resistance import ResistanceLaw
+from ..target import LayeredTarget
+from ..user_law import MAX_PARAMETERS, UserLaw
 
 __all__ = ["LAW", "EFFECTS", "COEFFICIENTS", "pack_laws", "pack_effects", "compilable", "in_lanes"]
 
@@ -118,8 +118,8 @@ def pack_effects(
     loads: Any, address: int = 0, entry_length: float | None = None, max_radius: float | None = None
 ) -> np.ndarray:
     """One :data:`EFFECTS` record (shape (1,)) of the effects of ``loads`` (a :class:`~fem_loads.dafl.DAFLLoads`),
-    for the mesh kernel (:func:`~fem_loads.kernel_layout.kernel_data`), the rings
-    (:func:`~fem_loads.revolved.ring_data`) and the numpy load alike.  ``address``: the user law's
+    for the mesh kernel (:func:`~fem_loads.kernels.layout.kernel_data`), the rings
+    (:func:`~fem_loads.kernels.rings.ring_data`) and the numpy load alike.  ``address``: the user law's
     (:func:`pack_laws`; 0: none); ``entry_length`` (m; 0 sharp) and ``max_radius`` (m): the load's own by default
     (its longest point's entry length, its farthest point from the centre of mass); the rings give theirs."""
     law, friction, surface, face = loads.law, loads.friction, loads.free_surface, loads.front_face

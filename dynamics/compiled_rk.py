@@ -5,7 +5,7 @@ Runge-Kutta-Munthe-Kaas step and chord path increment), but one call of :func:`r
 step in machine code, the load kernel of a :class:`CompiledLoad` included; the driver
 (:func:`~dynamics.simulate.simulate`) sees one :class:`StepResult` per step as before.  The quaternion and path
 arithmetic is the Python step's own ``*_scalars`` functions, compiled; the stage sums and the load run in
-another order, so the two steps agree to round-off, not bit for bit (tests/dynamics/test_compiled_step.py).
+another order, so the two steps agree to round-off, not bit for bit (tests/dynamics/test_compiled_rk.py).
 Caching and its costs: docs/numerics.md, "The compiled step", and docs/dev-numerics.md.
 """
 

@@ -1,13 +1,13 @@
-"""The layout of the compiled DAFL kernel's data (:mod:`fem_loads.compiled`): which arrays, in which order,
+"""The layout of the compiled DAFL kernel's data (:mod:`fem_loads.kernels.mesh_loop`): which arrays, in which order,
 built from a :class:`~fem_loads.dafl.DAFLLoads` through its public attributes (without numba)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from . import images
-from .dafl import DAFLLoads
-from .law_record import pack_effects, pack_laws
+from .. import images
+from ..dafl import DAFLLoads
+from .records import pack_effects, pack_laws
 
 __all__ = ["KERNEL_ARRAYS", "kernel_data"]  # and each array's index, DATA_*
 
@@ -20,8 +20,8 @@ DATA_INVERSE_ENTRY = 3  # (m,): 1 / l (1/m), zero with sharp entry
 DATA_HALF_ENTRY_LENGTH = 4  # (m,): l / 2 (m)
 DATA_IMAGE_SIGNS = 5  # (k, 6)
 DATA_POINT_SIGNS = 6  # (k, 3)
-DATA_EFFECTS = 7  # (1,) EFFECTS record: the ramps, friction, free surface, user law (law_record)
-DATA_LAWS = 8  # (layers,) LAW records: each layer's coefficients or user parameters (law_record)
+DATA_EFFECTS = 7  # (1,) EFFECTS record: the ramps, friction, free surface, user law (records)
+DATA_LAWS = 8  # (layers,) LAW records: each layer's coefficients or user parameters (records)
 DATA_TABLES = 9  # (2, columns): the layers' strength tables one after the other, depth (m) and stress (Pa)
 DATA_INTERFACES = 10  # (layers - 1,): the layers' interfaces (m below the surface)
 DATA_EXPOSURE_COLUMNS = 11  # (c,), int: the points that can be hidden (Exposure.columns); empty for a convex body
@@ -35,7 +35,7 @@ KERNEL_ARRAYS = tuple(name[5:].lower() for name in list(globals()) if name.start
 
 def kernel_data(loads: DAFLLoads) -> tuple[np.ndarray, ...]:
     """The arrays and records of :func:`dafl_kernel` for ``loads`` (its target
-    :func:`~fem_loads.law_record.compilable`), in the order of :data:`KERNEL_ARRAYS`."""
+    :func:`~fem_loads.kernels.records.compilable`), in the order of :data:`KERNEL_ARRAYS`."""
     quadrature = loads.quadrature
     if quadrature.mirror_images is not None:
         index = quadrature.mirror_images[0]

@@ -1,5 +1,5 @@
-"""One surface point of the compiled DAFL kernel (:mod:`fem_loads.compiled`): its motion, its stress, its friction,
-and the correction of the sums for the points the target cannot reach (:mod:`fem_loads.exposure`).
+"""One surface point of the compiled DAFL kernel (:mod:`fem_loads.kernels.mesh_loop`): its motion, its stress, its
+friction, and the correction of the sums for the points the target cannot reach (:mod:`fem_loads.exposure`).
 
 Everything here is inlined into the kernel's loops (``inline="always"``), so that the sums over the points
 and the correction of the hidden ones compute each point's stress with the same machine code.
@@ -13,8 +13,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from . import kernel_layout as layout
-from .factors import Switches
+from ..factors import Switches
+from . import layout
 from .native import (
     Coefficients,
     Parameters,
@@ -67,7 +67,7 @@ class Setup(NamedTuple):
     with_height: bool  #: the stress needs each point's height (a depth-dependent law, the free surface, entering)
     friction: tuple[float, float, float, float]  #: ``(mu, cap, W, |v|^2)`` for :func:`image_friction`
     address: int  #: the user law's cfunc (0: the built-in law)
-    coefficients: Coefficients  #: the first layer's law (:func:`~fem_loads.native.law_values`)
+    coefficients: Coefficients  #: the first layer's law (:func:`~fem_loads.kernels.native.law_values`)
     parameters: Parameters  #: and its user law's parameters
     polynomial: tuple[float, float, float, float]  #: its ``(c0, k, c1, c2)``, the plain law's
     switches: Switches
@@ -83,7 +83,7 @@ def setup(
     tuple per point costs its reference counting, more than the law itself).
 
     ``plain``: the law is the polynomial of the shipped scenes with both smooth ramps and separation
-    (:data:`~fem_loads.law_record.EFFECTS`'s ``plain``), and ``with_friction`` whether the loop adds friction or a
+    (:data:`~fem_loads.kernels.records.EFFECTS`'s ``plain``), and ``with_friction`` whether the loop adds friction or a
     free surface; both constants in the loop that passes them, so that its switches are constants too and the loop
     keeps no branch that differs from point to point."""
     effects, law = data[layout.DATA_EFFECTS][0], data[layout.DATA_LAWS][0]

@@ -1,13 +1,13 @@
 """The DAFL load in compiled code (numba): one loop over the surface points per evaluation.
 
 :func:`dafl_kernel` evaluates the resultant of :meth:`DAFLLoads.__call__ <fem_loads.dafl.DAFLLoads.__call__>`,
-every effect included, through the same per-point pipeline (:mod:`fem_loads.compiled_point`).  Mirror images are
+every effect included, through the same per-point pipeline (:mod:`fem_loads.kernels.point`).  Mirror images are
 kept as the numpy path keeps them (:mod:`fem_loads.images`): each image of the fundamental part's points is summed
 with its own signs, in the same order, and the images are folded in mirrored pairs, so a symmetric state gives an
 exactly symmetric normal load.
 
 The kernel takes its arrays as one tuple (:func:`kernel_data`), so the compiled Runge-Kutta step
-(:mod:`dynamics.compiled`) calls it without knowing what it computes, and a user's law as the address of its
+(:mod:`dynamics.compiled_rk`) calls it without knowing what it computes, and a user's law as the address of its
 ``cfunc`` (:meth:`~fem_loads.user_law.UserLaw.compiled`): the kernel is compiled and cached once for every law.
 """
 
@@ -18,8 +18,10 @@ import math
 import numpy as np
 from numba import njit
 
-from . import kernel_layout as layout
-from .compiled_point import (
+from . import layout
+from .layout import KERNEL_ARRAYS, kernel_data
+from .native import face_frame, point_stress
+from .point import (
     Motion,
     exposure_correction,
     image_friction,
@@ -30,8 +32,6 @@ from .compiled_point import (
     point_motion,
     setup,
 )
-from .kernel_layout import KERNEL_ARRAYS, kernel_data
-from .native import face_frame, point_stress
 
 __all__ = ["dafl_kernel", "lowest_height_kernel", "kernel_data", "KERNEL_ARRAYS"]
 
@@ -52,7 +52,7 @@ def _sums(
     layered: bool,
 ) -> None:
     """Each image's ``sum sigma w [n | r x n]`` into ``sums``; the friction's force and moment (body frame) into
-    ``friction``.  ``plain``, ``with_friction`` (:func:`~fem_loads.compiled_point.setup`) and ``layered`` are
+    ``friction``.  ``plain``, ``with_friction`` (:func:`~fem_loads.kernels.point.setup`) and ``layered`` are
     constants in each of the four functions that inline this one, each a loop of its own without the others'
     branches: the plain law with its SIMD lanes (no calls, and no branches that differ from point to point), with
     friction and the free surface or not; any other one law; and layers."""

@@ -1,4 +1,4 @@
-"""The ring-by-ring DAFL of a body of revolution (fem_loads.revolved) against the mesh's DAFL and closed forms."""
+"""The ring-by-ring DAFL of a body of revolution (fem_loads.kernels.rings) against the mesh's DAFL and closed forms."""
 
 import functools
 import math
@@ -11,7 +11,7 @@ from support import meshed, ring_records, slow_except
 import cases
 from cases.studies.reference import embedded_axial_force
 from fem_loads import DAFLLoads, ResistanceLaw, mass_properties, resistance_law, surface_quadrature
-from fem_loads.revolved import PitchPlaneLoad, lowest_height, revolved_surface
+from fem_loads.kernels.rings import PitchPlaneLoad, lowest_height, revolved_surface
 from fem_loads.target import Friction
 from fem_loads.user_law import user_law
 from mesh import BODY, BluntOgiveNose, ConeNose, OgiveNose, Profile, ProjectileGeometry, analytic_mass_properties
@@ -22,7 +22,7 @@ DELTA, ENTRY = 0.005, 0.01  # the default contact incidence; an entry ramp of 1 
 
 
 def rotation(theta: float) -> np.ndarray:
-    """Body to world, turned by ``theta`` about the world Y axis (fem_loads.revolved's convention)."""
+    """Body to world, turned by ``theta`` about the world Y axis (fem_loads.kernels.rings's convention)."""
     c, s = math.cos(theta), math.sin(theta)
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 
@@ -140,7 +140,8 @@ def test_closed_form_arcs_are_the_integrals():
 
 def _brute_force_rings(surface, law, friction, state, points=100_000):
     """The ring load by the midpoint rule in ``phi`` on ``points`` points per half ring: the integrand of the points'
-    pipeline (the numpy path's scalar functions), summed as :func:`~fem_loads.revolved.pitch_plane_load` sums it."""
+    pipeline (the numpy path's scalar functions), summed as :func:`~fem_loads.kernels.rings.pitch_plane_load` sums
+    it."""
     from fem_loads.factors import Switches, friction_stress_scalars, point_stress_scalars
     from fem_loads.target import slip_factor_scalars
 

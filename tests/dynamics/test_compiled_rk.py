@@ -1,4 +1,4 @@
-"""The compiled Runge-Kutta step (dynamics/compiled.py) against exact solutions and the Python step."""
+"""The compiled Runge-Kutta step (dynamics/compiled_rk.py) against exact solutions and the Python step."""
 
 from __future__ import annotations
 

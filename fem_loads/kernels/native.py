@@ -16,9 +16,9 @@ from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic, overload, register_jitable
 
-from . import factors
-from .exposure import cell_exposure_scalars, corner_exposure, cube_cell_scalars, fine_exposure
-from .factors import (
+from .. import factors
+from ..exposure import cell_exposure_scalars, corner_exposure, cube_cell_scalars, fine_exposure
+from ..factors import (
     add_term,
     entry_factor_scalars,
     friction_stress_scalars,
@@ -26,9 +26,9 @@ from .factors import (
     point_stress_scalars,
     switches_scalars,
 )
-from .resistance import normal_stress_scalars, polynomial_stress_scalars, table_stress_scalars
-from .target import face_frame_scalars, face_height_scalars, slip_factor_scalars
-from .user_law import MAX_PARAMETERS
+from ..resistance import normal_stress_scalars, polynomial_stress_scalars, table_stress_scalars
+from ..target import face_frame_scalars, face_height_scalars, slip_factor_scalars
+from ..user_law import MAX_PARAMETERS
 
 __all__ = [
     "call_user_law",
@@ -146,7 +146,7 @@ call_user_law: Callable[..., float] = _call_user_law_intrinsic
 
 @njit(cache=True, inline="always", error_model="numpy")
 def law_values(law: Any) -> tuple[Coefficients, Parameters]:
-    """A :data:`~fem_loads.law_record.LAW` record's built-in coefficients ``(c0, k, c1, c2, c, n)`` and its user
+    """A :data:`~fem_loads.kernels.records.LAW` record's built-in coefficients ``(c0, k, c1, c2, c, n)`` and its user
     law's parameters, as tuples of floats: what a loop over the points reads once, not once per point."""
     u = law.user
     return (law.c0, law.k, law.c1, law.c2, law.c, law.n), (u[0], u[1], u[2], u[3], u[4], u[5], u[6], u[7])
@@ -176,6 +176,6 @@ def law_value(
 def law_stress(
     law: Any, address: int, normal_velocity: float, depth: float, depths: np.ndarray, stresses: np.ndarray
 ) -> float:
-    """:func:`law_value` of one layer's law, a :data:`~fem_loads.law_record.LAW` record."""
+    """:func:`law_value` of one layer's law, a :data:`~fem_loads.kernels.records.LAW` record."""
     coefficients, parameters = law_values(law)
     return law_value(coefficients, parameters, address, normal_velocity, depth, depths, stresses)
