@@ -19,7 +19,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .factors import point_stress_scalars, switches_scalars
+from .factors import contact_width_scalars, point_stress_scalars, speed_scale_scalars, switches_scalars
 from .images import MirrorImages
 from .kernels.records import EFFECTS, pack_effects
 from .quadrature import SurfaceQuadrature
@@ -223,8 +223,8 @@ class DAFLLoads:
         return float((heights - 0.5 * self._entry_length).min() if self.entry_smoothing else heights.min())
 
     def _width(self, speed_scale: float) -> float:
-        """``W = w + delta U``, the contact width (m/s) at the speed scale ``U`` (0 with sharp contact)."""
-        return self.contact_width + self.contact_incidence * speed_scale
+        """``W``, the contact width (m/s) at the speed scale ``U`` (:func:`.factors.contact_width_scalars`)."""
+        return contact_width_scalars(self.contact_width, self.contact_incidence, speed_scale)
 
     def _stress(
         self, frame: tuple[float, ...], velocity: np.ndarray, rotation: np.ndarray, angular_velocity: np.ndarray
@@ -238,7 +238,7 @@ class DAFLLoads:
         else:
             normal_velocity = self._images.normal_velocity(generalised, np.empty(self._images.shape))
         speed = math.sqrt(float(velocity @ velocity))
-        speed_scale = speed + math.sqrt(float(angular_velocity @ angular_velocity)) * self.max_radius
+        speed_scale = speed_scale_scalars(speed, math.sqrt(float(angular_velocity @ angular_velocity)), self.max_radius)
         # every point's depth, even wholly inside, for a law that depends on it (layers always do)
         needs_depth = self.law.depth_dependent or self.free_surface is not None
         heights = self._heights(*frame) if needs_depth or not self._sphere(frame[0])[0] else None
@@ -343,7 +343,7 @@ class DAFLLoads:
         r_dot_w = points @ w
         speed2 = float(v @ v) + 2.0 * (points @ np.cross(v, w)) + float(w @ w) * self._radius2 - r_dot_w**2  # |u|^2
         slip2 = np.maximum(speed2 - normal_velocity**2, 0.0)
-        width = self._width(math.sqrt(float(v @ v)) + math.sqrt(float(w @ w)) * self.max_radius)
+        width = self._width(speed_scale_scalars(math.sqrt(float(v @ v)), math.sqrt(float(w @ w)), self.max_radius))
         return np.sqrt(slip2), slip_factor_scalars(slip2, width, float(v @ v)), r_dot_w
 
     def _friction_load(

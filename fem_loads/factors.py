@@ -82,6 +82,18 @@ class Switches(NamedTuple):
     smooth_entry: bool  #: points enter over their own extent (else sharply)
 
 
+def speed_scale_scalars(speed: float, spin: float, max_radius: float) -> float:
+    """``U = |V| + |omega| r_max`` (m/s): no surface point moves faster (``speed``, m/s; ``spin``, rad/s;
+    ``max_radius``, m).  It scales the contact ramp's width and the normal-velocity guard."""
+    return speed + spin * max_radius
+
+
+def contact_width_scalars(contact_width: float, contact_incidence: float, speed_scale: float) -> float:
+    """``W = w + delta U`` (m/s): the contact ramp's width at the speed scale ``U`` (:func:`speed_scale_scalars`);
+    0 with the sharp switch (both zero)."""
+    return contact_width + contact_incidence * speed_scale
+
+
 def switches_scalars(effects: Any, width: float, guard: float, entering: bool, plain: bool, surface: bool) -> Switches:
     """The :class:`Switches` of the effects record ``effects`` (:data:`~fem_loads.kernels.records.EFFECTS`, or an object
     with its fields) at the contact width ``width`` (m/s; 0: sharp, or a body at rest without a fixed width), the

@@ -34,7 +34,7 @@ import numpy as np
 from scipy import integrate
 from scipy.interpolate import BarycentricInterpolator
 
-from fem_loads.factors import contact_factor_scalars
+from fem_loads.factors import contact_factor_scalars, contact_width_scalars
 from fem_loads.resistance import ResistanceLaw
 from fem_loads.target import GAP, LayeredTarget
 from fem_loads.user_law import UserLaw
@@ -277,7 +277,7 @@ def axial_force(
     ``c`` the contact factor: ``S(x)`` one-sided, ``S(1/2 + x)`` centred, the step ``x > 0`` sharp), plus a
     flat front face (``sin = 1``) of a blunt nose.  The shank (``Vn = 0``) carries no axial force.
     """
-    width = contact_width + contact_incidence * speed
+    width = contact_width_scalars(contact_width, contact_incidence, speed)
     offset = 0.5 if contact == "centred" else 0.0
     extent = min(max(depth, 0.0), profile.nose_length)
     x, weights = _gauss(2000)
@@ -378,7 +378,7 @@ def layered_axial_force(
     :class:`Layer` slices with sharp faces: :func:`axial_force`'s integral taken over the part of the nose inside
     each slice by its own 400-point Gauss-Legendre rule (the integrand jumps at each face), gaps and the space
     behind the last slice unloaded.  An element ``s`` behind the tip lies ``depth - s`` deep."""
-    width = contact_width + contact_incidence * speed
+    width = contact_width_scalars(contact_width, contact_incidence, speed)
     offset = 0.5 if contact == "centred" else 0.0
     x, weights = _gauss(400)
 

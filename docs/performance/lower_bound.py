@@ -23,6 +23,7 @@ import numpy as np
 
 from cases.run.compiled import compiled_modules
 from dynamics.quaternion import rotation_matrix
+from fem_loads.factors import contact_width_scalars, speed_scale_scalars
 
 C_LOOP = r"""
 /* The DAFL load of one law with separation and both smooth ramps (the scenes' default load), over
@@ -147,9 +148,8 @@ def c_loop_call(loads, position, velocity, rotation, spin, folder: Path) -> Call
     state, ``repeat`` times; it returns the load (force in the body frame, moment)."""
     lib, pointer = c_kernel(folder)
     n = len(loads)
-    width = loads.contact_width + loads.contact_incidence * (
-        np.linalg.norm(velocity) + np.linalg.norm(spin) * loads.max_radius
-    )
+    speed_scale = speed_scale_scalars(float(np.linalg.norm(velocity)), float(np.linalg.norm(spin)), loads.max_radius)
+    width = contact_width_scalars(loads.contact_width, loads.contact_incidence, speed_scale)
     weights = loads.quadrature.weights
     per_point = loads.point_arrays()
     arrays = [

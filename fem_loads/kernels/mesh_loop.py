@@ -18,6 +18,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ..factors import contact_width_scalars, speed_scale_scalars
 from . import layout
 from .layout import KERNEL_ARRAYS, kernel_data
 from .native import face_frame, point_stress
@@ -181,8 +182,8 @@ def dafl_kernel(
         up[k, 0], up[k, 1], up[k, 2] = up0 * point_signs[k, 0], up1 * point_signs[k, 1], up2 * point_signs[k, 2]
     speed = math.sqrt(velocity[0] * velocity[0] + velocity[1] * velocity[1] + velocity[2] * velocity[2])
     spin = math.sqrt(angular_velocity[0] ** 2 + angular_velocity[1] ** 2 + angular_velocity[2] ** 2)
-    speed_scale = speed + spin * max_radius
-    width = effects.contact_width + effects.contact_incidence * speed_scale if effects.smooth_contact else 0.0
+    speed_scale = speed_scale_scalars(speed, spin, max_radius)
+    width = contact_width_scalars(effects.contact_width, effects.contact_incidence, speed_scale)
     embedded = height + reach < 0.0
     motion = Motion(g, up, v, angular_velocity, height, width, effects.guard * speed_scale, embedded)
     sums = np.zeros((images, 6))

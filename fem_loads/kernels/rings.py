@@ -27,7 +27,7 @@ from numba import njit
 from mesh import Profile
 
 from ..dafl import DAFLLoads
-from ..factors import Switches
+from ..factors import Switches, contact_width_scalars, speed_scale_scalars
 from ..resistance import ResistanceLaw
 from ..target import LEVEL
 from ..user_law import UserLaw
@@ -307,9 +307,8 @@ def pitch_plane_load(
     law, effects = laws[0], effects_record[0]
     static, dynamic = law.c0, law.c2
     entry, mu, cap = effects.entry_length, effects.friction, effects.friction_cap
-    width = effects.contact_width + effects.contact_incidence * (
-        math.sqrt(vx * vx + vz * vz) + abs(q) * effects.max_radius
-    )
+    speed_scale = speed_scale_scalars(math.sqrt(vx * vx + vz * vz), abs(q), effects.max_radius)
+    width = contact_width_scalars(effects.contact_width, effects.contact_incidence, speed_scale)
     # the contact ramp runs from Vn = start to Vn = full (0 and W one-sided, -W/2 and W/2 centred)
     start, full = -effects.contact_offset * width, (1.0 - effects.contact_offset) * width
     # the law exactly c0 + c2 Vn^2: the closed forms below are its integrals (else Gauss-Legendre throughout)

@@ -176,6 +176,31 @@ def test_a_friction_cap_is_taken_in_one_function():
     assert holders == ["fem_loads/factors.py:friction_stress_scalars"], holders
 
 
+def _width_writers(source: str) -> list[str]:
+    """Functions multiplying a name that holds ``incidence``: the contact width ``W = w + delta U`` written out."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+            for product in ast.walk(node):
+                if isinstance(product, ast.BinOp) and isinstance(product.op, ast.Mult):
+                    names = {n.id for n in ast.walk(product) if isinstance(n, ast.Name)}
+                    names |= {n.attr for n in ast.walk(product) if isinstance(n, ast.Attribute)}
+                    if any("incidence" in name for name in names):
+                        found.append(node.name)
+                        break
+    return found
+
+
+def test_the_contact_width_is_written_in_one_function():
+    """``W = w + delta U`` for every load (numpy, mesh kernel, rings) and the 1-D reference, and a control: a
+    width written out in a kernel is found."""
+    holders = []
+    for path in _modules():
+        holders += [f"{path.relative_to(ROOT)}:{name}" for name in _width_writers(path.read_text())]
+    assert holders == ["fem_loads/factors.py:contact_width_scalars"], holders
+    assert _width_writers("def load(e, u):\n    return e.contact_width + e.contact_incidence * u\n") == ["load"]
+
+
 def test_the_factor_checks_find_a_copy():
     """Control: a contact ramp, an entry ramp, a free-surface factor and a friction cap written in a kernel are
     each found."""
