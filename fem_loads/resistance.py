@@ -20,6 +20,7 @@ For ``Vn < 0``, where only a load without separation evaluates it, the velocity 
 
 from __future__ import annotations
 
+import inspect
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -30,6 +31,7 @@ from .factors import add_term
 
 __all__ = [
     "ResistanceLaw",
+    "COEFFICIENTS",
     "NAMED_LAWS",
     "LAW_FAMILIES",
     "resistance_law",
@@ -90,6 +92,11 @@ def normal_stress_scalars(
     if table_depths.shape[0] > 0:
         stress += table_stress_scalars(depth, table_depths, table_stresses)
     return stress
+
+
+#: the built-in law's coefficients by name, in the order :func:`normal_stress_scalars` takes them: the one place
+#: the order is written (:attr:`ResistanceLaw.coefficients` and the kernels' law record read it)
+COEFFICIENTS = tuple(inspect.signature(normal_stress_scalars).parameters)[2:8]
 
 
 def table_stress_scalars(depth: Any, table_depths: np.ndarray, table_stresses: np.ndarray) -> Any:
@@ -159,8 +166,9 @@ class ResistanceLaw:
 
     @property
     def coefficients(self) -> tuple[float, float, float, float, float, float]:
-        """``(c0, k, c1, c2, c, n)`` in the order :func:`normal_stress_scalars` takes them."""
-        return (self.c0, self.k, self.c1, self.c2, self.c, self.n)
+        """:data:`COEFFICIENTS`' values, in the order :func:`normal_stress_scalars` takes them."""
+        c0, k, c1, c2, c, n = (float(getattr(self, name)) for name in COEFFICIENTS)
+        return c0, k, c1, c2, c, n
 
     def normal_stress(self, normal_velocity: np.ndarray, depth: np.ndarray | float = 0.0) -> np.ndarray:
         """``sigma_n`` (Pa) at ``Vn`` (m/s) and depth (m below the surface); the caller applies separation."""

@@ -14,14 +14,12 @@ from typing import Any
 
 import numpy as np
 
-from ..resistance import ResistanceLaw
+from ..resistance import COEFFICIENTS, ResistanceLaw
 from ..target import LayeredTarget
 from ..user_law import MAX_PARAMETERS, UserLaw
 
-__all__ = ["LAW", "EFFECTS", "COEFFICIENTS", "pack_laws", "pack_effects", "compilable", "in_lanes"]
+__all__ = ["LAW", "EFFECTS", "pack_laws", "pack_effects", "compilable", "in_lanes"]
 
-#: the built-in law's coefficients in the record, in the order ResistanceLaw.coefficients gives them
-COEFFICIENTS = ("c0", "k", "c1", "c2", "c", "n")
 
 #: one layer's law (SI units)
 LAW = np.dtype(

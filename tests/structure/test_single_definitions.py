@@ -85,6 +85,24 @@ def test_the_kernels_take_every_compiled_form_from_one_module(module):
     assert all(getattr(kernel, name) is getattr(native, name) for name in shared)
 
 
+def test_the_coefficients_keep_one_order_from_the_law_to_the_loops():
+    """``COEFFICIENTS`` is the order of :func:`normal_stress_scalars`' parameters; the law, its packed record and the
+    tuple the compiled loops unpack (``law_values``) hold each coefficient in that place (six distinct values)."""
+    import inspect
+
+    from fem_loads.kernels import native
+    from fem_loads.kernels.records import pack_laws
+    from fem_loads.resistance import COEFFICIENTS, ResistanceLaw, normal_stress_scalars
+
+    assert COEFFICIENTS == ("c0", "k", "c1", "c2", "c", "n")
+    assert tuple(inspect.signature(normal_stress_scalars).parameters)[2:8] == COEFFICIENTS
+    law = ResistanceLaw(1e6, 2e3, k=3e5, c1=4e4, c=5e2, n=1.5)
+    assert law.coefficients == (1e6, 3e5, 4e4, 2e3, 5e2, 1.5)
+    records = pack_laws(law)[0]
+    assert tuple(float(records[0][name]) for name in COEFFICIENTS) == law.coefficients
+    assert native.law_values(records[0])[0] == law.coefficients
+
+
 def test_the_numpy_path_calls_the_same_definitions():
     """The numpy path's names are the definitions themselves (or thin array wrappers around them)."""
     from dynamics import rigid_body
