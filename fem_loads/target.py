@@ -179,6 +179,24 @@ class Friction:
         return np.asarray(friction_stress_scalars(sigma, self.coefficient, self.cap or 0.0))
 
 
+def slip_scalars(
+    v: tuple[float, float, float],
+    w: tuple[float, float, float],
+    r: tuple[float, float, float],
+    m: tuple[float, float, float],
+    normal_velocity: float,
+) -> tuple[float, float, float]:
+    """The slip ``s = u - Vn m`` (m/s, body frame) of a point ``r`` (m) with outward normal ``m``: its velocity
+    ``u = v + w x r`` less the normal part, for the body's velocity ``v`` (m/s) and angular velocity ``w`` (rad/s).
+    The compiled kernels' points and rings take it as it is; the numpy load sums its expansion over all the points
+    (``|s|^2 = |u|^2 - Vn^2``, :meth:`~fem_loads.dafl.DAFLLoads.slip`)."""
+    return (
+        v[0] + w[1] * r[2] - w[2] * r[1] - normal_velocity * m[0],
+        v[1] + w[2] * r[0] - w[0] * r[2] - normal_velocity * m[1],
+        v[2] + w[0] * r[1] - w[1] * r[0] - normal_velocity * m[2],
+    )
+
+
 def slip_factor_scalars(slip2: Any, width: float, speed2: float) -> Any:
     """``k``, with which the friction stress along the slip ``s`` is ``tau k s``: ``1 / sqrt(|s|^2 + W^2)``
     with a contact width ``W > 0`` (continuous through zero slip); sharp, ``1/|s|`` where ``|s|^2 > 1e-24 |V|^2``

@@ -27,12 +27,13 @@ from ..factors import (
     switches_scalars,
 )
 from ..resistance import normal_stress_scalars, polynomial_stress_scalars, table_stress_scalars
-from ..target import face_frame_scalars, face_height_scalars, slip_factor_scalars
+from ..target import face_frame_scalars, face_height_scalars, slip_factor_scalars, slip_scalars
 from ..user_law import MAX_PARAMETERS
 
 __all__ = [
     "call_user_law",
     "slip_factor",
+    "slip",
     "in_contact",
     "builtin_stress",
     "polynomial_stress",
@@ -97,6 +98,7 @@ switches = njit(inline="always", error_model="numpy")(switches_scalars)
 entry_factor = njit(inline="always", error_model="numpy")(entry_factor_scalars)
 friction_stress = njit(inline="always", error_model="numpy")(friction_stress_scalars)
 slip_factor = njit(inline="always", error_model="numpy")(slip_factor_scalars)
+slip = njit(inline="always", error_model="numpy")(slip_scalars)
 in_contact = njit(inline="always", error_model="numpy")(in_contact_scalars)
 # the centre's height as numba sees it inside the face's frame
 register_jitable(error_model="numpy")(face_height_scalars)

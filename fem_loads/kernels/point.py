@@ -28,6 +28,7 @@ from .native import (
     law_values,
     point_stress,
     polynomial_stress,
+    slip,
     slip_factor,
     switches,
 )
@@ -303,11 +304,8 @@ def image_friction(
     image of signs ``(1, sy, sz)``, carrying ``stress`` (its normal stress times its ``weight``) under the ``rule``
     ``(mu, cap, W, |v|^2)``: ``-tau k s`` against the slip ``s = u - Vn m``, ``u = v + w x r``."""
     r0, r1, r2 = r[0], sy * r[1], sz * r[2]
-    m0, m1, m2 = n[0], sy * n[1], sz * n[2]
     mu, cap, width, speed2 = rule
-    s0 = v[0] + w[1] * r2 - w[2] * r1 - normal_velocity * m0
-    s1 = v[1] + w[2] * r0 - w[0] * r2 - normal_velocity * m1
-    s2 = v[2] + w[0] * r1 - w[1] * r0 - normal_velocity * m2
+    s0, s1, s2 = slip(v, w, (r0, r1, r2), (n[0], sy * n[1], sz * n[2]), normal_velocity)
     t = friction_stress(stress, mu, cap * weight) * slip_factor(s0 * s0 + s1 * s1 + s2 * s2, width, speed2)
     return -t * s0, -t * s1, -t * s2, -t * (r1 * s2 - r2 * s1), -t * (r2 * s0 - r0 * s2), -t * (r0 * s1 - r1 * s0)
 

@@ -31,7 +31,7 @@ from ..factors import Switches, contact_width_scalars, speed_scale_scalars
 from ..resistance import ResistanceLaw
 from ..target import LEVEL
 from ..user_law import UserLaw
-from .native import entry_factor, friction_stress, law_stress, point_stress, slip_factor, switches
+from .native import entry_factor, friction_stress, law_stress, point_stress, slip, slip_factor, switches
 from .records import pack_effects, pack_laws
 
 __all__ = [
@@ -258,10 +258,11 @@ def _gauss_arc(
         j1 += sigma * c * weight
         if mu > 0.0:
             tau = friction_stress(sigma, mu, cap)
-            # the slip: the point's velocity u = (vx + q rho c, 0, vz - q x) less its normal part
-            sx = vx + q * rho * c - vn * n_axial
-            sy = -vn * n_radial * math.sin(phi)
-            sz = vz - q * x - vn * n_radial * c
+            # the point (x, rho sin phi, rho cos phi) with normal (n_axial, n_radial sin phi, n_radial cos phi)
+            s = math.sin(phi)
+            sx, sy, sz = slip(
+                (vx, 0.0, vz), (0.0, q, 0.0), (x, rho * s, rho * c), (n_axial, n_radial * s, n_radial * c), vn
+            )
             k = slip_factor(sx * sx + sy * sy + sz * sz, width, vx * vx + vz * vz)
             jx += tau * k * sx * weight
             jz += tau * k * sz * weight

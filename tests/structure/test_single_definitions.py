@@ -27,6 +27,7 @@ compiled_modules()  # numba's cache in the folder named for the compiled code
 #: the compiled forms :mod:`fem_loads.kernels.native` makes, and the module of each one definition
 NATIVE = {
     "slip_factor": ("target", "slip_factor_scalars"),
+    "slip": ("target", "slip_scalars"),
     "builtin_stress": ("resistance", "normal_stress_scalars"),
     "polynomial_stress": ("resistance", "polynomial_stress_scalars"),
     "entry_factor": ("factors", "entry_factor_scalars"),
