@@ -19,7 +19,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .factors import contact_width_scalars, point_stress_scalars, speed_scale_scalars, switches_scalars
+from .factors import (
+    contact_width_scalars,
+    law_velocity_scalars,
+    point_stress_scalars,
+    speed_scale_scalars,
+    switches_scalars,
+)
 from .images import MirrorImages
 from .kernels.records import EFFECTS, pack_effects
 from .quadrature import SurfaceQuadrature
@@ -246,7 +252,7 @@ class DAFLLoads:
         # the law at max(Vn, 0) with separation; a built-in law is finite everywhere, and below the one-sided
         # ramp its value is multiplied by zero, so there it is evaluated at Vn itself
         exact = not self.separation or (isinstance(self.law, ResistanceLaw) and not self._effects.contact_offset)
-        law_velocity = normal_velocity if exact else np.maximum(normal_velocity, 0.0)
+        law_velocity = normal_velocity if exact else law_velocity_scalars(normal_velocity, self.separation)
         if isinstance(self.law, LayeredTarget):  # the layers blended across their interfaces
             lengths = self._hot_entry if self.entry_smoothing else None
             stress = self.law.normal_stress(law_velocity, np.broadcast_to(depth, normal_velocity.shape), lengths)

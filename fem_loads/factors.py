@@ -82,6 +82,13 @@ class Switches(NamedTuple):
     smooth_entry: bool  #: points enter over their own extent (else sharply)
 
 
+def law_velocity_scalars(normal_velocity: Any, separation: bool) -> Any:
+    """The normal velocity (m/s) a point's law is evaluated at: ``max(Vn, 0)`` with separation (the contact factor
+    unloads a point moving away, and a user's law is defined for ``Vn >= 0`` only), ``Vn`` itself without (the
+    built-in law extended to ``Vn < 0`` as an odd function)."""
+    return np.maximum(normal_velocity, 0.0) if separation else normal_velocity
+
+
 def speed_scale_scalars(speed: float, spin: float, max_radius: float) -> float:
     """``U = |V| + |omega| r_max`` (m/s): no surface point moves faster (``speed``, m/s; ``spin``, rad/s;
     ``max_radius``, m).  It scales the contact ramp's width and the normal-velocity guard."""

@@ -13,7 +13,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ..factors import Switches
+from ..factors import Switches, law_velocity_scalars
 from . import layout
 from .native import (
     Coefficients,
@@ -230,7 +230,7 @@ def plain_layer_stresses(
         for j in range(buffer.shape[0]):
             _, _, normal_velocity, z = point_motion(normal_arm, points, j, g, up, height, True)
             share = entry_factor(top + z, True, inverse_entry[j]) - entry_factor(bottom + z, True, inverse_entry[j])
-            stress = polynomial_stress(max(normal_velocity, 0.0), -z, c0, k, c1, c2)
+            stress = polynomial_stress(law_velocity_scalars(normal_velocity, True), -z, c0, k, c1, c2)
             if with_table:
                 stress += table_buffer[j]
             buffer[j] += share * stress
@@ -249,7 +249,7 @@ def plain_stress(
     ``(c0, k, c1, c2)``) at ``Vn`` (m/s) and height ``z`` (m) through
     :func:`~fem_loads.factors.point_stress_scalars` (``inverse_entry``: ``1 / l``)."""
     c0, k, c1, c2 = polynomial
-    stress = polynomial_stress(max(normal_velocity, 0.0), -z, c0, k, c1, c2)
+    stress = polynomial_stress(law_velocity_scalars(normal_velocity, True), -z, c0, k, c1, c2)
     return point_stress(stress, normal_velocity, -z, z, inverse_entry, switches) * weight
 
 
@@ -269,7 +269,7 @@ def point_law_stress(
     if s.switches.separation and not in_contact(normal_velocity, s.switches):
         return 0.0  # the law unevaluated where the contact factor is zero: the separating half of the surface
     # without separation the law's odd extension to Vn < 0 (cut at 0 by the pipeline)
-    law_velocity = max(normal_velocity, 0.0) if s.switches.separation else normal_velocity
+    law_velocity = law_velocity_scalars(normal_velocity, s.switches.separation)
     stress = law_value(s.coefficients, s.parameters, s.address, law_velocity, -z, depths, stresses)
     return point_stress(stress, normal_velocity, -z, z, inverse_entry, s.switches) * weight
 
@@ -282,7 +282,7 @@ def layered_point_stress(
     ``data`` costs reference counting per point that the one-law loops do without."""
     if s.switches.separation and not in_contact(normal_velocity, s.switches):
         return 0.0
-    law_velocity = max(normal_velocity, 0.0) if s.switches.separation else normal_velocity
+    law_velocity = law_velocity_scalars(normal_velocity, s.switches.separation)
     stress = layered_stress(data, law_velocity, -z, s.switches.smooth_entry, inverse_entry)
     return point_stress(stress, normal_velocity, -z, z, inverse_entry, s.switches) * weight
 

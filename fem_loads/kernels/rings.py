@@ -27,7 +27,7 @@ from numba import njit
 from mesh import Profile
 
 from ..dafl import DAFLLoads
-from ..factors import Switches, contact_width_scalars, speed_scale_scalars
+from ..factors import Switches, contact_width_scalars, law_velocity_scalars, speed_scale_scalars
 from ..resistance import ResistanceLaw
 from ..target import LEVEL
 from ..user_law import UserLaw
@@ -156,7 +156,9 @@ def _ring_stress(law: Any, effects: Any, switches: Switches, normal_velocity: fl
     """A ring point's stress (Pa) at ``Vn`` (m/s) and ``height`` (m above the surface): the law at ``max(Vn, 0)``
     and depth ``-height`` through the points' pipeline."""
     entry = effects.entry_length
-    stress = law_stress(law, effects.user_law, max(normal_velocity, 0.0), -height, _NO_TABLE, _NO_TABLE)
+    stress = law_stress(
+        law, effects.user_law, law_velocity_scalars(normal_velocity, True), -height, _NO_TABLE, _NO_TABLE
+    )
     return point_stress(stress, normal_velocity, -height, height, 1.0 / entry if entry > 0.0 else 0.0, switches)
 
 

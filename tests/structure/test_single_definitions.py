@@ -220,6 +220,29 @@ def test_the_contact_width_is_written_in_one_function():
     assert _width_writers("def load(e, u):\n    return e.contact_width + e.contact_incidence * u\n") == ["load"]
 
 
+def _separation_writers(source: str) -> list[str]:
+    """Functions taking ``max(Vn, 0)`` of a normal velocity: the law's velocity under separation written out."""
+    found = []
+    for function in _functions_calling(ast.parse(source), {"max", "maximum"}):
+        for call in ast.walk(function):
+            if isinstance(call, ast.Call) and _called_name(call) in ("max", "maximum"):
+                names = {a.id for a in call.args if isinstance(a, ast.Name)}  # the velocity itself, not a sum
+                zero = any(isinstance(a, ast.Constant) and a.value == 0.0 for a in call.args)
+                if zero and names & {"normal_velocity", "vn"}:
+                    found.append(function.name)
+                    break
+    return found
+
+
+def test_the_law_s_velocity_under_separation_is_taken_in_one_function():
+    """``max(Vn, 0)`` for every load (numpy, mesh kernel, rings), and a control: one written in a kernel is found."""
+    holders = []
+    for path in _modules():
+        holders += [f"{path.relative_to(ROOT)}:{name}" for name in _separation_writers(path.read_text())]
+    assert holders == ["fem_loads/factors.py:law_velocity_scalars"], holders
+    assert _separation_writers("def law(vn, c0):\n    return c0 + max(vn, 0.0)\n") == ["law"]
+
+
 def test_the_factor_checks_find_a_copy():
     """Control: a contact ramp, an entry ramp, a free-surface factor and a friction cap written in a kernel are
     each found."""
