@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from types import SimpleNamespace
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -27,7 +27,6 @@ from .factors import (
     switches_scalars,
 )
 from .images import MirrorImages
-from .kernels.records import EFFECTS, pack_effects
 from .quadrature import SurfaceQuadrature
 from .resistance import ResistanceLaw
 from .target import (
@@ -42,7 +41,7 @@ from .target import (
 )
 from .user_law import UserLaw
 
-__all__ = ["DAFLLoads", "SurfaceStress", "CONTACT_MODELS"]
+__all__ = ["DAFLLoads", "SurfaceStress", "CONTACT_MODELS", "effect_values"]
 
 
 class SurfaceStress(NamedTuple):
@@ -162,9 +161,15 @@ class DAFLLoads:
         # the points that can be hidden, and each image's signs (k, 3), its direction in the part's frame
         self.exposure = q.exposure if exposure and q.exposure is not None and len(q.exposure.columns) else None
         self._exposure_signs = self._images.point_signs if self._images is not None else np.ones((1, 3))
-        # the effects as every kernel reads them (kernels.records.EFFECTS), in Python numbers
-        effects = pack_effects(self)
-        self._effects = SimpleNamespace(**{name: effects[name][0].tolist() for name in EFFECTS.names or ()})
+        # the effects by name, as the switches of every load read them
+        self._effects = SimpleNamespace(**self.effect_values())
+
+    def effect_values(self, entry_length: float | None = None, max_radius: float | None = None) -> dict[str, Any]:
+        """:func:`effect_values` of this load, with its own ``entry_length`` (m: its longest point's) and
+        ``max_radius`` (m: its farthest point from the centre of mass) by default."""
+        if entry_length is None:
+            entry_length = float(self._entry_length.max(initial=0.0))
+        return effect_values(self, entry_length, self.max_radius if max_radius is None else max_radius)
 
     def __len__(self) -> int:
         return len(self._weights)
@@ -369,3 +374,32 @@ class DAFLLoads:
             np.cross(sum_cr, v) + w * float(c @ self._radius2) - (c * r_dot_w) @ points - c_vn @ self._normal_arm[:, 3:]
         )
         return -np.concatenate([force, moment])
+
+
+def effect_values(loads: Any, entry_length: float, max_radius: float) -> dict[str, Any]:
+    """The effects of ``loads`` (a :class:`DAFLLoads`, or an object with its effect attributes) by name, in SI
+    numbers, with the entry length ``entry_length`` (m; 0 sharp) and the body's ``max_radius`` (m): what the
+    switches of every load read, and the fields of the kernels' effects record that are not the kernels' own
+    (:func:`~fem_loads.kernels.records.pack_effects`)."""
+    friction, surface, face = loads.friction, loads.free_surface, loads.front_face
+    return {
+        "contact_width": loads.contact_width,
+        "contact_incidence": loads.contact_incidence,
+        "contact_offset": 0.5 if loads.contact == "centred" else 0.0,
+        "smooth_contact": loads.contact_width > 0.0 or loads.contact_incidence > 0.0,
+        "guard": loads.normal_velocity_guard,
+        "separation": loads.separation,
+        "smooth_entry": entry_length > 0.0,
+        "entry_length": entry_length,
+        "friction": friction.coefficient if friction is not None else 0.0,
+        "friction_cap": (friction.cap or 0.0) if friction is not None else 0.0,
+        "surface_depth": surface.depth if surface is not None else 0.0,
+        "surface_fraction": surface.surface_fraction if surface is not None else 0.0,
+        "surface_front": surface.front if surface is not None else True,
+        "surface_rear": surface.rear_face if surface is not None else math.inf,
+        "max_radius": max_radius,
+        "reach": max_radius + 0.5 * entry_length,
+        "needs_depth": bool(loads.law.depth_dependent),
+        "face_normal": face.normal,
+        "face_offset": face.offset,
+    }

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from ..dafl import effect_values
 from ..resistance import COEFFICIENTS, ResistanceLaw
 from ..target import LayeredTarget
 from ..user_law import MAX_PARAMETERS, UserLaw
@@ -115,40 +116,18 @@ def pack_laws(law: ResistanceLaw | UserLaw | LayeredTarget) -> tuple[np.ndarray,
 def pack_effects(
     loads: Any, address: int = 0, entry_length: float | None = None, max_radius: float | None = None
 ) -> np.ndarray:
-    """One :data:`EFFECTS` record (shape (1,)) of the effects of ``loads`` (a :class:`~fem_loads.dafl.DAFLLoads`),
-    for the mesh kernel (:func:`~fem_loads.kernels.layout.kernel_data`), the rings
-    (:func:`~fem_loads.kernels.rings.ring_data`) and the numpy load alike.  ``address``: the user law's
-    (:func:`pack_laws`; 0: none); ``entry_length`` (m; 0 sharp) and ``max_radius`` (m): the load's own by default
-    (its longest point's entry length, its farthest point from the centre of mass); the rings give theirs."""
-    law, friction, surface, face = loads.law, loads.friction, loads.free_surface, loads.front_face
-    max_radius = loads.max_radius if max_radius is None else max_radius
+    """One :data:`EFFECTS` record (shape (1,)) of the effects of ``loads`` (a :class:`~fem_loads.dafl.DAFLLoads`,
+    :func:`~fem_loads.dafl.effect_values`) with the kernels' own fields, for the mesh kernel
+    (:func:`~fem_loads.kernels.layout.kernel_data`) and the rings (:func:`~fem_loads.kernels.rings.ring_data`).
+    ``address``: the user law's (:func:`pack_laws`; 0: none); ``entry_length`` (m; 0 sharp) and ``max_radius``
+    (m): the load's own by default; the rings give theirs."""
     if entry_length is None:
         entry_length = float(loads.point_arrays()["entry_length"].max(initial=0.0))
-    smooth_contact = loads.contact_width > 0.0 or loads.contact_incidence > 0.0
+    values = effect_values(loads, entry_length, loads.max_radius if max_radius is None else max_radius)
+    values["user_law"] = address
+    values["plain"] = in_lanes(loads.law, loads.separation, values["smooth_contact"], values["smooth_entry"])
+    assert set(values) == set(EFFECTS.names or ()), set(values) ^ set(EFFECTS.names or ())  # no field left at zero
     effects = np.zeros(1, dtype=EFFECTS)
-    values = {
-        "contact_width": loads.contact_width,
-        "contact_incidence": loads.contact_incidence,
-        "contact_offset": 0.5 if loads.contact == "centred" else 0.0,
-        "smooth_contact": smooth_contact,
-        "guard": loads.normal_velocity_guard,
-        "separation": loads.separation,
-        "smooth_entry": entry_length > 0.0,
-        "entry_length": entry_length,
-        "friction": friction.coefficient if friction is not None else 0.0,
-        "friction_cap": (friction.cap or 0.0) if friction is not None else 0.0,
-        "surface_depth": surface.depth if surface is not None else 0.0,
-        "surface_fraction": surface.surface_fraction if surface is not None else 0.0,
-        "surface_front": surface.front if surface is not None else True,
-        "surface_rear": surface.rear_face if surface is not None else np.inf,
-        "user_law": address,
-        "max_radius": max_radius,
-        "reach": max_radius + 0.5 * entry_length,
-        "needs_depth": bool(law.depth_dependent),
-        "plain": in_lanes(law, loads.separation, smooth_contact, entry_length > 0.0),
-        "face_normal": face.normal,
-        "face_offset": face.offset,
-    }
     for name, value in values.items():
         effects[name] = value
     return effects

@@ -14,6 +14,8 @@ coefficients (6, 15, 10) may appear in one function only; and no ``x._name`` is 
 from __future__ import annotations
 
 import ast
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -102,6 +104,19 @@ def test_the_coefficients_keep_one_order_from_the_law_to_the_loops():
     records = pack_laws(law)[0]
     assert tuple(float(records[0][name]) for name in COEFFICIENTS) == law.coefficients
     assert native.law_values(records[0])[0] == law.coefficients
+
+
+def test_a_numpy_run_reads_no_kernel_record_and_loads_no_numba():
+    """The numpy load takes its effects from :func:`fem_loads.dafl.effect_values`, not from the kernels' records: a
+    run on numpy imports neither the kernels nor numba (a fresh process, so that nothing else has)."""
+    code = (
+        "import sys\n"
+        "from cases import load_scene, run_scene, scene_path\n"
+        "run_scene(load_scene(scene_path('forrestal_luk_test2'), {'numerics.kernel': 'numpy'}))\n"
+        "print(sorted(m for m in sys.modules if m.startswith(('fem_loads.kernels', 'numba'))))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True)
+    assert done.stdout.strip() == "[]", done.stdout
 
 
 def test_the_numpy_path_calls_the_same_definitions():
