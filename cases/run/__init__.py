@@ -11,7 +11,15 @@ from .history import (
     history_columns,
     history_table,
 )
-from .persistence import ContentCache, RunStore, atomic_write, atomic_write_text, cache_dir, code_version
+from .persistence import (
+    ContentCache,
+    RunStore,
+    atomic_write,
+    atomic_write_text,
+    cache_dir,
+    code_version,
+    write_json,
+)
 from .prepare import PreparedProjectile, body_mesh, cached_mesh, prepare_projectile
 from .runner import RunResult, impact_positions, initial_attitude, initial_state, run_scene
 from .summary import RunSummary, StoredRun, summarise, write_outputs
@@ -40,6 +48,7 @@ __all__ = [
     "ContentCache",
     "atomic_write",
     "atomic_write_text",
+    "write_json",
     "cache_dir",
     "code_version",
 ]

@@ -49,6 +49,7 @@ __all__ = [
     "atomic_write_text",
     "remove_stale_temporaries",
     "json_safe",
+    "write_json",
     "code_version",
     "installed_version",
     "ContentCache",
@@ -191,6 +192,13 @@ def json_safe(value: Any) -> Any:
     if isinstance(value, (list, tuple)):
         return [json_safe(v) for v in value]
     return value
+
+
+def write_json(path: str | os.PathLike, record: Any) -> Path:
+    """Write ``record`` to ``path`` as JSON, atomically: every non-finite number as ``null`` (:func:`json_safe`), so
+    that strict readers take the file, and anything else JSON cannot hold refused (``TypeError``), never written as
+    its ``str``.  The one way a study writes its record."""
+    return atomic_write_text(path, json.dumps(json_safe(record), indent=1, allow_nan=False) + "\n")
 
 
 def _source_files(module: str) -> tuple[Path, list[Path]]:

@@ -262,9 +262,9 @@ def compare_series(
     out = Path(out)
     table = pd.DataFrame([{**row, "warnings": "; ".join(w for w in row["warnings"] if w)} for row in rows])
     atomic_write_text(out / "compare.csv", table.to_csv(index=False))
-    from ..run.persistence import json_safe
+    from ..run import write_json
 
-    atomic_write_text(out / "compare.json", json.dumps(json_safe(comparison.record()), indent=1) + "\n")
+    write_json(out / "compare.json", comparison.record())
     atomic_write_text(out / "compare.md", _series_markdown(comparison, series))
     figure(rows, {}, out / "compare.png", colour_by="law")
     return comparison

@@ -10,7 +10,6 @@ larger ``count`` (random or Sobol' design) runs only the new samples.  The study
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from collections.abc import Sequence
@@ -19,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..run import CONVERGENCE_THRESHOLD, RunStore, atomic_write_text, convergence_speed
+from ..run import CONVERGENCE_THRESHOLD, RunStore, atomic_write_text, convergence_speed, write_json
 from ..run.persistence import json_safe
 from ..scene import InputError, Overrides, one_line
 from ..viz.figures import axis_label, legend_outside, quantity_unit, save_figure, subplots
@@ -175,7 +174,7 @@ def run_ensemble(
     # the runs' wall and integration times stay in the run store: without them the same seed writes the
     # same bytes on any number of workers or on a cluster
     atomic_write_text(out / "ensemble.csv", table.drop(columns=list(VOLATILE), errors="ignore").to_csv(index=False))
-    atomic_write_text(out / "ensemble.json", json.dumps(json_safe(record), indent=1, allow_nan=False) + "\n")
+    write_json(out / "ensemble.json", record)
     atomic_write_text(out / "ensemble.md", _markdown(record, table, base.scenes[0].name or Path(scene).stem))
     _histograms(table, distributions, out / "ensemble_histograms.png")
     if bins is not None:
@@ -355,7 +354,7 @@ def _curve_figure(record: dict, path: Path) -> None:
 def _write_multi(out: Path, record: dict, samples: pd.DataFrame, name: str) -> None:
     """A multi-fidelity ensemble's files: the samples' table, its JSON, the report and the curve."""
     atomic_write_text(out / "ensemble.csv", samples.to_csv(index=False))
-    atomic_write_text(out / "ensemble.json", json.dumps(json_safe(record), indent=1, allow_nan=False) + "\n")
+    write_json(out / "ensemble.json", record)
     atomic_write_text(out / "ensemble.md", multi_markdown(record, name))
     if "curve" in record:
         _curve_figure(record, out / "ensemble_curve.png")

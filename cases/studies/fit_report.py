@@ -97,14 +97,12 @@ def _prediction_lines(result: FitResult) -> list[str]:
 
 def write_report(result: FitResult, out: Path, scene: str) -> None:
     """``fit.json``, ``fit.md`` and ``fit.png`` (observed against fitted) in ``out``, each written atomically."""
-    import json
 
-    from ..run import atomic_write_text
-    from ..run.persistence import json_safe
+    from ..run import atomic_write_text, write_json
     from ..viz.figures import axis_label, quantity_unit, save_figure, subplots
 
     out = Path(out)
-    atomic_write_text(out / "fit.json", json.dumps(json_safe(result.record()), indent=1, allow_nan=False) + "\n")
+    write_json(out / "fit.json", result.record())
     lines = [f"# Fit of {scene}", ""]
     if not result.converged:
         lines += [f"**{result.notes[0]}**", ""]

@@ -12,7 +12,6 @@ contour of the critical speed over two inputs, or a curve over one).
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import time
@@ -22,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from ..run import RunStore, atomic_write_text
+from ..run import RunStore, atomic_write_text, write_json
 from ..run.persistence import json_safe
 from ..scene import InputError, Overrides
 from ..viz.figures import axis_label, quantity_unit, save_figure, subplots
@@ -141,7 +140,7 @@ def _write(out: Path, record: dict) -> None:
     table = pd.DataFrame(record["points"])
     table[["bracket_low", "bracket_high"]] = [b if b else [math.nan, math.nan] for b in table.pop("bracket")]
     atomic_write_text(out / "map.csv", table.to_csv(index=False))
-    atomic_write_text(out / "map.json", json.dumps(json_safe({**record, "wall_time": None}), indent=1) + "\n")
+    write_json(out / "map.json", {**record, "wall_time": None})
     atomic_write_text(out / "map.md", _markdown(record))
     _figure(record, out / "map.png")
 

@@ -296,14 +296,12 @@ def write_validation(validation: Validation, out: str | os.PathLike) -> None:
     ``out``, each written atomically."""
     import pandas as pd
 
-    from ..run import atomic_write_text
-    from ..run.persistence import json_safe
+    from ..run import atomic_write_text, write_json
 
     out = Path(out)
     table = pd.DataFrame([{**row, "warnings": "; ".join(w for w in row["warnings"] if w)} for row in validation.rows])
     atomic_write_text(out / "validate.csv", table.to_csv(index=False))
-    record = json.dumps(json_safe(validation.record()), indent=1, allow_nan=False) + "\n"
-    atomic_write_text(out / "validate.json", record)
+    write_json(out / "validate.json", validation.record())
     atomic_write_text(out / "validate.md", markdown(validation))
     figure(validation.rows, {"": validation.curves}, out / "validate.png")
 

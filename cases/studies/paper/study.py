@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-import json
 import time
 from pathlib import Path
 
-from ...run import RunStore, atomic_write_text
+from ...run import RunStore, atomic_write_text, write_json
 from ..pool import Pool, map_local
 from ..prediction import TurnBoundary
 from ..speeds import find_critical_velocities
@@ -55,7 +54,7 @@ def reproduce(out: str | Path, store: RunStore, pool: Pool | None = None) -> dic
         "runs": {f"{kind} @ {ratio}": [run.record() for run in group] for (kind, ratio), group in runs.items()},
         "wall_time": wall_time,
     }
-    atomic_write_text(out / "results.json", json.dumps(record, indent=1, default=str) + "\n")
+    write_json(out / "results.json", record)
     atomic_write_text(
         out / "results.md",
         results_markdown(
@@ -180,7 +179,7 @@ def reproduce_variants(out: str | Path, store: RunStore, pool: Pool | None = Non
         "path_length_at_400": path_at_400,
         "wall_time": wall_time,
     }
-    atomic_write_text(out / "variants.json", json.dumps(record, indent=1, default=str) + "\n")
+    write_json(out / "variants.json", record)
     atomic_write_text(
         out / "variants.md", variants_markdown(ratios, runs, characteristic_by, fits, path_at_400, wall_time)
     )

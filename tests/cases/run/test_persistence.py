@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from cases import load_scene, prepare_projectile, run_scene, scene_path
-from cases.run import ContentCache, RunStore, cache_dir, cached_mesh, code_version
+from cases.run import ContentCache, RunStore, cache_dir, cached_mesh, code_version, write_json
 from cases.run.persistence import CODE, atomic_write
 from cases.run.prepare import _prepare, preparation_key, prepared_path
 
@@ -135,3 +135,16 @@ def test_atomic_write_leaves_the_old_file_when_the_writer_fails(tmp_path):
             tmp.write_bytes(b"half")
             raise ZeroDivisionError
     assert target.read_bytes() == b"old" and [p.name for p in tmp_path.iterdir()] == ["out.txt"]
+
+
+def test_a_study_record_is_strict_json_with_null_for_non_finite_numbers(tmp_path):
+    """Every study writes its record through ``write_json``: NaN and infinities become ``null`` (a strict reader
+    takes the file), and what JSON cannot hold is refused, not written as its ``str``."""
+    path = write_json(tmp_path / "record.json", {"a": [1.0, float("nan")], "b": {"c": np.float64(np.inf)}, "d": (2,)})
+    text = path.read_text()
+    assert "NaN" not in text and "Infinity" not in text
+    record = json.loads(text, parse_constant=lambda name: pytest.fail(f"{name} in the file"))
+    assert record == {"a": [1.0, None], "b": {"c": None}, "d": [2]}
+    with pytest.raises(TypeError):
+        write_json(tmp_path / "array.json", {"a": np.zeros(2)})
+    assert not (tmp_path / "array.json").exists()  # nothing half written
