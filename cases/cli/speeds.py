@@ -28,8 +28,8 @@ def _speed_options(
         type=speed_range,
         default=speeds,
         metavar="LOW:HIGH",
-        help=f"the range of impact speeds searched, m/s (default {speeds[0]:g}:{speeds[1]:g}; of a list or"
-        " START:STOP:STEP only the lowest and highest count)",
+        help=f"the range of impact speeds searched, m/s (default {speeds[0]:g}:{speeds[1]:g}; a list or a grid is"
+        " refused)",
     )
     parser.add_argument(
         "--resolution",
@@ -151,14 +151,17 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
 
 
 def speed_range(text: str) -> tuple[float, float]:
-    """``LOW:HIGH`` in m/s (``START:STOP:STEP`` and ``V1,V2,...`` give their lowest and highest)."""
+    """``LOW:HIGH`` in m/s.  A list (``V1,V2,...``) or a grid (``START:STOP:STEP``) is refused: a search runs the
+    speeds it chooses inside a range, not those given, and reducing a list to its ends would hide that."""
     parts = text.split(":")
+    if len(parts) != 2 or "," in text:
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: a range of speeds is LOW:HIGH in m/s (e.g. 200:1600), not a list or a grid"
+        )
     try:
-        numbers = [float(p) for p in (parts if len(parts) in (2, 3) else text.split(","))]
+        low, high = float(parts[0]), float(parts[1])
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r}: expected LOW:HIGH in m/s") from None
-    speeds = numbers[:2] if len(parts) in (2, 3) else numbers
-    low, high = min(speeds), max(speeds)
     if not 0 < low < high < math.inf:
         raise argparse.ArgumentTypeError(f"{text!r}: need 0 < LOW < HIGH, finite (m/s)")
     return low, high

@@ -235,13 +235,27 @@ def test_the_command_passes_range_and_guess_and_says_runs_and_rounds(monkeypatch
     record = json.loads(capsys.readouterr().out)
     assert record["bracket"] == [905.0, 907.5] and (record["runs"], record["rounds"]) == (5, 3)
     assert min(fake.rounds[0]) > 880 and max(fake.rounds[0]) < 940  # the guess's parts, not the range's
-    assert main(["critical", scene, "--speeds", "1000:1600:100", *common]) == 1  # 907 m/s is below the range
+    assert main(["critical", scene, "--speeds", "1000:1600", *common]) == 1  # 907 m/s is below the range
     assert capsys.readouterr().out.splitlines()[-1].startswith("every run is unstable, down to 1000 m/s (")
-    assert main(["critical", scene, "--speeds", "800,1000", *common]) == 0  # a list counts by its ends
+    assert main(["critical", scene, "--speeds", "800:1000", *common]) == 0
     assert capsys.readouterr().out.splitlines()[-1] == (
         "critical impact velocity 907.5 m/s (between 905 and 910 m/s; 7 full runs in 4 rounds)"
     )
     assert min(fake.rounds[-4]) > 800 and max(fake.rounds[-4]) < 1000
+
+
+@pytest.mark.parametrize("command", ["critical", "map", "ballistic-limit", "predict"])
+@pytest.mark.parametrize("given", ["800,900,1000", "800:1000:100", "800"])
+def test_a_list_or_a_grid_where_a_range_is_meant_is_refused_in_one_line(command, given, capsys):
+    """``--speeds 800,900,1000`` used to search 800-1000 silently: every command that takes a range refuses
+    anything but ``LOW:HIGH``, in one line naming that form, before anything runs."""
+    from cases.cli import main
+
+    with pytest.raises(SystemExit) as exit_:
+        main([command, str(scene_path("forrestal_luk_test2")), "--speeds", given])
+    assert exit_.value.code == 2
+    errors = [line for line in capsys.readouterr().err.splitlines() if "error:" in line]
+    assert len(errors) == 1 and "--speeds" in errors[0] and "LOW:HIGH" in errors[0], errors
 
 
 @pytest.mark.parametrize(
