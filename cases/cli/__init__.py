@@ -18,6 +18,7 @@ import warnings
 
 from ..scene import InputError, one_line
 from . import ensemble, fit, render, run, speeds, studies, sweep, validate
+from .descriptions import DESCRIPTIONS
 from .options import Parser, environment_defaults
 
 __all__ = ["main", "build_parser"]
@@ -31,6 +32,8 @@ def build_parser() -> Parser:
     commands = parser.add_subparsers(dest="command", required=True)
     for command in COMMANDS:
         command.register(commands)
+    for name, subparser in commands.choices.items():
+        subparser.description = DESCRIPTIONS[name]  # a command without one fails here, at its first use
     return parser
 
 

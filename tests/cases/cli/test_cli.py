@@ -1,10 +1,12 @@
 """The penetrate command as a user runs it."""
 
+import argparse
 import contextlib
 import gc
 import io
 import json
 import os
+import re
 import subprocess
 import sys
 
@@ -286,3 +288,16 @@ def test_a_commands_help_does_not_slow_the_parsing_of_another():
     done = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "[]"
+
+
+def test_every_command_s_help_says_what_it_does_and_what_it_writes():
+    """Each subcommand's ``--help`` opens with its description: what it does, and the files it writes or that it
+    writes none (or prints)."""
+    from cases.cli import build_parser
+    from cases.cli.descriptions import DESCRIPTIONS
+
+    commands = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)).choices
+    assert set(commands) == set(DESCRIPTIONS)
+    for name, description in DESCRIPTIONS.items():
+        assert " ".join(description.split()) in help_text(name), name
+        assert re.search(r"\b([Ww]rites?|[Pp]rints?)\b", description), name
