@@ -66,4 +66,5 @@ def test_each_law_gets_its_critical_speed(tmp_path):
         resolution=50.0,
     )
     critical = comparison.table.set_index("law")["critical_speed"]
-    assert all(400.0 < value < 1400.0 for value in critical)
+    assert all(600.0 < value < 1200.0 for value in critical)
+    assert critical["softer"] < critical["soil"]  # measured: 850 and 900 m/s, one resolution apart

@@ -26,8 +26,15 @@ def test_convergence_speed_on_an_exact_history():
     assert convergence_speed(history.assign(total_attack_angle=angle + 1.0), 0.1) is None
 
 
-def test_unstable_means_a_strong_turn():
-    assert not is_unstable(13.0) and is_unstable(-52.0)
+def test_unstable_means_an_axis_turn_of_at_least_the_threshold_either_way():
+    """The one definition (``UNSTABLE_TURN``, 30 degrees, docs/studies.md): at the threshold a run is unstable, a
+    hair below it stable, whichever way the axis turned."""
+    from cases.studies.instability import UNSTABLE_TURN
+
+    assert UNSTABLE_TURN == 30.0
+    for sign in (1.0, -1.0):
+        assert is_unstable(sign * UNSTABLE_TURN) and is_unstable(sign * 52.0)
+        assert not is_unstable(sign * np.nextafter(UNSTABLE_TURN, 0.0)) and not is_unstable(sign * 13.0)
 
 
 @pytest.fixture(scope="module")
