@@ -16,6 +16,7 @@ from __future__ import annotations
 import ast
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -139,6 +140,11 @@ def _modules() -> list[Path]:
     return [path for package in PACKAGES for path in sorted((ROOT / package).rglob("*.py"))]
 
 
+def _holders(finder: Callable[[str], list[str]]) -> list[str]:
+    """``module path:function`` of every function of the project that ``finder`` finds in its module's source."""
+    return [f"{path.relative_to(ROOT)}:{name}" for path in _modules() for name in finder(path.read_text())]
+
+
 def test_the_smooth_step_s_coefficients_appear_in_one_function():
     """``t^3 (10 - 15 t + 6 t^2)``: any function holding the constants 6, 15 and 10 is another copy of it."""
     holders = []
@@ -171,6 +177,12 @@ def _functions_calling(tree: ast.AST, names: set[str]) -> list[ast.FunctionDef]:
     return found
 
 
+def _names(*nodes: ast.AST) -> set[str]:
+    """The names and attribute names anywhere in ``nodes``."""
+    found = {n.id for node in nodes for n in ast.walk(node) if isinstance(n, ast.Name)}
+    return found | {n.attr for node in nodes for n in ast.walk(node) if isinstance(n, ast.Attribute)}
+
+
 def _called_name(call: ast.Call) -> str:
     function = call.func
     return function.attr if isinstance(function, ast.Attribute) else getattr(function, "id", "")
@@ -185,52 +197,40 @@ def _cap_takers(source: str) -> list[str]:
     found = []
     for function in _functions_calling(ast.parse(source), {"min", "minimum"}):
         for call in ast.walk(function):
-            if isinstance(call, ast.Call) and _called_name(call) in ("min", "minimum"):
-                names = {n.id for a in call.args for n in ast.walk(a) if isinstance(n, ast.Name)}
-                names |= {n.attr for a in call.args for n in ast.walk(a) if isinstance(n, ast.Attribute)}
-                if any("cap" in name for name in names):
-                    found.append(function.name)
-                    break
+            is_min = isinstance(call, ast.Call) and _called_name(call) in ("min", "minimum")
+            if is_min and any("cap" in name for name in _names(*call.args)):
+                found.append(function.name)
+                break
     return found
 
 
 def test_only_the_factors_call_the_smooth_step():
     """A ramp (contact, entry, interface, free surface) is a factor of :mod:`fem_loads.factors`; a call of the smooth
     step anywhere else writes one of them again."""
-    holders = []
-    for path in _modules():
-        holders += [f"{path.relative_to(ROOT)}:{name}" for name in _ramp_callers(path.read_text())]
+    holders = _holders(_ramp_callers)
     assert sorted(holders) == RAMP_CALLERS, holders
 
 
 def test_a_friction_cap_is_taken_in_one_function():
-    holders = []
-    for path in _modules():
-        holders += [f"{path.relative_to(ROOT)}:{name}" for name in _cap_takers(path.read_text())]
+    holders = _holders(_cap_takers)
     assert holders == ["fem_loads/factors.py:friction_stress_scalars"], holders
 
 
 def _width_writers(source: str) -> list[str]:
     """Functions multiplying a name that holds ``incidence``: the contact width ``W = w + delta U`` written out."""
+    functions = [n for n in ast.walk(ast.parse(source)) if isinstance(n, ast.FunctionDef | ast.AsyncFunctionDef)]
     found = []
-    for node in ast.walk(ast.parse(source)):
-        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
-            for product in ast.walk(node):
-                if isinstance(product, ast.BinOp) and isinstance(product.op, ast.Mult):
-                    names = {n.id for n in ast.walk(product) if isinstance(n, ast.Name)}
-                    names |= {n.attr for n in ast.walk(product) if isinstance(n, ast.Attribute)}
-                    if any("incidence" in name for name in names):
-                        found.append(node.name)
-                        break
+    for function in functions:
+        products = [n for n in ast.walk(function) if isinstance(n, ast.BinOp) and isinstance(n.op, ast.Mult)]
+        if any("incidence" in name for name in _names(*products)):
+            found.append(function.name)
     return found
 
 
 def test_the_contact_width_is_written_in_one_function():
     """``W = w + delta U`` for every load (numpy, mesh kernel, rings) and the 1-D reference, and a control: a
     width written out in a kernel is found."""
-    holders = []
-    for path in _modules():
-        holders += [f"{path.relative_to(ROOT)}:{name}" for name in _width_writers(path.read_text())]
+    holders = _holders(_width_writers)
     assert holders == ["fem_loads/factors.py:contact_width_scalars"], holders
     assert _width_writers("def load(e, u):\n    return e.contact_width + e.contact_incidence * u\n") == ["load"]
 
@@ -251,9 +251,7 @@ def _separation_writers(source: str) -> list[str]:
 
 def test_the_law_s_velocity_under_separation_is_taken_in_one_function():
     """``max(Vn, 0)`` for every load (numpy, mesh kernel, rings), and a control: one written in a kernel is found."""
-    holders = []
-    for path in _modules():
-        holders += [f"{path.relative_to(ROOT)}:{name}" for name in _separation_writers(path.read_text())]
+    holders = _holders(_separation_writers)
     assert holders == ["fem_loads/factors.py:law_velocity_scalars"], holders
     assert _separation_writers("def law(vn, c0):\n    return c0 + max(vn, 0.0)\n") == ["law"]
 
@@ -279,9 +277,7 @@ def _switches_builders(source: str) -> list[str]:
 
 def test_the_switches_are_built_from_the_effects_in_one_function():
     """Every load's :class:`~fem_loads.factors.Switches` come from ``switches_scalars`` (numpy, mesh kernel, rings)."""
-    holders = []
-    for path in _modules():
-        holders += [f"{path.relative_to(ROOT)}:{name}" for name in _switches_builders(path.read_text())]
+    holders = _holders(_switches_builders)
     assert holders == ["fem_loads/factors.py:switches_scalars"], holders
     # control: a kernel that builds its own is found
     assert _switches_builders("def setup(e):\n    return factors.Switches(True, True, 0.0)\n") == ["setup"]
