@@ -124,6 +124,7 @@ def ring_records(law, entry_length: float = 0.0, max_radius: float = 0.0, **effe
     keyword arguments of ``DAFLLoads``, a guard of 0 and no effect by default), without a mesh."""
     from types import SimpleNamespace
 
+    from fem_loads.dafl import effect_values
     from fem_loads.kernels.records import pack_effects, pack_laws
     from fem_loads.target import LEVEL
 
@@ -133,7 +134,7 @@ def ring_records(law, entry_length: float = 0.0, max_radius: float = 0.0, **effe
     )  # fmt: skip
     loads.__dict__.update(effects)
     laws, _, _, address = pack_laws(law)
-    return laws, pack_effects(loads, address, entry_length, max_radius)
+    return laws, pack_effects(loads, effect_values(loads, entry_length, max_radius), address)
 
 
 def schema_models(annotation: object) -> list[type[BaseModel]]:

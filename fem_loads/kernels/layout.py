@@ -61,7 +61,7 @@ def kernel_data(loads: DAFLLoads) -> tuple[np.ndarray, ...]:
         contiguous(0.5 * entry_length),
         contiguous(image_signs),
         contiguous(point_signs),
-        pack_effects(loads, address),
+        pack_effects(loads, loads.effect_values(), address),
         laws,
         tables,
         contiguous(interfaces),

@@ -24,7 +24,10 @@ from .layout import KERNEL_ARRAYS, kernel_data
 from .native import face_frame, point_stress
 from .point import (
     Motion,
+    blended,
     exposure_correction,
+    has_layers,
+    has_table,
     image_friction,
     layered_point_stress,
     plain_layer_stresses,
@@ -54,9 +57,10 @@ def _sums(
 ) -> None:
     """Each image's ``sum sigma w [n | r x n]`` into ``sums``; the friction's force and moment (body frame) into
     ``friction``.  ``plain``, ``with_friction`` (:func:`~fem_loads.kernels.point.setup`) and ``layered`` are
-    constants in each of the four functions that inline this one, each a loop of its own without the others'
+    constants in each of the six functions that inline this one, each a loop of its own without the others'
     branches: the plain law with its SIMD lanes (no calls, and no branches that differ from point to point), with
-    friction and the free surface or not; any other one law; and layers."""
+    friction and the free surface or not, and with layers or a strength table (``layered``: read in passes of their
+    own) or not; any other one law; and layers."""
     s, (points, normal_arm, point_signs, weights, inverse_entry, depths, stresses) = setup(
         data, motion, plain, with_friction
     )
@@ -65,7 +69,7 @@ def _sums(
     vt, wt = (v[0], v[1], v[2]), (w[0], w[1], w[2])
     mu = rule[0]
     layer_stresses = np.empty(weights.shape[0] if plain and layered else 0)
-    table_stresses = np.empty(weights.shape[0] if plain and layered and data[layout.DATA_TABLES].shape[1] else 0)
+    table_stresses = np.empty(weights.shape[0] if plain and layered and has_table(data) else 0)
     reach = data[layout.DATA_EFFECTS][0].reach
     for k in range(sums.shape[0]):
         gk = (g[k, 0], g[k, 1], g[k, 2], g[k, 3], g[k, 4], g[k, 5])
@@ -188,17 +192,17 @@ def dafl_kernel(
     motion = Motion(g, up, v, angular_velocity, height, width, effects.guard * speed_scale, embedded)
     sums = np.zeros((images, 6))
     friction = np.zeros(6)
-    blended = data[layout.DATA_INTERFACES].shape[0] > 0 or data[layout.DATA_TABLES].shape[1] > 0
+    in_passes = blended(data)
     rubbing = effects.friction > 0.0 or effects.surface_depth > 0.0
-    if effects.plain and blended and rubbing:
+    if effects.plain and in_passes and rubbing:
         _plain_layers_friction_sums(data, motion, sums, friction)
-    elif effects.plain and blended:
+    elif effects.plain and in_passes:
         _plain_layers_sums(data, motion, sums, friction)
     elif effects.plain and rubbing:
         _plain_friction_sums(data, motion, sums, friction)
     elif effects.plain:
         _plain_sums(data, motion, sums, friction)
-    elif data[layout.DATA_INTERFACES].shape[0] == 0:
+    elif not has_layers(data):
         _law_sums(data, motion, sums, friction)
     else:
         _layered_sums(data, motion, sums, friction)

@@ -90,9 +90,12 @@ def _add_term_always(value, term):  # type: ignore[no-untyped-def]
 
 # every *_scalars function of fem_loads.factors (its factors and the smooth step it imports) as numba sees them
 # inside the pipeline, so that a new factor needs no line here (the plain functions stay plain)
+# (law_velocity_scalars is not inlined at numba's level: its conditional expression trips the same pedantic SSA
+# check as polynomial_stress_scalars below; LLVM inlines it all the same)
 for _name, _function in vars(factors).items():
     if _name.endswith("_scalars") and callable(_function):
-        register_jitable(inline="always", error_model="numpy")(_function)
+        _inline = "never" if _function is factors.law_velocity_scalars else "always"
+        register_jitable(inline=_inline, error_model="numpy")(_function)
 point_stress = njit(inline="always", error_model="numpy")(point_stress_scalars)
 switches = njit(inline="always", error_model="numpy")(switches_scalars)
 entry_factor = njit(inline="always", error_model="numpy")(entry_factor_scalars)

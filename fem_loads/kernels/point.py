@@ -75,6 +75,25 @@ class Setup(NamedTuple):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
+def has_layers(data: tuple[np.ndarray, ...]) -> bool:
+    """The target has layers (an interface: a slab is one layer over the space behind it)."""
+    return data[layout.DATA_INTERFACES].shape[0] > 0
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def has_table(data: tuple[np.ndarray, ...]) -> bool:
+    """Some law of the target has a strength table."""
+    return data[layout.DATA_TABLES].shape[1] > 0
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def blended(data: tuple[np.ndarray, ...]) -> bool:
+    """Layers or a strength table: what the plain loops read in passes of their own
+    (:func:`plain_layer_stresses`), outside their SIMD lanes."""
+    return has_layers(data) or has_table(data)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def setup(
     data: tuple[np.ndarray, ...], motion: Motion, plain: bool, with_friction: bool
 ) -> tuple[Setup, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
@@ -334,8 +353,8 @@ def exposure_correction(
     if v[0] == 0.0 and v[1] == 0.0 and v[2] == 0.0:
         return  # no direction of motion, no shadow
     resolution = round(math.sqrt((start.shape[0] - 1) / 6.0))  # 6 N^2 cells
-    # layers, or a strength table: the plain loops blend them in passes of their own, the point here
-    blended = data[layout.DATA_INTERFACES].shape[0] > 0 or data[layout.DATA_TABLES].shape[1] > 0
+    # the plain law point by point where its loop reads no table; layers through their blend
+    layers, plain_point = has_layers(data), plain and not blended(data)
     s, (points, normal_arm, point_signs, weights, inverse_entry, depths, stresses) = setup(data, motion, plain, True)
     switches = s.switches
     vt, wt = (v[0], v[1], v[2]), (w[0], w[1], w[2])
@@ -360,9 +379,9 @@ def exposure_correction(
             ):
                 continue  # below the contact ramp (or where it is below 1e-14), or the sharp switch: nothing to hide
             weight, inverse = weights[p], inverse_entry[p]
-            if plain and not blended:
+            if plain_point:
                 stress = plain_stress(s.polynomial, s.switches, weight, inverse, normal_velocity, z)
-            elif blended:
+            elif layers:
                 stress = layered_point_stress(data, s, weight, inverse, normal_velocity, z)
             else:
                 stress = point_law_stress(s, depths, stresses, weight, inverse, normal_velocity, z)

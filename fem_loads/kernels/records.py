@@ -14,7 +14,6 @@ from typing import Any
 
 import numpy as np
 
-from ..dafl import effect_values
 from ..resistance import COEFFICIENTS, ResistanceLaw
 from ..target import LayeredTarget
 from ..user_law import MAX_PARAMETERS, UserLaw
@@ -113,17 +112,13 @@ def pack_laws(law: ResistanceLaw | UserLaw | LayeredTarget) -> tuple[np.ndarray,
     return records, np.ascontiguousarray(np.concatenate(tables, axis=1)), np.asarray(interfaces, float), address
 
 
-def pack_effects(
-    loads: Any, address: int = 0, entry_length: float | None = None, max_radius: float | None = None
-) -> np.ndarray:
-    """One :data:`EFFECTS` record (shape (1,)) of the effects of ``loads`` (a :class:`~fem_loads.dafl.DAFLLoads`,
+def pack_effects(loads: Any, values: dict[str, Any], address: int = 0) -> np.ndarray:
+    """One :data:`EFFECTS` record (shape (1,)) of the effects ``values`` of ``loads`` (a
+    :class:`~fem_loads.dafl.DAFLLoads`; ``values`` from its :meth:`~fem_loads.dafl.DAFLLoads.effect_values` or
     :func:`~fem_loads.dafl.effect_values`) with the kernels' own fields, for the mesh kernel
     (:func:`~fem_loads.kernels.layout.kernel_data`) and the rings (:func:`~fem_loads.kernels.rings.ring_data`).
-    ``address``: the user law's (:func:`pack_laws`; 0: none); ``entry_length`` (m; 0 sharp) and ``max_radius``
-    (m): the load's own by default; the rings give theirs."""
-    if entry_length is None:
-        entry_length = float(loads.point_arrays()["entry_length"].max(initial=0.0))
-    values = effect_values(loads, entry_length, loads.max_radius if max_radius is None else max_radius)
+    ``address``: the user law's (:func:`pack_laws`; 0: none)."""
+    values = dict(values)
     values["user_law"] = address
     values["plain"] = in_lanes(loads.law, loads.separation, values["smooth_contact"], values["smooth_entry"])
     assert set(values) == set(EFFECTS.names or ()), set(values) ^ set(EFFECTS.names or ())  # no field left at zero

@@ -143,7 +143,7 @@ def ring_data(loads: DAFLLoads, surface: RevolvedSurface) -> tuple[np.ndarray, n
         raise ValueError("the ring model takes a level target face")
     entry_length = loads.entry_smoothing * math.sqrt(float(np.median(loads.quadrature.weights)))
     laws, _, _, address = pack_laws(law)
-    return laws, pack_effects(loads, address, entry_length, surface.max_radius)
+    return laws, pack_effects(loads, loads.effect_values(entry_length, surface.max_radius), address)
 
 
 _NO_TABLE = np.zeros(0)
