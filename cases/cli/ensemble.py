@@ -5,16 +5,19 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .options import Parser, add_pool_options, add_scene_options, out_folder, overrides, positive_int, print_json, study
+from .options import Parser, add_scene_options, overrides, positive_int, print_json, study, study_parser
 
 __all__ = ["register"]
 
 
 def register(commands: argparse._SubParsersAction[Parser]) -> None:
-    parser = commands.add_parser(
-        "ensemble", help="Monte Carlo: the probability of each outcome under sampled impact conditions (resumable)"
+    parser = study_parser(
+        commands,
+        "ensemble",
+        "Monte Carlo: the probability of each outcome under sampled impact conditions (resumable)",
+        "ensemble.md, .csv, .json and the figures",
+        lambda parser: add_scene_options(parser, "the base scene TOML file"),
     )
-    add_scene_options(parser, "the base scene TOML file")
     parser.late_help(
         parser.add_argument(
             "--sample", action="append", default=[], metavar="KEY=DIST", help="sample a numeric scene key"
@@ -50,15 +53,6 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
         metavar="N",
         help="how many full runs a multi-fidelity ensemble makes (default 1024)",
     )
-    add_pool_options(parser, "runs/store")
-    parser.add_argument(
-        "--out",
-        default="runs/ensemble",
-        type=out_folder,
-        metavar="DIR",
-        help="where to write ensemble.md, .csv, .json and the figures (default runs/ensemble)",
-    )
-    parser.add_argument("--json", action="store_true", help="print the result as one JSON object")
     parser.set_defaults(handler=ensemble)
 
 

@@ -7,14 +7,14 @@ from pathlib import Path
 
 from .options import (
     Parser,
-    add_pool_options,
     add_scene_options,
-    out_folder,
     overrides,
     positive_float,
     positive_int,
     print_json,
+    renamed,
     study,
+    study_parser,
 )
 from .validate import SERIES_HELP
 
@@ -22,9 +22,13 @@ __all__ = ["register"]
 
 
 def register(commands: argparse._SubParsersAction[Parser]) -> None:
-    parser = commands.add_parser("fit", help="fit numeric scene keys to observed quantities (least squares)")
-    add_scene_options(parser, "a scene TOML file (or --series)", optional=True)
-    add_pool_options(parser, "runs/store")
+    parser = study_parser(
+        commands,
+        "fit",
+        "fit numeric scene keys to observed quantities (least squares)",
+        "fit.md, fit.json and fit.png",
+        lambda parser: add_scene_options(parser, "a scene TOML file (or --series)", optional=True),
+    )
     parser.add_argument(
         "--series",
         metavar="SERIES",
@@ -69,8 +73,9 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
         metavar="M/S",
         help="resolution of a critical-speed search (default 5 m/s)",
     )
+    renamed(parser, "--step", "--difference-step FRACTION (--step is a Runge-Kutta step wherever it is taken)")
     parser.add_argument(
-        "--step",
+        "--difference-step",
         type=positive_float,
         metavar="FRACTION",
         help="forward-difference step as a fraction of each range (default 1e-3; 0.05 when a"
@@ -79,14 +84,6 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
     parser.add_argument(
         "--max-evaluations", type=positive_int, default=30, metavar="N", help="model evaluations at most (default 30)"
     )
-    parser.add_argument(
-        "--out",
-        type=out_folder,
-        default="runs/fit",
-        metavar="DIR",
-        help="where to write fit.md, fit.json and fit.png (default runs/fit)",
-    )
-    parser.add_argument("--json", action="store_true", help="print the result as one JSON object")
     parser.set_defaults(handler=run_fit)
 
 
@@ -108,8 +105,10 @@ def run_fit(args: argparse.Namespace) -> int:
     from ..studies.fit import NotIdentifiable, fit, write_report
     from ..studies.fit_series import fit_series, parse_holdout
 
-    if args.step is not None and not args.step < 1:
-        raise InputError(f"--step {args.step:g}: must be below 1 (a fraction of each parameter's range)")
+    if args.difference_step is not None and not args.difference_step < 1:
+        raise InputError(
+            f"--difference-step {args.difference_step:g}: must be below 1 (a fraction of each parameter's range)"
+        )
     if (args.scene is None) == (args.series is None):
         raise InputError("fit: give a scene file (with --observe) or --series SERIES (one of them)")
     if args.series is None:
@@ -136,7 +135,7 @@ def run_fit(args: argparse.Namespace) -> int:
                     holdout=holdout,
                     folds=args.folds,
                     seed=args.seed,
-                    step=args.step,
+                    step=args.difference_step,
                     max_evaluations=args.max_evaluations,
                 )
                 title = Path(series.source).name
@@ -149,7 +148,7 @@ def run_fit(args: argparse.Namespace) -> int:
                     RunStore(args.store),
                     pool,
                     resolution=args.resolution,
-                    step=args.step,
+                    step=args.difference_step,
                     max_evaluations=args.max_evaluations,
                 )
                 title = args.scene

@@ -24,6 +24,8 @@ __all__ = [
     "out_file",
     "add_scene_options",
     "add_pool_options",
+    "study_parser",
+    "renamed",
     "overrides",
     "pool",
     "study",
@@ -139,6 +141,44 @@ def add_pool_options(parser: argparse.ArgumentParser, store: str) -> None:
         help="show the progress bar even when stderr is not a terminal (default: only when it is)",
     )
     shown.add_argument("--no-progress", dest="progress", action="store_false", default=None, help="no progress bar")
+
+
+def study_parser(
+    commands: argparse._SubParsersAction[Parser],
+    name: str,
+    help: str,
+    writes: str | None,
+    subject: Callable[[Parser], None] = add_scene_options,
+    out: str | None = None,
+    store: str = "runs/store",
+) -> Parser:
+    """A study's command with what every study takes, in one order: its ``subject`` (the scene and its ``--set``
+    overrides by default), where the runs go (:func:`add_pool_options`, the run store ``store``), ``--out`` (default
+    ``out``, else ``runs/NAME``; ``writes`` names what is written there; ``None``: the study writes no file) and
+    ``--json`` (the result as one JSON object)."""
+    parser = commands.add_parser(name, help=help)
+    subject(parser)
+    add_pool_options(parser, store)
+    if writes is not None:
+        out = out or f"runs/{name}"
+        parser.add_argument(
+            "--out", default=out, type=out_folder, metavar="DIR", help=f"where to write {writes} (default {out})"
+        )
+    parser.add_argument("--json", action="store_true", help="print the result as one JSON object")
+    return parser
+
+
+class _Renamed(argparse.Action):
+    """An option's old spelling: refused in one line that names the new one (:func:`renamed`)."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: Any, values: Any, option: Any = None) -> None:
+        parser.error(f"{option} is now {self.const}")
+
+
+def renamed(parser: Parser, old: str, new: str) -> None:
+    """Refuse ``old``, an option's former spelling, naming ``new`` (e.g. ``"--grid KEY=VALUES"``): hidden from the
+    help, it takes a value if one follows so that the refusal, not the value, is what the user reads."""
+    parser.add_argument(old, action=_Renamed, nargs="?", const=new, help=argparse.SUPPRESS)
 
 
 def pool(args: argparse.Namespace) -> Pool:

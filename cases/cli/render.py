@@ -6,7 +6,7 @@ import argparse
 import math
 
 from ..scene import InputError
-from .options import Parser, add_scene_options, overrides, positive_float, positive_int, print_json
+from .options import Parser, add_scene_options, out_folder, overrides, positive_float, positive_int, print_json, renamed
 
 __all__ = ["register"]
 
@@ -21,7 +21,9 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
         metavar="T,...",
         help="instants: times in seconds or embedded, peak, converged, end (default: those four)",
     )
-    parser.add_argument("--out", default="runs/render", metavar="DIR", help="where to write (default runs/render)")
+    parser.add_argument(
+        "--out", default="runs/render", type=out_folder, metavar="DIR", help="where to write (default runs/render)"
+    )
     parser.add_argument("--animation", action="store_true", help="also write animation.gif")
     parser.add_argument(
         "--frames",
@@ -34,11 +36,12 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
         "--paraview", action="store_true", help="also write paraview/run.pvd: the surface field over time and the path"
     )
     parser.add_argument(
-        "--steps",
+        "--paraview-frames",
         default="100",
         metavar="N|all",
-        help="steps in the ParaView output, evenly spaced in time, or all (default 100)",
+        help="frames of the ParaView output, evenly spaced in time, or all the run's steps (default 100)",
     )
+    renamed(parser, "--steps", "--paraview-frames N|all (--steps are Runge-Kutta steps wherever they are taken)")
     parser.add_argument(
         "--station",
         type=positive_float,
@@ -54,7 +57,7 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
         " pictures, the min..max over every instant they draw: the field images, trajectory.png's bodies, the"
         " animation's frames)",
     )
-    parser.add_argument("--json", action="store_true", help="print the written files and timings as JSON")
+    parser.add_argument("--json", action="store_true", help="print the written files and timings as one JSON object")
     parser.set_defaults(handler=render)
 
 
@@ -75,7 +78,7 @@ def _colour_range(text: str | None) -> tuple[float, float] | None:
 
 
 def _checked(args: argparse.Namespace) -> tuple[tuple[int, int], int | None, list[str] | None]:
-    """``--size``, ``--steps`` and ``--times``, refused before the run when they cannot be used."""
+    """``--size``, ``--paraview-frames`` and ``--times``, refused before the run when they cannot be used."""
     from ..viz import INSTANT_NAMES
 
     try:
@@ -85,9 +88,9 @@ def _checked(args: argparse.Namespace) -> tuple[tuple[int, int], int | None, lis
     if not (64 <= width <= 8192 and 64 <= height <= 8192):
         raise InputError(f"--size {args.size!r}: expected WIDTHxHEIGHT in pixels, each 64..8192")
     try:
-        steps = None if args.steps == "all" else positive_int(args.steps)
+        steps = None if args.paraview_frames == "all" else positive_int(args.paraview_frames)
     except argparse.ArgumentTypeError as exc:
-        raise InputError(f"--steps {exc}") from None
+        raise InputError(f"--paraview-frames {exc}") from None
     times = [t.strip() for t in args.times.split(",") if t.strip()] if args.times else None
     for text in times or ():
         try:

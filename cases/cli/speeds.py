@@ -8,7 +8,7 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .options import Parser, add_pool_options, add_scene_options, out_folder, positive_float, print_json, study
+from .options import Parser, add_scene_options, positive_float, print_json, renamed, study, study_parser
 
 if TYPE_CHECKING:
     from ..run import RunStore
@@ -40,13 +40,6 @@ def _speed_options(
     )
 
 
-def _study_options(parser: Parser) -> None:
-    add_scene_options(parser)
-    add_pool_options(parser, "runs/store")
-    _guide_option(parser)
-    parser.add_argument("--json", action="store_true", help="print the result as one JSON object")
-
-
 def _guide_option(parser: Parser) -> None:
     parser.add_argument(
         "--guide",
@@ -59,8 +52,10 @@ def _guide_option(parser: Parser) -> None:
 
 
 def register(commands: argparse._SubParsersAction[Parser]) -> None:
-    critical = commands.add_parser("critical", help="find the critical impact velocity of a scene's disturbance")
-    _study_options(critical)
+    critical = study_parser(
+        commands, "critical", "find the critical impact velocity of a scene's disturbance", writes=None
+    )
+    _guide_option(critical)
     critical.add_argument(
         "--guess",
         type=speed_range,
@@ -70,8 +65,8 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
     )
     _speed_options(critical)
     critical.set_defaults(handler=critical_speed)
-    convergent = commands.add_parser("convergent", help="measure the characteristic convergent velocity")
-    _study_options(convergent)
+    convergent = study_parser(commands, "convergent", "measure the characteristic convergent velocity", writes=None)
+    _guide_option(convergent)
     convergent.add_argument(
         "--threshold",
         type=positive_float,
@@ -80,28 +75,25 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
         help="the attack angle counts as converged below this (default 0.1 deg)",
     )
     convergent.set_defaults(handler=convergent_speed)
-    stability = commands.add_parser(
-        "map", help="the critical impact velocity over a grid of one or two inputs (guided searches, resumable)"
+    stability = study_parser(
+        commands,
+        "map",
+        "the critical impact velocity over a grid of one or two inputs (guided searches, resumable)",
+        "map.csv, .json, .md and map.png",
+        lambda parser: add_scene_options(parser, "the base scene TOML file"),
     )
-    add_scene_options(stability, "the base scene TOML file")
     stability.add_argument(
-        "--over",
+        "--grid",
         action="append",
         default=[],
         required=True,
         metavar="KEY=VALUES",
-        help="an axis of the map: START:STOP:STEP (inclusive) or V1,V2,...; one or two --over options",
+        help="an axis of the map: START:STOP:STEP (inclusive) or V1,V2,... (as sweep's --grid); one or two --grid"
+        " options",
     )
+    renamed(stability, "--over", "--grid KEY=VALUES (one axis syntax wherever one is taken)")
     _speed_options(stability)
-    add_pool_options(stability, "runs/store")
     _guide_option(stability)
-    stability.add_argument(
-        "--out",
-        default="runs/map",
-        type=out_folder,
-        metavar="DIR",
-        help="where to write map.csv, .json, .md and map.png (default runs/map)",
-    )
     stability.add_argument(
         "--quantity",
         choices=("critical_velocity", "ballistic_limit"),
@@ -109,14 +101,13 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
         help="what each point searches: the critical impact velocity (default) or the ballistic limit of a"
         " target with a rear face (then --guide auto is the 1-D model's guide, --resolution its, default 5 m/s)",
     )
-    stability.add_argument("--json", action="store_true", help="print the map as one JSON object")
     stability.set_defaults(handler=stability_map)
-    limit = commands.add_parser(
+    limit = study_parser(
+        commands,
         "ballistic-limit",
-        help="find the lowest impact speed that perforates a target with a rear face (guided, resumable)",
+        "find the lowest impact speed that perforates a target with a rear face (guided, resumable)",
+        writes=None,
     )
-    add_scene_options(limit)
-    add_pool_options(limit, "runs/store")
     _speed_options(limit, (10.0, 2000.0), 1.0, "a run that perforates and one that does not")
     limit.add_argument(
         "--guide",
@@ -125,7 +116,6 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
         help="auto (default): the first bracket around the 1-D model's limit where it applies (a normal impact"
         " of a body of revolution without friction, docs/targets.md); none: split the range",
     )
-    limit.add_argument("--json", action="store_true", help="print the result as one JSON object")
     limit.set_defaults(handler=ballistic_limit)
     predict = commands.add_parser(
         "predict",
@@ -304,7 +294,7 @@ def stability_map(args: argparse.Namespace) -> int:
         record = build(
             args.scene,
             overrides(args),
-            args.over,
+            args.grid,
             RunStore(args.store),
             args.out,
             args.speeds,

@@ -11,14 +11,14 @@ from typing import TYPE_CHECKING
 from ..scene import InputError
 from .options import (
     Parser,
-    add_pool_options,
     add_scene_options,
     law_names,
-    out_folder,
     overrides,
     positive_float,
     print_json,
+    renamed,
     study,
+    study_parser,
 )
 from .speeds import speed_range
 from .validate import SERIES_HELP
@@ -29,37 +29,13 @@ if TYPE_CHECKING:
 __all__ = ["register"]
 
 
-def _study_parser(
-    commands: argparse._SubParsersAction[Parser],
-    name: str,
-    help: str,
-    writes: str,
-    json_help: str = "print the table as JSON records",
-    scene_optional: bool = False,
-) -> Parser:
-    """A study's command with what every study takes: the scene and its overrides, where the runs go,
-    ``--json`` and ``--out`` (default ``runs/NAME``; ``writes`` names what is written there)."""
-    parser = commands.add_parser(name, help=help)
-    add_scene_options(parser, "a scene TOML file" + (" (or --series)" if scene_optional else ""), scene_optional)
-    add_pool_options(parser, "runs/store")
-    parser.add_argument("--json", action="store_true", help=json_help)
-    parser.add_argument(
-        "--out",
-        default=f"runs/{name}",
-        type=out_folder,
-        metavar="DIR",
-        help=f"where to write {writes} (default runs/{name})",
-    )
-    return parser
-
-
 def register(commands: argparse._SubParsersAction[Parser]) -> None:
-    compare = _study_parser(
+    compare = study_parser(
         commands,
         "compare",
         "run a scene, or a test series, under several resistance laws, side by side",
         "compare.md, compare.csv and compare.png (and compare.json with --series)",
-        scene_optional=True,
+        lambda parser: add_scene_options(parser, "a scene TOML file (or --series)", optional=True),
     )
     compare.add_argument("--series", metavar="SERIES", help=f"instead of a scene, {SERIES_HELP}; ranks the laws")
     compare.late_help(
@@ -75,8 +51,9 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
         " or a user's function 'mine={function=\"laws.py:f\", parameters={c0=1e7}}' (repeatable; docs/laws.md)",
     )
     compare.add_argument(
-        "--speeds", metavar="V1,V2,...", help="also measure each law's depth at these impact speeds (m/s)"
+        "--depths-at", metavar="V1,V2,...", help="also measure each law's depth at these impact speeds (m/s)"
     )
+    renamed(compare, "--speeds", "--depths-at V1,V2,... (--speeds is a LOW:HIGH search range wherever it is taken)")
     compare.add_argument(
         "--critical", type=speed_range, metavar="LOW:HIGH", help="also seek each law's critical speed in this range"
     )
@@ -86,12 +63,8 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
     compare.add_argument("--convergent", action="store_true", help="also measure each law's convergent speed")
     compare.set_defaults(handler=compare_laws)
 
-    accuracy = _study_parser(
-        commands,
-        "accuracy",
-        "what accuracy costs in time, for a scene",
-        "accuracy.md, .csv and .png",
-        json_help="print the result as one JSON object",
+    accuracy = study_parser(
+        commands, "accuracy", "what accuracy costs in time, for a scene", "accuracy.md, .csv and .png"
     )
     accuracy.add_argument(
         "--sizes",
@@ -119,7 +92,7 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
     )
     accuracy.set_defaults(handler=accuracy_study)
 
-    contact = _study_parser(
+    contact = study_parser(
         commands,
         "contact",
         "what the contact incidence changes: a scene down to the sharp law",
@@ -139,7 +112,7 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
     )
     contact.set_defaults(handler=contact_incidence_study)
 
-    entry = _study_parser(
+    entry = study_parser(
         commands, "entry", "what the entry smoothing changes, and RK4's time error with it", "entry.md and entry.csv"
     )
     entry.add_argument(
@@ -156,11 +129,15 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
     )
     entry.set_defaults(handler=entry_smoothing_study)
 
-    paper = commands.add_parser("paper", help="regenerate the paper's study: tables and figures")
-    paper.add_argument(
-        "--out", default="docs/paper", type=out_folder, metavar="DIR", help="where to write (default docs/paper)"
+    paper = study_parser(
+        commands,
+        "paper",
+        "regenerate the paper's study: tables and figures",
+        "results.md, results.json and the figures (variants.md, .json and .png with --variants)",
+        lambda parser: None,
+        out="docs/paper",
+        store="runs/paper-store",
     )
-    add_pool_options(paper, "runs/paper-store")
     paper.add_argument(
         "--variants", action="store_true", help="the paper's variants instead: friction, conical nose, other soil laws"
     )
@@ -200,7 +177,7 @@ def compare_laws(args: argparse.Namespace) -> int:
         raise InputError("--laws, --law: each law needs a label of its own (allowed: distinct names)")
     if args.series is not None:
         return _compare_series(args, laws)
-    speeds = _numbers("--speeds", args.speeds) if args.speeds else None
+    speeds = _numbers("--depths-at", args.depths_at) if args.depths_at else None
     with study(args) as pool:
         comparison = compare(
             args.scene,
@@ -215,7 +192,10 @@ def compare_laws(args: argparse.Namespace) -> int:
             convergent=args.convergent,
         )
     if args.json:
-        print(comparison.table.to_json(orient="records"))
+        record = {"rows": _records(comparison.table)}
+        if comparison.depth_by_speed is not None:
+            record["depths_at"] = _records(comparison.depth_by_speed)
+        print_json(record)
         return 0
     out = Path(args.out)
     print((out / "compare.md").read_text())
@@ -229,7 +209,7 @@ def _compare_series(args: argparse.Namespace, laws: list[tuple[str, object]]) ->
     from ..studies.series import read_series
     from .validate import report_failures
 
-    ignored = [flag for flag, given in (("--speeds", args.speeds), ("--critical", args.critical)) if given]
+    ignored = [flag for flag, given in (("--depths-at", args.depths_at), ("--critical", args.critical)) if given]
     if args.convergent:
         ignored.append("--convergent")
     if ignored:
@@ -283,7 +263,7 @@ def accuracy_study(args: argparse.Namespace) -> int:
             [int(q) for q in orders],
         )
     if args.json:
-        print_json({"reference": reference, "settings": json.loads(table.to_json(orient="records"))})
+        print_json({"reference": reference, "settings": _records(table)})
     else:
         print((Path(args.out) / "accuracy.md").read_text())
     return 0
@@ -312,10 +292,16 @@ def entry_smoothing_study(args: argparse.Namespace) -> int:
     return _show(args, table, "entry.md")
 
 
+def _records(table: pd.DataFrame) -> list[dict]:
+    """A table's rows as records, as JSON gives them (NaN as null)."""
+    return json.loads(table.to_json(orient="records"))
+
+
 def _show(args: argparse.Namespace, table: pd.DataFrame, report: str) -> int:
-    """A study's table as JSON records with ``--json``, else its markdown report from ``--out``."""
+    """A study's table as one JSON object, ``{"rows": [...]}``, with ``--json``; else its markdown report from
+    ``--out``."""
     if args.json:
-        print(table.to_json(orient="records"))
+        print_json({"rows": _records(table)})
     else:
         print((Path(args.out) / report).read_text())
     return 0
@@ -327,8 +313,11 @@ def paper_study(args: argparse.Namespace) -> int:
 
     with study(args) as pool:
         record = (reproduce_variants if args.variants else reproduce)(args.out, RunStore(args.store), pool)
-    if args.variants:
-        print(f"wrote {args.out}/variants.md, variants.json and variants.png in {record['wall_time']:.0f} s")
+    if args.json:
+        print_json(record)
         return 0
-    print(f"wrote {args.out}/results.md, results.json and the figures in {record['wall_time']:.0f} s")
+    written = "results.md, results.json and the figures"
+    if args.variants:
+        written = "variants.md, variants.json and variants.png"
+    print(f"wrote {args.out}/{written} in {record['wall_time']:.0f} s")
     return 0

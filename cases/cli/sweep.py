@@ -8,7 +8,7 @@ import shlex
 import sys
 from typing import TYPE_CHECKING, Any
 
-from .options import Parser, add_pool_options, add_scene_options, out_file, overrides, study
+from .options import Parser, add_pool_options, add_scene_options, out_file, overrides, print_json, study
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -38,7 +38,9 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
     )
     add_pool_options(parser, "runs/store")
     parser.add_argument("--out", type=out_file, metavar="FILE", help="write the results table as CSV")
-    parser.add_argument("--json", action="store_true", help="print the table as JSON records")
+    parser.add_argument(
+        "--json", action="store_true", help='print the result as one JSON object: {"rows": [one record per run]}'
+    )
     parser.set_defaults(handler=sweep)
 
 
@@ -61,7 +63,7 @@ def sweep(args: argparse.Namespace) -> int:
     if args.out:
         atomic_write_text(args.out, table.to_csv(index=False))
     if args.json:
-        print(table.to_json(orient="records"))
+        print_json({"rows": json.loads(table.to_json(orient="records"))})
     else:
         print(_shown(table, result, columns))
     failed = [i for i, run in enumerate(result.runs) if run.failed]

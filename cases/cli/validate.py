@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from .options import SET_HELP, Parser, add_pool_options, out_folder, overrides, print_json, study
+from .options import SET_HELP, Parser, overrides, print_json, study, study_parser
 
 __all__ = ["register", "SERIES_HELP"]
 
@@ -17,7 +17,25 @@ SERIES_HELP = (
 
 
 def register(commands: argparse._SubParsersAction[Parser]) -> None:
-    parser = commands.add_parser("validate", help="run every shot of a test series: predicted against measured")
+    parser = study_parser(
+        commands,
+        "validate",
+        "run every shot of a test series: predicted against measured",
+        "validate.md, .csv, .json and .png",
+        _series_options,
+    )
+    parser.add_argument(
+        "--curve-points",
+        type=int,
+        default=12,
+        metavar="N",
+        help="impact speeds of each group's predicted curve (0: none; default %(default)s)",
+    )
+    parser.set_defaults(handler=validate)
+
+
+def _series_options(parser: Parser) -> None:
+    """What a series is given by: the series itself and the ``--set`` overrides of every shot."""
     parser.add_argument("series", help=SERIES_HELP)
     parser.add_argument(
         "--set",
@@ -26,23 +44,6 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
         metavar="KEY=VALUE",
         help=f"{SET_HELP}; on every shot (a column of the series beats it for its own shot)",
     )
-    add_pool_options(parser, "runs/store")
-    parser.add_argument(
-        "--curve-points",
-        type=int,
-        default=12,
-        metavar="N",
-        help="impact speeds of each group's predicted curve (0: none; default %(default)s)",
-    )
-    parser.add_argument(
-        "--out",
-        type=out_folder,
-        default="runs/validate",
-        metavar="DIR",
-        help="where to write validate.md, .csv, .json and .png (default runs/validate)",
-    )
-    parser.add_argument("--json", action="store_true", help="print the result as one JSON object")
-    parser.set_defaults(handler=validate)
 
 
 def validate(args: argparse.Namespace) -> int:

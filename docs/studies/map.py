@@ -32,7 +32,7 @@ def main() -> None:
     elapsed = time.perf_counter() - start
     points = record["points"]
     print(
-        f"`penetrate map {SCENE} --over {OVER[0]} --over {OVER[1]}`: {len(points)} searches, {record['guided']}"
+        f"`penetrate map {SCENE} --grid {OVER[0]} --grid {OVER[1]}`: {len(points)} searches, {record['guided']}"
         f" guided, {record['full_runs']} full runs, {elapsed:.0f} s from an empty run store."
     )
     print()

@@ -232,7 +232,7 @@ def test_progress_shows_on_a_terminal_unless_told(command, monkeypatch):
 
     base = [command, *([] if command == "paper" else [str(scene_path("forrestal_luk_test2"))])]
     base += STUDY_COMMANDS[command]
-    json_flag = [] if command == "paper" else ["--json"]
+    json_flag = ["--json"]
     for flags, terminal, shown in [
         ([], False, False),
         (json_flag, False, False),
@@ -301,3 +301,67 @@ def test_every_command_s_help_says_what_it_does_and_what_it_writes():
     for name, description in DESCRIPTIONS.items():
         assert " ".join(description.split()) in help_text(name), name
         assert re.search(r"\b([Ww]rites?|[Pp]rints?)\b", description), name
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["sweep", "--grid", "impact.speed=300,350"],
+        ["compare", "--laws", "scene,softer_soil", "--depths-at", "300"],
+        ["contact", "--incidences", "0.01", "--step", "2e-5"],
+        ["entry", "--smoothings", "1", "--steps", "4e-5,2e-5"],
+    ],
+    ids=lambda command: command[0],
+)
+def test_a_study_s_json_is_one_object(command, tmp_path, capsys):
+    """``sweep``, ``compare``, ``contact`` and ``entry`` printed a bare list of records: now one object, the rows
+    under ``rows``, each a run of the study (as every other command's ``--json``)."""
+    name, *options = command
+    out = [] if name == "sweep" else ["--out", str(tmp_path / "out")]
+    scene = str(scene_path("forrestal_luk_test2"))
+    args = [name, scene, *FAST, *options, *out, "--store", str(tmp_path / "store"), "--workers", "1", "--no-progress"]
+    assert main([*args, "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert isinstance(record, dict) and record["rows"] and all(isinstance(row, dict) for row in record["rows"])
+    expected = {"sweep": 2, "compare": 2, "contact": 2, "entry": 2}[name]  # the contact study adds the sharp law
+    assert len(record["rows"]) == expected
+    if name == "compare":
+        assert [row["impact.speed"] for row in record["depths_at"]] == [300.0, 300.0]
+
+
+@pytest.mark.parametrize(
+    ("command", "new"),
+    [
+        (["map", "SCENE", "--over", "impact.attack_angle=1,2"], "--grid KEY=VALUES"),
+        (["compare", "SCENE", "--speeds", "200,400"], "--depths-at V1,V2,..."),
+        (["fit", "SCENE", "--step", "0.01"], "--difference-step FRACTION"),
+        (["render", "SCENE", "--steps", "10"], "--paraview-frames N|all"),
+    ],
+)
+def test_a_former_option_spelling_is_refused_naming_the_new_one(command, new):
+    """An option renamed so that one word means one thing in every command: the old spelling is refused in one
+    line that names the new one, never read as something else."""
+    from cases.cli import build_parser
+
+    with pytest.raises(SystemExit) as refused, contextlib.redirect_stderr(io.StringIO()) as err:
+        build_parser().parse_args(command)
+    message = err.getvalue()
+    assert refused.value.code == 2 and message.count("\n") == 1
+    assert f"{command[2]} is now {new}" in message
+
+
+def test_every_study_command_takes_the_shared_options():
+    """Every command that runs many scenes takes the same run-store, pool and ``--json`` options from one
+    parser, and ``--out`` is checked as a folder wherever a study writes one (render too)."""
+    from cases.cli import build_parser
+
+    commands = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)).choices
+    shared = {"--store", "--workers", "--scheduler", "--progress", "--no-progress", "--json"}
+    studies = [name for name, parser in commands.items() if "--store" in parser._option_string_actions]
+    assert set(studies) >= {"sweep", "critical", "map", "compare", "validate", "ensemble", "fit", "paper"}
+    for name in studies:
+        assert shared <= set(commands[name]._option_string_actions), name
+    for name, parser in commands.items():
+        out = parser._option_string_actions.get("--out")
+        if out is not None and name != "sweep":
+            assert out.type.__name__ == "out_folder", name

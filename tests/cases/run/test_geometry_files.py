@@ -180,7 +180,7 @@ def test_a_file_body_renders_its_field(folder, tmp_path):
         "--out",
         str(out),
         "--paraview",
-        "--steps",
+        "--paraview-frames",
         "3",
     )
     assert done.returncode == 0, done.stderr

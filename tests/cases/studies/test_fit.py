@@ -280,7 +280,7 @@ def test_not_identifiable_is_one_line_and_exit_code_1(tmp_path, capsys):
             ["--param", "impact.speed=100:400", "--param", "impact.speed=100:400", "--observe", "depth=5"],
             "each key once",
         ),
-        (["--param", "impact.speed=100:400", "--observe", "depth=5", "--step", "2"], "must be below 1"),
+        (["--param", "impact.speed=100:400", "--observe", "depth=5", "--difference-step", "2"], "must be below 1"),
     ],
 )
 def test_bad_fit_input_is_one_line_exit_2(options, message, tmp_path, capsys):

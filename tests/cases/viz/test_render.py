@@ -488,7 +488,7 @@ def test_render_command(tmp_path):
         "--out",
         str(out),
         "--paraview",
-        "--steps",
+        "--paraview-frames",
         "3",
         "--animation",
         "--frames",
