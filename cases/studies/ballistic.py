@@ -4,12 +4,13 @@
   that stops, comes back out or ends otherwise does not perforate.
 * **Ballistic limit**: the speed at which runs change from not perforating to perforating, found to
   ``resolution``: the lowest perforating run with a run that does not perforate at most ``resolution`` below it.
-  The limit is the middle of that bracket.  Each round runs as many speeds as the pool has workers.
+  The limit is the middle of that bracket, found by the critical speed's threshold search (:mod:`.search`),
+  perforation in place of instability.  Each round runs as many speeds as the pool has workers.
 * **Guide**: for a normal impact of a body of revolution whose nose alone presses (no friction, no free-surface
   reduction, separation), a 1-D integration of the nose through the target's slices
   (:func:`~cases.studies.reference.ballistic_limit_1d`) gives the limit in about a second; the first bracket is
   one resolution wide around it.  Full runs confirm its ends, and an end that its run contradicts gallops away,
-  one resolution and then doubling.  Elsewhere the search splits the range of speeds.
+  one resolution and then doubling.  Elsewhere the search splits the range of speeds (k-section).
 
 Runs are kept in the run store, so a search that stops is resumed by running it again.
 """
@@ -25,11 +26,16 @@ from ..run.runner import PERFORATED
 from ..scene import InputError, Scene
 from .pool import Pool, study_progress
 from .reference import ballistic_limit_1d, check_nose_alone_presses, scene_slices
+from .search import Bracket, search
 from .sweep import Sweep, Variation, run_sweep
 
 __all__ = ["LimitRun", "BallisticLimit", "find_ballistic_limit", "ballistic_guide", "check_rear_face"]
 
-_SLACK = 1 + 1e-9  # a bracket this close to the resolution is narrow enough (rounding)
+#: a range without the change: no run perforates up to its top, or every run does down to its bottom
+FAILURES = (
+    "no run perforates, up to {speed:g} m/s (--speeds)",
+    "every run perforates, down to {speed:g} m/s (--speeds)",
+)
 
 
 @dataclass(frozen=True)
@@ -122,78 +128,30 @@ def find_ballistic_limit(
     # every speed the search may run lies in the range: a speed the scene refuses fails here, not mid-search
     _sweep(base, [low, high])
     predicted, text = ballistic_guide(scene) if guide else (None, "unguided: --guide none")
-    width = max(2, (pool or Pool()).width)
+    bracket = Bracket(low, high, (low, high), resolution, failures=FAILURES)
+    if predicted is not None and low <= predicted - 0.5 * resolution and predicted + 0.5 * resolution <= high:
+        first = round(predicted - 0.5 * resolution, 6), round(predicted + 0.5 * resolution, 6)
+        bracket = Bracket(*first, (low, high), resolution, centre=predicted, failures=FAILURES)
     seen: dict[float, LimitRun] = {}
-    result = BallisticLimit(None, None, guide=text, predicted=predicted)
+
+    def scan(wanted: list[list[float]]) -> list[dict[float, bool]]:
+        runs = run_sweep(_sweep(base, wanted[0]), store, pool).runs
+        for speed, run in zip(wanted[0], runs):
+            summary = run.summary
+            end = summary.end_reason if summary is not None else "failed"
+            residual = summary.residual_velocity if summary is not None else math.nan
+            seen[speed] = LimitRun(speed, end, residual, run.key)
+        return [{v: run.perforated for v, run in seen.items()}]
+
     with study_progress("ballistic-limit"):
-        while True:
-            wanted, message = _next_speeds(seen, (low, high), resolution, width, predicted)
-            if message or not wanted:
-                break
-            runs = run_sweep(_sweep(base, wanted), store, pool).runs
-            for speed, run in zip(wanted, runs):
-                summary = run.summary
-                end = summary.end_reason if summary is not None else "failed"
-                residual = summary.residual_velocity if summary is not None else math.nan
-                seen[speed] = LimitRun(speed, end, residual, run.key)
-            result.rounds += 1
+        (rounds,) = search([bracket], max(2, (pool or Pool()).width), scan)
+    result = BallisticLimit(None, None, guide=text, predicted=predicted, rounds=rounds, message=bracket.failure)
     result.runs = sorted(seen.values(), key=lambda run: run.speed)
-    result.message = message
-    bracket = _bracket(seen)
-    if not message and bracket[0] is not None and bracket[1] is not None:
-        result.bracket = [bracket[0], bracket[1]]
-        result.ballistic_limit = 0.5 * (bracket[0] + bracket[1])
+    if not bracket.failure:
+        result.bracket = [bracket.low, bracket.high]
+        result.ballistic_limit = bracket.middle
     return result
 
 
 def _sweep(base: Sweep, speeds: Sequence[float]) -> Sweep:
     return Sweep.combined([(base, Variation({**base.variations[0].values, "impact.speed": v})) for v in speeds])
-
-
-def _bracket(seen: dict[float, LimitRun]) -> tuple[float | None, float | None]:
-    """The lowest perforating speed and the highest speed below it that does not perforate (None: no such run)."""
-    through = [v for v, run in seen.items() if run.perforated]
-    high = min(through, default=None)
-    low = max((v for v, run in seen.items() if not run.perforated and (high is None or v < high)), default=None)
-    return low, high
-
-
-def _next_speeds(
-    seen: dict[float, LimitRun], limits: tuple[float, float], resolution: float, width: int, predicted: float | None
-) -> tuple[list[float], str]:
-    """The speeds of the next round (none: the search is over), or the message of a range without the change."""
-    bottom, top = limits
-    low, high = _bracket(seen)
-    if not seen:
-        if predicted is not None and bottom <= predicted - 0.5 * resolution and predicted + 0.5 * resolution <= top:
-            return [round(predicted - 0.5 * resolution, 6), round(predicted + 0.5 * resolution, 6)], ""
-        return _split(bottom, top, width, include_ends=True), ""
-    if high is None:  # nothing perforates yet: gallop up from the fastest run
-        fastest = max(seen)
-        if fastest >= top:
-            return [], f"no run perforates, up to {top:g} m/s (--speeds)"
-        return [_gallop(fastest, +1, seen, resolution, top)], ""
-    if low is None:  # everything perforates: gallop down from the slowest run
-        slowest = min(seen)
-        if slowest <= bottom:
-            return [], f"every run perforates, down to {bottom:g} m/s (--speeds)"
-        return [_gallop(slowest, -1, seen, resolution, bottom)], ""
-    if high - low <= resolution * _SLACK:
-        return [], ""
-    count = min(width, math.ceil((high - low) / resolution - 1e-9) - 1)
-    return _split(low, high, count, include_ends=False), ""
-
-
-def _gallop(speed: float, sign: int, seen: dict[float, LimitRun], resolution: float, limit: float) -> float:
-    """The next speed beyond ``speed`` in the direction ``sign``: as far as the runs already span, at least one
-    resolution (the steps double), not beyond ``limit``."""
-    span = max(seen) - min(seen)
-    step = max(resolution, span)
-    return min(limit, speed + step) if sign > 0 else max(limit, speed - step)
-
-
-def _split(low: float, high: float, count: int, include_ends: bool) -> list[float]:
-    """``count`` speeds splitting ``[low, high]`` evenly (with its ends when ``include_ends``)."""
-    if include_ends:
-        return sorted({round(low + j * (high - low) / (count - 1), 6) for j in range(count)})
-    return sorted({round(low + j * (high - low) / (count + 1), 6) for j in range(1, count + 1)} - {low, high})

@@ -15,7 +15,7 @@ Definitions (docs/studies.md):
   of speeds.  Each round splits the bracket into equal parts with as many runs
   as the pool has workers (k-section); the range's ends, or a guessed
   bracket's, count only once runs confirm them.  The critical velocity is the
-  middle of the final bracket.
+  middle of the final bracket (the one threshold search, :mod:`.search`).
 * **Guided search** (the default where it applies, :mod:`.guide`): the reduced
   pitch-plane model's prediction gives a first bracket one resolution wide; full
   runs confirm its ends, and an end its run contradicts gallops out, one
@@ -35,7 +35,7 @@ Definitions (docs/studies.md):
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING
 
@@ -58,6 +58,7 @@ from .instability import (
     undisturbed,
 )
 from .pool import Pool, study_progress
+from .search import Bracket, search
 from .sweep import Sweep, Variation, run_sweep
 
 if TYPE_CHECKING:
@@ -169,122 +170,13 @@ def _scan(
         seen[i][v] = ScanRun(v, s.max_attack_angle, s.axis_angle_change, s.end_reason, run.key)
 
 
-@dataclass
-class _Bracket:
-    """One search's state: the bracket ``[low, high]`` and whether a run confirms each end.
-
-    An end not confirmed is assumed (the range's, or a guess's): stable at ``low``,
-    unstable at ``high``.  ``limits`` is the range the search may widen to.  A guided
-    search has the ``centre`` of its guide's bracket and the ``resolution``: an end its run
-    contradicts gallops away from the guide's bracket (each step as long as the way already
-    gone, at least the resolution) instead of jumping to the range's end.
-    """
-
-    low: float
-    high: float
-    limits: tuple[float, float]
-    low_run: bool = False
-    high_run: bool = False
-    failure: str = ""
-    stable_throughout: bool = False
-    centre: float | None = None
-    resolution: float = 0.0
-
-    def finished(self, resolution: float) -> bool:
-        return bool(self.failure) or (self.low_run and self.high_run and self.high - self.low <= resolution * _SLACK)
-
-    def _gallop(self, speed: float) -> float:
-        """The next speed beyond ``speed``, away from the guide's centre, inside the range."""
-        assert self.centre is not None  # guided
-        bottom, top = self.limits
-        sign = 1.0 if speed >= self.centre else -1.0
-        # each step as long as the way already gone from the guide's bracket (whose ends lie half a resolution
-        # from its centre), at least one resolution: the distance doubles, from one resolution on
-        gone = abs(speed - self.centre) - 0.5 * self.resolution
-        return min(top, max(bottom, round(speed + sign * max(self.resolution, gone), 6)))
-
-    def wanted(self, count: int, resolution: float) -> list[float]:
-        """The speeds to run next: up to ``count`` that split the bracket evenly on the grid of half the
-        resolution, or, once it is narrow enough, the ends not confirmed yet.  A guided search runs its
-        doubtful ends first, and spare runs where the gallop beyond a doubtful end would go."""
-        low, high = self.low, self.high
-        doubtful = [v for v, known in ((low, self.low_run), (high, self.high_run)) if not known]
-        if self.centre is not None and doubtful:
-            points = list(doubtful)
-            while len(points) < count and len(doubtful) == 1 and self._gallop(points[-1]) != points[-1]:
-                points.append(self._gallop(points[-1]))
-            return points[:count]
-        if high - low <= resolution * _SLACK:
-            return doubtful[:count]
-        count = min(count, math.ceil((high - low) / resolution - 1e-9) - 1)
-        step = 0.5 * resolution
-        split = {round(round((low + j * (high - low) / (count + 1)) / step) * step, 6) for j in range(1, count + 1)}
-        return sorted(v for v in split if low < v < high)
-
-    def update(self, seen: dict[float, ScanRun]) -> None:
-        """The new bracket: the lowest unstable run from its bottom up, and the highest stable run below
-        that; an end that its run contradicts moves out to the range's end, or a guided search's next
-        gallop (the search fails when the range's end was run and contradicts it too)."""
-        unstable = {v for v, run in seen.items() if is_unstable(run.axis_angle_change)}
-        stable = set(seen) - unstable
-        bottom, top = self.limits
-        guided = self.centre is not None
-        up = self._gallop(max(stable, default=self.high)) if guided else top
-        high = _end([v for v in unstable if v >= self.low], min, self.high, stable, up, top)
-        if high is None:
-            self.failure = f"every run is stable, up to {max(stable):g} m/s"
-            self.stable_throughout = True
-            return
-        down = self._gallop(min(unstable, default=self.low)) if guided else bottom
-        low = _end([v for v in stable if v < high[0]], max, self.low, unstable, down, bottom)
-        if low is None:
-            self.failure = f"every run is unstable, down to {min(unstable):g} m/s"
-            return
-        # runs beyond a contradicted end (a guided search's gallop) may lie inside the new bracket
-        inside = [v for v in unstable if low[0] < v < high[0]]
-        (self.low, self.low_run), (self.high, self.high_run) = low, ((min(inside), True) if inside else high)
-
-
-def _end(
-    side: list[float],
-    nearest: Callable[[list[float]], float],
-    assumed: float,
-    wrong_side: set[float],
-    moved: float,
-    limit: float,
-) -> tuple[float, bool] | None:
-    """One end of a bracket and whether a run confirms it: the ``nearest`` run on its side; else the assumed
-    end, unless its run lay on the wrong side: then the end ``moved`` out (the range's ``limit``, or a guided
-    search's next step towards it), and None if the limit too was run and lay on the wrong side."""
-    if side:
-        return nearest(side), True
-    if assumed not in wrong_side:
-        return assumed, False
-    return None if limit in wrong_side else (moved, False)
-
-
-_SLACK = 1 + 1e-9  # a bracket this close to the resolution is narrow enough (rounding of the grid)
-
-
-def _shares(brackets: Sequence[_Bracket], width: int) -> list[int]:
-    """How many runs each bracket gets this round: together a whole number of rounds of ``width`` runs (at least
-    one each), the widest brackets taking what is left over."""
-    budget = width * math.ceil(len(brackets) / width)
-    share, extra = divmod(budget, len(brackets))
-    widest = sorted(range(len(brackets)), key=lambda i: brackets[i].low - brackets[i].high)
-    counts = [share] * len(brackets)
-    for i in widest[:extra]:
-        counts[i] += 1
-    return counts
-
-
 def _first_brackets(
     bases: Sequence[Sweep],
     speeds: Sequence[float],
     resolution: float,
     guesses: Sequence[Sequence[float] | None] | None,
     guide: str,
-) -> tuple[list[_Bracket], list[Guide]]:
+) -> tuple[list[Bracket], list[Guide]]:
     """A bracket per scene: its guess, else its guide's, else the range; bad input is refused before anything
     runs."""
     low, high = float(min(speeds)), float(max(speeds))
@@ -306,15 +198,15 @@ def _first_brackets(
     brackets, guides = [], []
     for base, guess in zip(bases, guesses):
         if guess is not None:
-            brackets.append(_Bracket(float(min(guess)), float(max(guess)), (low, high)))
+            brackets.append(Bracket(float(min(guess)), float(max(guess)), (low, high), resolution))
             guides.append(Guide("none", "unguided: a guess given"))
             continue
         found, first = critical_guide(base.scenes[0], (low, high), resolution, guide)
         guides.append(found)
         if first is None:
-            brackets.append(_Bracket(low, high, (low, high)))
+            brackets.append(Bracket(low, high, (low, high), resolution))
         else:
-            brackets.append(_Bracket(first[0], first[1], (low, high), centre=0.5 * sum(first), resolution=resolution))
+            brackets.append(Bracket(first[0], first[1], (low, high), resolution, centre=0.5 * sum(first)))
     return brackets, guides
 
 
@@ -340,31 +232,23 @@ def find_critical_velocities(
     step), and a range without the change says so (``critical_velocity`` None).
     """
     brackets, guides = _first_brackets(bases, speeds, resolution, guesses, guide)
-    width = (pool or Pool()).width
     seen: list[dict[float, ScanRun]] = [{} for _ in bases]
-    rounds = [0] * len(bases)
+
+    def scan(wanted: list[list[float]]) -> list[dict[float, bool]]:
+        _scan(bases, store, pool, seen, wanted)
+        return [{v: is_unstable(run.axis_angle_change) for v, run in runs.items()} for runs in seen]
+
     with study_progress("critical"):  # one progress bar for every round
-        while True:
-            open_ = [i for i, b in enumerate(brackets) if not b.finished(resolution)]
-            if not open_:
-                break
-            counts = dict(zip(open_, _shares([brackets[i] for i in open_], width)))
-            wanted = [brackets[i].wanted(counts[i], resolution) if i in counts else [] for i in range(len(bases))]
-            if all(v in seen[i] for i in open_ for v in wanted[i]):  # cannot happen: every round runs something new
-                raise RuntimeError("the critical-speed search stalled: no new speed to run")
-            _scan(bases, store, pool, seen, wanted)
-            for i in open_:
-                rounds[i] += 1
-                brackets[i].update(seen[i])
+        rounds = search(brackets, (pool or Pool()).width, scan)
     results = []
     for i, bracket in enumerate(brackets):
         rows = sorted(seen[i].values(), key=lambda r: r.speed)
         if bracket.failure:
-            fix = range_fix(bracket.stable_throughout, bracket.limits, bases[i].scenes[0])
+            fix = range_fix(bracket.below_throughout, bracket.limits, bases[i].scenes[0])
             results.append(CriticalSearch(None, None, rows, bracket.failure, rounds[i], fix, guides[i]))
         else:
-            middle, ends = 0.5 * (bracket.low + bracket.high), [bracket.low, bracket.high]
-            results.append(CriticalSearch(middle, ends, rows, "", rounds[i], "", guides[i]))
+            ends = [bracket.low, bracket.high]
+            results.append(CriticalSearch(bracket.middle, ends, rows, "", rounds[i], "", guides[i]))
     return results
 
 
