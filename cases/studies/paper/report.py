@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -11,21 +10,15 @@ import numpy as np
 
 from ...run import CONVERGENCE_THRESHOLD
 from ..prediction import TurnBoundary
+from ..report import markdown_table, number_cell
 from ..speeds import CriticalSearch
 from .analysis import PaperRun, interpolate
 from .plan import FINE_NUMERICS, P3, PUBLISHED_TABLE4_P3, STUDY_NUMERICS, label
 
-__all__ = ["StudyResults", "results_markdown", "variants_markdown", "numerics_text", "fmt"]
+__all__ = ["StudyResults", "results_markdown", "variants_markdown", "numerics_text"]
 
 Runs = dict[tuple[str, float], list[PaperRun]]
 _EXPONENT = re.compile(r"e([-+])0(\d)")  # 2e-05 -> 2e-5
-
-
-def fmt(value: float | None, digits: int = 0) -> str:
-    """A number with ``digits`` decimals; ``-`` for None or a non-finite number."""
-    if value is None or (isinstance(value, float) and not math.isfinite(value)):
-        return "-"
-    return f"{value:.{digits}f}"
 
 
 def numerics_text(overrides: dict) -> str:
@@ -42,7 +35,7 @@ def _cell(run: PaperRun) -> str:
     if run.error is not None:
         return f"{run.speed:.0f} -> failed ({run.error.split(':')[0]})"
     return (
-        f"{run.speed:.0f} -> {fmt(run.convergence_speed)}"
+        f"{run.speed:.0f} -> {number_cell(run.convergence_speed, '.0f')}"
         + ("" if run.unstable else " (stable)")
         + (" (exited)" if run.end_reason == "exited" else "")
     )
@@ -77,20 +70,25 @@ def _heading(r: StudyResults) -> list[str]:
 
 
 def _speeds(r: StudyResults) -> list[str]:
-    lines = [
-        "## Critical impact velocity and characteristic convergent velocity (1 degree attack)",
-        "",
-        "| projectile (Lc/L) | critical (m/s) | bracket (m/s) | convergent, 1 deg (m/s) |"
-        " convergent, 5 deg (m/s) | convergent, 1 deg + 10 deg oblique (m/s) | spread |",
-        "|---|---|---|---|---|---|---|",
+    header = [
+        "projectile (Lc/L)",
+        "critical (m/s)",
+        "bracket (m/s)",
+        "convergent, 1 deg (m/s)",
+        "convergent, 5 deg (m/s)",
+        "convergent, 1 deg + 10 deg oblique (m/s)",
+        "spread",
     ]
+    rows = []
     for i, ratio in enumerate(r.ratios):
         values = [r.convergent[d][i] for d in ("attack 1", "attack 5", "attack 1, oblique 10")]
         known = [v for v in values if v]
-        spread = f"{(max(known) - min(known)) / np.mean(known):.1%}" if len(known) > 1 else "-"
+        spread = (max(known) - min(known)) / np.mean(known) if len(known) > 1 else None
         bracket = r.searches[i].bracket
-        found = f"{fmt(r.critical[i])} | {bracket[0]:g}-{bracket[1]:g}" if bracket else "- | -"
-        lines.append(f"| {label(ratio)} | {found} | " + " | ".join(fmt(v) for v in values) + f" | {spread} |")
+        found = [number_cell(r.critical[i], ".0f"), f"{bracket[0]:g}-{bracket[1]:g}"] if bracket else ["-", "-"]
+        rows.append([label(ratio), *found, *(number_cell(v, ".0f") for v in values), number_cell(spread, ".1%")])
+    lines = ["## Critical impact velocity and characteristic convergent velocity (1 degree attack)", ""]
+    lines += markdown_table(header, rows)
     fc, fv = r.fits["critical"], r.fits["convergent"]
     return lines + [
         "",
@@ -104,31 +102,40 @@ def _speeds(r: StudyResults) -> list[str]:
 
 
 def _table4(r: StudyResults) -> list[str]:
-    lines = [
-        "## Projectile #3 against the paper's Table 4",
-        "",
-        "| impact speed (m/s) | paper: convergent (m/s) | ours: convergent (m/s) | ours: stable? |"
-        " ours: max attack (deg) | ours: axis turn (deg) |",
-        "|---|---|---|---|---|---|",
+    header = [
+        "impact speed (m/s)",
+        "paper: convergent (m/s)",
+        "ours: convergent (m/s)",
+        "ours: stable?",
+        "ours: max attack (deg)",
+        "ours: axis turn (deg)",
     ]
-    for run in r.runs[("paper speeds", P3)]:
-        lines.append(
-            f"| {run.speed:.0f} | {PUBLISHED_TABLE4_P3[int(run.speed)]} | {fmt(run.convergence_speed)} | "
-            f"{'unstable' if run.unstable else 'stable'} | {run.max_attack_angle:.2f} | "
-            f"{run.axis_angle_change:.1f} |"
-        )
-    lines.append("")
+    rows = [
+        [
+            number_cell(run.speed, ".0f"),
+            number_cell(PUBLISHED_TABLE4_P3[int(run.speed)]),
+            number_cell(run.convergence_speed, ".0f"),
+            "unstable" if run.unstable else "stable",
+            number_cell(run.max_attack_angle, ".2f"),
+            number_cell(run.axis_angle_change, ".1f"),
+        ]
+        for run in r.runs[("paper speeds", P3)]
+    ]
+    lines = ["## Projectile #3 against the paper's Table 4", "", *markdown_table(header, rows), ""]
     lines += ["## Convergent velocity against impact velocity (the paper's Table 4 layout)", ""]
     for kind in ("attack 1", "attack 5", "attack 1, oblique 10"):
-        lines += [f"### {kind} deg", "", "| projectile | impact (m/s) -> convergent (m/s) |", "|---|---|"]
-        lines += [
-            f"| {label(ratio)} | " + "; ".join(_cell(run) for run in r.runs[(kind, ratio)]) + " |" for ratio in r.ratios
-        ]
-        lines.append("")
+        lines += [f"### {kind} deg", "", *_convergent_table(r.ratios, r.runs, kind), ""]
     for kind in ("attack 1, oblique 20", "attack 1, oblique 30", "attack 0, oblique 10", "attack 0, oblique 30"):
         cells = "; ".join(_cell(run) for run in r.runs[(kind, P3)])
-        lines += [f"Projectile #3, {kind} deg: {cells}. Characteristic: {fmt(r.convergent[kind][0])} m/s.", ""]
+        characteristic = number_cell(r.convergent[kind][0], ".0f")
+        lines += [f"Projectile #3, {kind} deg: {cells}. Characteristic: {characteristic} m/s.", ""]
     return lines
+
+
+def _convergent_table(ratios: Sequence[float], runs: Runs, kind: str) -> list[str]:
+    """The table ``projectile | impact -> convergent; ...`` of the runs of ``kind``, one row per projectile."""
+    rows = [[label(ratio), "; ".join(_cell(run) for run in runs[(kind, ratio)])] for ratio in ratios]
+    return markdown_table(["projectile", "impact (m/s) -> convergent (m/s)"], rows)
 
 
 def _load_only(r: StudyResults) -> list[str]:
@@ -139,24 +146,39 @@ def _load_only(r: StudyResults) -> list[str]:
         " embedded projectile can hold a steady turn at some attack angle (its minimum over alpha, the"
         " fold), against the trajectory-measured characteristic convergent velocity (1 degree attack).",
         "",
-        "| projectile | measured (m/s) | fold of the steady-turn boundary (m/s) | at attack angle (deg) |"
-        " prediction / measured |",
-        "|---|---|---|---|---|",
     ]
-    for ratio, b, measured in zip(r.ratios, r.boundaries, r.convergent["attack 1"]):
-        ratio_text = fmt(b.fold_speed / measured if (b.fold_speed and measured) else None, 3)
-        lines.append(
-            f"| {label(ratio)} | {fmt(measured)} | {fmt(b.fold_speed)} | {fmt(b.fold_attack_angle, 1)} | {ratio_text} |"
-        )
+    header = [
+        "projectile",
+        "measured (m/s)",
+        "fold of the steady-turn boundary (m/s)",
+        "at attack angle (deg)",
+        "prediction / measured",
+    ]
+    rows = [
+        [
+            label(ratio),
+            number_cell(measured, ".0f"),
+            number_cell(b.fold_speed, ".0f"),
+            number_cell(b.fold_attack_angle, ".1f"),
+            number_cell(b.fold_speed / measured if (b.fold_speed and measured) else None, ".3f"),
+        ]
+        for ratio, b, measured in zip(r.ratios, r.boundaries, r.convergent["attack 1"])
+    ]
+    lines += markdown_table(header, rows)
     lines += [
         "",
         "Where the attack angle of the unstable 1-degree runs peaks, against the steady-turn boundary at"
         " that angle (medians over the unstable runs):",
         "",
-        "| projectile | peak attack angle (deg) | speed at the peak (m/s) | V_turn at that angle (m/s) |"
-        " V_turn / speed at the peak |",
-        "|---|---|---|---|---|",
     ]
+    header = [
+        "projectile",
+        "peak attack angle (deg)",
+        "speed at the peak (m/s)",
+        "V_turn at that angle (m/s)",
+        "V_turn / speed at the peak",
+    ]
+    rows = []
     for ratio, b in zip(r.ratios, r.boundaries):
         # an unstable run has its peak (a failed run, without one, is never unstable)
         peaks = [run.peak for run in r.runs[("attack 1", ratio)] if run.unstable and run.peak is not None]
@@ -164,19 +186,26 @@ def _load_only(r: StudyResults) -> list[str]:
             continue
         angle, speed = float(np.median([p[0] for p in peaks])), float(np.median([p[1] for p in peaks]))
         v_turn = interpolate(b.attack_angles, b.steady_turn, angle)
-        lines.append(
-            f"| {label(ratio)} | {angle:.1f} | {speed:.0f} | {fmt(v_turn)} | "
-            f"{fmt(v_turn / speed if v_turn else None, 3)} |"
+        rows.append(
+            [
+                label(ratio),
+                number_cell(angle, ".1f"),
+                number_cell(speed, ".0f"),
+                number_cell(v_turn, ".0f"),
+                number_cell(v_turn / speed if v_turn else None, ".3f"),
+            ]
         )
+    lines += markdown_table(header, rows)
     b3 = r.boundaries[r.ratios.index(P3)]
+    lines += ["", "Projectile #3, the boundaries against the attack angle (m/s):", ""]
+    lines += markdown_table(
+        ["attack angle (deg)", *(number_cell(a, "g") for a in b3.attack_angles)],
+        [
+            ["non-rotating crossing", *(number_cell(v, ".0f") for v in b3.non_rotating)],
+            ["steady-turn boundary", *(number_cell(v, ".0f") for v in b3.steady_turn)],
+        ],
+    )
     return lines + [
-        "",
-        "Projectile #3, the boundaries against the attack angle (m/s):",
-        "",
-        "| attack angle (deg) | " + " | ".join(f"{a:g}" for a in b3.attack_angles) + " |",
-        "|---|" + "---|" * len(b3.attack_angles),
-        "| non-rotating crossing | " + " | ".join(fmt(v) for v in b3.non_rotating) + " |",
-        "| steady-turn boundary | " + " | ".join(fmt(v) for v in b3.steady_turn) + " |",
         "",
         "![steady-turn boundary of #3](turn_boundary_p3.png)",
         "",
@@ -184,31 +213,33 @@ def _load_only(r: StudyResults) -> list[str]:
 
 
 def _inertia_and_check(r: StudyResults) -> list[str]:
-    lines = [
-        "## Transverse moment of inertia of #3",
-        "",
-        "| transverse inertia scale | critical impact velocity (m/s) |",
-        "|---|---|",
-        f"| 1.0 | {fmt(r.critical[r.ratios.index(P3)])} |",
-    ]
-    lines += [f"| {k} | {fmt(c)} |" for k, c in zip(r.inertia_scales, r.inertia_critical)]
+    # the scale as the plan writes it (``str``: 1.0, 0.67, 1.5), the unscaled projectile first
+    scaled = [(1.0, r.critical[r.ratios.index(P3)]), *zip(r.inertia_scales, r.inertia_critical)]
+    lines = ["## Transverse moment of inertia of #3", ""]
+    lines += markdown_table(
+        ["transverse inertia scale", "critical impact velocity (m/s)"],
+        [[str(scale), number_cell(critical, ".0f")] for scale, critical in scaled],
+    )
     lines.append("")
     coarse = {run.speed: run for run in r.runs[("attack 1", P3)]}
-    lines += [
-        "## Numerical check (#3 near its critical speed)",
-        "",
-        "| impact speed (m/s) | numerics | max attack (deg) | axis turn (deg) | convergent (m/s) |",
-        "|---|---|---|---|---|",
-    ]
-    for fine in r.runs[("fine numerics", P3)]:
+    rows = [
+        [
+            number_cell(fine.speed, ".0f"),
+            name,
+            number_cell(run.max_attack_angle, ".3f"),
+            number_cell(run.axis_angle_change, ".2f"),
+            number_cell(run.convergence_speed, ".1f"),
+        ]
+        for fine in r.runs[("fine numerics", P3)]
         for name, run in (
             (f"study: `{numerics_text(STUDY_NUMERICS)}`", coarse[fine.speed]),
             (f"fine: `{numerics_text(FINE_NUMERICS)}`", fine),
-        ):
-            lines.append(
-                f"| {fine.speed:.0f} | {name} | {run.max_attack_angle:.3f} | {run.axis_angle_change:.2f} | "
-                f"{fmt(run.convergence_speed, 1)} |"
-            )
+        )
+    ]
+    lines += ["## Numerical check (#3 near its critical speed)", ""]
+    lines += markdown_table(
+        ["impact speed (m/s)", "numerics", "max attack (deg)", "axis turn (deg)", "convergent (m/s)"], rows
+    )
     lines.append("")
     return lines
 
@@ -265,26 +296,19 @@ def variants_markdown(
         "",
         "## Characteristic convergent velocity against Lc/L (m/s)",
         "",
-        "| variant | " + " | ".join(label(r) for r in ratios) + " | linear fit (R^2) |",
-        "|---|" + "---|" * (len(ratios) + 1),
     ]
+    rows = []
     for name, values in characteristic_by.items():
         fit = fits[name]
         fit_text = f"{fit['slope']:.0f} Lc/L + {fit['intercept']:.0f} ({fit['r2']:.3f})" if fit else "-"
-        lines.append(f"| {name} | " + " | ".join(fmt(v) for v in values) + f" | {fit_text} |")
-    lines += [
-        "",
-        "![variants](variants.png)",
-        "",
-        "## Distance travelled at 400 m/s (m), stable runs",
-        "",
-        "| variant | " + " | ".join(label(r) for r in ratios) + " |",
-        "|---|" + "---|" * len(ratios),
-    ]
-    lines += [f"| {name} | " + " | ".join(fmt(v, 2) for v in values) + " |" for name, values in path_at_400.items()]
+        rows.append([name, *(number_cell(v, ".0f") for v in values), fit_text])
+    lines += markdown_table(["variant", *(label(r) for r in ratios), "linear fit (R^2)"], rows)
+    lines += ["", "![variants](variants.png)", "", "## Distance travelled at 400 m/s (m), stable runs", ""]
+    lines += markdown_table(
+        ["variant", *(label(r) for r in ratios)],
+        [[name, *(number_cell(v, ".2f") for v in values)] for name, values in path_at_400.items()],
+    )
     lines += ["", "## Convergent velocity against impact velocity", ""]
     for name in characteristic_by:
-        lines += [f"### {name}", "", "| projectile | impact (m/s) -> convergent (m/s) |", "|---|---|"]
-        lines += [f"| {label(r)} | " + "; ".join(_cell(run) for run in runs[(name, r)]) + " |" for r in ratios]
-        lines.append("")
+        lines += [f"### {name}", "", *_convergent_table(ratios, runs, name), ""]
     return "\n".join(lines) + "\n"
