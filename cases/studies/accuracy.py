@@ -43,6 +43,7 @@ from ..scene import InputError, Overrides, Scene
 from ..viz.figures import legend_outside, save_figure, subplots
 from .pool import Pool
 from .reference import check_nose_alone_presses, scene_depth_1d
+from .report import markdown_table, number_cell
 from .speeds import is_unstable
 from .sweep import Sweep, Variation, end_cells, run_sweep
 
@@ -382,17 +383,40 @@ def _markdown(table: pd.DataFrame, reference: dict, scene: Scene) -> str:
         )
         + ".",
         "",
-        "| axis | setting | end | surface points | steps | depth (m) | depth error | axis angle error (deg) |"
-        " convergence speed error (m/s) | integration (s) | wall (s) | Pareto |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    header = [
+        "axis",
+        "setting",
+        "end",
+        "surface points",
+        "steps",
+        "depth (m)",
+        "depth error",
+        "axis angle error (deg)",
+        "convergence speed error (m/s)",
+        "integration (s)",
+        "wall (s)",
+        "Pareto",
     ]
     ends, notes = end_cells([(str(row["end_reason"]), json.loads(row["warnings"])) for _, row in table.iterrows()])
-    for (_, row), end in zip(table.iterrows(), ends):
-        lines.append(
-            f"| {row['axis']} | {_label(row)} | {end} | {row['surface_points']} | {row['steps']} | {row['depth']:.6f} |"
-            f" {row['depth_error']:.2e} | {row['axis_angle_error']:.2e} | {row['convergence_speed_error']:.2g} |"
-            f" {row['integration_time']:.2f} | {row['wall_time']:.2f} | {'yes' if row['pareto'] else ''} |"
-        )
+    rows = [
+        [
+            row["axis"],
+            _label(row),
+            end,
+            row["surface_points"],
+            row["steps"],
+            number_cell(row["depth"], ".6f"),
+            number_cell(row["depth_error"], ".2e"),
+            number_cell(row["axis_angle_error"], ".2e"),
+            number_cell(row["convergence_speed_error"], ".2g"),
+            number_cell(row["integration_time"], ".2f"),
+            number_cell(row["wall_time"], ".2f"),
+            "yes" if row["pareto"] else "",
+        ]
+        for (_, row), end in zip(table.iterrows(), ends)
+    ]
+    lines += markdown_table(header, rows)
     if notes:
         lines += ["", "Warnings (the end column points to them):", "", *[f"{i}. {n}" for i, n in enumerate(notes, 1)]]
     lines += ["", "![depth error against integration time](accuracy.png)", ""]
@@ -410,22 +434,35 @@ def _time_convergence_markdown(convergence: pd.DataFrame) -> list[str]:
         " error alone), the observed order of each halving, and the mesh's own depth error (its finest"
         " step against the reference), below which a shorter step buys nothing.",
         "",
-        "| mesh | step (s) | steps | depth time error | order | axis angle time error (deg) | order |"
-        " convergence speed time error (m/s) | order | mesh error (depth) | integration (s) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-
-    def order(value: float) -> str:
-        return "" if not np.isfinite(value) else f"{value:.1f}"
-
-    for _, row in convergence.iterrows():
-        mesh_error = "reference" if not np.isfinite(row["mesh_error"]) else f"{row['mesh_error']:.2e}"
-        lines.append(
-            f"| {row['numerics.mesh_size'] * 1e3:g} mm | {row['numerics.time_step']:g} | {int(row['steps'])} |"
-            f" {row['depth_time_error']:.2e} | {order(row['depth_order'])} |"
-            f" {row['axis_angle_time_error']:.2e} | {order(row['axis_angle_order'])} |"
-            f" {row['convergence_speed_time_error']:.2g} | {order(row['convergence_speed_order'])} |"
-            f" {mesh_error} | {row['integration_time']:.2f} |"
-        )
-    lines.append("")
+    header = [
+        "mesh",
+        "step (s)",
+        "steps",
+        "depth time error",
+        "order",
+        "axis angle time error (deg)",
+        "order",
+        "convergence speed time error (m/s)",
+        "order",
+        "mesh error (depth)",
+        "integration (s)",
+    ]
+    rows = [
+        [
+            f"{number_cell(row['numerics.mesh_size'] * 1e3, 'g')} mm",
+            number_cell(row["numerics.time_step"], "g"),
+            int(row["steps"]),
+            number_cell(row["depth_time_error"], ".2e"),
+            number_cell(row["depth_order"], ".1f", missing=""),
+            number_cell(row["axis_angle_time_error"], ".2e"),
+            number_cell(row["axis_angle_order"], ".1f", missing=""),
+            number_cell(row["convergence_speed_time_error"], ".2g"),
+            number_cell(row["convergence_speed_order"], ".1f", missing=""),
+            number_cell(row["mesh_error"], ".2e", missing="reference"),
+            number_cell(row["integration_time"], ".2f"),
+        ]
+        for _, row in convergence.iterrows()
+    ]
+    lines += [*markdown_table(header, rows), ""]
     return lines

@@ -36,6 +36,7 @@ from ..scene import Overrides
 from .accuracy import is_plain_normal_impact
 from .pool import Pool
 from .reference import axial_depth_1d
+from .report import markdown_table, number_cell
 from .speeds import is_unstable
 from .sweep import Sweep, Variation, run_sweep
 
@@ -130,25 +131,14 @@ def _markdown(table: pd.DataFrame, name: str, step: float) -> str:
         " (`contact_incidence = 0`). Changes are from the sharp run (m, deg, m/s);"
         " changes below round-off (1e-12 of the value) are 0.",
         "",
-        "| contact incidence | depth (m) | change | path (m) | change | axis turn (deg) | change |"
-        " convergence speed (m/s) | change |" + (" 1-D depth, same width (m) |" if reference else ""),
-        "|---|---|---|---|---|---|---|---|---|" + ("---|" if reference else ""),
     ]
-    for _, row in table.iterrows():
-        cells = [
-            f"{row['contact_incidence']:g}",
-            f"{row['depth']:.6f}",
-            _change(row, "depth"),
-            f"{row['path_length']:.6f}",
-            _change(row, "path_length"),
-            f"{row['axis_angle_change']:.4f}",
-            _change(row, "axis_angle_change"),
-            _number(row["convergence_speed"], ".2f"),
-            _change(row, "convergence_speed"),
-        ]
-        if reference:
-            cells.append(f"{row['depth_1d']:.6f}")
-        lines.append("| " + " | ".join(cells) + " |")
+    header = ["contact incidence", *CHANGES_HEADER] + (["1-D depth, same width (m)"] if reference else [])
+    rows = [
+        [number_cell(row["contact_incidence"], "g"), *_change_cells(row)]
+        + ([number_cell(row["depth_1d"], ".6f")] if reference else [])
+        for _, row in table.iterrows()
+    ]
+    lines += markdown_table(header, rows)
     return "\n".join(lines) + "\n"
 
 
@@ -221,34 +211,55 @@ def _entry_markdown(table: pd.DataFrame, name: str) -> str:
         f"RK4 on the scene's mesh. At the finest step ({steps[-1]:g} s), each smoothing's result and its"
         f" change from smoothing {smallest:g} (m, deg, m/s):",
         "",
-        "| entry smoothing | depth (m) | change | path (m) | change | axis turn (deg) | change |"
-        " convergence speed (m/s) | change |",
-        "|---|---|---|---|---|---|---|---|---|",
     ]
-    for _, row in finest.iterrows():
-        lines.append(
-            f"| {row['entry_smoothing']:g} | {row['depth']:.6f} | {_change(row, 'depth')} |"
-            f" {row['path_length']:.6f} | {_change(row, 'path_length')} |"
-            f" {row['axis_angle_change']:.4f} | {_change(row, 'axis_angle_change')} |"
-            f" {_number(row['convergence_speed'], '.2f')} | {_change(row, 'convergence_speed')} |"
-        )
+    changes = [[number_cell(row["entry_smoothing"], "g"), *_change_cells(row)] for _, row in finest.iterrows()]
+    lines += markdown_table(["entry smoothing", *CHANGES_HEADER], changes)
     lines += [
         "",
         "Time error of each step against the finest step at the same smoothing: relative depth error /"
         " axis-turn error (deg); `*`: the energy guard retook steps.",
         "",
-        "| entry smoothing | " + " | ".join(f"{h:g} s" for h in steps[:-1]) + " |",
-        "|---|" + "---|" * (len(steps) - 1),
     ]
+    time_errors = []
     for e, group in table.groupby("entry_smoothing"):
         group = group.set_index("time_step")
         cells = [
-            f"{group.loc[h, 'depth_time_error']:.1e} / {group.loc[h, 'axis_angle_change_time_error']:.1e}"
+            f"{number_cell(group.loc[h, 'depth_time_error'], '.1e')}"
+            f" / {number_cell(group.loc[h, 'axis_angle_change_time_error'], '.1e')}"
             + ("*" if group.loc[h, "energy_rejections"] else "")
             for h in steps[:-1]
         ]
-        lines.append(f"| {e:g} | " + " | ".join(cells) + " |")
+        time_errors.append([number_cell(e, "g"), *cells])
+    lines += markdown_table(["entry smoothing", *(f"{h:g} s" for h in steps[:-1])], time_errors)
     return "\n".join(lines) + "\n"
+
+
+#: the columns of a row of :func:`_change_cells`: each quantity and its change
+CHANGES_HEADER = (
+    "depth (m)",
+    "change",
+    "path (m)",
+    "change",
+    "axis turn (deg)",
+    "change",
+    "convergence speed (m/s)",
+    "change",
+)
+
+
+def _change_cells(row: pd.Series) -> list[str]:
+    """The cells under :data:`CHANGES_HEADER`: the depth, path length, axis turn and convergence speed of ``row``,
+    each followed by its :func:`_change`."""
+    return [
+        number_cell(row["depth"], ".6f"),
+        _change(row, "depth"),
+        number_cell(row["path_length"], ".6f"),
+        _change(row, "path_length"),
+        number_cell(row["axis_angle_change"], ".4f"),
+        _change(row, "axis_angle_change"),
+        number_cell(row["convergence_speed"], ".2f"),
+        _change(row, "convergence_speed"),
+    ]
 
 
 #: a change below this fraction of the value is round-off (the summation order of two runs of one
@@ -261,8 +272,4 @@ def _change(row: pd.Series, name: str) -> str:
     change = row[f"{name}_change"]
     if isinstance(change, float) and not math.isnan(change) and abs(change) <= ROUND_OFF * abs(row[name]):
         change = 0.0
-    return _number(change, "+.2e")
-
-
-def _number(value: float, spec: str) -> str:
-    return "-" if value is None or (isinstance(value, float) and math.isnan(value)) else format(value, spec)
+    return number_cell(change, "+.2e")

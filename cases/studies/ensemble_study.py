@@ -34,8 +34,9 @@ from .ensemble import (
     summary_record,
     variations,
 )
-from .multifidelity import FULL_RUNS, check_applies, multi_ensemble, multi_markdown
+from .multifidelity import FULL_RUNS, check_applies, interval_cell, multi_ensemble, multi_markdown
 from .pool import Pool
+from .report import markdown_table, number_cell
 from .sweep import Sweep, SweepResult, Variation, run_sweep
 
 __all__ = ["run_ensemble", "INTERVAL", "FIDELITIES"]
@@ -226,10 +227,6 @@ def _quantiles(table: pd.DataFrame) -> dict:
     return record
 
 
-def _cell(value: float | None) -> str:
-    return "-" if value is None or (isinstance(value, float) and math.isnan(value)) else f"{value:.3g}"
-
-
 def _markdown(record: dict, table: pd.DataFrame, name: str) -> str:
     lines = [
         f"# {name}: an ensemble of {record['runs']} runs",
@@ -238,44 +235,38 @@ def _markdown(record: dict, table: pd.DataFrame, name: str) -> str:
         " turned by at least 30 degrees (as `penetrate critical` decides). `failed` is counted over every run,"
         f" the other outcomes over the finished runs; intervals: {INTERVAL}.",
         "",
-        "| sampled key | distribution | min | mean | max |",
-        "|---|---|---|---|---|",
     ]
+    samples = []
     for key, text in record["samples"].items():
         column = table[key].astype(float)
-        lines.append(f"| {key} | {text} | {column.min():.4g} | {column.mean():.4g} | {column.max():.4g} |")
-    lines += [
-        "",
-        "| quantity | runs | mean | " + " | ".join(f"{q:.0%}" for q in QUANTILES) + " |",
-        "|---|---|---|" + "---|" * len(QUANTILES),
-    ]
+        samples.append([key, text, *(number_cell(v, ".4g") for v in (column.min(), column.mean(), column.max()))])
+    lines += markdown_table(["sampled key", "distribution", "min", "mean", "max"], samples)
+    quantities = []
     for name, unit in DISTRIBUTED.items():
         d = record["distributions"][name]
-        lines.append(
-            f"| {name} ({unit}) | {d['runs']} | {_cell(d['mean'])} | "
-            + " | ".join(_cell(v) for v in d["quantiles"].values())
-            + " |"
-        )
+        quantiles = [number_cell(v) for v in d["quantiles"].values()]
+        quantities.append([f"{name} ({unit})", d["runs"], number_cell(d["mean"]), *quantiles])
+    lines += ["", *markdown_table(["quantity", "runs", "mean", *(f"{q:.0%}" for q in QUANTILES)], quantities)]
     lines += [
         "",
         "(quantiles over the finished runs; the convergence speed over the runs whose attack angle"
         " peaked and fell below 0.1 degree, the residual velocity over the runs that perforated)",
     ]
-    lines += ["", "| outcome | probability | 95 % interval |", "|---|---|---|"]
-    for outcome in OUTCOMES:
-        low, high = record["interval"][outcome]
-        lines.append(f"| {outcome} | {_cell(record['probability'][outcome])} | {_cell(low)} - {_cell(high)} |")
+    probabilities = [
+        [outcome, number_cell(record["probability"][outcome]), interval_cell(record["interval"][outcome])]
+        for outcome in OUTCOMES
+    ]
+    lines += ["", *markdown_table(["outcome", "probability", "95 % interval"], probabilities)]
     if "curve" in record:
-        lines += [
-            "",
-            f"By {record['by']}:",
-            "",
-            "| bin | runs | " + " | ".join(OUTCOMES) + " |",
-            "|---|---|" + "---|" * len(OUTCOMES),
+        bins = [
+            [
+                interval_cell(b["bin"], "g"),
+                b["runs"],
+                *(f"{number_cell(b[o])} ({interval_cell(b['interval'][o])})" for o in OUTCOMES),
+            ]
+            for b in record["curve"]
         ]
-        for b in record["curve"]:
-            cells = [f"{_cell(b[o])} ({_cell(b['interval'][o][0])} - {_cell(b['interval'][o][1])})" for o in OUTCOMES]
-            lines.append(f"| {b['bin'][0]:g} - {b['bin'][1]:g} | {b['runs']} | " + " | ".join(cells) + " |")
+        lines += ["", f"By {record['by']}:", "", *markdown_table(["bin", "runs", *OUTCOMES], bins)]
         lines += ["", "![probabilities by bin](ensemble_curve.png)"]
     lines += ["", "![the samples and the outcomes' distributions](ensemble_histograms.png)", ""]
     # what found nothing, last (the printed report ends with it), with the option that would find something

@@ -37,6 +37,7 @@ import numpy as np
 from ..scene import InputError, Scene, one_line
 from .ensemble import CONFIDENCE, Distribution, wilson_interval
 from .pool import Pool
+from .report import markdown_table, number_cell
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -56,6 +57,7 @@ __all__ = [
     "stratified",
     "multi_ensemble",
     "multi_markdown",
+    "interval_cell",
 ]
 
 MARGIN = 0.012  # relative change of the impact speed either side of a sample (twice the 0.6 % measured)
@@ -286,12 +288,14 @@ INTERVAL = (
 )
 
 
+def interval_cell(interval: Sequence[float | None], spec: str = ".3g") -> str:
+    """A range as a table cell, ``low - high`` (a 95 % interval, a bin), each bound a :func:`~.report.number_cell`."""
+    low, high = interval
+    return f"{number_cell(low, spec)} - {number_cell(high, spec)}"
+
+
 def multi_markdown(record: dict, name: str) -> str:
     """The report of a multi-fidelity ensemble."""
-
-    def cell(value: float) -> str:
-        return "-" if value != value else f"{value:.3g}"
-
     strata = record["strata"]
     lines = [
         f"# {name}: a multi-fidelity ensemble of {record['runs']} samples, {record['full_runs']} full runs",
@@ -303,23 +307,26 @@ def multi_markdown(record: dict, name: str) -> str:
         f" and {record['by_stratum']['unstable']['runs']} unstable. Each stratum's probability is measured by its"
         f" full runs (the estimate does not trust the sort); intervals: {INTERVAL}.",
         "",
-        "| outcome | probability | 95 % interval |",
-        "|---|---|---|",
     ]
-    for outcome, p in record["probability"].items():
-        low, high = record["interval"][outcome]
-        lines.append(f"| {outcome} | {cell(p)} | {cell(low)} - {cell(high)} |")
-    lines += ["", "| stratum | samples | full runs | unstable among them |", "|---|---|---|---|"]
-    for stratum, counts in record["by_stratum"].items():
-        lines.append(f"| {stratum} | {counts['samples']} | {counts['runs']} | {counts['count']} |")
+    probabilities = [
+        [outcome, number_cell(p), interval_cell(record["interval"][outcome])]
+        for outcome, p in record["probability"].items()
+    ]
+    lines += markdown_table(["outcome", "probability", "95 % interval"], probabilities)
+    strata_rows = [[name, c["samples"], c["runs"], c["count"]] for name, c in record["by_stratum"].items()]
+    lines += ["", *markdown_table(["stratum", "samples", "full runs", "unstable among them"], strata_rows)]
     if "curve" in record:
-        lines += ["", f"By {record['by']}:", "", "| bin | samples | full runs | unstable | 95 % interval |"]
-        lines.append("|---|---|---|---|---|")
-        for b in record["curve"]:
-            low, high = b["interval"]["unstable"]
-            lines.append(
-                f"| {b['bin'][0]:g} - {b['bin'][1]:g} | {b['runs']} | {b['full_runs']} | {cell(b['unstable'])} |"
-                f" {cell(low)} - {cell(high)} |"
-            )
+        bins = [
+            [
+                interval_cell(b["bin"], "g"),
+                b["runs"],
+                b["full_runs"],
+                number_cell(b["unstable"]),
+                interval_cell(b["interval"]["unstable"]),
+            ]
+            for b in record["curve"]
+        ]
+        header = ["bin", "samples", "full runs", "unstable", "95 % interval"]
+        lines += ["", f"By {record['by']}:", "", *markdown_table(header, bins)]
         lines += ["", "![probabilities by bin](ensemble_curve.png)"]
     return "\n".join(lines) + "\n"
