@@ -23,6 +23,7 @@ from ..run import RunStore, atomic_write_text, initial_state, prepare_projectile
 from ..scene import InputError, Overrides, Scene
 from ..viz.figures import legend_outside, save_figure, subplots
 from .pool import Pool
+from .report import markdown_table, number_cell
 from .series import Series, combined
 from .speeds import find_critical_velocities, measure_convergent_velocity
 from .sweep import Sweep, SweepResult, Variation, end_cells, run_sweep
@@ -133,8 +134,6 @@ def _markdown(comparison: LawComparison, name: str) -> str:
     lines = [
         f"# {name} under {len(table)} resistance law{'s' if len(table) != 1 else ''}",
         "",
-        "| " + " | ".join(shown) + " |",
-        "|" + "---|" * len(shown),
     ]
     ends, notes = end_cells(
         [
@@ -142,17 +141,12 @@ def _markdown(comparison: LawComparison, name: str) -> str:
             for _, row in table.iterrows()
         ]
     )
+    rows = []
     for (_, row), end in zip(table.iterrows(), ends):
         row = row.copy()
         row["end_reason"] = end
-        cells = []
-        for c in shown:
-            value = row[c]
-            if isinstance(value, float):
-                cells.append("none found" if math.isnan(value) else f"{value:.4g}")
-            else:
-                cells.append("none found" if value is None else str(value))
-        lines.append("| " + " | ".join(cells) + " |")
+        rows.append([number_cell(row[c], ".4g", missing="none found") for c in shown])
+    lines += markdown_table(shown, rows)
     lines += ["", *[f"[{i}] {note}" for i, note in enumerate(notes, 1)]] if notes else []
     lines += ["", UNITS, "peak_nose_stress: the largest normal stress one body length in, at the impact speed.", ""]
     short = [
@@ -167,10 +161,14 @@ def _markdown(comparison: LawComparison, name: str) -> str:
         ]
     if comparison.depth_by_speed is not None:
         wide = comparison.depth_by_speed.pivot(index="impact.speed", columns="law", values="depth")
-        lines += ["Depth (m) against impact speed (m/s):", "", "| impact speed | " + " | ".join(wide.columns) + " |"]
-        lines.append("|" + "---|" * (len(wide.columns) + 1))
-        for speed, row in wide.iterrows():
-            lines.append(f"| {speed:g} | " + " | ".join(f"{value:.4g}" for value in row) + " |")
+        lines += ["Depth (m) against impact speed (m/s):", ""]
+        lines += markdown_table(
+            ["impact speed", *wide.columns],
+            [
+                [number_cell(speed, "g"), *(number_cell(depth, ".4g") for depth in row)]
+                for speed, row in wide.iterrows()
+            ],
+        )
         lines.append("")
     lines += ["![runs, depth against speed, stress on the body](compare.png)", ""]
     return "\n".join(lines)
@@ -285,40 +283,49 @@ def _series_markdown(comparison: SeriesComparison, series: Series) -> str:
     lines = [f"# {name}: {len(series.shots)} shots under {len(laws)} resistance law{'s' if len(laws) != 1 else ''}"]
     lines.append("")
     lines += settings_lines(comparison.settings)
-    lines += [
-        "| rank | law | measurements | mean abs error (%) | bias (%) | RMS (%) | chi-squared |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    for entry in comparison.ranking:
-        failed = f" ({entry['failed']} failed)" if entry["failed"] else ""
-        bias = "-" if entry["bias_percent"] is None else f"{entry['bias_percent']:+.1f}"
-        mean, rms = (entry[k] for k in ("mean_abs_error_percent", "rms_percent"))
-        cells = ["-" if mean is None else f"{mean:.1f}", bias, "-" if rms is None else f"{rms:.1f}"]
-        cells.append(_figure_cell(entry["chi2"]))
-        lines.append(f"| {entry['rank']} | {entry['law']} | {entry['shots']}{failed} | " + " | ".join(cells) + " |")
+    lines += markdown_table(
+        ["rank", "law", "measurements", "mean abs error (%)", "bias (%)", "RMS (%)", "chi-squared"],
+        [
+            [
+                entry["rank"],
+                entry["law"],
+                f"{entry['shots']} ({entry['failed']} failed)" if entry["failed"] else entry["shots"],
+                number_cell(entry["mean_abs_error_percent"], ".1f"),
+                number_cell(entry["bias_percent"], "+.1f"),
+                number_cell(entry["rms_percent"], ".1f"),
+                number_cell(entry["chi2"], ".3g"),
+            ]
+            for entry in comparison.ranking
+        ],
+    )
     lines += [
         "",
         "Ranked by the mean |error| over every measurement (per cent of the measurement), then chi-squared"
         " (where every shot gives a sigma). The scene's own law is `scene`.",
         "",
-        "| shot | quantity | measured | " + " | ".join(laws) + " |",
-        "|---|---|---|" + "---|" * len(laws),
     ]
     by_key = {(row["law"], row["label"], row["quantity"]): row for row in comparison.rows}
-    for shot in series.shots:
-        for measurement in shot.measurements:
-            cells = []
-            for law in laws:
-                row = by_key[(law, shot.label, measurement.quantity)]
-                predicted, error = row["predicted"], row["error_percent"]
-                end = "" if row["end_reason"] in ("stopped", "exited") else f", {row['end_reason']}"
-                cells.append("failed" if predicted is None else f"{predicted:.4g} ({error:+.1f} %{end})")
-            lines.append(
-                f"| {shot.label} | {measurement.quantity} | {measurement.value:.4g} | " + " | ".join(cells) + " |"
-            )
+    lines += markdown_table(
+        ["shot", "quantity", "measured", *laws],
+        [
+            [
+                shot.label,
+                measurement.quantity,
+                number_cell(measurement.value, ".4g"),
+                *(_prediction_cell(by_key[(law, shot.label, measurement.quantity)]) for law in laws),
+            ]
+            for shot in series.shots
+            for measurement in shot.measurements
+        ],
+    )
     lines += ["", "Predicted (error against the measurement); SI units.", "", "![parity by law](compare.png)", ""]
     return "\n".join(lines)
 
 
-def _figure_cell(value: float | None) -> str:
-    return "-" if value is None else f"{value:.3g}"
+def _prediction_cell(row: Mapping[str, Any]) -> str:
+    """One law's prediction of one measurement: ``predicted (error %)``, with the run's end unless it stopped or
+    exited; ``failed`` for a run that gave none."""
+    if row["predicted"] is None:
+        return "failed"
+    end = "" if row["end_reason"] in ("stopped", "exited") else f", {row['end_reason']}"
+    return f"{number_cell(row['predicted'], '.4g')} ({number_cell(row['error_percent'], '+.1f')} %{end})"

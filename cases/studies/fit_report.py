@@ -8,6 +8,8 @@ from typing import Any
 
 import numpy as np
 
+from .report import markdown_table, number_cell
+
 
 @dataclass
 class FitResult:
@@ -52,7 +54,7 @@ class FitResult:
 
 def _prediction_lines(result: FitResult) -> list[str]:
     """The held-out predictions and the cross-validation, each apart from the fit and labelled so."""
-    from .validate import cell, signed_percent, summary_table
+    from .validate import summary_table
 
     lines: list[str] = []
     if result.predictions is not None:
@@ -64,15 +66,32 @@ def _prediction_lines(result: FitResult) -> list[str]:
             "Predicted at the fitted values, and at the scenes' own values (before the fit), against the"
             " measurements the fit did not see:",
             "",
-            "| shot | quantity | impact speed (m/s) | measured | predicted | error (%) | before the fit | error (%) |",
-            "|---|---|---|---|---|---|---|---|",
         ]
-        for row, start in zip(p["rows"], p["start_rows"]):
-            lines.append(
-                f"| {row['label']} | {row['quantity']} | {row['impact_speed']:g} | {row['measured']:.4g} |"
-                f" {cell(row['predicted'])} | {signed_percent(row['error_percent'])} | {cell(start['predicted'])} |"
-                f" {signed_percent(start['error_percent'])} |"
-            )
+        lines += markdown_table(
+            [
+                "shot",
+                "quantity",
+                "impact speed (m/s)",
+                "measured",
+                "predicted",
+                "error (%)",
+                "before the fit",
+                "error (%)",
+            ],
+            [
+                [
+                    row["label"],
+                    row["quantity"],
+                    number_cell(row["impact_speed"], "g"),
+                    number_cell(row["measured"], ".4g"),
+                    number_cell(row["predicted"], ".4g"),
+                    number_cell(row["error_percent"], "+.1f"),
+                    number_cell(start["predicted"], ".4g"),
+                    number_cell(start["error_percent"], "+.1f"),
+                ]
+                for row, start in zip(p["rows"], p["start_rows"])
+            ],
+        )
         lines += ["", "Held out, at the fitted values:", "", *summary_table(p["summary"], {})]
         lines += ["", "Held out, at the scenes' own values:", "", *summary_table(p["start_summary"], {})]
     if result.cross_validation is not None:
@@ -81,16 +100,21 @@ def _prediction_lines(result: FitResult) -> list[str]:
             "",
             f"## {len(cv['folds'])}-fold cross-validation of the training shots (predictions, not fitted)",
             "",
-            "| fold | left out | " + " | ".join(f"`{k}`" for k in result.parameters) + " |",
-            "|---|---|" + "---|" * len(result.parameters),
         ]
-        for fold in cv["folds"]:
-            errors = fold["standard_errors"]
-            cells = [
-                f"{value:.6g} +- {'-' if errors[key] is None else format(errors[key], '.3g')}"
-                for key, value in fold["parameters"].items()
-            ]
-            lines.append(f"| {fold['fold']} | {', '.join(fold['left_out'])} | " + " | ".join(cells) + " |")
+        lines += markdown_table(
+            ["fold", "left out", *(f"`{k}`" for k in result.parameters)],
+            [
+                [
+                    fold["fold"],
+                    ", ".join(fold["left_out"]),
+                    *(
+                        f"{number_cell(value, '.6g')} +- {number_cell(fold['standard_errors'][key], '.3g')}"
+                        for key, value in fold["parameters"].items()
+                    ),
+                ]
+                for fold in cv["folds"]
+            ],
+        )
         lines += ["", "Each fold predicted by the fit to the others:", "", *summary_table(cv["summary"], {})]
     return lines
 
@@ -106,39 +130,41 @@ def write_report(result: FitResult, out: Path, scene: str) -> None:
     lines = [f"# Fit of {scene}", ""]
     if not result.converged:
         lines += [f"**{result.notes[0]}**", ""]
-    lines += ["| parameter | value | standard error | start |", "|---|---|---|---|"]
-    for key, value in result.parameters.items():
-        error = result.standard_errors[key]
-        start = result.starts.get(key)
-        lines.append(
-            f"| `{key}` | {value:.6g} | {'-' if error is None else f'{error:.3g}'} |"
-            f" {'-' if start is None else f'{start:.6g}'} |"
-        )
+    lines += markdown_table(
+        ["parameter", "value", "standard error", "start"],
+        [
+            [
+                f"`{key}`",
+                number_cell(value, ".6g"),
+                number_cell(result.standard_errors[key], ".3g"),
+                number_cell(result.starts.get(key), ".6g"),
+            ]
+            for key, value in result.parameters.items()
+        ],
+    )
     if result.correlation is not None and len(result.parameters) > 1:
         keys = list(result.parameters)
-        lines += [
-            "",
-            "Correlation of the parameters:",
-            "",
-            "| | " + " | ".join(f"`{k}`" for k in keys) + " |",
-            "|---|" + "---|" * len(keys),
-        ]
-        lines += [
-            f"| `{k}` | " + " | ".join(f"{c:+.3f}" for c in row) + " |" for k, row in zip(keys, result.correlation)
-        ]
-    lines += [
-        "",
-        "The fit's own residuals (the observations it was fitted to):",
-        "",
-        "| scene | quantity | impact speed (m/s) | observed | sigma | fitted | residual |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    for row in result.observations:
-        sigma = "-" if row["sigma"] is None else f"{row['sigma']:.4g}"
-        lines.append(
-            f"| {row['scene']} | {row['quantity']} | {row['impact_speed']:g} | {row['observed']:.6g} | {sigma} |"
-            f" {row['fitted']:.6g} | {row['residual']:+.4g} |"
+        lines += ["", "Correlation of the parameters:", ""]
+        lines += markdown_table(
+            ["", *(f"`{k}`" for k in keys)],
+            [[f"`{k}`", *(number_cell(c, "+.3f") for c in row)] for k, row in zip(keys, result.correlation)],
         )
+    lines += ["", "The fit's own residuals (the observations it was fitted to):", ""]
+    lines += markdown_table(
+        ["scene", "quantity", "impact speed (m/s)", "observed", "sigma", "fitted", "residual"],
+        [
+            [
+                row["scene"],
+                row["quantity"],
+                number_cell(row["impact_speed"], "g"),
+                number_cell(row["observed"], ".6g"),
+                number_cell(row["sigma"], ".4g"),
+                number_cell(row["fitted"], ".6g"),
+                number_cell(row["residual"], "+.4g"),
+            ]
+            for row in result.observations
+        ],
+    )
     lines += [
         "",
         f"Runs: {result.runs} ({result.new_runs} made by this fit, the rest found in the run store); "

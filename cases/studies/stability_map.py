@@ -27,6 +27,7 @@ from ..scene import InputError, Overrides
 from ..viz.figures import axis_label, quantity_unit, save_figure, subplots
 from .ballistic import find_ballistic_limit
 from .pool import Pool
+from .report import markdown_table, number_cell
 from .speeds import find_critical_velocities
 from .sweep import Sweep, grid, parse_grid
 
@@ -37,28 +38,28 @@ MAX_POINTS = 10_000  # points of one map
 QUANTITIES = {"critical_velocity": "critical impact velocity", "ballistic_limit": "ballistic limit"}
 
 
-def _axes(overs: Sequence[str]) -> list[tuple[str, list[Any]]]:
-    """The ``--over KEY=VALUES`` options as (key, values), one or two distinct keys, not the impact speed."""
-    if not 1 <= len(overs) <= 2:
-        raise InputError(f"--over: give one or two (KEY=START:STOP:STEP or KEY=V1,V2,...), got {len(overs)}")
-    axes = [parse_grid(text, "--over") for text in overs]
+def _axes(axes_given: Sequence[str]) -> list[tuple[str, list[Any]]]:
+    """The ``--grid KEY=VALUES`` options as (key, values), one or two distinct keys, not the impact speed."""
+    if not 1 <= len(axes_given) <= 2:
+        raise InputError(f"--grid: give one or two (KEY=START:STOP:STEP or KEY=V1,V2,...), got {len(axes_given)}")
+    axes = [parse_grid(text, "--grid") for text in axes_given]
     keys = [key for key, _ in axes]
     if len(set(keys)) != len(keys):
-        raise InputError(f"--over: {keys[0]} given twice (allowed: two different keys)")
+        raise InputError(f"--grid: {keys[0]} given twice (allowed: two different keys)")
     if "impact.speed" in keys:
         raise InputError(
-            "--over impact.speed: the map searches the impact speed; map other inputs (--speeds sets its range)"
+            "--grid impact.speed: the map searches the impact speed; map other inputs (--speeds sets its range)"
         )
     points = math.prod(len(values) for _, values in axes)
     if points > MAX_POINTS:
-        raise InputError(f"--over: {points} points (allowed: at most {MAX_POINTS})")
+        raise InputError(f"--grid: {points} points (allowed: at most {MAX_POINTS})")
     return axes
 
 
 def stability_map(
     scene: str | os.PathLike,
     overrides: Overrides | None,
-    overs: Sequence[str],
+    axes_given: Sequence[str],
     store: RunStore,
     out: str | os.PathLike,
     speeds: tuple[float, float] = (200.0, 1600.0),
@@ -67,14 +68,14 @@ def stability_map(
     guide: str = "auto",
     quantity: str = "critical_velocity",
 ) -> dict:
-    """The critical impact velocity (or the ballistic limit) at every point of the grid ``overs``; writes the map
+    """The critical impact velocity (or the ballistic limit) at every point of the grid ``axes_given``; writes the map
     into ``out``.
 
     Parameters
     ----------
     scene, overrides
         The base scene file and its ``--set`` overrides.
-    overs : sequence of str
+    axes_given : sequence of str
         One or two ``KEY=START:STOP:STEP`` (inclusive) or ``KEY=V1,V2,...``: the grid's axes.
     store : RunStore
         Where runs are found and kept (a map resumes from it).
@@ -92,7 +93,7 @@ def stability_map(
         ...}``.
     """
     start = time.perf_counter()
-    axes = _axes(overs)
+    axes = _axes(axes_given)
     keys = [key for key, _ in axes]
     points_grid = grid(dict(axes))  # the last key varies fastest
     bases = [Sweep.from_file(scene, overrides, [variation]) for variation in points_grid]
@@ -155,14 +156,14 @@ def _markdown(record: dict) -> str:
         f" {record['resolution']:g} m/s, {record['guided']} guided by {guide}, {record['full_runs']} full"
         f" runs in all. A point without a {title} says why.",
         "",
-        "| " + " | ".join(keys) + f" | {title} (m/s) | bracket (m/s) | full runs | guide |",
-        "|" + "---|" * (len(keys) + 4),
     ]
+    rows = []
     for p in record["points"]:
-        value = f"{p[quantity]:.1f}" if p[quantity] is not None else p["message"]
-        bracket = f"{p['bracket'][0]:g} - {p['bracket'][1]:g}" if p["bracket"] else "-"
-        cells = [f"{p[k]:g}" for k in keys]
-        lines.append("| " + " | ".join(cells) + f" | {value} | {bracket} | {p['runs']} | {p['guide']} |")
+        bracket = " - ".join(number_cell(bound, "g") for bound in p["bracket"]) if p["bracket"] else "-"
+        # float(): an integer grid value too is drawn as %g (1e+08, not 100000000)
+        cells = [number_cell(float(p[k]), "g") for k in keys]
+        rows.append([*cells, number_cell(p[quantity], ".1f", missing=p["message"]), bracket, p["runs"], p["guide"]])
+    lines += markdown_table([*keys, f"{title} (m/s)", "bracket (m/s)", "full runs", "guide"], rows)
     lines += ["", "![the map](map.png)", ""]
     return "\n".join(lines)
 

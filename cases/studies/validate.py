@@ -10,7 +10,6 @@ and the worker pool as every study's do: a validation run again makes no new run
 from __future__ import annotations
 
 import json
-import math
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -22,6 +21,7 @@ import numpy as np
 from ..run import RunStore
 from ..scene import Overrides
 from .pool import Pool
+from .report import markdown_table, number_cell
 from .series import Series, Shot, combined, run_value
 from .sweep import SweepResult, end_cells, run_sweep
 
@@ -216,39 +216,24 @@ def validate(
     return Validation(series, settings, rows, summary, groups, drawn, runs=len(set(sweep.keys())))
 
 
-def cell(value: Any, digits: int = 4) -> str:
-    if value is None or (isinstance(value, float) and not math.isfinite(value)):
-        return "-"
-    if isinstance(value, float):
-        return f"{value:.{digits}g}"
-    return str(value)
-
-
-def _fixed(value: float | None) -> str:
-    return "-" if value is None else f"{value:.1f}"
-
-
-def signed_percent(value: float | None) -> str:
-    return "-" if value is None else f"{value:+.1f}"
-
-
 def summary_table(summary: Mapping[str, Any], groups: Mapping[str, Mapping[str, Any]]) -> list[str]:
     """The summary as markdown lines: per quantity, the whole series and then each group."""
-    lines = [
-        "| quantity | shots | mean abs error (%) | bias (%) | RMS (%) | chi-squared |",
-        "|---|---|---|---|---|---|",
-    ]
+    rows = []
     for scope, per_quantity in [("all", summary), *groups.items()]:
         for quantity, s in per_quantity.items():
-            failed = f" ({s['failed']} failed)" if s["failed"] else ""
-            lines.append(
-                f"| {quantity}{'' if scope == 'all' else f', {scope}'} | {s['shots']}{failed} |"
-                f" {_fixed(s['mean_abs_error_percent'])} | {signed_percent(s['bias_percent'])} |"
-                f" {_fixed(s['rms_percent'])} | {cell(s['chi2'], 3)} |"
+            rows.append(
+                [
+                    quantity if scope == "all" else f"{quantity}, {scope}",
+                    f"{s['shots']} ({s['failed']} failed)" if s["failed"] else s["shots"],
+                    number_cell(s["mean_abs_error_percent"], ".1f"),
+                    number_cell(s["bias_percent"], "+.1f"),
+                    number_cell(s["rms_percent"], ".1f"),
+                    number_cell(s["chi2"], ".3g"),
+                ]
             )
         if len(groups) == 1:
             break  # one group: its lines would repeat the series'
-    return lines
+    return markdown_table(["quantity", "shots", "mean abs error (%)", "bias (%)", "RMS (%)", "chi-squared"], rows)
 
 
 def settings_lines(settings: Sequence[tuple[str, Any]]) -> list[str]:
@@ -264,17 +249,34 @@ def markdown(validation: Validation) -> str:
     name = Path(validation.series.source).name
     lines = [f"# {name}: {len(validation.series.shots)} shots, predicted against measured", ""]
     lines += settings_lines(validation.settings)
-    lines += [
-        "| shot | group | quantity | impact speed (m/s) | predicted | measured | error (%) | residual / sigma | end |",
-        "|---|---|---|---|---|---|---|---|---|",
-    ]
     ends, notes = end_cells([(row["end_reason"], row["warnings"]) for row in validation.rows])
-    for row, end in zip(validation.rows, ends):
-        lines.append(
-            f"| {row['label']} | {row['group']} | {row['quantity']} | {row['impact_speed']:g} |"
-            f" {cell(row['predicted'])} | {cell(row['measured'])} | {signed_percent(row['error_percent'])} |"
-            f" {cell(row['residual_sigmas'], 3)} | {end} |"
-        )
+    lines += markdown_table(
+        [
+            "shot",
+            "group",
+            "quantity",
+            "impact speed (m/s)",
+            "predicted",
+            "measured",
+            "error (%)",
+            "residual / sigma",
+            "end",
+        ],
+        [
+            [
+                row["label"],
+                row["group"],
+                row["quantity"],
+                number_cell(row["impact_speed"], "g"),
+                number_cell(row["predicted"], ".4g"),
+                number_cell(row["measured"], ".4g"),
+                number_cell(row["error_percent"], "+.1f"),
+                number_cell(row["residual_sigmas"], ".3g"),
+                end,
+            ]
+            for row, end in zip(validation.rows, ends)
+        ],
+    )
     lines += ["", "Units: SI (m, m/s, s, kg; angles in degrees). Error: (predicted - measured) / measured.", ""]
     lines += [*summary_table(validation.summary, validation.groups), ""]
     if notes:

@@ -73,11 +73,11 @@ def test_an_interrupted_map_resumes_from_the_store(tmp_path):
 @pytest.mark.parametrize(
     "overs, message",
     [
-        ([], "--over: give one or two"),
-        (["impact.attack_angle=1,2"] * 2, "--over: impact.attack_angle given twice"),
-        (["impact.speed=800:900:50"], "--over impact.speed: the map searches the impact speed"),
-        (["impact.attack_angle=0:1:0.0001", "impact.oblique_angle=0:1:0.1"], "--over: 110011 points"),
-        (["impact.attack_angle=1:0:1"], "--over 'impact.attack_angle=1:0:1': need STEP > 0 and STOP >= START"),
+        ([], "--grid: give one or two"),
+        (["impact.attack_angle=1,2"] * 2, "--grid: impact.attack_angle given twice"),
+        (["impact.speed=800:900:50"], "--grid impact.speed: the map searches the impact speed"),
+        (["impact.attack_angle=0:1:0.0001", "impact.oblique_angle=0:1:0.1"], "--grid: 110011 points"),
+        (["impact.attack_angle=1:0:1"], "--grid 'impact.attack_angle=1:0:1': need STEP > 0 and STOP >= START"),
     ],
 )
 def test_bad_grids_are_refused_in_one_line(tmp_path, overs, message):
@@ -88,11 +88,11 @@ def test_bad_grids_are_refused_in_one_line(tmp_path, overs, message):
 
 
 def test_the_command_prints_the_map(tmp_path, capsys):
-    args = ["map", str(scene_path("paper_p3")), "--set", "numerics.mesh_size=0.04", "--over", "impact.attack_angle=2"]
+    args = ["map", str(scene_path("paper_p3")), "--set", "numerics.mesh_size=0.04", "--grid", "impact.attack_angle=2"]
     common = ["--store", str(tmp_path / "store"), "--out", str(tmp_path / "out"), "--workers", "2", "--no-progress"]
     assert main([*args, *common]) == 0
     out = capsys.readouterr().out
     assert out.startswith("# Critical impact velocity of ") and "| 2 | " in out
     assert main([*args, *common, "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["points"][0]["guide"] == "reduced"
-    assert main(["map", str(scene_path("paper_p3")), "--over", "impact.speed=1,2", *common]) == 2
+    assert main(["map", str(scene_path("paper_p3")), "--grid", "impact.speed=1,2", *common]) == 2
