@@ -248,8 +248,6 @@ def environment_defaults(**values: str) -> Iterator[None]:
 def print_json(record: Any) -> None:
     """Print ``record`` as one JSON object: NaN and infinities as null, never as the bare ``NaN`` strict readers
     refuse (the run store's rule, :func:`~cases.run.persistence.json_safe`)."""
-    import json
+    from ..run.persistence import json_text
 
-    from ..run.persistence import json_safe
-
-    print(json.dumps(json_safe(record), allow_nan=False))
+    print(json_text(record, indent=None))

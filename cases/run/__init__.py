@@ -18,6 +18,7 @@ from .persistence import (
     atomic_write_text,
     cache_dir,
     code_version,
+    json_text,
     write_json,
 )
 from .prepare import PreparedProjectile, body_mesh, cached_mesh, prepare_projectile
@@ -49,6 +50,7 @@ __all__ = [
     "atomic_write",
     "atomic_write_text",
     "write_json",
+    "json_text",
     "cache_dir",
     "code_version",
 ]

@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .persistence import atomic_write_text, cache_dir
+from .persistence import cache_dir, write_json
 
 if TYPE_CHECKING:  # imported where used, after use_numba_cache
     from dynamics import RigidBody, RungeKutta
@@ -123,7 +123,7 @@ def _kept_closure(root: Path, signature: str) -> tuple[str, ...]:
         pass  # none kept yet, or unreadable: find it
     modules = tuple(_closure(root))
     with contextlib.suppress(OSError):  # a read-only cache: found again next time
-        atomic_write_text(kept, json.dumps({"signature": signature, "modules": modules}))
+        write_json(kept, {"signature": signature, "modules": modules})
     return modules
 
 

@@ -50,6 +50,7 @@ __all__ = [
     "remove_stale_temporaries",
     "json_safe",
     "write_json",
+    "json_text",
     "code_version",
     "installed_version",
     "ContentCache",
@@ -194,11 +195,17 @@ def json_safe(value: Any) -> Any:
     return value
 
 
-def write_json(path: str | os.PathLike, record: Any) -> Path:
-    """Write ``record`` to ``path`` as JSON, atomically: every non-finite number as ``null`` (:func:`json_safe`), so
-    that strict readers take the file, and anything else JSON cannot hold refused (``TypeError``), never written as
-    its ``str``.  The one way a study writes its record."""
-    return atomic_write_text(path, json.dumps(json_safe(record), indent=1, allow_nan=False) + "\n")
+def json_text(record: Any, indent: int | None = 1) -> str:
+    """``record`` as JSON text: every non-finite number as ``null`` (:func:`json_safe`), so that strict readers
+    take it, and anything else JSON cannot hold refused (``TypeError``), never written as its ``str``.  The one
+    way penetrate writes JSON, to a file (:func:`write_json`, a run's summary) or to the screen (``--json``)."""
+    return json.dumps(json_safe(record), indent=indent, allow_nan=False)
+
+
+def write_json(path: str | os.PathLike, record: Any, indent: int = 1) -> Path:
+    """Write ``record`` to ``path`` as :func:`json_text`, atomically: the one way a run or a study writes its
+    record."""
+    return atomic_write_text(path, json_text(record, indent) + "\n")
 
 
 def _source_files(module: str) -> tuple[Path, list[Path]]:
@@ -329,7 +336,7 @@ class RunStore:
 
     def save(self, key: str, record: dict, history_csv_gz: bytes | None) -> None:
         """Store a run: the history first, then the record that marks it finished."""
+        text = json_text(record) + "\n"  # null, never NaN; a record JSON cannot hold stores nothing
         if history_csv_gz is not None:
             atomic_write(self.history_path(key), history_csv_gz)
-        text = json.dumps(json_safe(record), indent=1, allow_nan=False) + "\n"  # null, never NaN
         atomic_write(self.record_path(key), text.encode())

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import io
-import json
 import math
 import os
 from collections.abc import Mapping
@@ -18,7 +17,7 @@ from dynamics.quaternion import rotation_matrix
 
 from ..scene import Numerics, Scene
 from .history import ATTACK_ANGLE_SPEED_FRACTION, HISTORY_UNITS, attack_angle_peak, history_columns, history_csv
-from .persistence import atomic_write, atomic_write_text, json_safe
+from .persistence import atomic_write, atomic_write_text, json_safe, json_text
 from .runner import (
     COARSE_ERROR,
     COARSE_TURN,
@@ -353,7 +352,7 @@ def write_outputs(
     record = summarise(result, h).record()
     record["scene_resolved"] = result.scene.model_dump(mode="json")
     record["history_units"] = HISTORY_UNITS
-    text = json.dumps(record, indent=2, allow_nan=False) + "\n"
+    text = json_text(record, indent=2) + "\n"  # before anything is removed: a record JSON cannot hold writes nothing
     paths = {"summary": out / "summary.json"}
     (out / "summary.json").unlink(missing_ok=True)
     if result.scene.outputs.history:

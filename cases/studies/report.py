@@ -31,4 +31,5 @@ def markdown_table(header: Sequence[str], rows: Iterable[Sequence[Any]]) -> list
     def line(cells: Sequence[Any]) -> str:
         return "|" + "".join(f" {cell} |" if str(cell) else " |" for cell in cells)
 
-    return [line(header), "|" + "---|" * len(header), *(line(row) for row in rows)]
+    rule = "|---|" + "---|" * (len(header) - 1)
+    return [line(header), rule, *(line(row) for row in rows)]
