@@ -14,7 +14,7 @@ import sys
 import numpy as np
 
 from cases import history_table, load_scene, run_scene, scene_path, summarise
-from cases.studies.reference import axial_depth_1d, embedded_axial_force
+from cases.reference.normal_impact import axial_depth_1d, embedded_axial_force
 from fem_loads import DAFLLoads, mass_properties, resistance_law, surface_quadrature
 from mesh import (
     BODY,

@@ -58,7 +58,7 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
 
 def sample_help() -> str:
     """``--sample``'s help: every distribution the study takes, from its own table."""
-    from ..studies.ensemble import FORMS
+    from ..studies.ensemble.sampling import FORMS
 
     forms = list(FORMS.values())
     return (
@@ -69,7 +69,7 @@ def sample_help() -> str:
 
 def ensemble(args: argparse.Namespace) -> int:
     from ..run import RunStore
-    from ..studies.ensemble_study import run_ensemble
+    from ..studies.ensemble.study import run_ensemble
 
     with study(args) as pool:
         record = run_ensemble(

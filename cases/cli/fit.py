@@ -89,7 +89,7 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
 
 def observe_help() -> str:
     """``--observe``'s help: every quantity the fit takes, from its own tables."""
-    from ..studies.fit import RUN_QUANTITIES, STUDY_QUANTITIES
+    from ..studies.measured.fit import RUN_QUANTITIES, STUDY_QUANTITIES
 
     return (
         f"an observed quantity of a run ({', '.join(RUN_QUANTITIES)}) or a study ({', '.join(STUDY_QUANTITIES)}),"
@@ -102,8 +102,8 @@ def run_fit(args: argparse.Namespace) -> int:
 
     from ..run import RunStore
     from ..scene import InputError, one_line
-    from ..studies.fit import NotIdentifiable, fit, write_report
-    from ..studies.fit_series import fit_series, parse_holdout
+    from ..studies.measured.fit import NotIdentifiable, fit, write_report
+    from ..studies.measured.fit_series import fit_series, parse_holdout
 
     if args.difference_step is not None and not args.difference_step < 1:
         raise InputError(
@@ -122,7 +122,7 @@ def run_fit(args: argparse.Namespace) -> int:
     try:
         with study(args) as pool:
             if args.series is not None:
-                from ..studies.series import read_series
+                from ..studies.measured.series import read_series
 
                 holdout = parse_holdout(args.holdout) if args.holdout else None
                 series = read_series(args.series)

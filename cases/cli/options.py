@@ -172,7 +172,7 @@ class _Renamed(argparse.Action):
     """An option's old spelling: refused in one line that names the new one (:func:`renamed`)."""
 
     def __call__(self, parser: argparse.ArgumentParser, namespace: Any, values: Any, option: Any = None) -> None:
-        parser.error(f"{option} is now {self.const}")
+        parser.error(f"{option}: a former spelling; give {self.const}")
 
 
 def renamed(parser: Parser, old: str, new: str) -> None:
@@ -192,7 +192,7 @@ def pool(args: argparse.Namespace) -> Pool:
 def study(args: argparse.Namespace) -> Iterator[Pool]:
     """The pool the options describe, with one progress bar named after the command for every run the block
     makes; the bar closes when the block ends, before the command prints its result beside it."""
-    from ..studies.pool import study_progress
+    from ..studies.engine.pool import study_progress
 
     with study_progress(args.command):
         yield pool(args)

@@ -230,7 +230,7 @@ def convergent_speed(args: argparse.Namespace) -> int:
 
 
 def ballistic_limit(args: argparse.Namespace) -> int:
-    from ..studies.ballistic import find_ballistic_limit
+    from ..studies.speeds.ballistic import find_ballistic_limit
 
     sweep, store = _inputs(args)
     with study(args) as pool:
@@ -256,7 +256,7 @@ def ballistic_limit(args: argparse.Namespace) -> int:
 
 def predict_speeds(args: argparse.Namespace) -> int:
     from ..scene import load_scene
-    from ..studies.predict import predict
+    from ..studies.reduced.pitch_plane import predict
     from .options import overrides
 
     result = predict(load_scene(args.scene, overrides(args)), args.speeds, args.resolution)
@@ -287,7 +287,7 @@ def predict_speeds(args: argparse.Namespace) -> int:
 
 def stability_map(args: argparse.Namespace) -> int:
     from ..run import RunStore
-    from ..studies.stability_map import stability_map as build
+    from ..studies.speeds.stability_map import stability_map as build
     from .options import overrides
 
     with study(args) as pool:

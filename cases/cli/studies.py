@@ -158,8 +158,8 @@ def incidences_help() -> str:
 def compare_laws(args: argparse.Namespace) -> int:
     from ..run import RunStore
     from ..scene import parse_override
-    from ..studies.compare import SCENE_LAW
-    from ..studies.compare import compare_laws as compare
+    from ..studies.measured.compare import SCENE_LAW
+    from ..studies.measured.compare import compare_laws as compare
 
     if (args.scene is None) == (args.series is None):
         raise InputError("compare: give a scene file or --series SERIES (one of them)")
@@ -205,8 +205,8 @@ def compare_laws(args: argparse.Namespace) -> int:
 
 def _compare_series(args: argparse.Namespace, laws: list[tuple[str, object]]) -> int:
     from ..run import RunStore
-    from ..studies.compare import compare_series
-    from ..studies.series import read_series
+    from ..studies.measured.compare import compare_series
+    from ..studies.measured.series import read_series
     from .validate import report_failures
 
     ignored = [flag for flag, given in (("--depths-at", args.depths_at), ("--critical", args.critical)) if given]
@@ -241,7 +241,7 @@ def _numbers(option: str, text: str) -> list[float]:
 
 def accuracy_study(args: argparse.Namespace) -> int:
     from ..run import RunStore
-    from ..studies.accuracy import accuracy_study as accuracy
+    from ..studies.numerics.accuracy import accuracy_study as accuracy
 
     orders = _numbers("--quadrature-orders", args.quadrature_orders)
     if not all(q == int(q) and 1 <= q <= 10 for q in orders):
@@ -271,7 +271,7 @@ def accuracy_study(args: argparse.Namespace) -> int:
 
 def contact_incidence_study(args: argparse.Namespace) -> int:
     from ..run import RunStore
-    from ..studies.contact import contact_study
+    from ..studies.numerics.contact import contact_study
 
     incidences = _numbers("--incidences", args.incidences)
     with study(args) as pool:
@@ -281,7 +281,7 @@ def contact_incidence_study(args: argparse.Namespace) -> int:
 
 def entry_smoothing_study(args: argparse.Namespace) -> int:
     from ..run import RunStore
-    from ..studies.contact import entry_study
+    from ..studies.numerics.contact import entry_study
 
     steps = _numbers("--steps", args.steps)
     if len(set(steps)) < 2:

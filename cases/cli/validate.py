@@ -49,9 +49,9 @@ def _series_options(parser: Parser) -> None:
 def validate(args: argparse.Namespace) -> int:
     from ..run import RunStore
     from ..scene import InputError
-    from ..studies.series import read_series
-    from ..studies.validate import validate as run_validation
-    from ..studies.validate import write_validation
+    from ..studies.measured.series import read_series
+    from ..studies.measured.validate import validate as run_validation
+    from ..studies.measured.validate import write_validation
 
     if not 0 <= args.curve_points <= 1000:
         raise InputError(f"--curve-points {args.curve_points}: must lie in 0..1000")

@@ -222,7 +222,7 @@ _LOOKED_FOR: set[str] = set()
 def announce_compiling(entry: str) -> None:
     """Say on stderr, before numba starts, that ``entry`` is about to be compiled and about how long it
     takes, when the cache lacks it (a first run after installing, or after the code changed); silent when
-    the machine code is cached, as after ``./dev setup`` (``python -m cases.studies.warm``).  Looks once per
+    the machine code is cached, as after ``./dev setup`` (``python -m cases.tools.warm``).  Looks once per
     process and entry point."""
     if entry in _LOOKED_FOR:
         return

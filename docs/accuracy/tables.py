@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 
 from cases.studies import end_cells
-from cases.studies.accuracy import time_convergence
+from cases.studies.numerics.accuracy import time_convergence
 from docs.measure import stamp
 
 

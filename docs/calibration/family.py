@@ -20,7 +20,7 @@ from pathlib import Path
 
 from cases.run import RunStore
 from cases.studies import Pool, Sweep, find_critical_velocity, measure_convergent_velocity
-from cases.studies.fit import fit
+from cases.studies.measured.fit import fit
 from cases.studies.paper.plan import STUDY_NUMERICS
 
 STUDY = list(STUDY_NUMERICS.items())  # the paper study's numerics

@@ -2,7 +2,7 @@
 
 Run from the repository root: ``python -m docs.calibration.soil`` (about a minute from an empty store; runs are kept in
 ``runs/calibration-soil-store`` and found again).  Every fit is ``penetrate fit``'s own
-(:func:`cases.studies.fit.fit`), at the shipped numerics of the five scenes; the observations are
+(:func:`cases.studies.measured.fit.fit`), at the shipped numerics of the five scenes; the observations are
 the measured distances travelled (path length of the centre of mass), without a stated
 uncertainty, so the standard errors come from the residual scatter.  Prints markdown: the fits
 (A and B together; B alone; A alone; a Coulomb friction coefficient), the leave-one-out table
@@ -18,7 +18,7 @@ import numpy as np
 from cases import load_scene, run_scene, summarise
 from cases.run import RunStore
 from cases.studies import Pool
-from cases.studies.fit import NotIdentifiable, fit
+from cases.studies.measured.fit import NotIdentifiable, fit
 
 MEASURED = {2: 4.98, 3: 5.18, 4: 5.18, 5: 5.02, 6: 4.82}  # m, distance travelled (path length)
 PAPER = {2: 5.05, 3: 5.00, 4: 5.05, 5: 5.01, 6: 5.00}  # m, the paper's predictions

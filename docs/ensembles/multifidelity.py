@@ -16,7 +16,7 @@ from tempfile import TemporaryDirectory
 
 from cases.run import RunStore
 from cases.studies import Pool
-from cases.studies.ensemble_study import run_ensemble
+from cases.studies.ensemble.study import run_ensemble
 from docs.measure import stamp
 
 SCENE = "cases/paper_p3.toml"

@@ -3,7 +3,7 @@
 
 Run from the repository root: ``python -m docs.ensembles.study`` (a few minutes on 2 cores from an
 empty store; runs are kept in ``runs/ensembles-store`` and found again).  Three ensembles of
-``penetrate ensemble``'s own code (:func:`cases.studies.ensemble_study.run_ensemble`), one per scale
+``penetrate ensemble``'s own code (:func:`cases.studies.ensemble.study.run_ensemble`), one per scale
 of the initial attack angle (half-normal, 0.5, 1 and 2 degrees), each with the impact speed uniform
 over 700-1400 m/s and the soil's ``B`` uniform within +-10 % of the paper's, 512 runs of a
 scrambled Sobol' design, at the paper study's numerics (docs/paper.md).  Writes the figures
@@ -22,8 +22,8 @@ import pandas as pd
 
 from cases.run import RunStore
 from cases.studies import Pool, Sweep, find_critical_velocity
-from cases.studies.ensemble import wilson_interval
-from cases.studies.ensemble_study import run_ensemble
+from cases.studies.ensemble.sampling import wilson_interval
+from cases.studies.ensemble.study import run_ensemble
 from cases.studies.paper.plan import STUDY_NUMERICS
 from cases.viz.figures import legend_outside, save_figure, subplots
 from docs.measure import stamp

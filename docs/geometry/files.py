@@ -9,7 +9,7 @@ the table says otherwise.  Prints a markdown table.
 
 * ``facets``: the depth of test 2 with the body as a first-order (flat facets) and a second-order volume
   mesh with their own normals, at 20, 10 and 5 mm, against the exact 1-D integration of the axial problem
-  with the same contact width (``cases.studies.reference``): what the facets cost against the truth.
+  with the same contact width (``cases.reference.normal_impact``): what the facets cost against the truth.
 * ``files``: STEP, BREP and IGES files in several units, a cone-nosed STEP file and volume meshes: the
   largest error of their mass properties and their depth against the analytic scene.
 """
@@ -23,7 +23,7 @@ import tempfile
 from pathlib import Path
 
 from cases import load_scene, run_scene, scene_path, summarise
-from cases.studies.reference import axial_depth_1d
+from cases.reference.normal_impact import axial_depth_1d
 from docs.geometry.cad_bodies import write_body, write_volume_mesh
 
 TEST2 = scene_path("forrestal_luk_test2")

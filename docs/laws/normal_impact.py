@@ -7,7 +7,7 @@ of the same law over the exact profile: the table of docs/evidence-laws.md.  Run
 from __future__ import annotations
 
 from cases import history_table, load_scene, run_scene, scene_path
-from cases.studies.reference import scene_depth_1d
+from cases.reference.normal_impact import scene_depth_1d
 from docs.measure import stamp
 
 LAWS = {

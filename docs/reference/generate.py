@@ -371,17 +371,17 @@ def option_default(action: argparse.Action) -> str:
     return f"`{toml(default) if isinstance(default, float) else default}`"
 
 
+def option_row(action: argparse.Action, prog: str) -> list[str]:
+    """An option's row: its names, value, default and description; a former spelling (hidden from the help,
+    ``cases.cli.options.renamed``) says what replaced it."""
+    names = ", ".join(f"`{o}`" for o in action.option_strings) or f"`{action.dest}`"
+    if action.help == argparse.SUPPRESS:
+        return [names, "", "", f"a former spelling, refused in one line: give {plain(str(action.const))}"]
+    return [names, value_of(action), option_default(action), help_text(action, prog)]
+
+
 def option_rows(parser: argparse.ArgumentParser) -> list[list[str]]:
-    return [
-        [
-            ", ".join(f"`{o}`" for o in action.option_strings) or f"`{action.dest}`",
-            value_of(action),
-            option_default(action),
-            help_text(action, parser.prog),
-        ]
-        for action in shown_actions(parser)
-        if not isinstance(action.choices, dict)
-    ]
+    return [option_row(action, parser.prog) for action in shown_actions(parser) if not isinstance(action.choices, dict)]
 
 
 def synopsis(parser: argparse.ArgumentParser) -> str:

@@ -16,7 +16,7 @@ import numpy as np
 
 from cases.run import RunStore
 from cases.studies import Pool, Sweep, Variation, find_critical_velocity
-from cases.studies.stability_map import stability_map
+from cases.studies.speeds.stability_map import stability_map
 from docs.measure import stamp
 
 SCENE = "cases/paper_p3.toml"

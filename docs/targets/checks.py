@@ -14,10 +14,10 @@ import tempfile
 from pathlib import Path
 
 from cases import scene_path
+from cases.reference.normal_impact import scene_slab_1d
 from cases.run import prepare_projectile, run_scene, summarise
 from cases.scene import Scene
 from cases.scene.load import read_scene_data, scene_from_dict
-from cases.studies.reference import scene_slab_1d
 from docs.measure import penetrate_output, stamp
 
 SOIL = "soil"

@@ -42,7 +42,7 @@ from cases.studies import (  # noqa: E402
     run_sweep,
 )
 from cases.studies.paper.plan import PAPER_RATIOS, STUDY_NUMERICS, VARIANTS, study_base  # noqa: E402
-from cases.studies.predict import RINGS, predict  # noqa: E402
+from cases.studies.reduced.pitch_plane import RINGS, predict  # noqa: E402
 from cases.viz.figures import legend_below  # noqa: E402
 from docs.measure import stamp  # noqa: E402
 from docs.record import study_main  # noqa: E402
@@ -306,7 +306,7 @@ def figure(record: dict) -> None:
 
 def fold() -> None:
     """The steady-turn fold of each family member against its measured convergent velocity (docs/paper/results.json,
-    :mod:`cases.studies.prediction`): what the loads alone, without the collapse's dynamics, say."""
+    :mod:`cases.studies.reduced.turn_boundary`): what the loads alone, without the collapse's dynamics, say."""
     paper = json.loads((HERE.parent / "paper" / "results.json").read_text())
     print(
         "| projectile | Lc/L (%) | fold of the steady turn (m/s) | at attack angle (deg) | convergent, measured "

@@ -10,8 +10,8 @@ import tempfile
 
 from cases.run import RunStore
 from cases.studies import Pool
-from cases.studies.series import read_series
-from cases.studies.validate import validate
+from cases.studies.measured.series import read_series
+from cases.studies.measured.validate import validate
 
 #: each series, what it is, and the quantity measured
 SERIES = (

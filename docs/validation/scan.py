@@ -14,9 +14,9 @@ import numpy as np
 
 from cases.run import RunStore
 from cases.studies import Pool
-from cases.studies.fit_series import Holdout, fit_series
-from cases.studies.series import read_series
-from cases.studies.validate import validate
+from cases.studies.measured.fit_series import Holdout, fit_series
+from cases.studies.measured.series import read_series
+from cases.studies.measured.validate import validate
 
 TRAINING = ("v405", "v446", "v545", "v651")
 

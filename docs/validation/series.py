@@ -4,7 +4,7 @@ root::
 
     python -m docs.validation.series forrestal1996_concrete
 
-The 1-D integration (:func:`cases.studies.reference.axial_depth_1d`) is the model's own straight shot: the
+The 1-D integration (:func:`cases.reference.normal_impact.axial_depth_1d`) is the model's own straight shot: the
 axial equation with the exact embedded nose area, the same law, mass and stop speed.  The closed form is the
 one the series' source uses: for concrete Forrestal et al.'s, with a crater of depth ``2d`` whose force grows
 linearly with depth, ``X = 2d + (2m / (pi d^2 N rho)) ln(1 + N rho V1^2 / (S f'c))`` with
@@ -20,11 +20,11 @@ import sys
 import numpy as np
 
 from cases import prepare_projectile
+from cases.reference.normal_impact import closed_form_depth, scene_depth_1d
 from cases.run import RunStore
 from cases.studies import Pool
-from cases.studies.reference import closed_form_depth, scene_depth_1d
-from cases.studies.series import read_series
-from cases.studies.validate import validate
+from cases.studies.measured.series import read_series
+from cases.studies.measured.validate import validate
 
 
 def forrestal_concrete(diameter: float, nose_factor: float, law, mass: float, speed: float) -> float:

@@ -8,7 +8,7 @@ import pytest
 from scipy import integrate
 from support import meshed, slow_except
 
-from cases.studies.reference import embedded_axial_force
+from cases.reference.normal_impact import embedded_axial_force
 from fem_loads import DAFLLoads, resistance_law, surface_quadrature
 from fem_loads.mass import mass_properties
 from mesh import BODY, ConeNose, OgiveNose, Profile, ProjectileGeometry

@@ -9,7 +9,7 @@ from scipy import integrate
 from support import meshed, slow_except
 
 from cases import history_table, load_scene, run_scene, scene_path, summarise
-from cases.studies.reference import embedded_axial_force, nose_factors
+from cases.reference.normal_impact import embedded_axial_force, nose_factors
 from fem_loads import DAFLLoads, mass_properties, resistance_law, surface_quadrature
 from fem_loads.target import FreeSurface, Friction, LayeredTarget
 from mesh import BODY, ConeNose, OgiveNose, Profile, ProjectileGeometry

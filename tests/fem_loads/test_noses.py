@@ -7,7 +7,7 @@ import pytest
 from support import meshed, slow_except
 
 from cases import load_scene, run_scene, scene_path, summarise
-from cases.studies.reference import axial_depth_1d, embedded_axial_force
+from cases.reference.normal_impact import axial_depth_1d, embedded_axial_force
 from fem_loads import DAFLLoads, mass_properties, resistance_law, surface_quadrature
 from mesh import (
     BODY,

@@ -9,7 +9,7 @@ import pytest
 from support import meshed, ring_records, slow_except
 
 import cases
-from cases.studies.reference import embedded_axial_force
+from cases.reference.normal_impact import embedded_axial_force
 from fem_loads import DAFLLoads, ResistanceLaw, mass_properties, resistance_law, surface_quadrature
 from fem_loads.kernels.rings import PitchPlaneLoad, lowest_height, revolved_surface
 from fem_loads.target import Friction

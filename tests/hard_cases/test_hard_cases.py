@@ -18,10 +18,10 @@ import pytest
 from support import slow_except
 
 from cases import history_table, load_scene, prepare_projectile, run_scene, scene_path, summarise
+from cases.reference.normal_impact import scene_depth_1d
 from cases.run import convergence_speed
 from cases.scene import SceneError, parse_override, read_toml, scene_from_dict
 from cases.studies import is_unstable
-from cases.studies.reference import scene_depth_1d
 from dynamics import (
     NON_FINITE,
     RK4,

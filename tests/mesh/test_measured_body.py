@@ -9,8 +9,8 @@ from scipy import integrate
 from support import meshed, ring_records, slow_except
 
 from cases import load_scene, run_scene, scene_path, summarise
+from cases.reference.normal_impact import axial_depth_1d, check_nose_alone_presses, embedded_axial_force
 from cases.scene import SceneError
-from cases.studies.reference import axial_depth_1d, check_nose_alone_presses, embedded_axial_force
 from fem_loads import DAFLLoads, mass_properties, resistance_law, surface_quadrature
 from fem_loads.kernels.rings import PitchPlaneLoad, revolved_surface
 from mesh import (

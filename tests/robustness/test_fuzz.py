@@ -628,7 +628,7 @@ SERIES_PLACES = ("row", "line", "header", "column", "empty", "no shots", "not a 
 def series_outcome(name: str, path: Path) -> None:
     """Read a series file: a Series whose every shot validates, or one line that names the place."""
     from cases.scene import InputError
-    from cases.studies.series import read_series
+    from cases.studies.measured.series import read_series
 
     try:
         series = read_series(path)
@@ -646,7 +646,7 @@ def series_outcome(name: str, path: Path) -> None:
 @st.composite
 def edited_series(draw):
     """A shipped series file with random characters deleted, inserted or replaced."""
-    from cases.studies.series import SERIES_DIR, SHIPPED_SERIES
+    from cases.studies.measured.series import SERIES_DIR, SHIPPED_SERIES
 
     text = (SERIES_DIR / f"{draw(st.sampled_from(SHIPPED_SERIES))}.csv").read_text()
     pieces = [",", "\n", '"', "%", "-", "nan", "1e999", "#", "measured.", "sigma.depth", "."]
@@ -959,7 +959,7 @@ def bad_command_lines(draw, files):
                 ":=1",
             ]
         ]
-        poisons += [("--step", v) for v in BAD_NUMBER + ["1", "2"]] + [("--resolution", v) for v in BAD_NUMBER]
+        poisons += [("--difference-step", v) for v in BAD_NUMBER + ["1", "2"]] + [("--resolution", v) for v in BAD_NUMBER]
         poisons += [("--max-evaluations", v) for v in BAD_WHOLE]
     if command == "ensemble":
         args += ["--sample", "impact.speed=uniform:250:300", "-n", "4"]
@@ -981,7 +981,7 @@ def bad_command_lines(draw, files):
         poisons += [("--design", v) for v in ["grid", ""]] + [("--seed", v) for v in ["x", "-1", "1.5"]]
     if command == "render":
         poisons += [("--size", v) for v in ["0x0", "abc", "64x", "100000x100000", "640x480x2", ""]]
-        poisons += [("--steps", v) for v in ["0", "-1", "x", ""]] + [("--times", v) for v in ["x", "peak,xyz"]]
+        poisons += [("--paraview-frames", v) for v in ["0", "-1", "x", ""]] + [("--times", v) for v in ["x", "peak,xyz"]]
         poisons += [("--frames", v) for v in BAD_WHOLE] + [("--station", v) for v in BAD_NUMBER]
     elif command != "run":
         poisons += [("--workers", v) for v in BAD_WHOLE]
@@ -1039,7 +1039,7 @@ def test_command_line_bad_input(cli_files, tmp_path_factory, data):
     work = cli_files["folder"].parent
     before = _listing(work)
     with (
-        mock.patch("cases.studies.sweep.run_missing", side_effect=AssertionError("a sweep started")),
+        mock.patch("cases.studies.engine.sweep.run_missing", side_effect=AssertionError("a sweep started")),
         mock.patch("cases.run.run_scene", side_effect=AssertionError("a run started")),
     ):
         code, stdout, stderr = call(args + EXTRA[args[0]], work)
@@ -1095,7 +1095,7 @@ def test_fit_is_refused_before_any_run_exactly_when_counting_says_so(tmp_path_fa
         args += ["--param", text]
     for quantity, value, sigma in observations:
         args += ["--observe", f"{quantity}={value!r}" + ("" if sigma is None else f"+-{sigma!r}")]
-    with mock.patch("cases.studies.sweep.run_missing", side_effect=AssertionError("a run started")) as runs:
+    with mock.patch("cases.studies.engine.sweep.run_missing", side_effect=AssertionError("a run started")) as runs:
         code, stdout, stderr = call(args, work)
     refused = len(observations) < len(parameters)
     OUTCOMES["fit counts"]["refused" if refused else "fitted"] += 1
@@ -1123,7 +1123,7 @@ class StableOrUnstable:
         runs = [
             SimpleNamespace(failed=False, error=None, summary=summary, key=str(i)) for i in range(len(sweep.scenes))
         ]
-        from cases.studies.sweep import SweepResult
+        from cases.studies.engine.sweep import SweepResult
 
         return SweepResult(sweep, runs, store)
 
@@ -1146,7 +1146,7 @@ def test_a_critical_search_that_finds_nothing_names_the_option_that_would(
     holds the searched one and reaches further the right way, inside what a scene allows, and names the
     attack angle when the scene has no disturbance (then a wider range alone finds nothing)."""
     from cases.cli.speeds import speed_range
-    from cases.studies import speeds as speeds_module
+    from cases.studies.speeds import characteristic as speeds_module
 
     high = min(low + width, 1e4)
     low, high = float(f"{low:.6g}"), float(f"{high:.6g}")

@@ -13,10 +13,10 @@ from dynamics.rigid_body import LoadFunction
 from ... import scene_path
 from ...run import CONVERGENCE_THRESHOLD, RunStore, StoredRun, attack_angle_peak, convergence_speed, prepare_projectile
 from ...scene import load_scene
-from ..pool import Pool
-from ..prediction import TurnBoundary, turn_boundary
-from ..speeds import is_unstable
-from ..sweep import Sweep, run_sweep
+from ..engine.pool import Pool
+from ..engine.sweep import Sweep, run_sweep
+from ..reduced.turn_boundary import TurnBoundary, turn_boundary
+from ..speeds.instability import is_unstable
 from .plan import STUDY_NUMERICS, RunGroup
 
 __all__ = ["PaperRun", "Study", "characteristic", "linear_fit", "interpolate", "load_boundary"]
@@ -120,8 +120,9 @@ def interpolate(xs: Sequence[float], ys: Sequence[float | None], x: float) -> fl
 
 
 def load_boundary(ratio: float) -> TurnBoundary:
-    """The load-only boundaries (:mod:`~cases.studies.prediction`) of the projectile at ``ratio``: the load on
-    the kernel a study's worker would run it on (the compiled one for the paper's law, 4-5 times faster here)."""
+    """The load-only boundaries (:mod:`~cases.studies.reduced.turn_boundary`) of the projectile at ``ratio``: the
+    load on the kernel a study's worker would run it on (the compiled one for the paper's law, 4-5 times faster
+    here)."""
     scene = load_scene(scene_path("paper_p3"), {**STUDY_NUMERICS, "projectile.centre_of_mass_ratio": ratio})
     prepared = prepare_projectile(scene)
     loads = scene.loads(prepared.quadrature)

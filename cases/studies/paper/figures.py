@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ...viz.figures import legend_outside, save_figure, subplots
-from ..prediction import TurnBoundary
+from ..reduced.turn_boundary import TurnBoundary
 from .analysis import PaperRun, Study
 
 __all__ = ["angle_figure", "history_figure", "speeds_figure", "boundary_figure", "variants_figure"]

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ... import scene_path
-from ..sweep import Sweep, Variation, grid
+from ..engine.sweep import Sweep, Variation, grid
 
 __all__ = [
     "STUDY_NUMERICS",

@@ -9,9 +9,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...run import CONVERGENCE_THRESHOLD
-from ..prediction import TurnBoundary
-from ..report import markdown_table, number_cell
-from ..speeds import CriticalSearch
+from ..engine.report import markdown_table, number_cell
+from ..reduced.turn_boundary import TurnBoundary
+from ..speeds.characteristic import CriticalSearch
 from .analysis import PaperRun, interpolate
 from .plan import FINE_NUMERICS, P3, PUBLISHED_TABLE4_P3, STUDY_NUMERICS, label
 

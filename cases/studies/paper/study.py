@@ -6,9 +6,9 @@ import time
 from pathlib import Path
 
 from ...run import RunStore, atomic_write_text, write_json
-from ..pool import Pool, map_local
-from ..prediction import TurnBoundary
-from ..speeds import find_critical_velocities
+from ..engine.pool import Pool, map_local
+from ..reduced.turn_boundary import TurnBoundary
+from ..speeds.characteristic import find_critical_velocities
 from . import figures
 from .analysis import Study, characteristic, linear_fit, load_boundary
 from .plan import INERTIA_SCALES, P3, PAPER_RATIOS, SCAN, VARIANTS, critical_bases, label, speed_groups, variant_groups

@@ -259,8 +259,8 @@ def test_help_lists_every_value_the_code_takes(monkeypatch):
     """Distributions, designs, named laws, contact options, fit quantities: each help is built from the
     registry the code checks input against, so a name added there shows in the help (tried here)."""
     from cases.scene.target import Effects
-    from cases.studies.ensemble import DESIGNS, FORMS
-    from cases.studies.fit import RUN_QUANTITIES, STUDY_QUANTITIES
+    from cases.studies.ensemble.sampling import DESIGNS, FORMS
+    from cases.studies.measured.fit import RUN_QUANTITIES, STUDY_QUANTITIES
     from fem_loads.resistance import NAMED_LAWS, ResistanceLaw
 
     monkeypatch.setitem(NAMED_LAWS, "test_clay", ResistanceLaw(1e6, 1500.0, "test_clay"))
@@ -347,7 +347,7 @@ def test_a_former_option_spelling_is_refused_naming_the_new_one(command, new):
         build_parser().parse_args(command)
     message = err.getvalue()
     assert refused.value.code == 2 and message.count("\n") == 1
-    assert f"{command[2]} is now {new}" in message
+    assert f"{command[2]}: a former spelling; give {new}" in message
 
 
 def test_every_study_command_takes_the_shared_options():

@@ -59,7 +59,7 @@ def test_an_edit_of_any_compiled_module_names_a_new_cache_folder(tree):
     assert digest(tree) == before
 
 
-@pytest.mark.parametrize("name", ["cases.cli.run", "cases.studies.sweep", "mesh.cad"])
+@pytest.mark.parametrize("name", ["cases.cli.run", "cases.studies.engine.sweep", "mesh.cad"])
 def test_an_edit_elsewhere_keeps_the_cache(tree, name):
     before = digest(tree)
     path = compiled._module_file(name, tree)

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from cases import history_table, load_scene, prepare_projectile, run_scene, scene_path, summarise
+from cases.reference.normal_impact import axial_depth_1d, closed_form_depth, scene_depth_1d
 from cases.run import initial_state
-from cases.studies.reference import axial_depth_1d, closed_form_depth, scene_depth_1d
 from dynamics import ENERGY_TOLERANCE, State
 from dynamics.quaternion import from_rotation_matrix, multiply
 

@@ -1,7 +1,7 @@
 """Targets beyond a level half-space: slabs that are perforated, gaps, inclined faces, ricochets.
 
 Each run is checked against an independent truth: a 1-D integration of the nose through the slices of the target
-(cases.studies.reference, which uses the exact profile and no mesh), the equal work of a rate-independent law
+(cases.reference.normal_impact, which uses the exact profile and no mesh), the equal work of a rate-independent law
 through equal thicknesses, and the rotation of a whole scene about the Y axis.
 """
 
@@ -14,11 +14,11 @@ import numpy as np
 import pytest
 
 from cases import scene_path
+from cases.reference.normal_impact import Layer, scene_slab_1d
 from cases.run import prepare_projectile, run_scene
 from cases.run.summary import summarise
 from cases.scene import Scene, SceneError
 from cases.scene.load import read_scene_data, scene_from_dict
-from cases.studies.reference import Layer, scene_slab_1d
 from fem_loads.target import LayeredTarget
 
 SLAB = {"layers": [{"thickness": 2.0, "law": "soil"}]}
@@ -133,7 +133,7 @@ def test_bad_targets_are_refused_in_one_line(target: dict[str, Any], message: st
 
 def test_the_1d_slices_match_a_single_law_half_space() -> None:
     # the sliced 1-D force equals the one-law force wherever the nose lies in the first slice
-    from cases.studies.reference import axial_force, layered_axial_force
+    from cases.reference.normal_impact import axial_force, layered_axial_force
 
     scene = shot(SLAB)
     built = scene.target.build()

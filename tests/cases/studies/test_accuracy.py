@@ -7,7 +7,7 @@ import pytest
 from cases import scene_path
 from cases.run import RunStore
 from cases.studies import Pool
-from cases.studies.accuracy import _pareto, accuracy_study
+from cases.studies.numerics.accuracy import _pareto, accuracy_study
 
 
 def test_pareto_front():
@@ -69,7 +69,7 @@ def test_contact_incidence_study_tends_to_the_sharp_law(tmp_path):
     (measured: 2 % at 0.04, 13 % at 0.02).  The change comes from the band of the ogive's shoulder whose
     slope is below the incidence, 11 mm long at 0.04 and 6 mm at 0.02, less than one element: the mesh
     samples it with a few points, so the agreement degrades as the band narrows (2x at 0.01)."""
-    from cases.studies.contact import contact_study
+    from cases.studies.numerics.contact import contact_study
 
     table = contact_study(
         scene_path("forrestal_luk_test2"),
@@ -93,7 +93,7 @@ def test_time_convergence_orders_of_a_known_error():
     and that mesh's error against the reference."""
     import pandas as pd
 
-    from cases.studies.accuracy import time_convergence
+    from cases.studies.numerics.accuracy import time_convergence
 
     rows = []
     for size, exact in ((0.04, 5.0), (0.02, 5.1)):
@@ -134,7 +134,7 @@ def test_entry_study_tables_each_smoothing_against_its_own_finest_step(tmp_path)
     """Test 2 on a 40 mm mesh, two smoothings x three steps: time errors against the finest step of the same
     smoothing (zero there), changes against the smaller smoothing; a longer entry smoothing moves the depth by less
     than a fortieth of the 40 mm mesh error (4e-3 relative, 2 cm; measured 0.18 mm)."""
-    from cases.studies.contact import entry_study
+    from cases.studies.numerics.contact import entry_study
 
     table = entry_study(
         scene_path("forrestal_luk_test2"),
@@ -164,7 +164,7 @@ def test_entry_study_tables_each_smoothing_against_its_own_finest_step(tmp_path)
 def test_a_change_at_round_off_is_reported_as_zero():
     """Two runs of one setting summed in another order differ by ~1e-16 of the value: shown as 0,
     while a real change, however small against the value's unit, keeps its digits."""
-    from cases.studies.contact import _change
+    from cases.studies.numerics.contact import _change
 
     row = pd.Series(
         {

@@ -11,9 +11,9 @@ import pytest
 
 from cases import scene_path
 from cases.cli import main
+from cases.reference.normal_impact import ballistic_limit_1d, slab_run_1d, target_layers
 from cases.run import prepare_projectile
 from cases.scene import load_scene
-from cases.studies.reference import ballistic_limit_1d, slab_run_1d, target_layers
 from fem_loads.target import LayeredTarget
 
 # test 2's projectile and soil, its target made a 2 m slab: the scene file with its [target] table replaced

@@ -9,8 +9,8 @@ import pytest
 
 from cases import scene_path
 from cases.run import RunStore
-from cases.studies.compare import compare_laws
-from cases.studies.pool import Pool
+from cases.studies.engine.pool import Pool
+from cases.studies.measured.compare import compare_laws
 from fem_loads.resistance import resistance_law
 
 COARSE = {"numerics.mesh_size": 0.03}

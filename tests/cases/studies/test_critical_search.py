@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from cases import scene_path
 from cases.scene import InputError
 from cases.studies import Pool, Sweep, find_critical_velocities, find_critical_velocity, is_unstable
-from cases.studies import speeds as speeds_module
+from cases.studies.speeds import characteristic as speeds_module
 
 RANGE = (200, 1600)  # the default range of `penetrate critical`
 
@@ -63,7 +63,7 @@ class FakeRuns:
                     key=f"{scene.projectile.centre_of_mass_ratio}@{scene.impact.speed}",
                 )
             )
-        from cases.studies.sweep import SweepResult
+        from cases.studies.engine.sweep import SweepResult
 
         return SweepResult(sweep, runs, store)
 
@@ -307,7 +307,7 @@ def test_the_command_ends_a_stable_range_with_the_options_to_change(monkeypatch,
 
 
 def fake_job(critical: float):
-    """A worker's job (cases.studies.pool.run_job) whose run turns like :func:`turn` at its impact speed."""
+    """A worker's job (cases.studies.engine.pool.run_job) whose run turns like :func:`turn` at its impact speed."""
     from cases.run import RunSummary, code_version
 
     fields = dict.fromkeys(RunSummary.model_fields, 0.0)
@@ -350,7 +350,7 @@ def critical_command(tmp_path, *options):
 
 def test_a_search_of_several_rounds_shows_one_bar_counting_every_run(monkeypatch, capsys, tmp_path):
     from cases.run import RunStore
-    from cases.studies import pool as pool_module
+    from cases.studies.engine import pool as pool_module
 
     monkeypatch.setattr(pool_module, "run_job", fake_job(907.3))
     bars = Bars().install(monkeypatch)
@@ -364,7 +364,7 @@ def test_a_search_of_several_rounds_shows_one_bar_counting_every_run(monkeypatch
 
 
 def test_progress_shows_on_a_terminal_or_when_asked(monkeypatch, capsys, tmp_path):
-    from cases.studies import pool as pool_module
+    from cases.studies.engine import pool as pool_module
 
     monkeypatch.setattr(pool_module, "run_job", fake_job(907.3))
     bars = Bars().install(monkeypatch)
@@ -383,7 +383,7 @@ def test_progress_shows_on_a_terminal_or_when_asked(monkeypatch, capsys, tmp_pat
 def test_a_search_found_in_the_store_counts_its_runs_as_done(monkeypatch, capsys, tmp_path):
     """Run again with a finer resolution: the first search's runs count as done at once, the new ones as made."""
     from cases.run import RunStore
-    from cases.studies import pool as pool_module
+    from cases.studies.engine import pool as pool_module
 
     monkeypatch.setattr(pool_module, "run_job", fake_job(907.3))
     assert critical_command(tmp_path, "--no-progress")[0] == 0
@@ -398,7 +398,7 @@ def test_a_search_found_in_the_store_counts_its_runs_as_done(monkeypatch, capsys
 
 def test_a_failed_run_ends_the_search_naming_its_speed_and_error(monkeypatch, base):
     def failing(sweep, store, pool=None):
-        from cases.studies.sweep import SweepResult
+        from cases.studies.engine.sweep import SweepResult
 
         runs = [SimpleNamespace(failed=True, error="ValueError: boom", summary=None, key="k") for _ in sweep.scenes]
         return SweepResult(sweep, runs, store)

@@ -10,7 +10,7 @@ from support import dask_cluster
 
 from cases import scene_path
 from cases.scene import InputError, load_scene
-from cases.studies.ensemble import (
+from cases.studies.ensemble.sampling import (
     Estimate,
     curve,
     draw,
@@ -269,7 +269,7 @@ def test_ensemble_command_on_test_2(tmp_path, capsys):
 
 def test_empty_bins_inside_the_samples_ask_for_more_runs():
     """Bins between the samples (too few runs to fill them) call for more runs, not other bins."""
-    from cases.studies.ensemble_study import _empty_bins
+    from cases.studies.ensemble.study import _empty_bins
 
     speeds = np.array([251.0, 252.0, 309.0])
     table = pd.DataFrame({"impact.speed": speeds, "unstable": False, "exited": False, "stopped": True, "failed": False})
@@ -432,7 +432,7 @@ def test_the_probability_of_instability_has_a_known_answer(tmp_path):
     bracket); it must lie inside the ensemble's 95 % interval."""
     from cases.run import RunStore
     from cases.studies import Sweep, find_critical_velocity
-    from cases.studies.ensemble_study import run_ensemble
+    from cases.studies.ensemble.study import run_ensemble
 
     overrides = [("numerics.mesh_size", 0.04)]
     store = RunStore(tmp_path / "store")

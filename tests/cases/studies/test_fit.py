@@ -11,7 +11,7 @@ from cases import load_scene, run_scene, summarise
 from cases.cli import main
 from cases.run import RunStore
 from cases.studies import Pool
-from cases.studies.fit import NotIdentifiable, fit
+from cases.studies.measured.fit import NotIdentifiable, fit
 
 TEST2 = "cases/forrestal_luk_test2.toml"
 TRUTH = {"A": 1.718, "sigma_0": 10e6, "B": 1.227, "rho_0": 1860.0}
@@ -171,7 +171,7 @@ def test_two_parameters_from_one_observation_are_not_identifiable(store):
 )
 def test_too_few_observations_are_refused_before_any_run(params, observations, tmp_path, capsys, monkeypatch):
     """Counting alone shows it: the command says how many observations the parameters need, and makes no run."""
-    from cases.studies import sweep as sweep_module
+    from cases.studies.engine import sweep as sweep_module
 
     def no_runs(*args, **kwargs):
         raise AssertionError("a run was started")
@@ -192,8 +192,8 @@ def test_a_characteristic_speed_not_found_says_what_to_change(tmp_path, monkeypa
     """#3 without a disturbance never turns: the fit stops at its first search, naming what would find one."""
     from types import SimpleNamespace
 
-    from cases.studies import speeds as speeds_module
-    from cases.studies.sweep import SweepResult
+    from cases.studies.engine.sweep import SweepResult
+    from cases.studies.speeds import characteristic as speeds_module
 
     def stable(sweep, store, pool=None):
         summary = SimpleNamespace(max_attack_angle=0.0, end_reason="stopped", axis_angle_change=0.0)

@@ -10,10 +10,10 @@ from __future__ import annotations
 import pytest
 
 from cases.run import RunStore
-from cases.studies.fit_series import fit_series, parse_holdout
-from cases.studies.pool import Pool
-from cases.studies.series import parse_series
-from cases.studies.validate import validate
+from cases.studies.engine.pool import Pool
+from cases.studies.measured.fit_series import fit_series, parse_holdout
+from cases.studies.measured.series import parse_series
+from cases.studies.measured.validate import validate
 from fem_loads.resistance import concrete_strength_factor
 
 SERIAL = Pool(workers=1, progress=False)

@@ -7,8 +7,8 @@ import pytest
 from cases import scene_path
 from cases.run import RunStore
 from cases.studies import Pool, Sweep, measure_convergent_velocity
-from cases.studies import speeds as speeds_module
-from cases.studies.guide import Guide
+from cases.studies.speeds import characteristic as speeds_module
+from cases.studies.speeds.guide import Guide
 
 COARSE = {"numerics.mesh_size": 0.04, "impact.speed": 700.0}  # #3 at 700 m/s: stable, as at 805; 925.75 turns
 POOL = Pool(workers=2, progress=False)

@@ -12,8 +12,8 @@ from test_critical_search import RANGE, FakeRuns, assert_confirmed
 from cases import scene_path
 from cases.scene import InputError
 from cases.studies import Pool, Sweep, find_critical_velocity
-from cases.studies import speeds as speeds_module
-from cases.studies.guide import Guide, critical_guide, grid_bracket
+from cases.studies.speeds import characteristic as speeds_module
+from cases.studies.speeds.guide import Guide, critical_guide, grid_bracket
 
 POOL = Pool(workers=2, progress=False)
 

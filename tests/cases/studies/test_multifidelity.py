@@ -11,8 +11,8 @@ from cases import scene_path
 from cases.run import RunStore
 from cases.scene import InputError, load_scene
 from cases.studies import Pool
-from cases.studies.ensemble_study import run_ensemble
-from cases.studies.multifidelity import MARGIN, STRATA, check_applies, choose, sort_chunk, stratified
+from cases.studies.ensemble.multifidelity import MARGIN, STRATA, check_applies, choose, sort_chunk, stratified
+from cases.studies.ensemble.study import run_ensemble
 
 
 def synthetic(rng, size=20_000, wrong=0.03):
@@ -84,7 +84,7 @@ def coarse_p3():
 
 def test_the_sort_is_the_reduced_runs_at_the_speed_minus_and_plus_the_margin(coarse_p3):
     from cases.run import prepare_projectile
-    from cases.studies.predict import ReducedModel
+    from cases.studies.reduced.pitch_plane import ReducedModel
 
     speeds = np.array([700.0, 905.0, 915.0, 1300.0, 1000.0])
     attacks = np.array([1.0, 1.0, 1.0, 0.05, 3.0])

@@ -12,7 +12,7 @@ from cases import load_scene, run_scene, scene_path, summarise
 from cases.run import convergence_speed, history_table, prepare_projectile
 from cases.scene import InputError
 from cases.studies.paper.plan import STUDY_NUMERICS
-from cases.studies.predict import ReducedModel, predict
+from cases.studies.reduced.pitch_plane import ReducedModel, predict
 
 P3_STUDY = {**STUDY_NUMERICS, "numerics.rtol": 1e-6}  # the paper study's 20 mm mesh; rtol 1e-6 keeps the run at 1 s
 

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from cases.studies.report import markdown_table, number_cell
+from cases.studies.engine.report import markdown_table, number_cell
 
 
 def test_a_table_has_its_header_its_rule_and_a_line_per_row():

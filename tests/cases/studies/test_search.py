@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cases.studies.search import Bracket, search
+from cases.studies.engine.search import Bracket, search
 
 LIMITS = (200.0, 1600.0)
 
@@ -89,7 +89,8 @@ def test_the_critical_speed_and_the_ballistic_limit_share_the_search():
     """Neither study keeps a bracket, a gallop or a split of its own: both run :func:`search`."""
     import inspect
 
-    from cases.studies import ballistic, speeds
+    from cases.studies.speeds import ballistic
+    from cases.studies.speeds import characteristic as speeds
 
     for module in (ballistic, speeds):
         source = inspect.getsource(module)

@@ -18,12 +18,12 @@ from cases import load_scene, run_scene, scene_path, summarise
 from cases.cli import main
 from cases.run import RunStore
 from cases.scene import InputError
-from cases.studies.compare import compare_series
-from cases.studies.fit import parse_observation
-from cases.studies.fit_series import Holdout, fit_series, parse_holdout, split_series
-from cases.studies.pool import Pool
-from cases.studies.series import SERIES_DIR, read_series
-from cases.studies.validate import error_summary, validate
+from cases.studies.engine.pool import Pool
+from cases.studies.measured.compare import compare_series
+from cases.studies.measured.fit import parse_observation
+from cases.studies.measured.fit_series import Holdout, fit_series, parse_holdout, split_series
+from cases.studies.measured.series import SERIES_DIR, read_series
+from cases.studies.measured.validate import error_summary, validate
 from fem_loads.resistance import concrete_cavity_expansion, concrete_strength_factor
 
 SERIAL = Pool(workers=1, progress=False)
@@ -347,7 +347,7 @@ def test_fit_series_without_a_parameter_is_validate_and_says_so(tmp_path, capsys
 
 
 def test_a_set_over_several_observations_is_named(tmp_path):
-    from cases.studies.fit import fit
+    from cases.studies.measured.fit import fit
 
     scene = str(scene_path("forrestal1996_concrete"))
     result = fit(

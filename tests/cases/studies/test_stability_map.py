@@ -10,7 +10,7 @@ from cases.cli import main
 from cases.run import RunStore
 from cases.scene import InputError
 from cases.studies import Pool, Sweep, Variation, find_critical_velocity
-from cases.studies.stability_map import stability_map
+from cases.studies.speeds.stability_map import stability_map
 
 COARSE = {"numerics.mesh_size": 0.04}
 OVER = ["impact.attack_angle=1:2:1", "impact.oblique_angle=0,10"]

@@ -29,7 +29,7 @@ def test_convergence_speed_on_an_exact_history():
 def test_unstable_means_an_axis_turn_of_at_least_the_threshold_either_way():
     """The one definition (``UNSTABLE_TURN``, 30 degrees, docs/studies.md): at the threshold a run is unstable, a
     hair below it stable, whichever way the axis turned."""
-    from cases.studies.instability import UNSTABLE_TURN
+    from cases.studies.speeds.instability import UNSTABLE_TURN
 
     assert UNSTABLE_TURN == 30.0
     for sign in (1.0, -1.0):
@@ -117,7 +117,7 @@ class FakeConvergentRuns:
     def __call__(self, sweep, store, pool=None):
         from types import SimpleNamespace
 
-        from cases.studies.sweep import SweepResult
+        from cases.studies.engine.sweep import SweepResult
 
         runs, histories = [], []
         for scene in sweep.scenes:
@@ -145,7 +145,7 @@ class FakeConvergentRuns:
     ],
 )
 def test_convergent_without_an_unstable_run_names_the_option_to_change(monkeypatch, scene, attack, fix):
-    from cases.studies import speeds as speeds_module
+    from cases.studies.speeds import characteristic as speeds_module
 
     monkeypatch.setattr(speeds_module, "run_sweep", FakeConvergentRuns(unstable_from=np.inf))
     sweep = Sweep.from_file(scene_path(scene), {"impact.attack_angle": attack})
@@ -156,7 +156,7 @@ def test_convergent_without_an_unstable_run_names_the_option_to_change(monkeypat
 
 @pytest.mark.parametrize("least", [0.34, 2.0, 0.1])
 def test_convergent_that_never_falls_below_the_threshold_suggests_one_that_does(monkeypatch, least):
-    from cases.studies import speeds as speeds_module
+    from cases.studies.speeds import characteristic as speeds_module
 
     monkeypatch.setattr(speeds_module, "run_sweep", FakeConvergentRuns(unstable_from=0.0, least=least))
     sweep = Sweep.from_file(scene_path("paper_p3"))
@@ -186,20 +186,3 @@ def test_predict_names_the_option_that_finds_each_missing_speed():
     p3 = load_scene(scene_path("paper_p3"), coarse)  # critical near 910 m/s
     assert predict(p3, (200, 600)).messages[-1].endswith("; widen the range with --speeds 200:900")
     assert predict(p3, (1000, 1600)).messages[-1].endswith("; lower the range with --speeds 500:1600")
-
-
-def test_warming_meshes_and_compiles_what_is_missing_and_then_nothing(tmp_path, monkeypatch):
-    """The set-up's warm-up: a scene missing from the mesh cache is meshed and said so; run again, it finds
-    everything cached, says nothing and reports nothing filled."""
-    from cases import scene_path
-    from cases.run import prepare
-    from cases.studies.warm import warm_caches
-
-    monkeypatch.setenv("PENETRATE_CACHE_DIR", str(tmp_path))  # an empty mesh cache (numba's stays put)
-    prepare._prepare.cache_clear()  # as in the fresh process ./dev starts: nothing prepared in memory either
-    said: list[str] = []
-    _, filled = warm_caches([scene_path("forrestal_luk_test2")], say=said.append)
-    assert filled and said == ["penetrate: meshing forrestal_luk_test2.toml (gmsh; a few seconds, once)"]
-    said.clear()
-    _, filled = warm_caches([scene_path("forrestal_luk_test2")], say=said.append)
-    assert not filled and said == []

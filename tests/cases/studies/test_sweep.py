@@ -122,7 +122,7 @@ def test_rounds_of_a_study_reuse_warm_workers(tmp_path):
     """Two rounds on two local workers (as the bisection of a critical speed runs them) go to the same
     worker processes, which keep their imports and prepared projectiles, and give the table one worker
     gives."""
-    from cases.studies import pool as pool_module
+    from cases.studies.engine import pool as pool_module
 
     first = run_sweep(_sweep(speeds=(1000,)), RunStore(tmp_path / "a"), Pool(workers=2, progress=False)).table()
     executor = pool_module._WARM[2]
@@ -140,7 +140,8 @@ _FORKED_SWEEP = """
 import json, sys
 from cases import scene_path
 from cases.run import RunStore
-from cases.studies import Pool, Sweep, grid, pool, run_sweep
+from cases.studies import Pool, Sweep, grid, run_sweep
+from cases.studies.engine import pool
 sweep = Sweep.from_file(scene_path("paper_p3"), json.loads(sys.argv[2]), grid({"impact.speed": [1000, 1100, 1200]}))
 table = run_sweep(sweep, RunStore(sys.argv[1]), Pool(workers=2, progress=False)).table()
 print(pool._WARM[2]._mp_context.get_start_method())
@@ -155,7 +156,7 @@ def test_a_single_threaded_process_forks_its_workers_and_they_give_the_table_one
     import io
     import threading
 
-    from cases.studies import pool as pool_module
+    from cases.studies.engine import pool as pool_module
 
     done = subprocess.run(
         [sys.executable, "-c", _FORKED_SWEEP, str(tmp_path / "forked"), json.dumps(QUICK)],
@@ -292,7 +293,7 @@ def test_dask_scheduler_and_worker_processes_give_the_same_table(tmp_path):
 
 
 def test_a_worker_running_other_code_is_refused(tmp_path, monkeypatch):
-    from cases.studies import pool
+    from cases.studies.engine import pool
 
     monkeypatch.setattr(pool, "run_job", lambda text: (*pool.simulate_record(text), "other-code"))
     with pytest.raises(pool.CodeMismatch, match="code version other-code"):
@@ -350,7 +351,7 @@ def test_the_compiled_step_is_compiled_once_before_local_workers_start(monkeypat
     Workers about to be forked find it loaded here even when the cache has it."""
     from cases import load_scene, scene_path
     from cases.run import compiled
-    from cases.studies import pool
+    from cases.studies.engine import pool
 
     calls = []
     monkeypatch.setattr(pool, "start_method", lambda: "spawn")

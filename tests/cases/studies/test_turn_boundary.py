@@ -8,7 +8,7 @@ import pytest
 
 from cases import load_scene, prepare_projectile, scene_path
 from cases.run.compiled import compiled_load_function
-from cases.studies.prediction import DEEP, pitch_moment, turn_boundary
+from cases.studies.reduced.turn_boundary import DEEP, pitch_moment, turn_boundary
 
 COARSE = {"numerics.mesh_size": 0.04}
 ANGLES = (4, 8, 12)

@@ -18,11 +18,13 @@ from matplotlib.path import Path as MplPath
 from matplotlib.transforms import Bbox
 
 import cases.viz.figures as figures_module
-from cases.studies import accuracy, compare, ensemble_study, validate
-from cases.studies.ensemble import Distribution, wilson_interval
-from cases.studies.fit_report import FitResult, write_report
+from cases.studies.ensemble import study as ensemble_study
+from cases.studies.ensemble.sampling import Distribution, wilson_interval
+from cases.studies.measured import compare, validate
+from cases.studies.measured.fit_report import FitResult, write_report
+from cases.studies.numerics import accuracy
 from cases.studies.paper import figures as paper
-from cases.studies.prediction import TurnBoundary
+from cases.studies.reduced.turn_boundary import TurnBoundary
 from cases.viz import panels
 from cases.viz.figures import axis_label, legend_outside, quantity_unit, subplots
 

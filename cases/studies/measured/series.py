@@ -28,13 +28,13 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .. import SCENE_DIR, SHIPPED_SCENES
-from ..run import convergence_speed
-from ..scene import InputError, Overrides, Scene, apply_overrides, dotted_key, parse_override, read_scene_data
-from .sweep import Sweep, Variation
+from ... import SCENE_DIR, SHIPPED_SCENES
+from ...run import convergence_speed
+from ...scene import InputError, Overrides, Scene, apply_overrides, dotted_key, parse_override, read_scene_data
+from ..engine.sweep import Sweep, Variation
 
 if TYPE_CHECKING:
-    from .sweep import SweepResult
+    from ..engine.sweep import SweepResult
 
 __all__ = [
     "Measurement",
@@ -146,7 +146,7 @@ class Series:
         self, overrides: Overrides | None = None, variations: Sequence[Mapping[str, Any]] = ({},)
     ) -> list[tuple[dict, str, Variation]]:
         """Every shot under every variation (``target.law`` of a law comparison, the parameters of a fit), the
-        shots varying fastest, as parts of :meth:`Sweep.from_bases <cases.studies.sweep.Sweep.from_bases>`."""
+        shots varying fastest, as parts of :meth:`Sweep.from_bases <cases.studies.engine.sweep.Sweep.from_bases>`."""
         try:
             bases = self.bases(overrides)
         except InputError as exc:

@@ -38,14 +38,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..run import RunStore, atomic_write_text, convergence_speed, prepare_projectile
-from ..scene import InputError, Overrides, Scene
-from ..viz.figures import legend_outside, save_figure, subplots
-from .pool import Pool
-from .reference import check_nose_alone_presses, scene_depth_1d
-from .report import markdown_table, number_cell
-from .speeds import is_unstable
-from .sweep import Sweep, Variation, end_cells, run_sweep
+from ...reference.normal_impact import check_nose_alone_presses, scene_depth_1d
+from ...run import RunStore, atomic_write_text, convergence_speed, prepare_projectile
+from ...scene import InputError, Overrides, Scene
+from ...viz.figures import legend_outside, save_figure, subplots
+from ..engine.pool import Pool
+from ..engine.report import markdown_table, number_cell
+from ..engine.sweep import Sweep, Variation, end_cells, run_sweep
+from ..speeds.instability import is_unstable
 
 __all__ = [
     "accuracy_study",

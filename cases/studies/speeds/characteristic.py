@@ -15,7 +15,7 @@ Definitions (docs/studies.md):
   of speeds.  Each round splits the bracket into equal parts with as many runs
   as the pool has workers (k-section); the range's ends, or a guessed
   bracket's, count only once runs confirm them.  The critical velocity is the
-  middle of the final bracket (the one threshold search, :mod:`.search`).
+  middle of the final bracket (the one threshold search, :mod:`..engine.search`).
 * **Guided search** (the default where it applies, :mod:`.guide`): the reduced
   pitch-plane model's prediction gives a first bracket one resolution wide; full
   runs confirm its ends, and an end its run contradicts gallops out, one
@@ -41,25 +41,22 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..run import CONVERGENCE_THRESHOLD, RunStore, convergence_speed
-from ..run.history import attack_angle_peak
-from ..scene import InputError
+from ...run import CONVERGENCE_THRESHOLD, RunStore, convergence_speed
+from ...run.history import attack_angle_peak
+from ...scene import InputError
+from ..engine.pool import Pool, study_progress
+from ..engine.search import Bracket, search
+from ..engine.sweep import Sweep, Variation, run_sweep
 from .guide import Guide, convergent_guide, critical_guide
 from .instability import (
     MAX_SPEED,
     RAISE_FACTOR,
-    UNSTABLE_TURN,
     disturbance_fix,
-    indicator,
     is_unstable,
     raised_speeds,
     range_fix,
     typed_number,
-    undisturbed,
 )
-from .pool import Pool, study_progress
-from .search import Bracket, search
-from .sweep import Sweep, Variation, run_sweep
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -68,15 +65,9 @@ __all__ = [
     "CriticalSearch",
     "find_critical_velocity",
     "find_critical_velocities",
-    "is_unstable",
-    "indicator",
     "ConvergentResult",
     "measure_convergent_velocity",
-    "UNSTABLE_TURN",
     "ScanRun",
-    "undisturbed",
-    "disturbance_fix",
-    "range_fix",
 ]
 
 

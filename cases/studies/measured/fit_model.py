@@ -1,9 +1,10 @@
 """The model a fit inverts: observed quantities as a function of the fitted parameters, through the run store.
 
 A point of the model is the parameters' values (each as a fraction of its range); evaluating points runs the
-observations' scenes with those values set, all points in one batch of runs (:func:`~cases.studies.sweep.run_sweep`),
-and measures the characteristic speeds by their searches.  Every point is cached, and every run is kept in the
-run store, so the fit's iterations and a fit run again make no run twice.
+observations' scenes with those values set, all points in one batch of runs
+(:func:`~cases.studies.engine.sweep.run_sweep`), and measures the characteristic speeds by their searches.  Every
+point is cached, and every run is kept in the run store, so the fit's iterations and a fit run again make no run
+twice.
 """
 
 from __future__ import annotations
@@ -13,12 +14,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..run import CONVERGENCE_THRESHOLD, RunStore
-from ..scene import apply_overrides
-from .pool import Pool
+from ...run import CONVERGENCE_THRESHOLD, RunStore
+from ...scene import apply_overrides
+from ..engine.pool import Pool
+from ..engine.sweep import Sweep, Variation, run_sweep
+from ..speeds.characteristic import find_critical_velocity, measure_convergent_velocity
+from ..speeds.instability import disturbance_fix, undisturbed
 from .series import RUN_QUANTITIES, run_value
-from .speeds import disturbance_fix, find_critical_velocity, measure_convergent_velocity, undisturbed
-from .sweep import Sweep, Variation, run_sweep
 
 __all__ = ["Parameter", "Observation", "FitModel", "STUDY_QUANTITIES", "DIGITS"]
 

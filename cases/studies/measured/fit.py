@@ -5,7 +5,7 @@ observations (a quantity of a run's summary, or a characteristic speed, of one o
 several scenes; the parameters apply to every scene).  The fit minimises the sum of the
 squared residuals ``(fitted - observed) / sigma`` with :func:`scipy.optimize.least_squares`
 inside the bounds.  Every model evaluation is a set of runs made through the run store
-and the worker pool (:func:`~cases.studies.sweep.run_sweep`), so a fit run again makes no
+and the worker pool (:func:`~cases.studies.engine.sweep.run_sweep`), so a fit run again makes no
 new run and a killed fit continues where it stopped.
 
 The Jacobian is a forward difference, all its columns in one batch of runs, with a step of
@@ -29,13 +29,13 @@ from typing import Any
 
 import numpy as np
 
-from ..run import RunStore
-from ..scene import InputError, Overrides, apply_overrides, dotted_key, read_scene_data, scene_from_dict
+from ...run import RunStore
+from ...scene import InputError, Overrides, apply_overrides, dotted_key, read_scene_data, scene_from_dict
+from ..engine.pool import Pool, study_progress
 from .fit_model import DIGITS, STUDY_QUANTITIES, FitModel, Observation, Parameter
 
 # the report is written by its own module; fit.write_report stays its public name
 from .fit_report import FitResult, write_report
-from .pool import Pool, study_progress
 from .series import RUN_QUANTITIES, finite_number
 
 __all__ = [

@@ -18,12 +18,12 @@ from typing import Any
 
 import numpy as np
 
-from ..run import RunStore
-from ..scene import Overrides
-from .pool import Pool
-from .report import markdown_table, number_cell
+from ...run import RunStore
+from ...scene import Overrides
+from ..engine.pool import Pool
+from ..engine.report import markdown_table, number_cell
+from ..engine.sweep import SweepResult, end_cells, run_sweep
 from .series import Series, Shot, combined, run_value
-from .sweep import SweepResult, end_cells, run_sweep
 
 __all__ = [
     "Validation",
@@ -298,7 +298,7 @@ def write_validation(validation: Validation, out: str | os.PathLike) -> None:
     ``out``, each written atomically."""
     import pandas as pd
 
-    from ..run import atomic_write_text, write_json
+    from ...run import atomic_write_text, write_json
 
     out = Path(out)
     table = pd.DataFrame([{**row, "warnings": "; ".join(w for w in row["warnings"] if w)} for row in validation.rows])
@@ -320,7 +320,7 @@ def figure(
     ``rows`` may carry a ``law`` (a comparison): ``colour_by`` names the field the colours follow, and
     ``curves`` holds each colour's curves by group.
     """
-    from ..viz.figures import axis_label, legend_outside, quantity_unit, save_figure, subplots
+    from ...viz.figures import axis_label, legend_outside, quantity_unit, save_figure, subplots
 
     quantities = list(dict.fromkeys(row["quantity"] for row in rows))
     fig, axes = subplots(len(quantities), 2, figsize=(12.0, 4.6 * len(quantities)), squeeze=False)

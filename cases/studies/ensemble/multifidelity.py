@@ -2,7 +2,7 @@
 
 ``penetrate ensemble ... --fidelity multi`` (docs/ensembles.md):
 
-1. **Sort.**  Every sample gets two reduced runs (:class:`~cases.studies.predict.ReducedModel`), at its
+1. **Sort.**  Every sample gets two reduced runs (:class:`~cases.studies.reduced.pitch_plane.ReducedModel`), at its
    impact speed lowered and raised by :data:`MARGIN`: unstable at the lower speed, it is *unstable*;
    stable at the higher speed, *stable*; else it lies *near* the stability boundary.  The margin is the
    reduced model's largest measured error of a critical speed (0.6 %, docs/theory.md), about doubled.
@@ -20,8 +20,9 @@
    audited strata and the Monte Carlo error of the ``N`` samples themselves (Bonferroni), so that it holds
    at 95 % jointly.
 
-The reduced model applies to a body of revolution in a homogeneous target (:func:`.predict.check_supported`)
-with the sampled keys among :data:`REDUCED_KEYS`; elsewhere ``multi`` is refused in one line.
+The reduced model applies to a body of revolution in a homogeneous target
+(:func:`..reduced.pitch_plane.check_supported`) with the sampled keys among :data:`REDUCED_KEYS`; elsewhere
+``multi`` is refused in one line.
 """
 
 from __future__ import annotations
@@ -34,16 +35,16 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..scene import InputError, Scene, one_line
-from .ensemble import CONFIDENCE, Distribution, wilson_interval
-from .pool import Pool
-from .report import markdown_table, number_cell
+from ...scene import InputError, Scene, one_line
+from ..engine.pool import Pool
+from ..engine.report import markdown_table, number_cell
+from .sampling import CONFIDENCE, Distribution, wilson_interval
 
 if TYPE_CHECKING:
     import pandas as pd
 
-    from ..run import RunStore
-    from .sweep import Sweep
+    from ...run import RunStore
+    from ..engine.sweep import Sweep
 
 __all__ = [
     "MARGIN",
@@ -68,7 +69,7 @@ STRATA = ("stable", "unstable", "near")  # the sort's codes 0, 1, 2
 
 def check_applies(scene: Scene, keys: Sequence[str]) -> None:
     """Refuse, in one line, an ensemble the reduced model cannot sort."""
-    from .predict import check_supported
+    from ..reduced.pitch_plane import check_supported
 
     other = [key for key in keys if key not in REDUCED_KEYS]
     if other:
@@ -86,8 +87,8 @@ def check_applies(scene: Scene, keys: Sequence[str]) -> None:
 
 @functools.lru_cache(maxsize=4)
 def _model(scene_json: str) -> Any:  # a ReducedModel, made once per process and scene
-    from ..run import prepare_projectile
-    from .predict import ReducedModel
+    from ...run import prepare_projectile
+    from ..reduced.pitch_plane import ReducedModel
 
     scene = Scene.model_validate_json(scene_json)
     return ReducedModel(scene, prepare_projectile(scene))
@@ -95,7 +96,7 @@ def _model(scene_json: str) -> Any:  # a ReducedModel, made once per process and
 
 def sort_chunk(scene_json: str, speeds: np.ndarray, attacks: np.ndarray, obliques: np.ndarray) -> np.ndarray:
     """The sort (codes of :data:`STRATA`) of samples of the scene (m/s, deg): a worker's job."""
-    from .instability import UNSTABLE_TURN
+    from ..speeds.instability import UNSTABLE_TURN
 
     model = _model(scene_json)
     unit = model.starts(np.ones(len(speeds)), attacks, obliques)  # velocities scale with the speed
@@ -114,7 +115,7 @@ def sort_chunk(scene_json: str, speeds: np.ndarray, attacks: np.ndarray, oblique
 
 def sort_samples(scene: Scene, values: Mapping[str, np.ndarray], width: int) -> np.ndarray:
     """Sort every sample (``values``: sampled key -> one value per sample) on ``width`` local processes."""
-    from .pool import map_local
+    from ..engine.pool import map_local
 
     count = len(next(iter(values.values())))
     impact = scene.impact
@@ -217,8 +218,8 @@ def multi_ensemble(
     """
     import pandas as pd
 
-    from .ensemble import OUTCOMES, bin_index, outcomes
-    from .sweep import run_sweep
+    from ..engine.sweep import run_sweep
+    from .sampling import OUTCOMES, bin_index, outcomes
 
     keys = [d.key for d in distributions]
     clock = time.perf_counter()
@@ -289,7 +290,8 @@ INTERVAL = (
 
 
 def interval_cell(interval: Sequence[float | None], spec: str = ".3g") -> str:
-    """A range as a table cell, ``low - high`` (a 95 % interval, a bin), each bound a :func:`~.report.number_cell`."""
+    """A range as a table cell, ``low - high`` (a 95 % interval, a bin), each bound a
+    :func:`~..engine.report.number_cell`."""
     low, high = interval
     return f"{number_cell(low, spec)} - {number_cell(high, spec)}"
 

@@ -9,7 +9,7 @@ The model (docs/theory.md derives it and says what it neglects):
 * **Motion.**  Three degrees of freedom in the vertical plane (:mod:`dynamics.pitch_plane`), the
   mass and transverse moment of inertia of the scene's projectile.
 * **The characteristic speeds** then follow from the same definitions as the measured ones
-  (:mod:`.speeds`): the convergent velocity from a reduced run at the scene's impact speed (raised
+  (:mod:`..speeds.characteristic`): the convergent velocity from a reduced run at the scene's impact speed (raised
   by 15 % while that run is stable, as ``penetrate convergent`` does), the critical impact velocity
   by bisection of reduced runs between a stable and an unstable impact speed, to the same 5 m/s.
 
@@ -26,7 +26,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from ..run import (
+from ...run import (
     CONVERGENCE_THRESHOLD,
     PreparedProjectile,
     impact_positions,
@@ -34,9 +34,9 @@ from ..run import (
     initial_state,
     prepare_projectile,
 )
-from ..run.compiled import announce_compiling, use_numba_cache
-from ..scene import InputError, Scene
-from .instability import MAX_SPEED, UNSTABLE_TURN, disturbance_fix, raised_speeds, range_fix
+from ...run.compiled import announce_compiling, use_numba_cache
+from ...scene import InputError, Scene
+from ..speeds.instability import MAX_SPEED, UNSTABLE_TURN, disturbance_fix, raised_speeds, range_fix
 
 __all__ = [
     "ReducedModel",
@@ -96,7 +96,7 @@ class ReducedModel:
         use_numba_cache()
         from fem_loads.kernels.rings import revolved_surface, ring_data
 
-        from ..run.pitch_plane_step import pitch_plane_trajectory
+        from ...run.pitch_plane_step import pitch_plane_trajectory
 
         self.scene, self.prepared = scene, prepared
         self._trajectory = pitch_plane_trajectory

@@ -19,14 +19,14 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ..run import RunStore, atomic_write_text, initial_state, prepare_projectile
-from ..scene import InputError, Overrides, Scene
-from ..viz.figures import legend_outside, save_figure, subplots
-from .pool import Pool
-from .report import markdown_table, number_cell
+from ...run import RunStore, atomic_write_text, initial_state, prepare_projectile
+from ...scene import InputError, Overrides, Scene
+from ...viz.figures import legend_outside, save_figure, subplots
+from ..engine.pool import Pool
+from ..engine.report import markdown_table, number_cell
+from ..engine.sweep import Sweep, SweepResult, Variation, end_cells, run_sweep
+from ..speeds.characteristic import find_critical_velocities, measure_convergent_velocity
 from .series import Series, combined
-from .speeds import find_critical_velocities, measure_convergent_velocity
-from .sweep import Sweep, SweepResult, Variation, end_cells, run_sweep
 
 __all__ = ["compare_laws", "compare_series", "LawComparison", "SeriesComparison", "law_values", "COLUMNS", "SCENE_LAW"]
 
@@ -260,7 +260,7 @@ def compare_series(
     out = Path(out)
     table = pd.DataFrame([{**row, "warnings": "; ".join(w for w in row["warnings"] if w)} for row in rows])
     atomic_write_text(out / "compare.csv", table.to_csv(index=False))
-    from ..run import write_json
+    from ...run import write_json
 
     write_json(out / "compare.json", comparison.record())
     atomic_write_text(out / "compare.md", _series_markdown(comparison, series))

@@ -1,7 +1,7 @@
 """``penetrate ensemble``: a scene's runs under sampled impact conditions, and what they show.
 
-The samples (:mod:`.ensemble`) become typed :class:`~cases.studies.sweep.Variation` objects and
-run through :func:`~cases.studies.sweep.run_sweep`, so each run is stored under its resolved
+The samples (:mod:`.sampling`) become typed :class:`~cases.studies.engine.sweep.Variation` objects and
+run through :func:`~cases.studies.engine.sweep.run_sweep`, so each run is stored under its resolved
 scene's key: the same seed gives the same runs on any pool, a killed ensemble resumes, and a
 larger ``count`` (random or Sobol' design) runs only the new samples.  The study writes
 ``ensemble.csv`` (a row per run: its sample, outcomes and summary, without the timings), ``ensemble.json``,
@@ -18,11 +18,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..run import CONVERGENCE_THRESHOLD, RunStore, atomic_write_text, convergence_speed, write_json
-from ..run.persistence import json_safe
-from ..scene import InputError, Overrides, one_line
-from ..viz.figures import axis_label, legend_outside, quantity_unit, save_figure, subplots
-from .ensemble import (
+from ...run import CONVERGENCE_THRESHOLD, RunStore, atomic_write_text, convergence_speed, write_json
+from ...run.persistence import json_safe
+from ...scene import InputError, Overrides, one_line
+from ...viz.figures import axis_label, legend_outside, quantity_unit, save_figure, subplots
+from ..engine.pool import Pool
+from ..engine.report import markdown_table, number_cell
+from ..engine.sweep import Sweep, SweepResult, Variation, run_sweep
+from .multifidelity import FULL_RUNS, check_applies, interval_cell, multi_ensemble, multi_markdown
+from .sampling import (
     OUTCOMES,
     Distribution,
     curve,
@@ -34,10 +38,6 @@ from .ensemble import (
     summary_record,
     variations,
 )
-from .multifidelity import FULL_RUNS, check_applies, interval_cell, multi_ensemble, multi_markdown
-from .pool import Pool
-from .report import markdown_table, number_cell
-from .sweep import Sweep, SweepResult, Variation, run_sweep
 
 __all__ = ["run_ensemble", "INTERVAL", "FIDELITIES"]
 
@@ -107,7 +107,7 @@ def run_ensemble(
     scene, overrides
         The base scene file and its ``--set`` overrides.
     samples : sequence of str
-        The ``--sample KEY=DIST`` texts (:func:`~cases.studies.ensemble.parse_sample`).
+        The ``--sample KEY=DIST`` texts (:func:`~cases.studies.ensemble.sampling.parse_sample`).
     count : int
         How many runs.
     store : RunStore
@@ -117,7 +117,7 @@ def run_ensemble(
     seed : int
         The seed of the samples.
     design : str
-        ``random``, ``sobol`` or ``lhs`` (:func:`~cases.studies.ensemble.unit_points`).
+        ``random``, ``sobol`` or ``lhs`` (:func:`~cases.studies.ensemble.sampling.unit_points`).
     by : str, optional
         ``KEY=START:STOP:STEP``: the outcomes' probabilities in bins of a sampled key.
     pool : Pool, optional

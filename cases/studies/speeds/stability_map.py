@@ -1,9 +1,9 @@
 """``penetrate map``: the critical impact velocity, or the ballistic limit, over a grid of one or two scene inputs.
 
 Each point of the grid is a critical-speed search of the scene with those inputs set
-(:func:`~cases.studies.speeds.find_critical_velocities`, all points in lockstep on the pool's workers),
+(:func:`~cases.studies.speeds.characteristic.find_critical_velocities`, all points in lockstep on the pool's workers),
 guided by the reduced model where it applies and confirmed by full runs; or, with ``quantity =
-"ballistic_limit"``, a ballistic-limit search (:func:`~cases.studies.ballistic.find_ballistic_limit`, point after
+"ballistic_limit"``, a ballistic-limit search (:func:`~cases.studies.speeds.ballistic.find_ballistic_limit`, point after
 point, each on the pool's workers).  The runs are kept in the run
 store, so an interrupted map resumes: its searches replay their rounds from the store and run only what is
 missing.  The study writes ``map.csv`` (a row per point), ``map.json``, ``map.md`` and ``map.png`` (a
@@ -21,15 +21,15 @@ from typing import Any
 
 import numpy as np
 
-from ..run import RunStore, atomic_write_text, write_json
-from ..run.persistence import json_safe
-from ..scene import InputError, Overrides
-from ..viz.figures import axis_label, quantity_unit, save_figure, subplots
+from ...run import RunStore, atomic_write_text, write_json
+from ...run.persistence import json_safe
+from ...scene import InputError, Overrides
+from ...viz.figures import axis_label, quantity_unit, save_figure, subplots
+from ..engine.pool import Pool
+from ..engine.report import markdown_table, number_cell
+from ..engine.sweep import Sweep, grid, parse_grid
 from .ballistic import find_ballistic_limit
-from .pool import Pool
-from .report import markdown_table, number_cell
-from .speeds import find_critical_velocities
-from .sweep import Sweep, grid, parse_grid
+from .characteristic import find_critical_velocities
 
 __all__ = ["stability_map", "MAX_POINTS", "QUANTITIES"]
 

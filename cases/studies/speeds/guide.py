@@ -1,20 +1,20 @@
 """Guides of the characteristic-speed searches: where the reduced pitch-plane model applies, it says where
 to look, and full runs decide.
 
-The reduced model (:mod:`.predict`, docs/theory.md) finds both characteristic speeds of a body of
+The reduced model (:mod:`..reduced.pitch_plane`, docs/theory.md) finds both characteristic speeds of a body of
 revolution in a homogeneous target within about one percent of the full simulator, in milliseconds.
 A guide turns its answer into the first full runs of a search:
 
 * **critical impact velocity**: the reduced model's change from stable to unstable, bisected to an
   eighth of the resolution, becomes a first bracket one resolution wide on the search's grid (half
   the resolution).  Full runs at both ends confirm it; an end its run contradicts gallops away from
-  it, one resolution and then doubling (:func:`~cases.studies.speeds.find_critical_velocities`).
+  it, one resolution and then doubling (:func:`~cases.studies.speeds.characteristic.find_critical_velocities`).
 * **characteristic convergent velocity**: the first of the raised impact speeds (the scene's, times
   1.15, 1.15^2, ...) whose reduced run is unstable; full runs at it and at the speed below it decide,
   and the measurement goes down, or on up, from there when they do not agree.
 
 Where the reduced model does not apply (a projectile from a file, layers, a strength table, the
-free-surface reduction, no separation, yaw or roll, :func:`.predict.check_supported`) the search runs
+free-surface reduction, no separation, yaw or roll, :func:`..reduced.pitch_plane.check_supported`) the search runs
 as it did unguided, and its result says why.
 """
 
@@ -23,11 +23,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from ..scene import InputError, Scene, one_line
+from ...scene import InputError, Scene, one_line
 from .instability import UNSTABLE_TURN, raised_speeds
 
 if TYPE_CHECKING:
-    from .predict import ReducedModel
+    from ..reduced.pitch_plane import ReducedModel
 
 __all__ = ["GUIDES", "Guide", "critical_guide", "convergent_guide", "grid_bracket"]
 
@@ -65,8 +65,8 @@ def _model(scene: Scene, guide: str) -> tuple[ReducedModel | None, Guide | None]
         raise InputError(f"--guide {guide!r}: expected one of {', '.join(GUIDES)}")
     if guide == "none":
         return None, Guide("none", "unguided (--guide none)")
-    from ..run import prepare_projectile
-    from .predict import ReducedModel, check_supported
+    from ...run import prepare_projectile
+    from ..reduced.pitch_plane import ReducedModel, check_supported
 
     try:
         check_supported(scene)
@@ -97,7 +97,7 @@ def critical_guide(
     if model is None:
         assert unguided is not None
         return unguided, None
-    from .predict import reduced_critical
+    from ..reduced.pitch_plane import reduced_critical
 
     predicted, stable = reduced_critical(model, limits, resolution / FINER)
     if predicted is None:

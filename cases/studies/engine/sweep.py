@@ -22,8 +22,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from ..run import RunStore, RunSummary, StoredRun
-from ..scene import (
+from ...run import RunStore, RunSummary, StoredRun
+from ...scene import (
     InputError,
     Overrides,
     Scene,

@@ -4,11 +4,11 @@
   that stops, comes back out or ends otherwise does not perforate.
 * **Ballistic limit**: the speed at which runs change from not perforating to perforating, found to
   ``resolution``: the lowest perforating run with a run that does not perforate at most ``resolution`` below it.
-  The limit is the middle of that bracket, found by the critical speed's threshold search (:mod:`.search`),
+  The limit is the middle of that bracket, found by the critical speed's threshold search (:mod:`..engine.search`),
   perforation in place of instability.  Each round runs as many speeds as the pool has workers.
 * **Guide**: for a normal impact of a body of revolution whose nose alone presses (no friction, no free-surface
   reduction, separation), a 1-D integration of the nose through the target's slices
-  (:func:`~cases.studies.reference.ballistic_limit_1d`) gives the limit in about a second; the first bracket is
+  (:func:`~cases.reference.normal_impact.ballistic_limit_1d`) gives the limit in about a second; the first bracket is
   one resolution wide around it.  Full runs confirm its ends, and an end that its run contradicts gallops away,
   one resolution and then doubling.  Elsewhere the search splits the range of speeds (k-section).
 
@@ -21,13 +21,13 @@ import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 
-from ..run import RunStore, prepare_projectile
-from ..run.runner import PERFORATED
-from ..scene import InputError, Scene
-from .pool import Pool, study_progress
-from .reference import ballistic_limit_1d, check_nose_alone_presses, scene_slices
-from .search import Bracket, search
-from .sweep import Sweep, Variation, run_sweep
+from ...reference.normal_impact import ballistic_limit_1d, check_nose_alone_presses, scene_slices
+from ...run import RunStore, prepare_projectile
+from ...run.runner import PERFORATED
+from ...scene import InputError, Scene
+from ..engine.pool import Pool, study_progress
+from ..engine.search import Bracket, search
+from ..engine.sweep import Sweep, Variation, run_sweep
 
 __all__ = ["LimitRun", "BallisticLimit", "find_ballistic_limit", "ballistic_guide", "check_rear_face"]
 

@@ -31,14 +31,14 @@ import pandas as pd
 
 from fem_loads import ResistanceLaw
 
-from ..run import RunStore, atomic_write_text, convergence_speed, prepare_projectile
-from ..scene import Overrides
+from ...reference.normal_impact import axial_depth_1d
+from ...run import RunStore, atomic_write_text, convergence_speed, prepare_projectile
+from ...scene import Overrides
+from ..engine.pool import Pool
+from ..engine.report import markdown_table, number_cell
+from ..engine.sweep import Sweep, Variation, run_sweep
+from ..speeds.instability import is_unstable
 from .accuracy import is_plain_normal_impact
-from .pool import Pool
-from .reference import axial_depth_1d
-from .report import markdown_table, number_cell
-from .speeds import is_unstable
-from .sweep import Sweep, Variation, run_sweep
 
 __all__ = [
     "contact_study",

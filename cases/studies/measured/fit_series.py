@@ -10,14 +10,14 @@ from typing import Any
 
 import numpy as np
 
-from ..run import RunStore
-from ..scene import InputError, Overrides
+from ...run import RunStore
+from ...scene import InputError, Overrides
+from ..engine.pool import Pool
+from ..engine.sweep import run_sweep
 from .fit import NotIdentifiable, fit_bases
 from .fit_model import Observation
 from .fit_report import FitResult
-from .pool import Pool
 from .series import Series, combined, finite_number
-from .sweep import run_sweep
 from .validate import error_summary, prediction_rows
 
 __all__ = ["HOLDOUT_KINDS", "Holdout", "parse_holdout", "split_series", "fit_series"]

@@ -1,6 +1,6 @@
 """Warm the caches a first study would otherwise fill: numba's machine code and the shipped scenes' meshes.
 
-``./dev`` runs ``python -m cases.studies.warm`` after installing, so that the first run or study on a
+``./dev`` runs ``python -m cases.tools.warm`` after installing, so that the first run or study on a
 fresh machine compiles nothing and meshes nothing (the README's promise).  Each shipped scene (or each
 scene given) is prepared (gmsh mesh, mass properties and quadrature, into the disk cache of
 :func:`cases.run.cache_dir`); a scene a study would run compiled builds its compiled step (numba compiles
@@ -35,7 +35,7 @@ def _compiled(scene: Scene, prepared: PreparedProjectile) -> None:
 
 
 def _reduced(scene: Scene, prepared: PreparedProjectile) -> None:
-    from .predict import ReducedModel
+    from ..studies.reduced.pitch_plane import ReducedModel
 
     try:
         model = ReducedModel(scene, prepared)
@@ -65,7 +65,7 @@ def warm_caches(
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m cases.studies.warm", description=(__doc__ or "").split("\n\n", maxsplit=1)[0]
+        prog="python -m cases.tools.warm", description=(__doc__ or "").split("\n\n", maxsplit=1)[0]
     )
     parser.add_argument("scenes", nargs="*", type=Path, help="scene files (default: every shipped scene)")
     options = parser.parse_args(argv)

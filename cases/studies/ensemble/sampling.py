@@ -9,7 +9,7 @@ Sobol' points are a prefix of one sequence, so raising the number of runs keeps 
 samples (and their stored runs); a Latin hypercube is made for its size and cannot be extended.
 
 Each run's outcomes (:func:`outcomes`) are ``unstable`` (the axis turned by at least 30 degrees,
-:func:`~cases.studies.speeds.is_unstable`, as ``penetrate critical`` decides), ``exited``, ``stopped``,
+:func:`~cases.studies.speeds.instability.is_unstable`, as ``penetrate critical`` decides), ``exited``, ``stopped``,
 ``perforated`` and ``ricocheted`` (its end reason) and ``failed`` (an error ended it).  :func:`estimate` gives each
 outcome's probability with a 95 % Wilson score interval (:func:`wilson_interval`), and
 :func:`curve` the same in bins of one sampled key (``--by KEY=START:STOP:STEP``, :func:`parse_bins`).
@@ -25,9 +25,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
-from ..scene import InputError, Scene, dotted_key
-from .speeds import is_unstable
-from .sweep import MAX_GRID_VALUES, SweepResult, Variation
+from ...scene import InputError, Scene, dotted_key
+from ..engine.sweep import MAX_GRID_VALUES, SweepResult, Variation
+from ..speeds.instability import is_unstable
 
 if TYPE_CHECKING:
     import numpy.typing as npt
@@ -262,7 +262,8 @@ def draw(distributions: Sequence[Distribution], count: int, seed: int = 0, desig
 
 
 def variations(distributions: Sequence[Distribution], samples: np.ndarray) -> list[Variation]:
-    """One typed :class:`~cases.studies.sweep.Variation` per sample (Python floats, or ints for whole-number keys)."""
+    """One typed :class:`~cases.studies.engine.sweep.Variation` per sample (Python floats, or ints for
+    whole-number keys)."""
 
     def typed(d: Distribution, value: float) -> Any:
         return int(value) if d.name == "choice" and all(isinstance(v, int) for v in d.parameters) else float(value)

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from .report import markdown_table, number_cell
+from ..engine.report import markdown_table, number_cell
 
 
 @dataclass
@@ -122,8 +122,8 @@ def _prediction_lines(result: FitResult) -> list[str]:
 def write_report(result: FitResult, out: Path, scene: str) -> None:
     """``fit.json``, ``fit.md`` and ``fit.png`` (observed against fitted) in ``out``, each written atomically."""
 
-    from ..run import atomic_write_text, write_json
-    from ..viz.figures import axis_label, quantity_unit, save_figure, subplots
+    from ...run import atomic_write_text, write_json
+    from ...viz.figures import axis_label, quantity_unit, save_figure, subplots
 
     out = Path(out)
     write_json(out / "fit.json", result.record())

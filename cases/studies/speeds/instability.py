@@ -10,8 +10,8 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from ..scene import Scene
-from ..scene.schema import Impact
+from ...scene import Scene
+from ...scene.schema import Impact
 
 __all__ = [
     "UNSTABLE_TURN",

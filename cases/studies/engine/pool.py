@@ -25,10 +25,10 @@ from dataclasses import dataclass
 from multiprocessing import get_context
 from typing import TYPE_CHECKING, Any, Never
 
-from ..run import RunStore, code_version, prepare_projectile
-from ..run.prepare import preparation_key
-from ..run.summary import simulate_record
-from ..scene import Scene
+from ...run import RunStore, code_version, prepare_projectile
+from ...run.prepare import preparation_key
+from ...run.summary import simulate_record
+from ...scene import Scene
 
 if TYPE_CHECKING:
     from tqdm import tqdm
@@ -228,7 +228,7 @@ def _compile_once(scenes: Iterable[Scene], width: int) -> None:
     """Compile the compiled step here, once (announced), before local workers start, when the cache lacks it
     and a run will take it: else every worker compiles it side by side, each saying so.  When the workers
     are about to be forked, also load it from the cache here, so that they start with it loaded."""
-    from ..run.compiled import needs_compiling, precompile
+    from ...run.compiled import needs_compiling, precompile
 
     compiled = any(scene.with_kernel(many_runs=True).numerics.kernel == "compiled" for scene in scenes)
     forking = width not in _WARM and start_method() == "fork"
