@@ -102,7 +102,7 @@ def run_fit(args: argparse.Namespace) -> int:
 
     from ..run import RunStore
     from ..scene import InputError, one_line
-    from ..studies.measured.fit import NotIdentifiable, fit, write_report
+    from ..studies.measured.fit import NotIdentifiable, fit, write_fit
     from ..studies.measured.fit_series import fit_series, parse_holdout
 
     if args.difference_step is not None and not args.difference_step < 1:
@@ -155,7 +155,7 @@ def run_fit(args: argparse.Namespace) -> int:
     except NotIdentifiable as exc:
         print(f"penetrate fit: {one_line(exc)}", file=sys.stderr)
         return 1
-    write_report(result, Path(args.out), title)
+    write_fit(result, Path(args.out), title)
     if args.json:
         print_json(result.record())
     else:

@@ -959,7 +959,9 @@ def bad_command_lines(draw, files):
                 ":=1",
             ]
         ]
-        poisons += [("--difference-step", v) for v in BAD_NUMBER + ["1", "2"]] + [("--resolution", v) for v in BAD_NUMBER]
+        poisons += [("--difference-step", v) for v in BAD_NUMBER + ["1", "2"]] + [
+            ("--resolution", v) for v in BAD_NUMBER
+        ]
         poisons += [("--max-evaluations", v) for v in BAD_WHOLE]
     if command == "ensemble":
         args += ["--sample", "impact.speed=uniform:250:300", "-n", "4"]
@@ -981,7 +983,9 @@ def bad_command_lines(draw, files):
         poisons += [("--design", v) for v in ["grid", ""]] + [("--seed", v) for v in ["x", "-1", "1.5"]]
     if command == "render":
         poisons += [("--size", v) for v in ["0x0", "abc", "64x", "100000x100000", "640x480x2", ""]]
-        poisons += [("--paraview-frames", v) for v in ["0", "-1", "x", ""]] + [("--times", v) for v in ["x", "peak,xyz"]]
+        poisons += [("--paraview-frames", v) for v in ["0", "-1", "x", ""]] + [
+            ("--times", v) for v in ["x", "peak,xyz"]
+        ]
         poisons += [("--frames", v) for v in BAD_WHOLE] + [("--station", v) for v in BAD_NUMBER]
     elif command != "run":
         poisons += [("--workers", v) for v in BAD_WHOLE]

@@ -12,18 +12,18 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from ...run import CONVERGENCE_THRESHOLD, RunStore, atomic_write_text, convergence_speed, write_json
+from ...run import CONVERGENCE_THRESHOLD, RunStore, convergence_speed
 from ...run.persistence import json_safe
 from ...scene import InputError, Overrides, one_line
 from ...viz.figures import axis_label, legend_outside, quantity_unit, save_figure, subplots
 from ..engine.pool import Pool
-from ..engine.report import markdown_table, number_cell
+from ..engine.report import Report, markdown_table, number_cell, write_report
 from ..engine.sweep import Sweep, SweepResult, Variation, run_sweep
 from .multifidelity import FULL_RUNS, check_applies, interval_cell, multi_ensemble, multi_markdown
 from .sampling import (
@@ -171,15 +171,16 @@ def run_ensemble(
         key, edges = bins
         record["by"] = key
         record["curve"] = curve(table[key].to_numpy(float), table, edges)
-    out = Path(out)
     # the runs' wall and integration times stay in the run store: without them the same seed writes the
     # same bytes on any number of workers or on a cluster
-    atomic_write_text(out / "ensemble.csv", table.drop(columns=list(VOLATILE), errors="ignore").to_csv(index=False))
-    write_json(out / "ensemble.json", record)
-    atomic_write_text(out / "ensemble.md", _markdown(record, table, base.scenes[0].name or Path(scene).stem))
-    _histograms(table, distributions, out / "ensemble_histograms.png")
+    shown = table.drop(columns=list(VOLATILE), errors="ignore")
+    figures: dict[str, Callable[[Path], None]] = {
+        "ensemble_histograms.png": lambda path: _histograms(table, distributions, path)
+    }
     if bins is not None:
-        _curve_figure(record, out / "ensemble_curve.png")
+        figures["ensemble_curve.png"] = lambda path: _curve_figure(record, path)
+    markdown = _markdown(record, table, base.scenes[0].name or Path(scene).stem)
+    write_report(out, Report("ensemble", markdown, shown, record, figures))
     return json_safe(record)
 
 
@@ -344,8 +345,5 @@ def _curve_figure(record: dict, path: Path) -> None:
 
 def _write_multi(out: Path, record: dict, samples: pd.DataFrame, name: str) -> None:
     """A multi-fidelity ensemble's files: the samples' table, its JSON, the report and the curve."""
-    atomic_write_text(out / "ensemble.csv", samples.to_csv(index=False))
-    write_json(out / "ensemble.json", record)
-    atomic_write_text(out / "ensemble.md", multi_markdown(record, name))
-    if "curve" in record:
-        _curve_figure(record, out / "ensemble_curve.png")
+    figures = {"ensemble_curve.png": lambda path: _curve_figure(record, path)} if "curve" in record else {}
+    write_report(out, Report("ensemble", multi_markdown(record, name), samples, record, figures))

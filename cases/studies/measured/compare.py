@@ -19,11 +19,11 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ...run import RunStore, atomic_write_text, initial_state, prepare_projectile
+from ...run import RunStore, initial_state, prepare_projectile
 from ...scene import InputError, Overrides, Scene
 from ...viz.figures import legend_outside, save_figure, subplots
 from ..engine.pool import Pool
-from ..engine.report import markdown_table, number_cell
+from ..engine.report import Report, markdown_table, number_cell, write_report
 from ..engine.sweep import Sweep, SweepResult, Variation, end_cells, run_sweep
 from ..speeds.characteristic import find_critical_velocities, measure_convergent_velocity
 from .series import Series, combined
@@ -102,11 +102,9 @@ def compare_laws(
     table["peak_nose_stress"] = [float(values.max()) / 1e6 for _, values in stress.values()]
     lengths = [float(prepare_projectile(s).profile.length) for s in sweep.scenes]
     comparison = LawComparison(table, result, depth_by_speed, stress, lengths)
-    out = Path(out)
-    atomic_write_text(out / "compare.csv", table.to_csv(index=False))
     name = sweep.scenes[0].name or Path(scene).stem
-    atomic_write_text(out / "compare.md", _markdown(comparison, name))
-    _figure(comparison, out / "compare.png")
+    figures = {"compare.png": lambda path: _figure(comparison, path)}
+    write_report(out, Report("compare", _markdown(comparison, name), table, figures=figures))
     return comparison
 
 
@@ -257,14 +255,10 @@ def compare_series(
     for place, entry in enumerate(ranking, start=1):
         entry["rank"] = place
     comparison = SeriesComparison(rows, ranking, settings, series.source)
-    out = Path(out)
     table = pd.DataFrame([{**row, "warnings": "; ".join(w for w in row["warnings"] if w)} for row in rows])
-    atomic_write_text(out / "compare.csv", table.to_csv(index=False))
-    from ...run import write_json
-
-    write_json(out / "compare.json", comparison.record())
-    atomic_write_text(out / "compare.md", _series_markdown(comparison, series))
-    figure(rows, {}, out / "compare.png", colour_by="law")
+    figures = {"compare.png": lambda path: figure(rows, {}, path, colour_by="law")}
+    markdown = _series_markdown(comparison, series)
+    write_report(out, Report("compare", markdown, table, comparison.record(), figures))
     return comparison
 
 

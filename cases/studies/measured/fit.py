@@ -34,8 +34,8 @@ from ...scene import InputError, Overrides, apply_overrides, dotted_key, read_sc
 from ..engine.pool import Pool, study_progress
 from .fit_model import DIGITS, STUDY_QUANTITIES, FitModel, Observation, Parameter
 
-# the report is written by its own module; fit.write_report stays its public name
-from .fit_report import FitResult, write_report
+# the report is written by its own module; fit.write_fit stays its public name
+from .fit_report import FitResult, write_fit
 from .series import RUN_QUANTITIES, finite_number
 
 __all__ = [
@@ -46,7 +46,7 @@ __all__ = [
     "parse_parameter",
     "parse_observation",
     "fit",
-    "write_report",
+    "write_fit",
     "RUN_QUANTITIES",
     "STUDY_QUANTITIES",
     "check_counts",

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from ..engine.report import markdown_table, number_cell
+from ..engine.report import Report, markdown_table, number_cell, write_report
 
 
 @dataclass
@@ -119,14 +119,13 @@ def _prediction_lines(result: FitResult) -> list[str]:
     return lines
 
 
-def write_report(result: FitResult, out: Path, scene: str) -> None:
+def write_fit(result: FitResult, out: Path, scene: str) -> None:
     """``fit.json``, ``fit.md`` and ``fit.png`` (observed against fitted) in ``out``, each written atomically."""
+    figures = {"fit.png": lambda path: _figure(result, path)}
+    write_report(out, Report("fit", _markdown(result, scene), record=result.record(), figures=figures))
 
-    from ...run import atomic_write_text, write_json
-    from ...viz.figures import axis_label, quantity_unit, save_figure, subplots
 
-    out = Path(out)
-    write_json(out / "fit.json", result.record())
+def _markdown(result: FitResult, scene: str) -> str:
     lines = [f"# Fit of {scene}", ""]
     if not result.converged:
         lines += [f"**{result.notes[0]}**", ""]
@@ -174,7 +173,13 @@ def write_report(result: FitResult, out: Path, scene: str) -> None:
         lines += ["", *[f"* {note}" for note in result.notes]]
     lines += _prediction_lines(result)
     lines += ["", "![observed against fitted](fit.png)", ""]
-    atomic_write_text(out / "fit.md", "\n".join(lines))
+    return "\n".join(lines)
+
+
+def _figure(result: FitResult, path: Path) -> None:
+    """Each observation against its fitted value, with its sigma."""
+    from ...viz.figures import axis_label, quantity_unit, save_figure, subplots
+
     figure, axes = subplots(figsize=(5.5, 4.5))
     observed = np.array([row["observed"] for row in result.observations])
     fitted = np.array([row["fitted"] for row in result.observations])
@@ -198,4 +203,4 @@ def write_report(result: FitResult, out: Path, scene: str) -> None:
     axes.set_ylabel(axis_label("fitted", shared))
     axes.set_title("observed against fitted (bars: sigma)", fontsize=10)
     figure.tight_layout()
-    save_figure(figure, out / "fit.png")
+    save_figure(figure, path)

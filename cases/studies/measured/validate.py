@@ -21,7 +21,7 @@ import numpy as np
 from ...run import RunStore
 from ...scene import Overrides
 from ..engine.pool import Pool
-from ..engine.report import markdown_table, number_cell
+from ..engine.report import Report, markdown_table, number_cell, write_report
 from ..engine.sweep import SweepResult, end_cells, run_sweep
 from .series import Series, Shot, combined, run_value
 
@@ -298,14 +298,9 @@ def write_validation(validation: Validation, out: str | os.PathLike) -> None:
     ``out``, each written atomically."""
     import pandas as pd
 
-    from ...run import atomic_write_text, write_json
-
-    out = Path(out)
     table = pd.DataFrame([{**row, "warnings": "; ".join(w for w in row["warnings"] if w)} for row in validation.rows])
-    atomic_write_text(out / "validate.csv", table.to_csv(index=False))
-    write_json(out / "validate.json", validation.record())
-    atomic_write_text(out / "validate.md", markdown(validation))
-    figure(validation.rows, {"": validation.curves}, out / "validate.png")
+    figures = {"validate.png": lambda path: figure(validation.rows, {"": validation.curves}, path)}
+    write_report(out, Report("validate", markdown(validation), table, validation.record(), figures))
 
 
 def figure(

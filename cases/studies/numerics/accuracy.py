@@ -39,11 +39,11 @@ import numpy as np
 import pandas as pd
 
 from ...reference.normal_impact import check_nose_alone_presses, scene_depth_1d
-from ...run import RunStore, atomic_write_text, convergence_speed, prepare_projectile
+from ...run import RunStore, convergence_speed, prepare_projectile
 from ...scene import InputError, Overrides, Scene
 from ...viz.figures import legend_outside, save_figure, subplots
 from ..engine.pool import Pool
-from ..engine.report import markdown_table, number_cell
+from ..engine.report import Report, markdown_table, number_cell, write_report
 from ..engine.sweep import Sweep, Variation, end_cells, run_sweep
 from ..speeds.instability import is_unstable
 
@@ -354,9 +354,12 @@ def _label(row: pd.Series) -> str:
 
 
 def _write(table: pd.DataFrame, reference: dict, scene: Scene, out: Path) -> None:
-    out.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(out / "accuracy.csv", table.to_csv(index=False))
-    atomic_write_text(out / "accuracy.md", _markdown(table, reference, scene))
+    figures = {"accuracy.png": lambda path: _figure(table, scene, path)}
+    write_report(out, Report("accuracy", _markdown(table, reference, scene), table, figures=figures))
+
+
+def _figure(table: pd.DataFrame, scene: Scene, path: Path) -> None:
+    """Each setting's error against its integration time, and the Pareto front."""
     fig, ax = subplots(figsize=(9.5, 5.5))
     for (axis, integrator), group in table.groupby(["axis", "numerics.integrator"]):
         ax.loglog(group["integration_time"], group["depth_error"], "o", label=f"{axis} axis, {integrator}")
@@ -368,7 +371,7 @@ def _write(table: pd.DataFrame, reference: dict, scene: Scene, out: Path) -> Non
     ax.grid(alpha=0.3, which="both")
     legend_outside(ax)
     fig.tight_layout()
-    save_figure(fig, out / "accuracy.png")
+    save_figure(fig, path)
 
 
 def _markdown(table: pd.DataFrame, reference: dict, scene: Scene) -> str:

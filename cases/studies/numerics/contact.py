@@ -32,10 +32,10 @@ import pandas as pd
 from fem_loads import ResistanceLaw
 
 from ...reference.normal_impact import axial_depth_1d
-from ...run import RunStore, atomic_write_text, convergence_speed, prepare_projectile
+from ...run import RunStore, convergence_speed, prepare_projectile
 from ...scene import Overrides
 from ..engine.pool import Pool
-from ..engine.report import markdown_table, number_cell
+from ..engine.report import Report, markdown_table, number_cell, write_report
 from ..engine.sweep import Sweep, Variation, run_sweep
 from ..speeds.instability import is_unstable
 from .accuracy import is_plain_normal_impact
@@ -116,9 +116,7 @@ def contact_study(
             )[0]
             for w in values
         ]
-    out = Path(out)
-    atomic_write_text(out / "contact.csv", table.to_csv(index=False))
-    atomic_write_text(out / "contact.md", _markdown(table, base.name or Path(scene).stem, step))
+    write_report(out, Report("contact", _markdown(table, base.name or Path(scene).stem, step), table))
     return table
 
 
@@ -195,9 +193,7 @@ def entry_study(
         error = (table[name] - at_finest).abs()
         table[f"{name}_time_error"] = error / at_finest if relative else error
         table[f"{name}_change"] = at_finest - finest[name].iloc[0]
-    out = Path(out)
-    atomic_write_text(out / "entry.csv", table.to_csv(index=False))
-    atomic_write_text(out / "entry.md", _entry_markdown(table, sweep.scenes[0].name or Path(scene).stem))
+    write_report(out, Report("entry", _entry_markdown(table, sweep.scenes[0].name or Path(scene).stem), table))
     return table
 
 

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import functools
 import time
+from collections.abc import Callable
 from pathlib import Path
 
-from ...run import RunStore, atomic_write_text, write_json
+from ...run import RunStore
 from ..engine.pool import Pool, map_local
+from ..engine.report import Report, write_report
 from ..reduced.turn_boundary import TurnBoundary
 from ..speeds.characteristic import find_critical_velocities
 from . import figures
@@ -39,7 +42,7 @@ def reproduce(out: str | Path, store: RunStore, pool: Pool | None = None) -> dic
     fits = {"critical": linear_fit(ratios, critical), "convergent": linear_fit(ratios, convergent["attack 1"])}
     # one projectile's boundary per local worker: the pool's width, on this machine even with a cluster
     boundaries = map_local(load_boundary, [(r,) for r in ratios], study.pool.width)
-    _figures(study, out, runs, ratios, critical, convergent, fits, boundaries)
+    drawn = _figures(study, runs, ratios, critical, convergent, fits, boundaries)
     wall_time = time.perf_counter() - start
     record = {
         "ratios": ratios,
@@ -54,22 +57,26 @@ def reproduce(out: str | Path, store: RunStore, pool: Pool | None = None) -> dic
         "runs": {f"{kind} @ {ratio}": [run.record() for run in group] for (kind, ratio), group in runs.items()},
         "wall_time": wall_time,
     }
-    write_json(out / "results.json", record)
-    atomic_write_text(
-        out / "results.md",
-        results_markdown(
-            StudyResults(
-                ratios,
-                runs,
-                searches,
-                critical,
-                convergent,
-                fits,
-                INERTIA_SCALES,
-                inertia_critical,
-                boundaries,
-                wall_time,
-            )
+    write_report(
+        out,
+        Report(
+            "results",
+            results_markdown(
+                StudyResults(
+                    ratios,
+                    runs,
+                    searches,
+                    critical,
+                    convergent,
+                    fits,
+                    INERTIA_SCALES,
+                    inertia_critical,
+                    boundaries,
+                    wall_time,
+                )
+            ),
+            record=record,
+            figures=drawn,
         ),
     )
     return record
@@ -77,27 +84,26 @@ def reproduce(out: str | Path, store: RunStore, pool: Pool | None = None) -> dic
 
 def _figures(
     study: Study,
-    out: Path,
     runs: Runs,
     ratios: list[float],
     critical: list[float | None],
     convergent: dict[str, list[float | None]],
     fits: dict[str, dict],
     boundaries: list[TurnBoundary],
-) -> None:
-    figures.boundary_figure(study, boundaries[ratios.index(P3)], runs[("attack 1", P3)], out / "turn_boundary_p3.png")
+) -> dict[str, Callable[[Path], None]]:
+    """The study's figures by file name, each a function that draws it into the path it is given."""
+    drawn: dict[str, Callable[[Path], None]] = {}
+    p3_boundary = boundaries[ratios.index(P3)]
+    drawn["turn_boundary_p3.png"] = lambda path: figures.boundary_figure(
+        study, p3_boundary, runs[("attack 1", P3)], path
+    )
     for r in ratios:
-        figures.angle_figure(
-            study,
-            [(f"{run.speed:.0f} m/s", run.key) for run in runs[("attack 1", r)]],
-            f"Lc/L = {label(r)}, 1 degree attack: six impact speeds around the critical",
-            out / f"{figure_name(r)}.png",
-        )
-    figures.angle_figure(
-        study,
-        [(f"{run.speed:.0f} m/s", run.key) for run in runs[("attack 5", P3)]],
-        "projectile #3, 5 degrees attack",
-        out / "angles_p3_attack5.png",
+        named = [(f"{run.speed:.0f} m/s", run.key) for run in runs[("attack 1", r)]]
+        title = f"Lc/L = {label(r)}, 1 degree attack: six impact speeds around the critical"
+        drawn[f"{figure_name(r)}.png"] = functools.partial(figures.angle_figure, study, named, title)
+    attack5 = [(f"{run.speed:.0f} m/s", run.key) for run in runs[("attack 5", P3)]]
+    drawn["angles_p3_attack5.png"] = lambda path: figures.angle_figure(
+        study, attack5, "projectile #3, 5 degrees attack", path
     )
     oblique = [
         (f"{angle} deg oblique, {run.speed:.0f} m/s", run.key)
@@ -105,49 +111,31 @@ def _figures(
         for run in runs[(f"attack 1, oblique {angle}", P3)]
         if run.speed in (800, 1200)
     ]
-    figures.angle_figure(
-        study,
-        oblique,
-        "projectile #3, 1 degree attack with 10, 20 and 30 degrees oblique",
-        out / "angles_p3_oblique.png",
-    )
+    oblique_title = "projectile #3, 1 degree attack with 10, 20 and 30 degrees oblique"
+    drawn["angles_p3_oblique.png"] = lambda path: figures.angle_figure(study, oblique, oblique_title, path)
     p3 = runs[("attack 1", P3)]
     stable, unstable = [run for run in p3 if not run.unstable], [run for run in p3 if run.unstable]
     pair = ([max(stable, key=lambda run: run.speed)] if stable else []) + (
         [min(unstable, key=lambda run: run.speed)] if unstable else []
     )
     centre = P3 * 0.93
-    named = [(f"{run.speed:.0f} m/s", run.key) for run in pair]
-    figures.history_figure(
-        study,
-        named,
-        centre,
-        "projectile #3 just below and above its critical speed (1 degree attack)",
-        out / "histories_p3_critical.png",
-    )
     paper_pair = [(f"{run.speed:.0f} m/s", run.key) for run in runs[("paper speeds", P3)] if run.speed in (1100, 1120)]
-    figures.history_figure(
-        study,
-        paper_pair,
-        centre,
-        "projectile #3 at the paper's 1100 and 1120 m/s (1 degree attack)",
-        out / "histories_p3_paper_speeds.png",
-    )
-    figures.history_figure(
-        study,
-        [(f"{run.speed:.0f} m/s", run.key) for run in runs[("attack 5", P3)]],
-        centre,
-        "projectile #3, 5 degrees attack",
-        out / "histories_p3_attack5.png",
-    )
-    figures.history_figure(
-        study,
-        oblique,
-        centre,
-        "projectile #3, 1 degree attack with 10, 20 and 30 degrees oblique",
-        out / "histories_p3_oblique.png",
-    )
-    figures.speeds_figure(ratios, critical, convergent["attack 1"], fits, out / "speeds_vs_lc.png")
+    histories = {
+        "histories_p3_critical.png": (
+            [(f"{run.speed:.0f} m/s", run.key) for run in pair],
+            "projectile #3 just below and above its critical speed (1 degree attack)",
+        ),
+        "histories_p3_paper_speeds.png": (
+            paper_pair,
+            "projectile #3 at the paper's 1100 and 1120 m/s (1 degree attack)",
+        ),
+        "histories_p3_attack5.png": (attack5, "projectile #3, 5 degrees attack"),
+        "histories_p3_oblique.png": (oblique, oblique_title),
+    }
+    for name, (named, title) in histories.items():
+        drawn[name] = functools.partial(figures.history_figure, study, named, centre, title)
+    drawn["speeds_vs_lc.png"] = lambda path: figures.speeds_figure(ratios, critical, convergent["attack 1"], fits, path)
+    return drawn
 
 
 def reproduce_variants(out: str | Path, store: RunStore, pool: Pool | None = None) -> dict:
@@ -170,7 +158,6 @@ def reproduce_variants(out: str | Path, store: RunStore, pool: Pool | None = Non
     for name, values in characteristic_by.items():
         known = [(r, v) for r, v in zip(ratios, values) if v is not None]
         fits[name] = linear_fit([r for r, _ in known], [v for _, v in known]) if len(known) >= 3 else None
-    figures.variants_figure(ratios, characteristic_by, out / "variants.png")
     wall_time = time.perf_counter() - start
     record = {
         "ratios": ratios,
@@ -179,8 +166,7 @@ def reproduce_variants(out: str | Path, store: RunStore, pool: Pool | None = Non
         "path_length_at_400": path_at_400,
         "wall_time": wall_time,
     }
-    write_json(out / "variants.json", record)
-    atomic_write_text(
-        out / "variants.md", variants_markdown(ratios, runs, characteristic_by, fits, path_at_400, wall_time)
-    )
+    markdown = variants_markdown(ratios, runs, characteristic_by, fits, path_at_400, wall_time)
+    drawn = {"variants.png": lambda path: figures.variants_figure(ratios, characteristic_by, path)}
+    write_report(out, Report("variants", markdown, record=record, figures=drawn))
     return record

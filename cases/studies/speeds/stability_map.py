@@ -21,12 +21,12 @@ from typing import Any
 
 import numpy as np
 
-from ...run import RunStore, atomic_write_text, write_json
+from ...run import RunStore
 from ...run.persistence import json_safe
 from ...scene import InputError, Overrides
 from ...viz.figures import axis_label, quantity_unit, save_figure, subplots
 from ..engine.pool import Pool
-from ..engine.report import markdown_table, number_cell
+from ..engine.report import Report, markdown_table, number_cell, write_report
 from ..engine.sweep import Sweep, grid, parse_grid
 from .ballistic import find_ballistic_limit
 from .characteristic import find_critical_velocities
@@ -140,10 +140,8 @@ def _write(out: Path, record: dict) -> None:
 
     table = pd.DataFrame(record["points"])
     table[["bracket_low", "bracket_high"]] = [b if b else [math.nan, math.nan] for b in table.pop("bracket")]
-    atomic_write_text(out / "map.csv", table.to_csv(index=False))
-    write_json(out / "map.json", {**record, "wall_time": None})
-    atomic_write_text(out / "map.md", _markdown(record))
-    _figure(record, out / "map.png")
+    figures = {"map.png": lambda path: _figure(record, path)}
+    write_report(out, Report("map", _markdown(record), table, {**record, "wall_time": None}, figures))
 
 
 def _markdown(record: dict) -> str:

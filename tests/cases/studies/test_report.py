@@ -32,3 +32,45 @@ def test_a_table_without_rows_is_its_header():
 )
 def test_a_number_cell_formats_floats_and_marks_what_is_missing(value, spec, shown):
     assert number_cell(value, spec) == shown
+
+
+def test_a_report_is_written_by_the_one_writer(tmp_path):
+    """Its table as CSV, its record as strict JSON (a NaN as null), its Markdown and each figure, into a folder
+    made if missing; what it wrote is what it lists."""
+    import json
+
+    import pandas as pd
+
+    from cases.studies.engine.report import Report, write_report
+
+    drawn = []
+    report = Report(
+        "study",
+        "# a study\n",
+        pd.DataFrame({"speed": [300.0, 350.0], "depth": [1.5, math.nan]}),
+        {"critical_velocity": math.nan, "runs": 2},
+        {"study.png": lambda path: (drawn.append(path), path.write_bytes(b"png"))},
+    )
+    paths = write_report(tmp_path / "out", report)
+    assert [p.name for p in paths] == ["study.csv", "study.json", "study.md", "study.png"]
+    assert all(p.is_file() for p in paths) and drawn == [tmp_path / "out" / "study.png"]
+    assert json.loads((tmp_path / "out" / "study.json").read_text()) == {"critical_velocity": None, "runs": 2}
+    assert "NaN" not in (tmp_path / "out" / "study.json").read_text()
+    assert pd.read_csv(paths[0])["speed"].tolist() == [300.0, 350.0]
+    assert (tmp_path / "out" / "study.md").read_text() == "# a study\n"
+
+
+def test_no_study_writes_a_file_itself():
+    """Every study's files go through the one writer: no module of the studies but the writer calls the atomic
+    writers or the JSON writer."""
+    from pathlib import Path
+
+    import cases.studies
+
+    root = Path(cases.studies.__file__).parent
+    for path in root.rglob("*.py"):
+        text = path.read_text()
+        if path.name == "report.py" and path.parent.name == "engine":
+            assert "atomic_write_text(" in text and "write_json(" in text  # the control: the writer is found
+            continue
+        assert not any(call in text for call in ("atomic_write_text(", "write_json(", "atomic_write(")), path

@@ -21,7 +21,7 @@ import cases.viz.figures as figures_module
 from cases.studies.ensemble import study as ensemble_study
 from cases.studies.ensemble.sampling import Distribution, wilson_interval
 from cases.studies.measured import compare, validate
-from cases.studies.measured.fit_report import FitResult, write_report
+from cases.studies.measured.fit_report import FitResult, write_fit
 from cases.studies.numerics import accuracy
 from cases.studies.paper import figures as paper
 from cases.studies.reduced.turn_boundary import TurnBoundary
@@ -183,7 +183,7 @@ def _draw_every_figure(tmp_path) -> None:
     ]
     curve = {"impact_speed": [405.0, 700.0, 1009.0], "depth": [0.4, 1.0, 1.9]}
     validate.figure(shots, {"": {"51 MPa": curve}}, tmp_path / "validate.png")
-    write_report(
+    write_fit(
         FitResult({"target.law.B": 1.2}, {"target.law.B": 0.01}, None, observations, 2, 0, 5, 0.1), tmp_path, "p3"
     )
 
