@@ -3,7 +3,7 @@ in one table (the one-line help beside each parser is what ``penetrate --help`` 
 
 from __future__ import annotations
 
-__all__ = ["DESCRIPTIONS"]
+__all__ = ["DESCRIPTIONS", "JSON_SHAPES"]
 
 DESCRIPTIONS = {
     "run": (
@@ -81,4 +81,29 @@ DESCRIPTIONS = {
         " instants, its trajectory, the resistance centre and a polar plot; an animation and ParaView files if"
         " asked. Writes the pictures into --out."
     ),
+}
+
+#: what each command's ``--json`` prints: one JSON object, its top-level keys (and what the rest holds)
+JSON_SHAPES = {
+    "run": "the run's summary: the fields of summary.json (the run outputs' reference)",
+    "sweep": '`{"rows": [...]}`: a row per run, the varied keys and every summary field',
+    "critical": "`critical_velocity`, `bracket`, `indicator` (every run), `message`, `fix`, `runs`, `rounds`,"
+    " `guide`, `guide_text`, `predicted_velocity`",
+    "convergent": "`characteristic_convergent_velocity`, `runs`, `message`, `guide`, `guide_text`",
+    "map": "the map's record, as map.json: the grid's `keys`, `points` (a search each), `speeds`, `resolution`,"
+    " the runs",
+    "ballistic-limit": "`ballistic_limit`, `bracket`, `runs`, `full_runs`, `rounds`, `message`, `guide`,"
+    " `predicted_limit`",
+    "predict": "`characteristic_convergent_velocity`, `critical_velocity`, `critical_bracket`, `model`,"
+    " `assumptions`, `runs`, `messages`, `prediction_time`, `wall_time`",
+    "compare": '`{"rows": [...]}` (a row per law) and, with --depths-at, `depths_at`; with --series the record of'
+    " compare.json: `series`, `ranking`, `shots`",
+    "accuracy": "`reference` (the finest run) and `settings` (a row per setting)",
+    "contact": '`{"rows": [...]}`: a row per contact incidence',
+    "entry": '`{"rows": [...]}`: a row per entry smoothing and step',
+    "paper": "the record of results.json (variants.json with --variants)",
+    "validate": "the record of validate.json",
+    "ensemble": "the record of ensemble.json",
+    "fit": "the record of fit.json",
+    "render": "the files written and the timings",
 }

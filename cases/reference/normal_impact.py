@@ -45,6 +45,7 @@ if TYPE_CHECKING:
     from ..scene import Scene
 
 __all__ = [
+    "is_plain_normal_impact",
     "embedded_axial_force",
     "closed_form_depth",
     "axial_depth_1d",
@@ -75,6 +76,30 @@ def check_nose_alone_presses(profile: Profile) -> None:
             "projectile.body: a flare presses in axial motion, and the 1-D references load the nose"
             " alone (a boat tail, which only narrows, is covered)"
         )
+
+
+def is_plain_normal_impact(scene: Scene) -> bool:
+    """A normal impact with no disturbance, one law and no effect, of a body of revolution whose nose alone
+    presses (no flare): the 1-D integration is its exact reference."""
+    impact, effects = scene.impact, scene.effects
+    plain = (
+        impact.oblique_angle == 0
+        and impact.attack_angle == 0
+        and impact.yaw_angle == 0
+        and not any(impact.angular_velocity)
+        and scene.target.layers is None
+        and effects.friction.model == "none"
+        and effects.separation
+        and effects.free_surface is None
+        and not effects.gravity
+        and scene.projectile.geometry is None
+    )
+    if plain and scene.projectile.body is not None:
+        try:
+            check_nose_alone_presses(scene.projectile.profile())
+        except ValueError:
+            return False
+    return plain
 
 
 def nose_factors(profile: Profile, friction: float = 0.0) -> tuple[float, float]:

@@ -402,6 +402,7 @@ def cli_reference() -> str:
     """Every command of ``penetrate``: a list of them, the options of ``penetrate`` itself, then each command's
     synopsis and options."""
     from cases.cli import build_parser
+    from cases.cli.descriptions import JSON_SHAPES
 
     parser = build_parser()
     commands = subcommands(parser)
@@ -419,6 +420,8 @@ def cli_reference() -> str:
     for name, (summary, sub) in commands.items():
         lines += ["", f"## penetrate {name}", "", f"{summary[:1].upper()}{summary[1:]}.", "", f"`{synopsis(sub)}`", ""]
         lines += table(CLI_HEADER, option_rows(sub))
+        if any("--json" in action.option_strings for action in shown_actions(sub)):
+            lines += ["", f"`--json` prints one JSON object: {JSON_SHAPES[name]}."]
     return "\n".join(lines) + "\n"
 
 

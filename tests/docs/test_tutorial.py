@@ -5,6 +5,8 @@ import re
 import subprocess
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[2]
 TUTORIAL = ROOT / "docs" / "tutorial.md"
 #: a ``toml`` block that changes one table of a scene file written before: ``# NAME: BASE with this [TABLE] table``
@@ -46,6 +48,7 @@ def test_the_tutorial_scenes_are_the_ones_its_generated_outputs_run():
         assert content == (ROOT / "docs" / "tutorial" / name).read_text(), name
 
 
+@pytest.mark.slow  # the default suite keeps within 4 minutes on 2 cores; CI runs it
 def test_the_tutorial_runs_as_written(tmp_path):
     (tmp_path / "cases").symlink_to(ROOT / "cases")
     (tmp_path / ".venv").symlink_to(ROOT / ".venv")

@@ -71,6 +71,7 @@ def test_the_load_is_continuous_across_zero_normal_velocity(quadrature, contact)
     assert abs(forces[-1] - forces[0]) < 1e-3 * abs(jump)
 
 
+@pytest.mark.slow  # the default suite keeps within 4 minutes on 2 cores; CI runs it
 def test_the_load_is_continuous_across_the_surface(quadrature):
     """Lower the body through the surface in 0.1 mm steps: each point enters over its own extent
     l = sqrt(w), so the axial force changes by at most (15/8) sigma sum sqrt(w) per metre (its Lipschitz

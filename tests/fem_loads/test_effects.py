@@ -150,6 +150,7 @@ def test_crossing_into_a_stiffer_layer_at_an_angle_keeps_the_path():
     assert 0.0 < default < 0.06 and 0.0 < narrow < 0.6 * default
 
 
+@pytest.mark.slow  # the default suite keeps within 4 minutes on 2 cores; CI runs it
 def test_free_surface_reduction_deepens_the_path():
     factor = FreeSurface(0.5, 0.2).factor(np.array([-1.0, 0.0, 0.25, 0.5, 2.0]))
     np.testing.assert_allclose(factor, [0.2, 0.2, 0.6, 1.0, 1.0])

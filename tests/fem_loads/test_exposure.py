@@ -217,6 +217,7 @@ def _recess_runs(folder: str) -> tuple:
     return tuple(summarise(run_scene(s)) for s in (recessed, everything, reference))
 
 
+@pytest.mark.slow  # the default suite keeps within 4 minutes on 2 cores; CI runs it
 def test_a_base_recess_the_soil_cannot_reach_does_not_change_the_shot(tmp_path_factory):
     """The recess's inner wall is hidden behind the body: the recessed body runs as the plain one with its mass
     properties, within 0.2 % in depth and 0.1 degrees in turn (measured: 4e-9 and 5e-7 degrees).  Loading it (every

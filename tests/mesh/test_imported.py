@@ -101,6 +101,7 @@ def test_cone_against_the_analytic_cone(folder):
     assert_matches_analytic(props, analytic_mass_properties(CONE, STEEL), 2e-4)
 
 
+@pytest.mark.slow  # the default suite keeps within 4 minutes on 2 cores; CI runs it
 def test_named_and_numbered_solids_take_their_densities(folder):
     """A counterweight solid inside the body: named in a STEP file's products, or numbered (``solid1``,
     ``solid2``) in a BREP file (no names), against OpenCASCADE's own volumes.  Which solid the file lists

@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ...reference.normal_impact import check_nose_alone_presses, scene_depth_1d
+from ...reference.normal_impact import is_plain_normal_impact, scene_depth_1d
 from ...run import RunStore, convergence_speed, prepare_projectile
 from ...scene import InputError, Overrides, Scene
 from ...viz.figures import legend_outside, save_figure, subplots
@@ -62,30 +62,6 @@ SIZE_PER_DIAMETER = 0.42
 STEP_PER_TRANSIT = 1 / 25
 DEFAULT_RTOLS = (1e-3, 1e-4, 1e-5, 1e-6)
 DEFAULT_QUADRATURE_ORDERS = (4, 6)
-
-
-def is_plain_normal_impact(scene: Scene) -> bool:
-    """A normal impact with no disturbance, one law and no effect, of a body of revolution whose nose alone
-    presses (no flare): the 1-D integration is its exact reference."""
-    impact, effects = scene.impact, scene.effects
-    plain = (
-        impact.oblique_angle == 0
-        and impact.attack_angle == 0
-        and impact.yaw_angle == 0
-        and not any(impact.angular_velocity)
-        and scene.target.layers is None
-        and effects.friction.model == "none"
-        and effects.separation
-        and effects.free_surface is None
-        and not effects.gravity
-        and scene.projectile.geometry is None
-    )
-    if plain and scene.projectile.body is not None:
-        try:
-            check_nose_alone_presses(scene.projectile.profile())
-        except ValueError:
-            return False
-    return plain
 
 
 def _one_digit(value: float) -> float:

@@ -31,14 +31,13 @@ import pandas as pd
 
 from fem_loads import ResistanceLaw
 
-from ...reference.normal_impact import axial_depth_1d
+from ...reference.normal_impact import axial_depth_1d, is_plain_normal_impact
 from ...run import RunStore, convergence_speed, prepare_projectile
 from ...scene import Overrides
 from ..engine.pool import Pool
 from ..engine.report import Report, markdown_table, number_cell, write_report
 from ..engine.sweep import Sweep, Variation, run_sweep
 from ..speeds.instability import is_unstable
-from .accuracy import is_plain_normal_impact
 
 __all__ = [
     "contact_study",

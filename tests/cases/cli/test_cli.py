@@ -323,6 +323,7 @@ def test_a_study_s_json_is_one_object(command, tmp_path, capsys):
     assert main([*args, "--json"]) == 0
     record = json.loads(capsys.readouterr().out)
     assert isinstance(record, dict) and record["rows"] and all(isinstance(row, dict) for row in record["rows"])
+    assert set(record) == ({"rows", "depths_at"} if name == "compare" else {"rows"})  # as the reference says
     expected = {"sweep": 2, "compare": 2, "contact": 2, "entry": 2}[name]  # the contact study adds the sharp law
     assert len(record["rows"]) == expected
     if name == "compare":
@@ -365,3 +366,24 @@ def test_every_study_command_takes_the_shared_options():
         out = parser._option_string_actions.get("--out")
         if out is not None and name != "sweep":
             assert out.type.__name__ == "out_folder", name
+
+
+def test_every_json_shape_is_documented_and_the_records_keys_are_its_keys():
+    """Each command with ``--json`` has its shape in the command reference (one table, JSON_SHAPES), and the
+    records whose keys it lists print exactly those keys."""
+    from cases.cli import build_parser
+    from cases.cli.descriptions import JSON_SHAPES
+    from cases.studies.reduced.pitch_plane import Prediction
+    from cases.studies.speeds.ballistic import BallisticLimit
+    from cases.studies.speeds.characteristic import ConvergentResult, CriticalSearch
+
+    commands = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)).choices
+    assert {name for name, parser in commands.items() if "--json" in parser._option_string_actions} == set(JSON_SHAPES)
+    records = {
+        "critical": CriticalSearch(None, None).as_dict(),
+        "ballistic-limit": BallisticLimit(None, None).as_dict(),
+        "convergent": ConvergentResult(None, [], "").as_dict(),
+        "predict": Prediction(None, None, None, "", []).as_dict(),
+    }
+    for name, record in records.items():
+        assert set(re.findall(r"`(\w+)`", JSON_SHAPES[name])) == set(record), name

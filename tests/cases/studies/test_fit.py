@@ -188,6 +188,7 @@ def test_too_few_observations_are_refused_before_any_run(params, observations, t
     assert not store.exists() and not out.exists()  # the run store stays empty: no run was made
 
 
+@pytest.mark.slow  # the default suite keeps within 4 minutes on 2 cores; CI runs it
 def test_a_characteristic_speed_not_found_says_what_to_change(tmp_path, monkeypatch):
     """#3 without a disturbance never turns: the fit stops at its first search, naming what would find one."""
     from types import SimpleNamespace

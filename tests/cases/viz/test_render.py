@@ -260,6 +260,7 @@ def test_the_field_images_of_one_render_share_one_colour_range(unstable, tmp_pat
     assert all("beyond the colour bar" not in caption for _, _, caption in shown)
 
 
+@pytest.mark.slow  # the default suite keeps within 4 minutes on 2 cores; CI runs it
 def test_render_all_draws_every_picture_on_one_range_or_the_given_one(unstable, tmp_path, shown, monkeypatch):
     """Field images, trajectory bodies and animation frames: one range over all they draw; ``colour_range``
     fixes it, and a frame whose field goes beyond it says so."""
@@ -520,6 +521,7 @@ def test_render_command(tmp_path):
     assert bad.returncode == 2 and "--times" in bad.stderr and "Traceback" not in bad.stderr
 
 
+@pytest.mark.slow  # the default suite keeps within 4 minutes on 2 cores; CI runs it
 def test_surface_the_target_cannot_reach_is_drawn_apart(tmp_path):
     """The finned body thrown in pitching (300 rad/s), so that it meets the soil at an angle: the facets its fins and
     shank hide (fem_loads.exposure) are grey in the picture, not a stress colour, and the caption says so."""
