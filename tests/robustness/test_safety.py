@@ -46,7 +46,9 @@ def _sweep(texts, variations):
 
 
 def _cli(*args: str) -> list[str]:
-    return [sys.executable, "-m", "cases.cli", *args]
+    # the installed command, not ``-m cases.cli``: a module run with -m is looked up from the working directory
+    # first, which another test of the same worker may have left elsewhere
+    return [str(Path(sys.executable).with_name("penetrate")), *args]
 
 
 def _sets(items) -> list[str]:
