@@ -35,6 +35,7 @@ __all__ = [
     "point_stress_scalars",
     "contact_factor_scalars",
     "entry_factor_scalars",
+    "layer_share_scalars",
     "surface_factor_scalars",
     "free_face_distance_scalars",
     "friction_stress_scalars",
@@ -177,6 +178,15 @@ def entry_factor_scalars(height: Any, smooth: bool, inverse_length: Any) -> Any:
         argument += 0.5  # 1/2 - H / l, in place on an array
         return smooth_step_scalars(argument)
     return (height < 0.0) * 1.0
+
+
+def layer_share_scalars(top: float, bottom: float, depth: Any, smooth: bool, inverse_length: Any) -> Any:
+    """The share of a layer between the interfaces at depths ``top < bottom`` (m; ``-inf`` and ``inf`` where there
+    is none) in the stress of a point at ``depth`` (m): ``e(top - d) - e(bottom - d)`` (:func:`entry_factor_scalars`),
+    so that a point enters the layer below as it enters the target, and the shares of all layers sum to 1."""
+    return entry_factor_scalars(top - depth, smooth, inverse_length) - entry_factor_scalars(
+        bottom - depth, smooth, inverse_length
+    )
 
 
 def surface_factor_scalars(depth: Any, inverse_depth: float, surface_fraction: float) -> Any:

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from .factors import entry_factor_scalars, free_face_distance_scalars, friction_stress_scalars, surface_factor_scalars
+from .factors import free_face_distance_scalars, friction_stress_scalars, layer_share_scalars, surface_factor_scalars
 from .resistance import ResistanceLaw
 from .user_law import UserLaw
 
@@ -121,21 +121,14 @@ class LayeredTarget:
         evaluated only where it has a share.
         """
         stress = np.zeros(np.shape(normal_velocity))
-        above = np.ones(np.shape(normal_velocity))
         smooth = lengths is not None and bool(np.any(lengths))
         inverse = 1.0 / np.asarray(lengths) if smooth else 0.0
-        interfaces = self.interfaces
-        for layer, law in enumerate(self.laws):
-            if layer < len(interfaces):
-                # a point enters the layer below as it enters the target: its entry factor at the interface
-                below = np.broadcast_to(entry_factor_scalars(interfaces[layer] - depth, smooth, inverse), stress.shape)
-            else:
-                below = np.zeros(stress.shape)
-            share = above - below
+        bounds = [-math.inf, *self.interfaces, math.inf]
+        for law, top, bottom in zip(self.laws, bounds[:-1], bounds[1:]):
+            share = np.broadcast_to(layer_share_scalars(top, bottom, depth, smooth, inverse), stress.shape)
             where = share != 0.0
             if where.any():
                 stress[where] += share[where] * law.normal_stress(normal_velocity[where], depth[where])
-            above = below
         return stress
 
 

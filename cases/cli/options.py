@@ -13,6 +13,8 @@ from typing import TYPE_CHECKING, Any, NoReturn
 from ..scene import one_line
 
 if TYPE_CHECKING:
+    import pandas as pd
+
     from ..studies import Pool
 
 __all__ = [
@@ -31,6 +33,8 @@ __all__ = [
     "study",
     "quiet_start",
     "environment_defaults",
+    "print_json",
+    "table_records",
 ]
 
 
@@ -251,3 +255,10 @@ def print_json(record: Any) -> None:
     from ..run.persistence import json_text
 
     print(json_text(record, indent=None))
+
+
+def table_records(table: pd.DataFrame) -> list[dict]:
+    """A table's rows as the records of a ``--json`` object (NaN as null, as JSON gives them)."""
+    import json
+
+    return json.loads(table.to_json(orient="records"))

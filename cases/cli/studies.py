@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -19,6 +18,7 @@ from .options import (
     renamed,
     study,
     study_parser,
+    table_records,
 )
 from .speeds import speed_range
 from .validate import SERIES_HELP
@@ -192,9 +192,9 @@ def compare_laws(args: argparse.Namespace) -> int:
             convergent=args.convergent,
         )
     if args.json:
-        record = {"rows": _records(comparison.table)}
+        record = {"rows": table_records(comparison.table)}
         if comparison.depth_by_speed is not None:
-            record["depths_at"] = _records(comparison.depth_by_speed)
+            record["depths_at"] = table_records(comparison.depth_by_speed)
         print_json(record)
         return 0
     out = Path(args.out)
@@ -263,7 +263,7 @@ def accuracy_study(args: argparse.Namespace) -> int:
             [int(q) for q in orders],
         )
     if args.json:
-        print_json({"reference": reference, "settings": _records(table)})
+        print_json({"reference": reference, "settings": table_records(table)})
     else:
         print((Path(args.out) / "accuracy.md").read_text())
     return 0
@@ -292,16 +292,11 @@ def entry_smoothing_study(args: argparse.Namespace) -> int:
     return _show(args, table, "entry.md")
 
 
-def _records(table: pd.DataFrame) -> list[dict]:
-    """A table's rows as records, as JSON gives them (NaN as null)."""
-    return json.loads(table.to_json(orient="records"))
-
-
 def _show(args: argparse.Namespace, table: pd.DataFrame, report: str) -> int:
     """A study's table as one JSON object, ``{"rows": [...]}``, with ``--json``; else its markdown report from
     ``--out``."""
     if args.json:
-        print_json({"rows": _records(table)})
+        print_json({"rows": table_records(table)})
     else:
         print((Path(args.out) / report).read_text())
     return 0

@@ -8,7 +8,7 @@ import shlex
 import sys
 from typing import TYPE_CHECKING, Any
 
-from .options import Parser, add_pool_options, add_scene_options, out_file, overrides, print_json, study
+from .options import Parser, add_pool_options, add_scene_options, out_file, overrides, print_json, study, table_records
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -63,7 +63,7 @@ def sweep(args: argparse.Namespace) -> int:
     if args.out:
         atomic_write_text(args.out, table.to_csv(index=False))
     if args.json:
-        print_json({"rows": json.loads(table.to_json(orient="records"))})
+        print_json({"rows": table_records(table)})
     else:
         print(_shown(table, result, columns))
     failed = [i for i, run in enumerate(result.runs) if run.failed]

@@ -31,7 +31,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
-from scipy import integrate
+from scipy import integrate, optimize
 from scipy.interpolate import BarycentricInterpolator
 
 from fem_loads.factors import contact_factor_scalars, contact_width_scalars
@@ -476,17 +476,15 @@ def slab_run_1d(
 def ballistic_limit_1d(
     profile: Profile, layers: list[Layer], mass: float, relative: float = 1e-6, **contact_ramp: Any
 ) -> float:
-    """The lowest speed (m/s) at which :func:`slab_run_1d` passes the nose through the slices, by bisection to
-    ``relative``: below it the body stops inside."""
+    """The lowest speed (m/s) at which :func:`slab_run_1d` passes the nose through the slices, by bisection
+    (``scipy.optimize.bisect``) to ``relative``: below it the body stops inside."""
     low, high = 1.0, 100.0
     while math.isfinite(slab_run_1d(profile, layers, mass, low, **contact_ramp)[0]):
         low /= 10.0  # a target so thin that even this speed goes through
     while math.isnan(slab_run_1d(profile, layers, mass, high, **contact_ramp)[0]):
         low, high = high, 2.0 * high
-    while high - low > relative * high:
-        middle = 0.5 * (low + high)
-        if math.isnan(slab_run_1d(profile, layers, mass, middle, **contact_ramp)[0]):
-            low = middle
-        else:
-            high = middle
-    return 0.5 * (low + high)
+
+    def passes(speed: float) -> float:
+        return -1.0 if math.isnan(slab_run_1d(profile, layers, mass, speed, **contact_ramp)[0]) else 1.0
+
+    return float(optimize.bisect(passes, low, high, rtol=relative))

@@ -345,7 +345,7 @@ def _at_rest(trajectory: Trajectory, mass: float, scene: Scene) -> bool:
     ``v^2 / (2 a)``, of at most :data:`REST_TRAVEL` of its path.  Why: near rest the contact ramp narrows with the
     speed, so the load of an aligned shank's sliding contact stiffens without bound and chatters faster than any
     step the error control accepts (the 155 mm shell with its nose through the rear face of a 1.2 m slab at
-    725-740 m/s: 4-13 um left to travel at about 1 m/s); the depth is then within that travel (docs/numerics.md,
+    725-740 m/s: 4-22 um left to travel at 0.9-1.9 m/s); the depth is then within that travel (docs/numerics.md,
     the end of a run)."""
     velocity = trajectory.velocity[-1]
     speed = float(np.linalg.norm(velocity))

@@ -23,6 +23,7 @@ from ..factors import (
     entry_factor_scalars,
     friction_stress_scalars,
     in_contact_scalars,
+    layer_share_scalars,
     point_stress_scalars,
     switches_scalars,
 )
@@ -38,6 +39,7 @@ __all__ = [
     "builtin_stress",
     "polynomial_stress",
     "entry_factor",
+    "layer_share",
     "friction_stress",
     "point_stress",
     "switches",
@@ -99,6 +101,7 @@ for _name, _function in vars(factors).items():
 point_stress = njit(inline="always", error_model="numpy")(point_stress_scalars)
 switches = njit(inline="always", error_model="numpy")(switches_scalars)
 entry_factor = njit(inline="always", error_model="numpy")(entry_factor_scalars)
+layer_share = njit(inline="always", error_model="numpy")(layer_share_scalars)
 friction_stress = njit(inline="always", error_model="numpy")(friction_stress_scalars)
 slip_factor = njit(inline="always", error_model="numpy")(slip_factor_scalars)
 slip = njit(inline="always", error_model="numpy")(slip_scalars)

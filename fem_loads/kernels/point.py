@@ -20,12 +20,12 @@ from .native import (
     Parameters,
     cell_exposure,
     cube_cell,
-    entry_factor,
     friction_stress,
     in_contact,
     law_stress,
     law_value,
     law_values,
+    layer_share,
     point_stress,
     polynomial_stress,
     slip,
@@ -163,21 +163,17 @@ def layered_stress(
     ``1 / inverse_length``, m), by the same entry factor."""
     interfaces, laws, tables = data[layout.DATA_INTERFACES], data[layout.DATA_LAWS], data[layout.DATA_TABLES]
     address = data[layout.DATA_EFFECTS][0].user_law
+    last = interfaces.shape[0]
     stress = 0.0
-    above = 1.0  # the share of this layer and those below it: the entry factor at its top interface d
-    for layer in range(interfaces.shape[0] + 1):
-        below = 0.0
-        if layer < interfaces.shape[0]:
-            below = entry_factor(interfaces[layer] - depth, smooth, inverse_length)
-        share = above - below
+    for layer in range(last + 1):
+        top = interfaces[layer - 1] if layer > 0 else -math.inf
+        bottom = interfaces[layer] if layer < last else math.inf
+        share = layer_share(top, bottom, depth, smooth, inverse_length)
         if share != 0.0:
             law = laws[layer]
             first, count = law.table_first, law.table_count
             depths, stresses = tables[0, first : first + count], tables[1, first : first + count]
             stress += share * law_stress(law, address, normal_velocity, depth, depths, stresses)
-        above = below
-        if above == 0.0:
-            break
     return stress
 
 
@@ -248,7 +244,7 @@ def plain_layer_stresses(
             table_stresses(table, points, up, height, (shallowest, deepest), table_buffer)
         for j in range(buffer.shape[0]):
             _, _, normal_velocity, z = point_motion(normal_arm, points, j, g, up, height, True)
-            share = entry_factor(top + z, True, inverse_entry[j]) - entry_factor(bottom + z, True, inverse_entry[j])
+            share = layer_share(top, bottom, -z, True, inverse_entry[j])
             stress = polynomial_stress(law_velocity_scalars(normal_velocity, True), -z, c0, k, c1, c2)
             if with_table:
                 stress += table_buffer[j]

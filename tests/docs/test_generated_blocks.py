@@ -208,8 +208,8 @@ def test_a_digit_changed_in_any_block_of_any_page_is_caught():
 
 @pytest.mark.slow
 def test_todays_share_of_the_generated_blocks_reproduces(capsys):
-    """`./dev docs --check --rotation`: the day's share of the blocks re-run in a fresh copy (about a
-    third of the 40 minutes every block costs); every block within as many days as there are shares."""
+    """`./dev docs --check --rotation`: the day's share of the blocks re-run in a fresh copy (about an
+    eighth of the 1.5 hours every block costs); every block within as many days as there are shares."""
     assert regenerate.check(rerun=True, rotation=True) == 0, capsys.readouterr().out
 
 

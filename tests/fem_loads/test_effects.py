@@ -11,6 +11,7 @@ from support import meshed, slow_except
 from cases import history_table, load_scene, run_scene, scene_path, summarise
 from cases.reference.normal_impact import embedded_axial_force, nose_factors
 from fem_loads import DAFLLoads, mass_properties, resistance_law, surface_quadrature
+from fem_loads.resistance import ResistanceLaw
 from fem_loads.target import FreeSurface, Friction, LayeredTarget
 from mesh import BODY, ConeNose, OgiveNose, Profile, ProjectileGeometry
 
@@ -174,6 +175,22 @@ def test_layers_pick_the_law_by_depth():
     )
     static = target.normal_stress(np.zeros(5), np.array([0.5, 1.5, 2.9, 3.1, 100.0]))
     np.testing.assert_allclose(static, [17.18e6, 13.521e6, 13.521e6, 20.268e6, 20.268e6])
+
+
+@pytest.mark.parametrize("lengths", [None, np.full(7, 0.3)])
+def test_the_layers_shares_sum_to_one_and_blend_across_each_interface(lengths):
+    """Three laws of static stress 1, 2 and 3 Pa under interfaces at 1 and 2 m: the stress is the share-weighted
+    sum, so equal stresses give 1 everywhere (the shares sum to 1), and across an interface the blend runs from
+    one law to the next over the points' length, centred on it (without lengths, the law below from just under
+    the interface)."""
+    laws = tuple(ResistanceLaw(c0, 0.0) for c0 in (1.0, 2.0, 3.0))
+    depth = np.array([-0.5, 0.5, 0.85, 1.0, 1.15, 1.7, 5.0])
+    same = LayeredTarget((1.0, 2.0), (laws[0],) * 3).normal_stress(np.zeros(7), depth, lengths)
+    blended = LayeredTarget((1.0, 2.0), laws).normal_stress(np.zeros(7), depth, lengths)
+    np.testing.assert_array_equal(same, [1.0] * 7)
+    # smooth: from law 1 at 0.15 m (half a length) above the interface to law 2 as far below; sharp: law 2 below it
+    expected = [1.0, 1.0, 1.0, 1.5, 2.0, 2.0, 3.0] if lengths is not None else [1.0, 1.0, 1.0, 1.0, 2.0, 2.0, 3.0]
+    np.testing.assert_allclose(blended, expected, rtol=1e-15)
 
 
 def _friction_by_points(loads, position, velocity, rotation, omega):

@@ -97,13 +97,14 @@ def test_no_stop_is_reported_as_leaving_and_none_coasts(oblique, speed, attack, 
 def test_a_stop_with_the_nose_through_the_rear_face_ends_stopped(speed):
     """The same shell through a 1.2 m slab just under its ballistic limit (about 745 m/s), 30 mm mesh, 6 points a
     facet: the nose stops part way through the rear face, where the sliding contact of the shank near rest
-    chatters faster than any step the error control accepts, and the steps fail at their floor about 1 m/s above
-    the stop speed.  Pass: ``stopped`` without a warning, and deeper than the same run stopped at 1.5 m/s by no
-    more than 1e-4 of the path (the travel it had left)."""
+    chatters faster than any step the error control accepts, and the steps fail at their floor at 0.9-1.9 m/s.
+    Pass: ``stopped`` without a warning, and deeper than the same run ended by its
+    speed alone at 3 m/s (above every floor seen) by no more than 1e-4 of the path: it ends where the body as
+    good as rests."""
     fine = {"mesh_size": 0.03, "quadrature_order": 4}
     result, summary = _run(20.0, speed, 0.0, 1.2, **fine)
-    _, early = _run(20.0, speed, 0.0, 1.2, stop_speed=1.5, **fine)
-    assert early.end_reason == "stopped" and early.final_speed == pytest.approx(1.5, rel=1e-2)
+    _, early = _run(20.0, speed, 0.0, 1.2, stop_speed=3.0, slow_fraction=1e-3, **fine)
+    assert early.end_reason == "stopped" and early.final_speed == pytest.approx(3.0, rel=1e-2)
     assert summary.end_reason == "stopped" and not summary.warnings, summary
     assert summary.depth > 1.2
     assert 0.0 <= summary.depth - early.depth <= 1e-4 * summary.path_length

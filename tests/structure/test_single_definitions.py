@@ -128,7 +128,7 @@ def test_the_numpy_path_calls_the_same_definitions():
     assert dafl.point_stress_scalars is factors.point_stress_scalars
     assert dafl.switches_scalars is factors.switches_scalars
     assert dafl.slip_factor_scalars is target.slip_factor_scalars
-    assert target.entry_factor_scalars is factors.entry_factor_scalars
+    assert target.layer_share_scalars is factors.layer_share_scalars
     assert target.surface_factor_scalars is factors.surface_factor_scalars
     assert target.free_face_distance_scalars is factors.free_face_distance_scalars
     assert target.friction_stress_scalars is factors.friction_stress_scalars

@@ -20,14 +20,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 __all__ = ["Bracket", "search", "SLACK"]
 
 SLACK = 1 + 1e-9  # a bracket this close to the resolution is narrow enough (rounding of the grid)
-
-#: the failures of a range without the change, by side ({speed}: the range's end that was run)
-CRITICAL_FAILURES = ("every run is stable, up to {speed:g} m/s", "every run is unstable, down to {speed:g} m/s")
 
 
 @dataclass
@@ -44,7 +41,7 @@ class Bracket:
     limits: tuple[float, float]
     resolution: float
     centre: float | None = None
-    failures: tuple[str, str] = CRITICAL_FAILURES
+    failures: tuple[str, str] = field(kw_only=True)
     low_run: bool = False
     high_run: bool = False
     failure: str = ""

@@ -71,6 +71,10 @@ __all__ = [
 ]
 
 
+#: a range without the change, by side ({speed}: the range's end that was run)
+FAILURES = ("every run is stable, up to {speed:g} m/s", "every run is unstable, down to {speed:g} m/s")
+
+
 @dataclass(frozen=True)
 class ScanRun:
     """One run of a critical-speed search (m/s, deg)."""
@@ -189,15 +193,17 @@ def _first_brackets(
     brackets, guides = [], []
     for base, guess in zip(bases, guesses):
         if guess is not None:
-            brackets.append(Bracket(float(min(guess)), float(max(guess)), (low, high), resolution))
+            brackets.append(Bracket(float(min(guess)), float(max(guess)), (low, high), resolution, failures=FAILURES))
             guides.append(Guide("none", "unguided: a guess given"))
             continue
         found, first = critical_guide(base.scenes[0], (low, high), resolution, guide)
         guides.append(found)
         if first is None:
-            brackets.append(Bracket(low, high, (low, high), resolution))
+            brackets.append(Bracket(low, high, (low, high), resolution, failures=FAILURES))
         else:
-            brackets.append(Bracket(first[0], first[1], (low, high), resolution, centre=0.5 * sum(first)))
+            brackets.append(
+                Bracket(first[0], first[1], (low, high), resolution, centre=0.5 * sum(first), failures=FAILURES)
+            )
     return brackets, guides
 
 

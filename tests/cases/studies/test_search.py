@@ -9,16 +9,17 @@ from hypothesis import strategies as st
 from cases.studies.engine.search import Bracket, search
 
 LIMITS = (200.0, 1600.0)
+FAILURES = ("below up to {speed:g}", "above down to {speed:g}")
 
 
 def run_search(threshold: float, width: int, resolution: float, centre: float | None = None):
     """Search a sharp threshold (above at and beyond ``threshold``); the bracket, the rounds and every round's
     speeds."""
     if centre is None:
-        bracket = Bracket(*LIMITS, LIMITS, resolution)
+        bracket = Bracket(*LIMITS, LIMITS, resolution, failures=FAILURES)
     else:
         low = min(max(centre - 0.5 * resolution, LIMITS[0]), LIMITS[1] - resolution)
-        bracket = Bracket(low, low + resolution, LIMITS, resolution, centre=centre)
+        bracket = Bracket(low, low + resolution, LIMITS, resolution, centre=centre, failures=FAILURES)
     seen: dict[float, bool] = {}
     rounds: list[list[float]] = []
 
@@ -69,7 +70,7 @@ def test_a_wrong_guide_gallops_out_doubling():
 @pytest.mark.parametrize(("threshold", "failure"), [(2000.0, 0), (100.0, 1)])
 @pytest.mark.parametrize("centre", [None, 900.0])
 def test_a_range_without_the_change_fails_saying_which_side(threshold, failure, centre):
-    failures = ("below up to {speed:g}", "above down to {speed:g}")
+    failures = FAILURES
     bracket = Bracket(*LIMITS, LIMITS, 5.0, failures=failures)
     if centre is not None:
         bracket = Bracket(centre - 2.5, centre + 2.5, LIMITS, 5.0, centre=centre, failures=failures)
