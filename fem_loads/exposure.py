@@ -108,8 +108,12 @@ class Exposure:
         face, i, j, fx, fy = cube_cell_scalars(n, float(direction[0]), float(direction[1]), float(direction[2]))
         cell = (face * n + i) * n + j
         span = slice(self.cell_start[cell], self.cell_start[cell + 1])
-        corners, fine = self.cell_corners[span].tolist(), self.cell_fine[span].tolist()
-        exposure = np.array([cell_exposure_scalars(mask, bits, fx, fy) for mask, bits in zip(corners, fine)])
+        # cell_exposure_scalars on every row at once: the refined rows by their sub-nodes, the others by corners
+        fine = self.cell_fine[span]
+        exposure = corner_exposure(self.cell_corners[span], fx, fy)
+        refined = fine >= 0
+        if refined.any():
+            exposure[refined] = fine_exposure(fine[refined], fx, fy)
         return self.cell_rows[span], exposure
 
     def factor(self, directions: np.ndarray) -> np.ndarray:
@@ -150,8 +154,9 @@ def cell_exposure_scalars(mask: int, fine: int, fx: float, fy: float) -> float:
     return corner_exposure(mask, fx, fy) if fine < 0 else fine_exposure(fine, fx, fy)
 
 
-def fine_exposure(bits: int, fx: float, fy: float) -> float:
-    """``e`` at ``(fx, fy)`` in a refined cell: bilinear between the four hidden-or-not sub-nodes around it."""
+def fine_exposure(bits: Any, fx: float, fy: float) -> Any:
+    """``e`` at ``(fx, fy)`` in a refined cell (``bits`` an int, or an array of them): bilinear between the four
+    hidden-or-not sub-nodes around it."""
     x, y = fx * SUB_CELLS, fy * SUB_CELLS
     a, b = min(max(int(math.floor(x)), 0), SUB_CELLS - 1), min(max(int(math.floor(y)), 0), SUB_CELLS - 1)
     first = b * (SUB_CELLS + 1) + a
@@ -160,21 +165,17 @@ def fine_exposure(bits: int, fx: float, fy: float) -> float:
     return corner_exposure(mask, x - a, y - b)
 
 
-def corner_exposure(mask: int, fx: float, fy: float) -> float:
-    """``e`` at ``(fx, fy)`` in a cell hidden at the corners ``mask`` (:attr:`Exposure.cell_corners`): one less
-    the bilinear shares of the hidden corners; 0 exactly at four."""
-    if mask == 15:
-        return 0.0
-    exposure = 1.0
-    if mask & 1:
-        exposure -= (1.0 - fx) * (1.0 - fy)
-    if mask & 2:
-        exposure -= fx * (1.0 - fy)
-    if mask & 4:
-        exposure -= (1.0 - fx) * fy
-    if mask & 8:
-        exposure -= fx * fy
-    return exposure
+def corner_exposure(mask: Any, fx: float, fy: float) -> Any:
+    """``e`` at ``(fx, fy)`` in a cell hidden at the corners ``mask`` (:attr:`Exposure.cell_corners`; an int, or an
+    array of them for many points at one place): one less the bilinear shares of the hidden corners; 0 exactly at
+    four.  Each share is multiplied by its corner's bit, not branched on, so that an array takes the same
+    arithmetic (a share times 0 or 1 is exact)."""
+    gx, gy = 1.0 - fx, 1.0 - fy
+    exposure = 1.0 - (mask & 1) * (gx * gy)
+    exposure -= ((mask >> 1) & 1) * (fx * gy)
+    exposure -= ((mask >> 2) & 1) * (gx * fy)
+    exposure -= ((mask >> 3) & 1) * (fx * fy)
+    return exposure * (mask != 15)  # the four shares sum to 1 only up to rounding
 
 
 def cube_nodes(resolution: int) -> np.ndarray:

@@ -183,10 +183,18 @@ def entry_factor_scalars(height: Any, smooth: bool, inverse_length: Any) -> Any:
 def layer_share_scalars(top: float, bottom: float, depth: Any, smooth: bool, inverse_length: Any) -> Any:
     """The share of a layer between the interfaces at depths ``top < bottom`` (m; ``-inf`` and ``inf`` where there
     is none) in the stress of a point at ``depth`` (m): ``e(top - d) - e(bottom - d)`` (:func:`entry_factor_scalars`),
-    so that a point enters the layer below as it enters the target, and the shares of all layers sum to 1."""
-    return entry_factor_scalars(top - depth, smooth, inverse_length) - entry_factor_scalars(
-        bottom - depth, smooth, inverse_length
-    )
+    so that a point enters the layer below as it enters the target, and the shares of all layers sum to 1.
+
+    An infinite bound is not evaluated: its factor is exactly 1 (``top = -inf``) or 0 (``bottom = inf``), and a
+    pass over the points fewer is what keeps the numpy layered target as fast as one entry factor per interface."""
+    if bottom == math.inf:
+        if top == -math.inf:
+            return 1.0  # the one layer of a target without interfaces
+        return entry_factor_scalars(top - depth, smooth, inverse_length)
+    below = entry_factor_scalars(bottom - depth, smooth, inverse_length)
+    if top == -math.inf:
+        return 1.0 - below
+    return entry_factor_scalars(top - depth, smooth, inverse_length) - below
 
 
 def surface_factor_scalars(depth: Any, inverse_depth: float, surface_fraction: float) -> Any:

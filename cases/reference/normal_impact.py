@@ -478,13 +478,17 @@ def ballistic_limit_1d(
 ) -> float:
     """The lowest speed (m/s) at which :func:`slab_run_1d` passes the nose through the slices, by bisection
     (``scipy.optimize.bisect``) to ``relative``: below it the body stops inside."""
-    low, high = 1.0, 100.0
-    while math.isfinite(slab_run_1d(profile, layers, mass, low, **contact_ramp)[0]):
-        low /= 10.0  # a target so thin that even this speed goes through
-    while math.isnan(slab_run_1d(profile, layers, mass, high, **contact_ramp)[0]):
-        low, high = high, 2.0 * high
+    runs: dict[float, float] = {}  # the bracket's ends, run once: bisect evaluates both ends again
 
     def passes(speed: float) -> float:
-        return -1.0 if math.isnan(slab_run_1d(profile, layers, mass, speed, **contact_ramp)[0]) else 1.0
+        if speed not in runs:
+            runs[speed] = -1.0 if math.isnan(slab_run_1d(profile, layers, mass, speed, **contact_ramp)[0]) else 1.0
+        return runs[speed]
+
+    low, high = 1.0, 100.0
+    while passes(low) > 0.0:
+        low /= 10.0  # a target so thin that even this speed goes through
+    while passes(high) < 0.0:
+        low, high = high, 2.0 * high
 
     return float(optimize.bisect(passes, low, high, rtol=relative))
