@@ -11,7 +11,7 @@ The model (docs/theory.md derives it and says what it neglects):
 * **The characteristic speeds** then follow from the same definitions as the measured ones
   (:mod:`..speeds.characteristic`): the convergent velocity from a reduced run at the scene's impact speed (raised
   by 15 % while that run is stable, as ``penetrate convergent`` does), the critical impact velocity
-  by bisection of reduced runs between a stable and an unstable impact speed, to the same 5 m/s.
+  by the full runs' threshold search over reduced runs, one a round, to the same 5 m/s.
 
 A reduced run costs about a millisecond where a run of the full model takes a few tenths of a second,
 so a whole prediction (ten or so reduced runs) costs about one percent of one trajectory run of the
@@ -36,6 +36,7 @@ from ...run import (
 )
 from ...run.compiled import announce_compiling, use_numba_cache
 from ...scene import InputError, Scene
+from ..engine.search import Bracket, search
 from ..speeds.instability import MAX_SPEED, UNSTABLE_TURN, disturbance_fix, raised_speeds, range_fix
 
 __all__ = [
@@ -239,7 +240,7 @@ def predict(
     runs: list[ReducedRun] = []
     messages: list[str] = []
     convergent = _convergent(model, scene.impact.speed, runs, messages)
-    critical, bracket = _critical(model, speeds, resolution, runs, messages, convergent, speeds)
+    critical, bracket = _critical(model, speeds, resolution, runs, messages, convergent)
     end = time.perf_counter()
     description = (
         f"reduced pitch-plane model: the scene's DAFL integrated over {len(model.surface.rings)} rings of"
@@ -278,11 +279,11 @@ def _convergent(model: ReducedModel, impact_speed: float, runs: list[ReducedRun]
 
 
 def reduced_critical(model: ReducedModel, speeds: tuple[float, float], resolution: float) -> tuple[float | None, bool]:
-    """The reduced model's critical impact velocity in ``speeds`` (m/s), bisected to ``resolution`` from nothing
-    known; None when the range holds no change, with whether its runs were then stable throughout (else
-    unstable down to the range's bottom)."""
+    """The reduced model's critical impact velocity in ``speeds`` (m/s), to ``resolution``, from nothing known;
+    None when the range holds no change, with whether its runs were then stable throughout (else unstable down
+    to the range's bottom)."""
     runs: list[ReducedRun] = []
-    critical, _ = _critical(model, speeds, resolution, runs, [], None, speeds)
+    critical, _ = _critical(model, speeds, resolution, runs, [], None)
     return critical, critical is None and not any(run.unstable for run in runs)
 
 
@@ -293,55 +294,48 @@ def _critical(
     runs: list[ReducedRun],
     messages: list[str],
     convergent: float | None,
-    searched: tuple[float, float],
 ) -> tuple[float | None, list[float] | None]:
-    """Bisection of reduced runs between a stable and an unstable impact speed in ``speeds`` (each run stops
-    at the 30-degree turn that makes it unstable, or once its attack angle has converged).
+    """The change from stable to unstable reduced runs (each stops at the 30-degree turn that makes it unstable,
+    or once its attack angle has converged) in ``speeds``, by the one threshold search of the full runs
+    (:func:`~cases.studies.engine.search.search`), one run a round.
 
-    The first bracket uses what the convergent velocity's runs showed: an unstable run there is an
-    upper end, and no run below the convergent velocity can turn unstable (its attack angle collapses
-    at once), so that is a lower end.  An end no run has confirmed is run before the result counts.
-    ``searched``: the range ``--speeds`` gave, which a message that finds nothing suggests widening.
+    The first bracket uses the runs already made (``runs``: the convergent velocity's): the lowest unstable one
+    in the range is an upper end and the highest stable one below it a lower end.  Without a stable run, no run
+    below the convergent velocity can turn unstable (its attack angle collapses at once), so that is the assumed
+    lower end; a run that contradicts it moves the end to the range's bottom.
     """
     low, high = float(min(speeds)), float(max(speeds))
-    known = {run.speed: run.unstable for run in runs if run.speed >= low}
-    unstable_seen = [v for v, unstable in known.items() if unstable and v <= high]
-    stable_seen = [v for v, unstable in known.items() if not unstable and v <= high]
-    high_checked = bool(unstable_seen)
-    if unstable_seen:
-        high = min(unstable_seen)
-    if stable_seen and max(stable_seen) < high:
-        low = max(low, max(stable_seen))
-    low_checked = bool(stable_seen) and low == max(stable_seen)
-    if not low_checked and convergent is not None and low < convergent < high:
-        low = convergent
+    bracket = Bracket(
+        low,
+        high,
+        (low, high),
+        resolution,
+        failures=(
+            "no unstable reduced run up to {speed:g} m/s: no critical impact velocity in the range; "
+            + range_fix(True, speeds, model.scene).replace("{", "{{").replace("}", "}}"),
+            "the reduced run at {speed:g} m/s is already unstable: the critical impact velocity lies below the"
+            " range; " + range_fix(False, speeds, model.scene).replace("{", "{{").replace("}", "}}"),
+        ),
+    )
+    known = {run.speed: run.unstable for run in runs if low <= run.speed <= high}
+    if known:
+        bracket.update(known)
+    if not bracket.low_run and convergent is not None and bracket.low < convergent < bracket.high:
+        bracket.low = convergent
 
-    def unstable(speed: float) -> bool:
-        run = model.run(speed, turn_limit=UNSTABLE_TURN)
-        runs.append(run)
-        return run.unstable
+    def scan(wanted: list[list[float]]) -> list[dict[float, bool]]:
+        for speed in wanted[0]:
+            if speed not in known:
+                run = model.run(speed, turn_limit=UNSTABLE_TURN)
+                runs.append(run)
+                known[speed] = run.unstable
+        return [known]
 
-    if not high_checked and not unstable(high):
-        messages.append(
-            f"no unstable reduced run up to {high:g} m/s: no critical impact velocity in the range;"
-            f" {range_fix(True, searched, model.scene)}"
-        )
+    search([bracket], 1, scan)
+    if bracket.failure:
+        messages.append(bracket.failure)
         return None, None
-    while high - low > resolution:
-        middle = 0.5 * (low + high)
-        if unstable(middle):
-            high = middle
-        else:
-            low, low_checked = middle, True
-    if not low_checked and unstable(low):
-        if low > min(speeds):  # the guess from the convergent velocity did not hold: search the whole range
-            return _critical(model, (min(speeds), low), resolution, runs, messages, None, searched)
-        messages.append(
-            f"the reduced run at {low:g} m/s is already unstable: the critical impact velocity lies below the range;"
-            f" {range_fix(False, searched, model.scene)}"
-        )
-        return None, None
-    return 0.5 * (low + high), [low, high]
+    return bracket.middle, [bracket.low, bracket.high]
 
 
 def check_supported(scene: Scene) -> None:
