@@ -12,8 +12,8 @@ DESCRIPTIONS = {
     ),
     "sweep": (
         "Run variations of a scene (--grid over scene keys, --list of override sets) in parallel, each run kept in"
-        " the run store, so that running the sweep again runs only what is new. Prints a row per run; --out writes"
-        " the rows as CSV."
+        " the run store, so that running the sweep again runs only what is new. Prints a row per run; writes sweep.csv"
+        " (every summary field of each run) and sweep.md into --out."
     ),
     "critical": (
         "Find the critical impact velocity: the speed above which the scene's disturbed trajectory turns unstable,"

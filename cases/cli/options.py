@@ -23,7 +23,6 @@ __all__ = [
     "positive_int",
     "positive_float",
     "out_folder",
-    "out_file",
     "add_scene_options",
     "add_pool_options",
     "study_parser",
@@ -83,16 +82,15 @@ def positive_float(text: str) -> float:
 
 
 def out_folder(text: str) -> str:
-    """``--out DIR``: refused at once when it names a file, not after the run."""
-    if Path(text).exists() and not Path(text).is_dir():
+    """``--out DIR``: refused at once when it names a file, or a new path with a file's suffix (a former
+    ``sweep --out table.csv``), not after the run."""
+    path = Path(text)
+    if path.exists() and not path.is_dir():
         raise argparse.ArgumentTypeError(f"{text!r}: is a file; give a folder (it is made when missing)")
-    return text
-
-
-def out_file(text: str) -> str:
-    """``--out FILE``: refused at once when it names a folder."""
-    if Path(text).is_dir():
-        raise argparse.ArgumentTypeError(f"{text!r}: is a folder; give a file name")
+    if not path.exists() and path.suffix.lower() in (".csv", ".json", ".md", ".txt"):
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: a file name; give a folder (it is made when missing): the command writes its files into it"
+        )
     return text
 
 
@@ -155,14 +153,17 @@ def study_parser(
     subject: Callable[[Parser], None] = add_scene_options,
     out: str | None = None,
     store: str = "runs/store",
+    full_runs: bool = True,
 ) -> Parser:
     """A study's command with what every study takes, in one order: its ``subject`` (the scene and its ``--set``
-    overrides by default), where the runs go (:func:`add_pool_options`, the run store ``store``), ``--out`` (default
+    overrides by default), where the runs go (:func:`add_pool_options`, the run store ``store``; not for a study
+    that makes no ``full_runs``), ``--out`` (default
     ``out``, else ``runs/NAME``; ``writes`` names what is written there; ``None``: the study writes no file) and
     ``--json`` (the result as one JSON object)."""
     parser = commands.add_parser(name, help=help)
     subject(parser)
-    add_pool_options(parser, store)
+    if full_runs:
+        add_pool_options(parser, store)
     if writes is not None:
         out = out or f"runs/{name}"
         parser.add_argument(

@@ -117,11 +117,13 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
         " of a body of revolution without friction, docs/targets.md); none: split the range",
     )
     limit.set_defaults(handler=ballistic_limit)
-    predict = commands.add_parser(
+    predict = study_parser(
+        commands,
         "predict",
-        help="predict both characteristic speeds without a full trajectory (reduced pitch-plane model, docs/theory.md)",
+        "predict both characteristic speeds without a full trajectory (reduced pitch-plane model, docs/theory.md)",
+        writes=None,
+        full_runs=False,
     )
-    add_scene_options(predict)
     predict.add_argument(
         "--speeds",
         type=speed_range,
@@ -134,9 +136,8 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
         type=positive_float,
         default=5.0,
         metavar="M/S",
-        help="bisect until a stable and an unstable reduced run are this close (default 5 m/s)",
+        help="search until a stable and an unstable reduced run are this close (default 5 m/s)",
     )
-    predict.add_argument("--json", action="store_true", help="print the result as one JSON object")
     predict.set_defaults(handler=predict_speeds)
 
 

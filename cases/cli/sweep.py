@@ -8,7 +8,7 @@ import shlex
 import sys
 from typing import TYPE_CHECKING, Any
 
-from .options import Parser, add_pool_options, add_scene_options, out_file, overrides, print_json, study, table_records
+from .options import Parser, add_scene_options, overrides, print_json, study, study_parser, table_records
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -21,7 +21,18 @@ SHOWN = ("end_reason", "depth", "path_length", "max_attack_angle", "axis_angle_c
 
 
 def register(commands: argparse._SubParsersAction[Parser]) -> None:
-    parser = commands.add_parser("sweep", help="run variations of a scene in parallel (resumable)")
+    parser = study_parser(
+        commands,
+        "sweep",
+        "run variations of a scene in parallel (resumable)",
+        "sweep.csv (a row per run) and sweep.md",
+        subject=_subject,
+    )
+    parser.set_defaults(handler=sweep)
+
+
+def _subject(parser: Parser) -> None:
+    """The base scene and the variations: a grid over scene keys and a list of override sets."""
     add_scene_options(parser, "the base scene TOML file")
     parser.add_argument(
         "--grid",
@@ -36,17 +47,12 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
         metavar="FILE",
         help="a TOML file of [[run]] tables of dotted keys, one run each (with --grid: their product)",
     )
-    add_pool_options(parser, "runs/store")
-    parser.add_argument("--out", type=out_file, metavar="FILE", help="write the results table as CSV")
-    parser.add_argument(
-        "--json", action="store_true", help='print the result as one JSON object: {"rows": [one record per run]}'
-    )
-    parser.set_defaults(handler=sweep)
 
 
 def sweep(args: argparse.Namespace) -> int:
-    from ..run import RunStore, atomic_write_text
+    from ..run import RunStore
     from ..studies import Sweep, Variation, grid, parse_grid, read_variations, run_sweep
+    from ..studies.engine.report import Report, write_report
 
     parameters = dict(parse_grid(text) for text in args.grid)
     variations = grid(parameters) if parameters else [Variation({})]
@@ -60,12 +66,12 @@ def sweep(args: argparse.Namespace) -> int:
     with study(args) as pool:
         result = run_sweep(Sweep.from_file(args.scene, overrides(args), variations), RunStore(args.store), pool)
     table = result.table()
-    if args.out:
-        atomic_write_text(args.out, table.to_csv(index=False))
+    shown, notes = _shown(table, result, columns)
+    write_report(args.out, Report("sweep", _markdown(args.scene, shown, notes), table))
     if args.json:
         print_json({"rows": table_records(table)})
     else:
-        print(_shown(table, result, columns))
+        print("\n".join([shown.to_string(index=False), *notes]))
     failed = [i for i, run in enumerate(result.runs) if run.failed]
     if failed:
         print(
@@ -76,9 +82,9 @@ def sweep(args: argparse.Namespace) -> int:
     return 0
 
 
-def _shown(table: pd.DataFrame, result: SweepResult, columns: dict) -> str:
-    """The printed table: the varied keys, the headline figures, and each run's end with its warnings marked
-    and listed below (``--out`` and ``--json`` hold the warnings' texts per run)."""
+def _shown(table: pd.DataFrame, result: SweepResult, columns: dict) -> tuple[pd.DataFrame, list[str]]:
+    """The shown table: the varied keys, the headline figures, and each run's end with its warnings marked; and
+    the warnings' notes the marks point to (sweep.csv and ``--json`` hold the warnings' texts per run)."""
     from ..studies import end_cells
 
     ends, notes = end_cells(
@@ -86,9 +92,16 @@ def _shown(table: pd.DataFrame, result: SweepResult, columns: dict) -> str:
     )
     shown = table[[c for c in (*columns, *SHOWN) if c in table]].copy()
     shown["end_reason"] = ends
-    lines = [shown.to_string(index=False)]
-    lines += [f"[{i}] {note}" for i, note in enumerate(notes, 1)]
-    return "\n".join(lines)
+    return shown, [f"[{i}] {note}" for i, note in enumerate(notes, 1)]
+
+
+def _markdown(scene: str, shown: pd.DataFrame, notes: list[str]) -> str:
+    """sweep.md: the shown table in Markdown, its notes below."""
+    from ..studies.engine.report import markdown_table, number_cell
+
+    rows = [[number_cell(v) for v in row] for row in shown.itertuples(index=False)]
+    lines = [f"# penetrate sweep {scene}", "", *markdown_table(list(shown.columns), rows), "", *notes]
+    return "\n".join(lines) + "\n"
 
 
 def _failure_line(args: argparse.Namespace, values: dict, failed: int, runs: int) -> str:

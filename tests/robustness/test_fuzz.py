@@ -1024,7 +1024,7 @@ def _listing(folder: Path) -> set[str]:
 # where each command would write: nothing may appear there
 EXTRA = {
     "run": ["--out", "outputs"],
-    "sweep": ["--out", "outputs/table.csv", "--store", "store", "--no-progress"],
+    "sweep": ["--out", "outputs", "--store", "store", "--no-progress"],
     "critical": ["--store", "store", "--no-progress"],
     "convergent": ["--store", "store", "--no-progress"],
     "compare": ["--out", "outputs", "--store", "store", "--no-progress"],

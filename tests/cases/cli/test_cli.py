@@ -317,7 +317,7 @@ def test_a_study_s_json_is_one_object(command, tmp_path, capsys):
     """``sweep``, ``compare``, ``contact`` and ``entry`` printed a bare list of records: now one object, the rows
     under ``rows``, each a run of the study (as every other command's ``--json``)."""
     name, *options = command
-    out = [] if name == "sweep" else ["--out", str(tmp_path / "out")]
+    out = ["--out", str(tmp_path / "out")]
     scene = str(scene_path("forrestal_luk_test2"))
     args = [name, scene, *FAST, *options, *out, "--store", str(tmp_path / "store"), "--workers", "1", "--no-progress"]
     assert main([*args, "--json"]) == 0
@@ -364,7 +364,7 @@ def test_every_study_command_takes_the_shared_options():
         assert shared <= set(commands[name]._option_string_actions), name
     for name, parser in commands.items():
         out = parser._option_string_actions.get("--out")
-        if out is not None and name != "sweep":
+        if out is not None:
             assert out.type.__name__ == "out_folder", name
 
 

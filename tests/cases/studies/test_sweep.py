@@ -204,7 +204,21 @@ def test_a_sweep_with_failed_runs_ends_with_the_command_that_shows_why(tmp_path,
     sets = [o for item in QUICK_SET for o in ("--set", item)]
     grid_option = ["--grid", f"projectile.centre_of_mass_ratio={ratios}"]
     assert (
-        main(["sweep", str(scene_path("paper_p3")), *sets, *grid_option, "--workers", "1", "--store", str(store)]) == 1
+        main(
+            [
+                "sweep",
+                str(scene_path("paper_p3")),
+                *sets,
+                *grid_option,
+                "--workers",
+                "1",
+                "--store",
+                str(store),
+                "--out",
+                str(tmp_path / "out"),
+            ]
+        )
+        == 1
     )
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(
@@ -241,7 +255,7 @@ def _cli_sweep(store, out, *extra):
 
 @pytest.mark.slow  # seconds of runs: CI's slow step
 def test_killed_sweep_loses_nothing_and_resumes(tmp_path):
-    store, out = tmp_path / "store", tmp_path / "table.csv"
+    store, out = tmp_path / "store", tmp_path / "table"
     log = tmp_path / "stderr.txt"
     with log.open("w") as stderr:
         proc = subprocess.Popen(
@@ -259,11 +273,11 @@ def test_killed_sweep_loses_nothing_and_resumes(tmp_path):
     done = subprocess.run(_cli_sweep(store, out), capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr
     assert all(p.stat().st_mtime_ns == stamp for p, stamp in finished.items())  # reused, not rerun
-    resumed = pd.read_csv(out)
-    fresh_out = tmp_path / "fresh.csv"
+    resumed = pd.read_csv(out / "sweep.csv")
+    fresh_out = tmp_path / "fresh"
     fresh = subprocess.run(_cli_sweep(tmp_path / "fresh-store", fresh_out), capture_output=True, text=True, timeout=600)
     assert fresh.returncode == 0, fresh.stderr
-    pd.testing.assert_frame_equal(_stable(resumed), _stable(pd.read_csv(fresh_out)), check_exact=True)
+    pd.testing.assert_frame_equal(_stable(resumed), _stable(pd.read_csv(fresh_out / "sweep.csv")), check_exact=True)
     assert len(resumed) == 6
 
 
@@ -319,7 +333,7 @@ def test_listed_variations_combine_with_a_grid(tmp_path):
         "--store",
         str(tmp_path / "s"),
         "--out",
-        str(tmp_path / "t.csv"),
+        str(tmp_path / "t"),
         "--no-progress",
         "--workers",
         "2",
@@ -328,7 +342,7 @@ def test_listed_variations_combine_with_a_grid(tmp_path):
         args += ["--set", item]
     done = subprocess.run(args, capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr
-    table = pd.read_csv(tmp_path / "t.csv")
+    table = pd.read_csv(tmp_path / "t" / "sweep.csv")
     assert list(zip(table["impact.oblique_angle"], table["impact.speed"])) == [
         (0, 1000),
         (0, 1100),
