@@ -1,7 +1,7 @@
 """Projectiles from files against the analytic scenes (docs/evidence-geometry.md): what each kind of file costs in
 accuracy.
 
-Run from the repository root: ``python -m docs.geometry.files facets`` (about two minutes: the 5 mm meshes) or
+Run from the repository root: ``python -m docs.geometry.files facets`` (about three minutes: the 5 mm meshes) or
 ``python -m docs.geometry.files files`` (about a minute).  The bodies are written by gmsh's own OpenCASCADE
 primitives (``docs/geometry/cad_bodies.py``, independent of ``mesh/``) into a temporary folder and read back through
 ``projectile.geometry``; every run is test 2's shot (or its cone-nosed twin) at the shipped numerics unless
