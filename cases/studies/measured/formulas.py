@@ -19,7 +19,7 @@ from ...run import prepare_projectile
 from ...scene import InputError, Scene
 from ..engine.report import Report, markdown_table, number_cell
 
-__all__ = ["FormulaInputs", "Formulas", "formula_inputs", "formulas", "formulas_report", "NDRC_NOSES"]
+__all__ = ["FormulaInputs", "Formulas", "formula_inputs", "formulas", "formulas_report", "formula_rows", "NDRC_NOSES"]
 
 NDRC_NOSES = tuple(eq.NDRC_NOSE_FACTORS)
 
@@ -202,3 +202,29 @@ def formulas_report(result: Formulas, scene_name: str) -> Report:
     header = ["formula", "depth (m)", "scabbing (m)", "perforation (m)", "inside its ranges", "source"]
     lines = [f"# Empirical formulas: {scene_name}", "", *markdown_table(header, rows), "", *result.messages]
     return Report("formulas", "\n".join(lines) + "\n", record=result.as_dict())
+
+
+def formula_rows(shots: list[tuple[str, str, Scene, float]]) -> tuple[list[dict], list[str]]:
+    """Each formula's depth for each measured depth ``(label, group, scene, measured)``: a row per shot and formula
+    (``error_percent`` of the measurement, ``valid``); and a line for each shot the formulas do not describe."""
+    rows, refused = [], []
+    for label, group, scene, measured in shots:
+        try:
+            result = formulas(scene)
+        except InputError as error:
+            refused.append(f"{label}: {error}")
+            continue
+        for e in result.estimates:
+            rows.append(
+                {
+                    "label": label,
+                    "group": group,
+                    "formula": e.name,
+                    "predicted": e.depth,
+                    "measured": measured,
+                    "error_percent": 100.0 * (e.depth - measured) / abs(measured),
+                    "residual_sigmas": None,
+                    "valid": e.valid,
+                }
+            )
+    return rows, refused
