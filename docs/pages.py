@@ -145,6 +145,11 @@ KINDS: dict[str, tuple[str, tuple[Page, ...]]] = {
                 "Accuracy against cost",
                 "error against run time for mesh size, quadrature and time step; the recommended settings",
             ),
+            Page(
+                "docs/evidence-formulas.md",
+                "The empirical formulas beside the model",
+                "Young, NDRC, ACE, UKAEA, Li and Chen: what each says, its source, what was checked",
+            ),
             Page("docs/paper.md", "The paper's study reproduced", "the instability study, with every gap"),
             Page("docs/paper/results.md", "The paper's study: tables and figures", "generated"),
             Page("docs/paper/variants.md", "The paper's variants", "friction, a conical nose, other soils"),

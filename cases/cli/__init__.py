@@ -17,13 +17,13 @@ import sys
 import warnings
 
 from ..scene import InputError, one_line
-from . import ensemble, fit, render, run, speeds, studies, sweep, validate
+from . import ensemble, fit, formulas, render, run, speeds, studies, sweep, validate
 from .descriptions import DESCRIPTIONS
 from .options import Parser, environment_defaults
 
 __all__ = ["main", "build_parser"]
 
-COMMANDS = (run, sweep, speeds, studies, validate, ensemble, fit, render)
+COMMANDS = (run, sweep, speeds, studies, validate, formulas, ensemble, fit, render)
 
 
 def build_parser() -> Parser:

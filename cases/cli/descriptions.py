@@ -76,6 +76,12 @@ DESCRIPTIONS = {
         " with their standard errors. Writes fit.json, fit.md and fit.png into --out; nothing when the observations do"
         " not determine the fit."
     ),
+    "formulas": (
+        "Evaluate the field's empirical equations for the scene's projectile, impact speed and concrete target:"
+        " depth of penetration by Young, the modified NDRC, ACE, UKAEA and Li and Chen, with scabbing and"
+        " perforation thicknesses where a formula gives them, each checked against the ranges of its data."
+        " Prints the table; writes formulas.md and formulas.json into --out."
+    ),
     "render": (
         "Run one scene and draw its resistance field off-screen: the body coloured by the normal stress at chosen"
         " instants, its trajectory, the resistance centre and a polar plot; an animation and ParaView files if"
@@ -105,5 +111,7 @@ JSON_SHAPES = {
     "validate": "the record of validate.json",
     "ensemble": "the record of ensemble.json",
     "fit": "the record of fit.json",
+    "formulas": "`inputs` (what the formulas took from the scene), `formulas` (a list: `name`, `depth`, `valid`,"
+    " `checks`, `scabbing`, `perforation`, `source`), `messages`",
     "render": "the files written and the timings",
 }

@@ -31,6 +31,11 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
         metavar="N",
         help="impact speeds of each group's predicted curve (0: none; default %(default)s)",
     )
+    parser.add_argument(
+        "--formulas",
+        action="store_true",
+        help="predict each measured depth by the empirical formulas too (penetrate formulas), beside the model",
+    )
     parser.set_defaults(handler=validate)
 
 
@@ -57,7 +62,9 @@ def validate(args: argparse.Namespace) -> int:
         raise InputError(f"--curve-points {args.curve_points}: must lie in 0..1000")
     series = read_series(args.series)
     with study(args) as pool:
-        validation = run_validation(series, overrides(args), RunStore(args.store), pool, args.curve_points)
+        validation = run_validation(
+            series, overrides(args), RunStore(args.store), pool, args.curve_points, args.formulas
+        )
     write_validation(validation, args.out)
     if args.json:
         print_json(validation.record())

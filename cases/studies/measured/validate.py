@@ -165,6 +165,8 @@ class Validation:
     groups: dict[str, dict[str, Any]]
     curves: dict[str, dict[str, Any]] = field(default_factory=dict)
     runs: int = 0
+    formulas: list[dict[str, Any]] | None = None
+    formulas_refused: list[str] = field(default_factory=list)
 
     @property
     def failed(self) -> list[str]:
@@ -181,6 +183,7 @@ class Validation:
             "groups": self.groups,
             "curves": self.curves,
             "runs": self.runs,
+            **({} if self.formulas is None else {"formulas": self.formulas, "formulas_refused": self.formulas_refused}),
         }
 
 
@@ -190,9 +193,11 @@ def validate(
     store: RunStore,
     pool: Pool | None = None,
     curve_points: int = CURVE_POINTS,
+    with_formulas: bool = False,
 ) -> Validation:
     """Run every shot of ``series`` (``overrides``, ``--set``, on every shot; a column beats them for its own
-    shot) and, per group, ``curve_points`` impact speeds of its predicted curve; all in one batch of runs."""
+    shot) and, per group, ``curve_points`` impact speeds of its predicted curve; all in one batch of runs.
+    ``with_formulas``: each measured depth predicted by the empirical formulas too."""
     settings = list(overrides.items() if isinstance(overrides, Mapping) else overrides or [])
     curves = curve_variations(series, curve_points)
     parts = series.parts(settings)
@@ -213,7 +218,42 @@ def validate(
             "notes": notes,
         }
         start += len(speeds)
-    return Validation(series, settings, rows, summary, groups, drawn, runs=len(set(sweep.keys())))
+    validation = Validation(series, settings, rows, summary, groups, drawn, runs=len(set(sweep.keys())))
+    if with_formulas:
+        from .formulas import formula_rows
+
+        depths = [
+            (shot.label, shot.group, result.sweep.scenes[i], m.value)
+            for i, shot in enumerate(series.shots)
+            for m in shot.measurements
+            if m.quantity == "depth"
+        ]
+        validation.formulas, validation.formulas_refused = formula_rows(depths)
+    return validation
+
+
+def formula_table(validation: Validation) -> list[str]:
+    """The model's error on the measured depths beside each formula's: shots, mean |error|, bias, RMS (per cent)
+    and how many shots lie inside every range the formula checks."""
+    rows = validation.formulas or []
+
+    def errors(summary: Mapping[str, Any]) -> list[str]:
+        return [
+            number_cell(summary["mean_abs_error_percent"], ".1f"),
+            number_cell(summary["bias_percent"], "+.1f"),
+            number_cell(summary["rms_percent"], ".1f"),
+        ]
+
+    table = []
+    if "depth" in validation.summary:
+        model = validation.summary["depth"]
+        table.append(["the model (DAFL run)", model["shots"], *errors(model), "-"])
+    for name in dict.fromkeys(row["formula"] for row in rows):
+        mine = [row for row in rows if row["formula"] == name]
+        summary = error_summary(mine)
+        table.append([name, summary["shots"], *errors(summary), sum(row["valid"] for row in mine)])
+    header = ["depth by", "shots", "mean abs error (%)", "bias (%)", "RMS (%)", "shots inside its ranges"]
+    return markdown_table(header, table)
 
 
 def summary_table(summary: Mapping[str, Any], groups: Mapping[str, Mapping[str, Any]]) -> list[str]:
@@ -281,6 +321,10 @@ def markdown(validation: Validation) -> str:
     lines += [*summary_table(validation.summary, validation.groups), ""]
     if notes:
         lines += ["Warnings:", "", *[f"{i}. {note}" for i, note in enumerate(notes, 1)], ""]
+    if validation.formulas is not None:
+        lines += ["Depth by the empirical formulas (penetrate formulas), beside the model's:", ""]
+        lines += [*formula_table(validation), ""]
+        lines += [f"Not described by the formulas: {line}" for line in validation.formulas_refused]
     for group, curve in validation.curves.items():
         if curve["notes"]:
             lines += [f"The predicted curve of {group}: " + "; ".join(curve["notes"]) + ".", ""]

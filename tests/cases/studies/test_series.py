@@ -92,10 +92,18 @@ def test_validate_command_writes_its_outputs(tmp_path, capsys):
     out = tmp_path / "out"
     code = main(
         ["validate", "forrestal1996_concrete", "--set", "numerics.mesh_size=0.012", "--store", str(tmp_path / "s")]
-        + ["--out", str(out), "--curve-points", "4", "--no-progress", "--json"]
+        + ["--out", str(out), "--curve-points", "4", "--no-progress", "--json", "--formulas"]
     )
     assert code == 0
     record = json.loads(capsys.readouterr().out)
+    # --formulas: each shot's depth by every formula of its own scene (penetrate formulas), beside the model's
+    from cases.studies.measured.formulas import formulas
+
+    assert len(record["formulas"]) == 10 * 6 and record["formulas_refused"] == []
+    first = read_series(CONCRETE).shots[0]
+    own = formulas(load_scene(scene_path(first.scene), dict(first.values)))
+    assert [(r["formula"], r["predicted"]) for r in record["formulas"][:6]] == [(e.name, e.depth) for e in own.estimates]
+    assert "| the model (DAFL run) | 10 |" in (out / "validate.md").read_text()
     assert set(record) >= {"shots", "summary", "groups"}
     assert set(record["shots"][0]) >= {"label", "group", "predicted", "measured", "error_percent", "end_reason"}
     assert set(record["summary"]["depth"]) >= {"mean_abs_error_percent", "bias_percent", "rms_percent", "shots"}
