@@ -186,5 +186,5 @@ def _validation_only(args: argparse.Namespace) -> int:
         " scenes' own values)",
         file=sys.stderr,
     )
-    args.curve_points = 0
+    args.curve_points, args.formulas = 0, False
     return validate(args)

@@ -102,7 +102,8 @@ def test_validate_command_writes_its_outputs(tmp_path, capsys):
     assert len(record["formulas"]) == 10 * 6 and record["formulas_refused"] == []
     first = read_series(CONCRETE).shots[0]
     own = formulas(load_scene(scene_path(first.scene), dict(first.values)))
-    assert [(r["formula"], r["predicted"]) for r in record["formulas"][:6]] == [(e.name, e.depth) for e in own.estimates]
+    by_formula = [(r["formula"], r["predicted"]) for r in record["formulas"][:6]]
+    assert by_formula == [(e.name, e.depth) for e in own.estimates]
     assert "| the model (DAFL run) | 10 |" in (out / "validate.md").read_text()
     assert set(record) >= {"shots", "summary", "groups"}
     assert set(record["shots"][0]) >= {"label", "group", "predicted", "measured", "error_percent", "end_reason"}
