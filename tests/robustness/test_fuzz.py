@@ -892,7 +892,19 @@ def bad_command_lines(draw, files):
     """A command line with at least one bad input (the last word wins where options repeat)."""
     command = draw(
         st.sampled_from(
-            ["run", "sweep", "critical", "convergent", "compare", "accuracy", "render", "fit", "ensemble", "validate"]
+            [
+                "run",
+                "sweep",
+                "critical",
+                "convergent",
+                "compare",
+                "accuracy",
+                "render",
+                "fit",
+                "ensemble",
+                "validate",
+                "formulas",
+            ]
         )
     )
     # the studies set some keys themselves: a bad value there would be overridden, not rejected
@@ -931,6 +943,10 @@ def bad_command_lines(draw, files):
         poisons += [("--sizes", v) for v in BAD_NUMBER[:6]]
     if command == "validate":
         poisons += [("--curve-points", v) for v in ["-1", "x", "100000", "1.5"]]
+    if command == "formulas":
+        poisons += [("--reinforcement", v) for v in BAD_NUMBER[1:] + ["11"]] + [
+            ("--ndrc-nose", v) for v in ["", "sharp", "x"]
+        ]
     if command == "fit":
         args += ["--param", "impact.speed=100:400", "--observe", "depth=5"]
         poisons += [
@@ -1033,6 +1049,7 @@ EXTRA = {
     "fit": ["--out", "outputs", "--store", "store", "--no-progress"],
     "ensemble": ["--out", "outputs", "--store", "store", "--no-progress"],
     "validate": ["--out", "outputs", "--store", "store", "--no-progress"],
+    "formulas": ["--out", "outputs"],
 }
 
 
