@@ -68,7 +68,7 @@ def test_the_tutorial_runs_as_written(tmp_path):
             commands += 1
     assert commands >= 11
     # what the page says the commands write
-    for written_file in ("summary.json", "runs/mine/summary.json", "runs/mine/history.csv", "speeds.csv"):
+    for written_file in ("summary.json", "runs/mine/summary.json", "runs/mine/history.csv", "runs/speeds/sweep.csv"):
         assert (tmp_path / written_file).stat().st_size > 0, written_file
     for picture in ("field_peak_attack_angle.png", "field_end.png"):
         assert (tmp_path / "renders" / picture).stat().st_size > 0, picture
