@@ -393,9 +393,13 @@ def test_a_declared_symmetry_is_checked_through_the_bodys_own_axis(folder):
 def test_a_volume_mesh_turned_and_moved_in_its_file_is_the_mesh_at_the_origin(folder):
     """Rotating a scene rotates its result: the same mesh with its nodes turned onto an oblique axis and moved,
     read along that axis (given, or found by "auto"), has the mass properties within 1e-9 and the depth and
-    turn of the mesh moved without turning within 1e-6 (round-off: the nodes are turned back).  The turn is
-    the one the body frame undoes (the shortest from +x onto the axis): a roll about the axis as well would
-    turn the mesh's own small asymmetry against the attack plane (measured: 4e-5 in depth at 2 deg).
+    turn of the mesh moved without turning: given the axis, within 1e-9 (round-off: the nodes are turned back;
+    measured 1e-13).  The turn is the one the body frame undoes (the shortest from +x onto the axis): a roll
+    about the axis as well would turn the mesh's own small asymmetry against the attack plane (measured: 4e-5 in
+    depth at 2 deg).  So with "auto" the two agree less closely, and not by round-off: the axis found lies 3e-5
+    rad off +x, and the shortest turn onto it in the turned file differs from the unturned one's by a roll of
+    that order, which turns the asymmetry by as much (measured on four meshes, gmsh's differing from run to
+    run: 1e-9 in depth, 1.3e-6 to 1.5e-6 deg in the turn).
 
     Against the mesh at the origin the depth agrees within 1e-5 only, and that is not round-off: a body whose
     centroid lies on the file's own x line (within a thousandth of its length) keeps that line as its axis,
@@ -414,14 +418,14 @@ def test_a_volume_mesh_turned_and_moved_in_its_file_is_the_mesh_at_the_origin(fo
     meshio.write(moved, meshio.Mesh(m.points @ turn.T + offset, m.cells, cell_data=m.cell_data))
     shot = {"numerics.normals": "mesh", "numerics.mesh_size": 0.03, "impact.attack_angle": 2.0}
     # "auto" finds the mesh's own principal axis (3e-5 rad off the drawn one: the mesh is not quite symmetric)
-    for axis, unturned in ((turn[:, 0].tolist(), [1, 0, 0]), ("auto", "auto")):
+    for (axis, unturned), close in (((turn[:, 0].tolist(), [1, 0, 0]), 1e-9), (("auto", "auto"), 1e-5)):
         at_origin = run_scene(from_file({"file": str(plain), "axis": unturned}, **shot))
         a = run_scene(from_file({"file": str(shifted), "axis": unturned}, **shot))
         b = run_scene(from_file({"file": str(moved), "axis": axis}, **shot))
         assert b.prepared.mass.axial_inertia == pytest.approx(a.prepared.mass.axial_inertia, rel=1e-9)
         assert b.prepared.mass.transverse_inertia == pytest.approx(a.prepared.mass.transverse_inertia, rel=1e-9)
-        assert summarise(b).depth == pytest.approx(summarise(a).depth, rel=1e-6)
-        assert summarise(b).axis_angle_change == pytest.approx(summarise(a).axis_angle_change, abs=1e-6)
+        assert summarise(b).depth == pytest.approx(summarise(a).depth, rel=min(close, 1e-8))
+        assert summarise(b).axis_angle_change == pytest.approx(summarise(a).axis_angle_change, abs=close)
         assert summarise(b).depth == pytest.approx(summarise(at_origin).depth, rel=1e-5)
 
 
