@@ -270,7 +270,7 @@ def _rank(entry: Mapping[str, Any]) -> tuple[float, float]:
 
 
 def _series_markdown(comparison: SeriesComparison, series: Series) -> str:
-    from .validate import settings_lines
+    from .validate import error_cells, settings_lines
 
     name = Path(series.source).name
     laws = [entry["law"] for entry in comparison.ranking]
@@ -284,10 +284,7 @@ def _series_markdown(comparison: SeriesComparison, series: Series) -> str:
                 entry["rank"],
                 entry["law"],
                 f"{entry['shots']} ({entry['failed']} failed)" if entry["failed"] else entry["shots"],
-                number_cell(entry["mean_abs_error_percent"], ".1f"),
-                number_cell(entry["bias_percent"], "+.1f"),
-                number_cell(entry["rms_percent"], ".1f"),
-                number_cell(entry["chi2"], ".3g"),
+                *error_cells(entry),
             ]
             for entry in comparison.ranking
         ],

@@ -91,6 +91,16 @@ def error_summary(rows: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
     }
 
 
+def error_cells(summary: Mapping[str, Any]) -> list[str]:
+    """A table's cells of an :func:`error_summary`: mean |error|, bias and RMS (per cent), then chi-squared."""
+    return [
+        number_cell(summary["mean_abs_error_percent"], ".1f"),
+        number_cell(summary["bias_percent"], "+.1f"),
+        number_cell(summary["rms_percent"], ".1f"),
+        number_cell(summary["chi2"], ".3g"),
+    ]
+
+
 def summaries(rows: Sequence[Mapping[str, Any]]) -> tuple[dict[str, Any], dict[str, dict[str, Any]]]:
     """``(summary, groups)``: :func:`error_summary` per quantity, overall and per group."""
     quantities = list(dict.fromkeys(row["quantity"] for row in rows))
@@ -236,22 +246,14 @@ def formula_table(validation: Validation) -> list[str]:
     """The model's error on the measured depths beside each formula's: shots, mean |error|, bias, RMS (per cent)
     and how many shots lie inside every range the formula checks."""
     rows = validation.formulas or []
-
-    def errors(summary: Mapping[str, Any]) -> list[str]:
-        return [
-            number_cell(summary["mean_abs_error_percent"], ".1f"),
-            number_cell(summary["bias_percent"], "+.1f"),
-            number_cell(summary["rms_percent"], ".1f"),
-        ]
-
     table = []
     if "depth" in validation.summary:
         model = validation.summary["depth"]
-        table.append(["the model (DAFL run)", model["shots"], *errors(model), "-"])
+        table.append(["the model (DAFL run)", model["shots"], *error_cells(model)[:3], "-"])
     for name in dict.fromkeys(row["formula"] for row in rows):
         mine = [row for row in rows if row["formula"] == name]
         summary = error_summary(mine)
-        table.append([name, summary["shots"], *errors(summary), sum(row["valid"] for row in mine)])
+        table.append([name, summary["shots"], *error_cells(summary)[:3], sum(row["valid"] for row in mine)])
     header = ["depth by", "shots", "mean abs error (%)", "bias (%)", "RMS (%)", "shots inside its ranges"]
     return markdown_table(header, table)
 
@@ -265,10 +267,7 @@ def summary_table(summary: Mapping[str, Any], groups: Mapping[str, Mapping[str, 
                 [
                     quantity if scope == "all" else f"{quantity}, {scope}",
                     f"{s['shots']} ({s['failed']} failed)" if s["failed"] else s["shots"],
-                    number_cell(s["mean_abs_error_percent"], ".1f"),
-                    number_cell(s["bias_percent"], "+.1f"),
-                    number_cell(s["rms_percent"], ".1f"),
-                    number_cell(s["chi2"], ".3g"),
+                    *error_cells(s),
                 ]
             )
         if len(groups) == 1:
