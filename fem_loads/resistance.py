@@ -40,6 +40,7 @@ __all__ = [
     "concrete_strength_factor",
     "normal_stress_scalars",
     "polynomial_stress_scalars",
+    "power_term_scalars",
     "UnknownLawError",
 ]
 
@@ -69,6 +70,12 @@ def polynomial_stress_scalars(normal_velocity: Any, depth: Any, c0: float, k: fl
     return stress
 
 
+def power_term_scalars(normal_velocity: Any, c: float, n: float) -> Any:
+    """The power term ``c Vn |Vn|^(n - 1)`` (Pa) of :func:`normal_stress_scalars`: odd in ``Vn``, as the dynamic
+    term ``c2 Vn |Vn|`` is."""
+    return c * np.sign(normal_velocity) * np.abs(normal_velocity) ** n
+
+
 def normal_stress_scalars(
     normal_velocity: Any,
     depth: Any,
@@ -88,7 +95,7 @@ def normal_stress_scalars(
     """
     stress = polynomial_stress_scalars(normal_velocity, depth, c0, k, c1, c2)
     if c != 0.0:
-        stress += c * np.sign(normal_velocity) * np.abs(normal_velocity) ** n
+        stress += power_term_scalars(normal_velocity, c, n)
     if table_depths.shape[0] > 0:
         stress += table_stress_scalars(depth, table_depths, table_stresses)
     return stress

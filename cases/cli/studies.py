@@ -61,6 +61,11 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
         "--resolution", type=positive_float, default=5.0, help="of --critical (m/s, default %(default)s)"
     )
     compare.add_argument("--convergent", action="store_true", help="also measure each law's convergent speed")
+    compare.add_argument(
+        "--formulas",
+        action="store_true",
+        help="with --series: rank the empirical formulas' depths with the laws (penetrate formulas)",
+    )
     compare.set_defaults(handler=compare_laws)
 
     accuracy = study_parser(
@@ -177,6 +182,10 @@ def compare_laws(args: argparse.Namespace) -> int:
         raise InputError("--laws, --law: each law needs a label of its own (allowed: distinct names)")
     if args.series is not None:
         return _compare_series(args, laws)
+    if args.formulas:
+        raise InputError(
+            "compare --formulas: ranks the formulas on a test series (--series); for one scene, run penetrate formulas"
+        )
     speeds = _numbers("--depths-at", args.depths_at) if args.depths_at else None
     with study(args) as pool:
         comparison = compare(
@@ -216,7 +225,9 @@ def _compare_series(args: argparse.Namespace, laws: list[tuple[str, object]]) ->
         raise InputError(f"compare --series: {', '.join(ignored)} apply to a scene, not to a series (drop them)")
     series = read_series(args.series)
     with study(args) as pool:
-        comparison = compare_series(series, overrides(args), laws, RunStore(args.store), args.out, pool)
+        comparison = compare_series(
+            series, overrides(args), laws, RunStore(args.store), args.out, pool, with_formulas=args.formulas
+        )
     if args.json:
         print_json(comparison.record())
     else:

@@ -98,11 +98,11 @@ class Check:
 
 @dataclass
 class Estimate:
-    """What a formula says of a scene: the depth (m) and, where it gives them, the scabbing and perforation
-    thicknesses (m); ``valid`` when every check lies inside its range."""
+    """What a formula says of a scene: the depth (m; None for a formula of a thickness only) and, where it gives
+    them, the scabbing and perforation thicknesses (m); ``valid`` when every check lies inside its range."""
 
     name: str
-    depth: float
+    depth: float | None
     source: str
     checks: list[Check] = field(default_factory=list)
     scabbing: float | None = None

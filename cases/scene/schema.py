@@ -102,9 +102,9 @@ class Numerics(Strict):
     kernel: Literal["auto", "numpy", "compiled"] = field(
         "auto",
         description="how the steps are computed: numpy (the reference), compiled (numba: the whole Runge-Kutta"
-        " step in machine code, after about 0.4 s of loading per process) or auto (compiled in"
-        " studies, whose workers load it once, where it is the faster: polynomial laws with the smooth ramps;"
-        " numpy for a single run and for any other law)",
+        " step in machine code, after about 0.6 s of loading per process) or auto (compiled in"
+        " studies, whose workers load it once, where it is the faster: built-in laws with the smooth ramps and"
+        " separation; numpy for a single run, a user's law or another switch)",
     )
 
     def stop_speed_at(self, impact_speed: float) -> float:
@@ -176,10 +176,10 @@ class Scene(Strict):
     @property
     def warnings(self) -> list[str]:
         """What the scene's inputs alone make doubtful, one plain-language line each (empty when nothing needs
-        saying): an empirical law used outside the range of the data it was fitted to (:attr:`Target.warnings`).
-        Such a scene runs: these are lines for a run summary's warnings, as ``numerics_warnings`` gives the
-        numerics'."""
-        return self.target.warnings
+        saying): an empirical law used outside the range of the data it was fitted to, or a shot into concrete
+        fast enough for the nose to lose mass (:meth:`Target.warnings`).  Such a scene runs: these are lines for a
+        run summary's warnings, as ``numerics_warnings`` gives the numerics'."""
+        return self.target.warnings(self.impact.speed)
 
     @property
     def stop_speed(self) -> float:
@@ -197,8 +197,9 @@ class Scene(Strict):
     @property
     def compiled_is_faster(self) -> bool:
         """Whether the compiled kernel computes this scene's load in SIMD lanes
-        (:func:`fem_loads.kernels.records.in_lanes`), 4-11 times faster than numpy; any other load it computes point
-        by point, no faster than numpy (a power term, a user's law: docs/performance.md)."""
+        (:func:`fem_loads.kernels.records.in_lanes`), 1.6-11 times faster than numpy (the least with a power term,
+        its pow point by point); any other load it computes point by point, no faster than numpy (a user's law, the
+        sharp switch, no separation: docs/performance.md)."""
         from fem_loads.kernels.records import in_lanes
 
         effects, smooth_entry = self.effects, self.numerics.entry_smoothing > 0
@@ -206,7 +207,7 @@ class Scene(Strict):
 
     def with_kernel(self, many_runs: bool) -> Scene:
         """This scene with ``numerics.kernel`` resolved: ``auto`` is ``compiled`` in a process that runs
-        many scenes (a study's worker loads the compiled code once, about 0.4 s) when the compiled kernel is the
+        many scenes (a study's worker loads the compiled code once, about 0.6 s) when the compiled kernel is the
         faster for the scene (:attr:`compiled_is_faster`), else ``numpy``."""
         if self.numerics.kernel != "auto":
             return self

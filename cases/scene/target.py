@@ -372,17 +372,17 @@ class Target(Strict):
         layers = self.layers or []
         return math.inf if not layers or layers[-1].thickness is None else self.inner_faces[-1]
 
-    @property
-    def warnings(self) -> list[str]:
-        """Plain-language doubts about the target's laws, one line each (empty when none): an empirical law used
-        outside the data it was fitted to (:attr:`~.schema.Scene.warnings`)."""
+    def warnings(self, speed: float) -> list[str]:
+        """Plain-language doubts about the target's laws for a shot at ``speed`` (m/s), one line each (empty when
+        none): an empirical law used outside the data it was fitted to, or concrete struck faster than a steel nose
+        stays whole (:func:`~.plausible.mass_loss_warnings`; :attr:`~.schema.Scene.warnings`)."""
         if self.layers is None:
             laws = [("target.law", self.law)]
         else:
             laws = [(f"target.layers.{index}.law", layer.law) for index, layer in enumerate(self.layers)]
-        return [
-            line for where, law in laws if isinstance(law, ConcreteLawSpec) for line in law.data_range_warnings(where)
-        ]
+        concrete = [(where, law) for where, law in laws if isinstance(law, ConcreteLawSpec)]
+        lines = [line for where, law in concrete for line in law.data_range_warnings(where)]
+        return lines + ranges.mass_loss_warnings(speed, [where for where, _ in concrete], self.layers is not None)
 
     def build_rear_face(self) -> FrontFace | None:
         """The plane past which the whole body has perforated the target, facing out of its rear (a point's height

@@ -27,7 +27,7 @@ from ..factors import (
     point_stress_scalars,
     switches_scalars,
 )
-from ..resistance import normal_stress_scalars, polynomial_stress_scalars, table_stress_scalars
+from ..resistance import normal_stress_scalars, polynomial_stress_scalars, power_term_scalars, table_stress_scalars
 from ..target import face_frame_scalars, face_height_scalars, slip_factor_scalars, slip_scalars
 from ..user_law import MAX_PARAMETERS
 
@@ -38,6 +38,7 @@ __all__ = [
     "in_contact",
     "builtin_stress",
     "polynomial_stress",
+    "power_term",
     "entry_factor",
     "layer_share",
     "friction_stress",
@@ -113,6 +114,9 @@ polynomial_stress = njit(inline="always", error_model="numpy")(polynomial_stress
 # the polynomial part as numba sees it inside normal_stress_scalars (the plain function stays plain; not
 # inlined at numba's level, whose renaming of its augmented assignments trips a pedantic SSA check)
 register_jitable(error_model="numpy")(polynomial_stress_scalars)
+# the power term as numba sees it inside normal_stress_scalars, and for the passes that add it to a plain law
+register_jitable(error_model="numpy")(power_term_scalars)
+power_term = njit(inline="always", error_model="numpy")(power_term_scalars)
 builtin_stress = njit(inline="always", error_model="numpy")(normal_stress_scalars)
 cube_cell = njit(inline="always", error_model="numpy")(cube_cell_scalars)
 # the cell's exposure and the two forms it calls, as numba sees them inside it (the plain functions stay plain)

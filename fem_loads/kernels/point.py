@@ -28,6 +28,7 @@ from .native import (
     layer_share,
     point_stress,
     polynomial_stress,
+    power_term,
     slip,
     slip_factor,
     switches,
@@ -87,10 +88,20 @@ def has_table(data: tuple[np.ndarray, ...]) -> bool:
 
 
 @njit(cache=True, inline="always", error_model="numpy")
+def has_power(data: tuple[np.ndarray, ...]) -> bool:
+    """Some law of the target has a power term (``c`` not 0)."""
+    laws = data[layout.DATA_LAWS]
+    for layer in range(laws.shape[0]):  # noqa: SIM110 (numba compiles no generator inside any())
+        if laws[layer].c != 0.0:
+            return True
+    return False
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def blended(data: tuple[np.ndarray, ...]) -> bool:
-    """Layers or a strength table: what the plain loops read in passes of their own
+    """Layers, a strength table or a power term: what the plain loops read in passes of their own
     (:func:`plain_layer_stresses`), outside their SIMD lanes."""
-    return has_layers(data) or has_table(data)
+    return has_layers(data) or has_table(data) or has_power(data)
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -220,12 +231,13 @@ def plain_layer_stresses(
     reach: float,
     buffers: tuple[np.ndarray, np.ndarray],
 ) -> None:
-    """Each point's law stress (Pa) on layers of plain laws into ``buffers[0]``: the layers' polynomials and
-    strength tables at ``max(Vn, 0)`` blended across each interface as :func:`layered_stress` blends them, in one
+    """Each point's law stress (Pa) on layers of plain laws into ``buffers[0]``: the layers' polynomials, power terms
+    and strength tables at ``max(Vn, 0)`` blended across each interface as :func:`layered_stress` blends them, in one
     pass over the points per layer that the body reaches (its centre's ``height`` above the front face give or take
     ``reach``, m), and a table's in passes of their own into ``buffers[1]`` (:func:`table_stresses`), so that each
-    pass keeps the SIMD lanes of the plain loop.  One law is one layer.  An infinite interface above the first layer
-    and below the last gives their blend factors exactly 1 and 0 without a branch."""
+    pass keeps the SIMD lanes of the plain loop (a power term's pass calls ``pow`` point by point, the main loop
+    keeps its lanes).  One law is one layer.  An infinite interface above the first layer and below the last gives
+    their blend factors exactly 1 and 0 without a branch."""
     interfaces, laws, tables = data[layout.DATA_INTERFACES], data[layout.DATA_LAWS], data[layout.DATA_TABLES]
     buffer, table_buffer = buffers
     last = interfaces.shape[0]
@@ -237,18 +249,53 @@ def plain_layer_stresses(
         if deepest < top or shallowest > bottom:
             continue  # every point's share of this layer is exactly zero
         law = laws[layer]
-        c0, k, c1, c2, _, _ = law_values(law)[0]
+        coefficients = law_values(law)[0]
         with_table = law.table_count > 0
         if with_table:
             table = tables[:, law.table_first : law.table_first + law.table_count]
             table_stresses(table, points, up, height, (shallowest, deepest), table_buffer)
-        for j in range(buffer.shape[0]):
-            _, _, normal_velocity, z = point_motion(normal_arm, points, j, g, up, height, True)
-            share = layer_share(top, bottom, -z, True, inverse_entry[j])
-            stress = polynomial_stress(law_velocity_scalars(normal_velocity, True), -z, c0, k, c1, c2)
-            if with_table:
-                stress += table_buffer[j]
-            buffer[j] += share * stress
+        bounds = (top, bottom)
+        # one loop with pow and one without, so that a law without a power term keeps its SIMD lanes
+        if coefficients[4] != 0.0:
+            _layer_pass(
+                normal_arm, points, inverse_entry, g, up, height, bounds, coefficients, True, with_table, buffers
+            )
+        else:
+            _layer_pass(
+                normal_arm, points, inverse_entry, g, up, height, bounds, coefficients, False, with_table, buffers
+            )
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _layer_pass(
+    normal_arm: np.ndarray,
+    points: np.ndarray,
+    inverse_entry: np.ndarray,
+    g: tuple[float, ...],
+    up: tuple[float, float, float],
+    height: float,
+    bounds: tuple[float, float],
+    coefficients: Coefficients,
+    with_power: bool,
+    with_table: bool,
+    buffers: tuple[np.ndarray, np.ndarray],
+) -> None:
+    """One layer's share of each point's stress added to ``buffers[0]`` (:func:`plain_layer_stresses`): its law at
+    ``max(Vn, 0)`` in the order :func:`~fem_loads.resistance.normal_stress_scalars` sums it, between the interfaces
+    ``bounds`` (m below the front face); ``with_power`` a constant where it is inlined."""
+    buffer, table_buffer = buffers
+    top, bottom = bounds
+    c0, k, c1, c2, c, n = coefficients
+    for j in range(buffer.shape[0]):
+        _, _, normal_velocity, z = point_motion(normal_arm, points, j, g, up, height, True)
+        share = layer_share(top, bottom, -z, True, inverse_entry[j])
+        law_velocity = law_velocity_scalars(normal_velocity, True)
+        stress = polynomial_stress(law_velocity, -z, c0, k, c1, c2)
+        if with_power:
+            stress += power_term(law_velocity, c, n)
+        if with_table:
+            stress += table_buffer[j]
+        buffer[j] += share * stress
 
 
 @njit(cache=True, inline="always", error_model="numpy")

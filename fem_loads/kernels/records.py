@@ -57,7 +57,10 @@ EFFECTS = np.dtype(
         ("max_radius", "f8"),  # m: the farthest point from the centre of mass
         ("reach", "f8"),  # m: max_radius widened by half the longest entry length (DAFLLoads.reach)
         ("needs_depth", "b1"),  # the stress depends on each point's depth (beyond entering)
-        ("plain", "b1"),  # polynomial laws (one, each layer's; tables too), both smooth ramps, separation: SIMD loops
+        (
+            "plain",
+            "b1",
+        ),  # built-in laws (one, each layer's; tables, power terms), both smooth ramps, separation: SIMD loops
         ("face_normal", "f8", (3,)),  # n: the front face n . X = d (world frame; target.FrontFace)
         ("face_offset", "f8"),  # d (m)
     ]
@@ -72,11 +75,11 @@ def in_lanes(
     law: ResistanceLaw | UserLaw | LayeredTarget, separation: bool, smooth_contact: bool, smooth_entry: bool
 ) -> bool:
     """Whether the compiled kernel computes this load in SIMD lanes (its plain loops, the effects record's
-    ``plain``): built-in polynomial laws, one or each layer's, depth terms and strength tables included (no power
-    term), with separation and both smooth ramps, the contact's and the entry's.  It computes any other load point
-    by point, no faster than the numpy path (docs/performance.md)."""
-    polynomial = all(isinstance(each, ResistanceLaw) and each.c == 0.0 for each in _laws(law))
-    return polynomial and separation and smooth_contact and smooth_entry
+    ``plain``): built-in laws, one or each layer's, depth terms, strength tables and power terms included (the last
+    two in passes of their own), with separation and both smooth ramps, the contact's and the entry's.  It computes
+    any other load point by point, no faster than the numpy path (docs/performance.md)."""
+    built_in = all(isinstance(each, ResistanceLaw) for each in _laws(law))
+    return built_in and separation and smooth_contact and smooth_entry
 
 
 def compilable(law: ResistanceLaw | UserLaw | LayeredTarget) -> bool:

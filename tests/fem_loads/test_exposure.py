@@ -143,9 +143,9 @@ def test_a_convex_body_has_no_table_and_loads_as_before():
         np.testing.assert_array_equal(np.concatenate(scene.loads(q)(*state)), np.concatenate(off(*state)))
 
 
-#: the compiled kernel's loops: the plain law, a plain law with a strength table and layers of plain laws (a row and
-#: an interface 2 m down, which the states straddle: both are read in passes of their own), and any other law (a
-#: power term)
+#: the compiled kernel's loops: the plain law, a plain law with a strength table, layers of plain laws (a row and
+#: an interface 2 m down, which the states straddle) and a power term, each read in passes of their own; and the
+#: loop of any other load, point by point (no separation)
 TARGETS = {
     "plain": {},
     "table": {
@@ -160,6 +160,7 @@ TARGETS = {
         "target.layers": [{"thickness": 2.0, "law": "soil"}, {"law": {"model": "polynomial", "c0": 8e6, "c2": 1500.0}}]
     },
     "power": {"target.law": {"model": "power", "c0": 17.18e6, "c": 5000.0, "n": 1.9}},
+    "point by point": {"effects.separation": False},
 }
 
 

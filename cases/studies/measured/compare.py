@@ -221,12 +221,15 @@ def compare_series(
     store: RunStore,
     out: str | os.PathLike,
     pool: Pool | None = None,
+    with_formulas: bool = False,
 ) -> SeriesComparison:
     """Every shot of ``series`` under each law; the laws ranked by their mean |error| over every measurement
     (then chi-squared); ``compare.md``, ``compare.csv``, ``compare.json`` and ``compare.png`` in ``out``.
 
     ``laws`` as :func:`compare_laws` takes them (None: each shot's scene's own law).  A series whose columns
-    set the law of each shot is refused: there would be nothing to compare.
+    set the law of each shot is refused: there would be nothing to compare.  ``with_formulas``: the empirical
+    formulas' depths (:func:`~.formulas.formula_rows`, on each shot's own scene) ranked with the laws, each
+    entry's ``kind`` saying which it is.
     """
     from .validate import error_summary, figure, prediction_rows
 
@@ -247,10 +250,15 @@ def compare_series(
         ranking.append(
             {
                 "law": label,
+                "kind": "law",
                 **error_summary(mine),
                 "quantities": {q: error_summary([r for r in mine if r["quantity"] == q]) for q in quantities},
             }
         )
+    if with_formulas:
+        estimates, ranked = _formula_entries(series, settings)
+        rows += estimates
+        ranking += ranked
     ranking.sort(key=_rank)
     for place, entry in enumerate(ranking, start=1):
         entry["rank"] = place
@@ -260,6 +268,34 @@ def compare_series(
     markdown = _series_markdown(comparison, series)
     write_report(out, Report("compare", markdown, table, comparison.record(), figures))
     return comparison
+
+
+def _formula_entries(series: Series, settings: list[tuple[str, Any]]) -> tuple[list[dict], list[dict]]:
+    """The empirical formulas' rows (one per measured depth, shaped as a law's) and ranking entries: each shot's
+    scene as the series and ``settings`` give it, whatever laws are compared."""
+    from .formulas import formula_rows
+    from .validate import error_summary
+
+    scenes = combined(series, series.parts(settings)).scenes
+    depths = [
+        (shot.label, shot.group, scenes[i], m.value)
+        for i, shot in enumerate(series.shots)
+        for m in shot.measurements
+        if m.quantity == "depth"
+    ]
+    found, _ = formula_rows(depths)
+    speeds = {label: scene.impact.speed for label, _, scene, _ in depths}
+    rows = [
+        {"law": row["formula"], "quantity": "depth", "impact_speed": speeds[row["label"]], "end_reason": None}
+        | {"warnings": [], **row}
+        for row in found
+    ]
+    ranking = []
+    for name in dict.fromkeys(row["law"] for row in rows):
+        mine = [row for row in rows if row["law"] == name]
+        summary = error_summary(mine)
+        ranking.append({"law": name, "kind": "formula", **summary, "quantities": {"depth": summary}})
+    return rows, ranking
 
 
 def _rank(entry: Mapping[str, Any]) -> tuple[float, float]:
@@ -274,7 +310,12 @@ def _series_markdown(comparison: SeriesComparison, series: Series) -> str:
 
     name = Path(series.source).name
     laws = [entry["law"] for entry in comparison.ranking]
-    lines = [f"# {name}: {len(series.shots)} shots under {len(laws)} resistance law{'s' if len(laws) != 1 else ''}"]
+    count = sum(entry["kind"] == "law" for entry in comparison.ranking)
+    formulas = len(laws) - count
+    lines = [
+        f"# {name}: {len(series.shots)} shots under {count} resistance law{'s' if count != 1 else ''}"
+        + (f" and {formulas} empirical formula{'s' if formulas != 1 else ''}" if formulas else "")
+    ]
     lines.append("")
     lines += settings_lines(comparison.settings)
     lines += markdown_table(
@@ -282,7 +323,7 @@ def _series_markdown(comparison: SeriesComparison, series: Series) -> str:
         [
             [
                 entry["rank"],
-                entry["law"],
+                entry["law"] if entry["kind"] == "law" else f"{entry['law']} (formula)",
                 f"{entry['shots']} ({entry['failed']} failed)" if entry["failed"] else entry["shots"],
                 *error_cells(entry),
             ]
@@ -292,7 +333,13 @@ def _series_markdown(comparison: SeriesComparison, series: Series) -> str:
     lines += [
         "",
         "Ranked by the mean |error| over every measurement (per cent of the measurement), then chi-squared"
-        " (where every shot gives a sigma). The scene's own law is `scene`.",
+        " (where every shot gives a sigma). The scene's own law is `scene`."
+        + (
+            " A formula predicts the depths of the shots it describes, each on the shot's own target"
+            " (penetrate formulas)."
+            if any(entry["kind"] == "formula" for entry in comparison.ranking)
+            else ""
+        ),
         "",
     ]
     by_key = {(row["law"], row["label"], row["quantity"]): row for row in comparison.rows}
@@ -303,7 +350,7 @@ def _series_markdown(comparison: SeriesComparison, series: Series) -> str:
                 shot.label,
                 measurement.quantity,
                 number_cell(measurement.value, ".4g"),
-                *(_prediction_cell(by_key[(law, shot.label, measurement.quantity)]) for law in laws),
+                *(_prediction_cell(by_key.get((law, shot.label, measurement.quantity))) for law in laws),
             ]
             for shot in series.shots
             for measurement in shot.measurements
@@ -313,10 +360,12 @@ def _series_markdown(comparison: SeriesComparison, series: Series) -> str:
     return "\n".join(lines)
 
 
-def _prediction_cell(row: Mapping[str, Any]) -> str:
+def _prediction_cell(row: Mapping[str, Any] | None) -> str:
     """One law's prediction of one measurement: ``predicted (error %)``, with the run's end unless it stopped or
-    exited; ``failed`` for a run that gave none."""
+    exited (a formula has none); ``failed`` for a run that gave none; ``-`` for a formula's missing quantity."""
+    if row is None:
+        return "-"
     if row["predicted"] is None:
         return "failed"
-    end = "" if row["end_reason"] in ("stopped", "exited") else f", {row['end_reason']}"
+    end = "" if row["end_reason"] in (None, "stopped", "exited") else f", {row['end_reason']}"
     return f"{number_cell(row['predicted'], '.4g')} ({number_cell(row['error_percent'], '+.1f')} %{end})"

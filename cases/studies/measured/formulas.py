@@ -137,8 +137,8 @@ def formulas(scene: Scene, ndrc_nose: str | None = None, reinforcement: float = 
     estimates.append(ndrc)
 
     degen = eq.Estimate(
-        "Degen (on the NDRC's depth)",
-        x_ndrc,
+        "Degen (perforation, on the NDRC's depth)",
+        None,
         eq.SOURCES["Degen perforation"],
         _normal(i) + [eq.Check("tp/d", eq.degen_perforation_thickness(x_ndrc, d) / d, 0.0, 18.0, "", True)],
     )
@@ -206,7 +206,8 @@ def formulas_report(result: Formulas, scene_name: str) -> Report:
 
 def formula_rows(shots: list[tuple[str, str, Scene, float]]) -> tuple[list[dict], list[str]]:
     """Each formula's depth for each measured depth ``(label, group, scene, measured)``: a row per shot and formula
-    (``error_percent`` of the measurement, ``valid``); and a line for each shot the formulas do not describe."""
+    of a depth (``error_percent`` of the measurement, ``valid``); and a line for each shot the formulas do not
+    describe."""
     rows, refused = [], []
     for label, group, scene, measured in shots:
         try:
@@ -215,6 +216,8 @@ def formula_rows(shots: list[tuple[str, str, Scene, float]]) -> tuple[list[dict]
             refused.append(f"{label}: {error}")
             continue
         for e in result.estimates:
+            if e.depth is None:  # a thickness only
+                continue
             rows.append(
                 {
                     "label": label,

@@ -313,3 +313,26 @@ def test_a_mass_in_the_scene_file_is_held_to_its_flared_body():
     assert scene_from_dict(heavy).projectile.mass == pytest.approx(1.5 * plain)
     with pytest.raises(SceneError, match="denser than 25000 kg/m"):
         scene_from_dict(apply_overrides(data, {"projectile.mass": 1.5 * plain}))
+
+
+@pytest.mark.parametrize("speed, warns", [(405.0, False), (1000.0, False), (1001.0, True), (1201.0, True)])
+def test_a_shot_into_concrete_above_a_kilometre_a_second_warns_of_mass_loss(speed, warns):
+    """Above about 1 km/s a steel nose loses mass in concrete (docs/laws.md: Forrestal et al.'s 1996 shots, within
+    6 % to 1069 m/s and 19.6 % too deep at 1201 m/s): the scene runs, says so in one line, and names the
+    formulas to compare with."""
+    lines = load_scene(scene_path(GROUT), {"impact.speed": speed}).warnings
+    if not warns:
+        assert lines == []
+        return
+    (line,) = lines
+    assert line.startswith(f"impact.speed = {number(speed)} m/s into concrete (target.law): above about 1000 m/s")
+    assert "loses mass" in line and "penetrate formulas SCENE" in line and "\n" not in line
+
+
+def test_the_mass_loss_warning_names_the_concrete_layer_and_leaves_soil_alone():
+    """Layers: the line names the concrete layer and no formulas (they take one homogeneous target); a soil at
+    1200 m/s (the paper's shots) is not concrete and says nothing of mass loss."""
+    (line,) = load_scene(scene_path("soil_over_sloping_concrete"), {"impact.speed": 1100.0}).warnings
+    assert line.startswith("impact.speed = 1100 m/s into concrete (target.layers.1.law)")
+    assert "formulas" not in line
+    assert load_scene(scene_path(TEST2), {"impact.speed": 1200.0}).warnings == []

@@ -39,7 +39,10 @@ def test_forrestal_1996_shot():
     assert not by_name["UKAEA"].valid and by_name["modified NDRC"].valid
     assert any("UKAEA: impact speed = 405 m/s lies outside its range 25-300 m/s" in m for m in result.messages)
     slower = formulas(scene.model_copy(update={"impact": scene.impact.model_copy(update={"speed": 250.0})}))
-    assert all(a.depth < b.depth for a, b in zip(slower.estimates, result.estimates))
+    assert all(a.depth < b.depth for a, b in zip(slower.estimates, result.estimates) if a.depth is not None)
+    degen = by_name["Degen (perforation, on the NDRC's depth)"]  # a thickness only: no depth of its own
+    x_ndrc = by_name["modified NDRC"].depth
+    assert degen.depth is None and degen.perforation == eq.degen_perforation_thickness(x_ndrc, i.diameter) > x_ndrc
 
 
 def test_an_oblique_shot_is_outside_every_formula():
@@ -69,6 +72,8 @@ def test_the_command_prints_one_object(tmp_path):
     record = json.loads(printed.getvalue())
     assert set(record) == {"inputs", "formulas", "messages"} and len(record["formulas"]) >= 4
     for entry in record["formulas"]:
-        assert {"name", "depth", "valid", "checks", "source"} <= set(entry) and entry["depth"] > 0
+        assert {"name", "depth", "valid", "checks", "source"} <= set(entry)
+        assert entry["depth"] > 0 if entry["depth"] is not None else entry["perforation"] > 0
+    assert sum(entry["depth"] is not None for entry in record["formulas"]) >= 4
     assert json.loads((out / "formulas.json").read_text()) == record
     assert (out / "formulas.md").read_text().startswith("# Empirical formulas: forrestal1996_concrete")

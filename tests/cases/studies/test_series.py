@@ -99,11 +99,11 @@ def test_validate_command_writes_its_outputs(tmp_path, capsys):
     # --formulas: each shot's depth by every formula of its own scene (penetrate formulas), beside the model's
     from cases.studies.measured.formulas import formulas
 
-    assert len(record["formulas"]) == 10 * 6 and record["formulas_refused"] == []
+    assert len(record["formulas"]) == 10 * 5 and record["formulas_refused"] == []  # Degen gives no depth
     first = read_series(CONCRETE).shots[0]
     own = formulas(load_scene(scene_path(first.scene), dict(first.values)))
-    by_formula = [(r["formula"], r["predicted"]) for r in record["formulas"][:6]]
-    assert by_formula == [(e.name, e.depth) for e in own.estimates]
+    by_formula = [(r["formula"], r["predicted"]) for r in record["formulas"][:5]]
+    assert by_formula == [(e.name, e.depth) for e in own.estimates if e.depth is not None]
     assert "| the model (DAFL run) | 10 |" in (out / "validate.md").read_text()
     assert set(record) >= {"shots", "summary", "groups"}
     assert set(record["shots"][0]) >= {"label", "group", "predicted", "measured", "error_percent", "end_reason"}
@@ -243,6 +243,26 @@ def test_compare_series_ranks_the_laws(tmp_path):
         "compare.json",
         "compare.png",
     }
+
+
+def test_compare_series_ranks_the_formulas_with_the_laws(tmp_path):
+    """``with_formulas``: each formula of a depth enters the ranking (``kind`` "formula") with the error summary
+    of its depths on the shots' own scenes, the same as validate --formulas gives, whatever law is compared."""
+    series = read_series(CONCRETE).subset(["v405", "v1009"])
+    store = RunStore(tmp_path / "store")
+    laws = [("weak", {"A": 5.0, "sigma_0": 51e6, "B": 1.0, "rho_0": 2300.0})]
+    comparison = compare_series(series, COARSE, laws, store, tmp_path / "out", SERIAL, with_formulas=True)
+    kinds = {entry["law"]: entry["kind"] for entry in comparison.ranking}
+    assert kinds["weak"] == "law" and len(kinds) == 1 + 5 and {"Li and Chen", "Young", "ACE"} <= set(kinds)
+    means = [entry["mean_abs_error_percent"] for entry in comparison.ranking]
+    assert means == sorted(means) and [e["rank"] for e in comparison.ranking] == list(range(1, 7))
+    own = validate(series, COARSE, store, SERIAL, curve_points=0, with_formulas=True)
+    for entry in (e for e in comparison.ranking if e["kind"] == "formula"):
+        mine = [row for row in own.formulas if row["formula"] == entry["law"]]
+        assert entry["mean_abs_error_percent"] == pytest.approx(error_summary(mine)["mean_abs_error_percent"])
+    markdown = (tmp_path / "out" / "compare.md").read_text()
+    assert markdown.startswith("# forrestal1996_concrete.csv: 2 shots under 1 resistance law and 5 empirical formulas")
+    assert "| Li and Chen (formula) |" in markdown
 
 
 def test_compare_series_refuses_a_series_that_sets_the_law(tmp_path):
