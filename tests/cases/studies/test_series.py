@@ -265,6 +265,17 @@ def test_compare_series_ranks_the_formulas_with_the_laws(tmp_path):
     assert "| Li and Chen (formula) |" in markdown
 
 
+def test_compare_formulas_on_a_scene_is_refused_in_one_line(tmp_path, capsys):
+    """The formulas are ranked on a test series only; on one scene the command says where to go, writes nothing."""
+    out = tmp_path / "o"
+    code = main(
+        ["compare", str(scene_path("forrestal1996_concrete")), "--laws", "scene", "--formulas"] + ["--out", str(out)]
+    )
+    assert code == 2 and not out.exists()
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert "compare --formulas" in line and "--series" in line and "penetrate formulas" in line
+
+
 def test_compare_series_refuses_a_series_that_sets_the_law(tmp_path):
     path = tmp_path / "s.csv"
     path.write_text("scene,target.law,measured.depth\nforrestal_luk_test2,softer_soil,5\n")
