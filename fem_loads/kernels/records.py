@@ -57,10 +57,7 @@ EFFECTS = np.dtype(
         ("max_radius", "f8"),  # m: the farthest point from the centre of mass
         ("reach", "f8"),  # m: max_radius widened by half the longest entry length (DAFLLoads.reach)
         ("needs_depth", "b1"),  # the stress depends on each point's depth (beyond entering)
-        (
-            "plain",
-            "b1",
-        ),  # built-in laws (one, each layer's; tables, power terms), both smooth ramps, separation: SIMD loops
+        ("plain", "b1"),  # in_lanes: built-in laws (tables, power terms), smooth ramps, separation: SIMD loops
         ("face_normal", "f8", (3,)),  # n: the front face n . X = d (world frame; target.FrontFace)
         ("face_offset", "f8"),  # d (m)
     ]

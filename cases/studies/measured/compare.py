@@ -277,14 +277,8 @@ def _formula_entries(series: Series, settings: list[tuple[str, Any]]) -> tuple[l
     from .validate import error_summary
 
     scenes = combined(series, series.parts(settings)).scenes
-    depths = [
-        (shot.label, shot.group, scenes[i], m.value)
-        for i, shot in enumerate(series.shots)
-        for m in shot.measurements
-        if m.quantity == "depth"
-    ]
-    found, _ = formula_rows(depths)
-    speeds = {label: scene.impact.speed for label, _, scene, _ in depths}
+    found, _ = formula_rows(series, scenes)
+    speeds = {shot.label: scene.impact.speed for shot, scene in zip(series.shots, scenes)}
     rows = [
         {"law": row["formula"], "quantity": "depth", "impact_speed": speeds[row["label"]], "end_reason": None}
         | {"warnings": [], **row}

@@ -10,7 +10,9 @@ describe (a law that is not the concrete family, layers) is refused in one line.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from mesh.profile import BluntOgiveNose, ConeNose, OgiveNose, SecantOgiveNose
 
@@ -18,6 +20,9 @@ from ...reference import empirical as eq
 from ...run import prepare_projectile
 from ...scene import InputError, Scene
 from ..engine.report import Report, markdown_table, number_cell
+
+if TYPE_CHECKING:
+    from .series import Series
 
 __all__ = ["FormulaInputs", "Formulas", "formula_inputs", "formulas", "formulas_report", "formula_rows", "NDRC_NOSES"]
 
@@ -204,30 +209,32 @@ def formulas_report(result: Formulas, scene_name: str) -> Report:
     return Report("formulas", "\n".join(lines) + "\n", record=result.as_dict())
 
 
-def formula_rows(shots: list[tuple[str, str, Scene, float]]) -> tuple[list[dict], list[str]]:
-    """Each formula's depth for each measured depth ``(label, group, scene, measured)``: a row per shot and formula
-    of a depth (``error_percent`` of the measurement, ``valid``); and a line for each shot the formulas do not
-    describe."""
+def formula_rows(series: Series, scenes: Sequence[Scene]) -> tuple[list[dict], list[str]]:
+    """Each formula's depth for each measured depth of ``series``, its shots run as ``scenes`` (in its order; more
+    are ignored): a row per shot and formula of a depth (``error_percent`` of the measurement, ``valid``); and a line
+    for each shot the formulas do not describe."""
     rows, refused = [], []
-    for label, group, scene, measured in shots:
-        try:
-            result = formulas(scene)
-        except InputError as error:
-            refused.append(f"{label}: {error}")
-            continue
-        for e in result.estimates:
-            if e.depth is None:  # a thickness only
+    for shot, scene in zip(series.shots, scenes):
+        for measured in (m.value for m in shot.measurements if m.quantity == "depth"):
+            label, group = shot.label, shot.group
+            try:
+                result = formulas(scene)
+            except InputError as error:
+                refused.append(f"{label}: {error}")
                 continue
-            rows.append(
-                {
-                    "label": label,
-                    "group": group,
-                    "formula": e.name,
-                    "predicted": e.depth,
-                    "measured": measured,
-                    "error_percent": 100.0 * (e.depth - measured) / abs(measured),
-                    "residual_sigmas": None,
-                    "valid": e.valid,
-                }
-            )
+            for e in result.estimates:
+                if e.depth is None:  # a thickness only
+                    continue
+                rows.append(
+                    {
+                        "label": label,
+                        "group": group,
+                        "formula": e.name,
+                        "predicted": e.depth,
+                        "measured": measured,
+                        "error_percent": 100.0 * (e.depth - measured) / abs(measured),
+                        "residual_sigmas": None,
+                        "valid": e.valid,
+                    }
+                )
     return rows, refused

@@ -232,13 +232,7 @@ def validate(
     if with_formulas:
         from .formulas import formula_rows
 
-        depths = [
-            (shot.label, shot.group, result.sweep.scenes[i], m.value)
-            for i, shot in enumerate(series.shots)
-            for m in shot.measurements
-            if m.quantity == "depth"
-        ]
-        validation.formulas, validation.formulas_refused = formula_rows(depths)
+        validation.formulas, validation.formulas_refused = formula_rows(series, result.sweep.scenes)
     return validation
 
 
