@@ -158,7 +158,8 @@ class ErrorControl(StepControl):
         magnitude[-1] = max(before.path_length, after.path_length)  # the path length, last
         assert result.error is not None  # start() takes adaptive methods only: every step estimates its error
         scaled = result.error / (self.atol + self.rtol * magnitude)
-        return float(np.sqrt(np.mean(scaled * scaled)))
+        # np.mean's own arithmetic (a sum, then a division by the count), without its dispatch: once a step
+        return float(np.sqrt(np.add.reduce(scaled * scaled) / scaled.size))
 
     def judge(self, result: StepResult, state: State, size: float) -> tuple[str, float | str]:
         finite = result.state.is_finite()

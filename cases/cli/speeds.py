@@ -129,7 +129,7 @@ def register(commands: argparse._SubParsersAction[Parser]) -> None:
         type=speed_range,
         default=(200.0, 1600.0),
         metavar="LOW:HIGH",
-        help="the range the critical impact velocity is sought in, m/s (default 200:1600)",
+        help="the range the critical impact velocity is sought in, m/s (default 200:1600; a list or a grid is refused)",
     )
     predict.add_argument(
         "--resolution",

@@ -401,6 +401,7 @@ def simulate_record(scene_json: str) -> tuple[dict, bytes | None]:
     import gzip  # a study's worker only
 
     buffer = io.BytesIO()
-    with gzip.GzipFile(fileobj=buffer, mode="wb", mtime=0) as gz:
+    # level 1: a seventh of level 9's time on a run's history, for a file 7 % larger
+    with gzip.GzipFile(fileobj=buffer, mode="wb", compresslevel=1, mtime=0) as gz:
         gz.write(history_csv(history, max(1, len(history["time"]) // MAX_STORED_HISTORY_ROWS)))
     return record, buffer.getvalue()

@@ -2,12 +2,13 @@
 
 ``penetrate ensemble ... --fidelity multi`` (docs/ensembles.md):
 
-1. **Sort.**  Every sample gets two reduced runs (:class:`~cases.studies.reduced.pitch_plane.ReducedModel`), at its
+1. **Sort.**  Each sample gets reduced runs (:class:`~cases.studies.reduced.pitch_plane.ReducedModel`) at its
    impact speed lowered and raised by :data:`MARGIN`: unstable at the lower speed, it is *unstable*;
    stable at the higher speed, *stable*; else it lies *near* the stability boundary.  The margin is the
    reduced model's largest measured error of a critical speed (0.6 %, docs/theory.md), about doubled.
-   (A sample unstable at the lower speed is not run at the higher one: the sort assumes that a faster
-   impact is no more stable; the estimate below does not rely on it.)
+   The sort assumes that a faster impact is no more stable (the estimate below does not rely on it), so
+   one run decides a sample that is not near: the first :data:`PILOT` samples are run at the lower speed
+   first, and every other one first at the speed that confirms the sort of its nearest pilot sample.
 2. **Full runs.**  Of ``full_runs`` full runs, up to :data:`NEAR_SHARE` go to near samples, the rest to a
    random audit of the stable and unstable samples, in proportion to their numbers; each chosen at random
    within its stratum (the seed's own stream).
@@ -65,6 +66,7 @@ MARGIN = 0.012  # relative change of the impact speed either side of a sample (t
 NEAR_SHARE = 0.25  # of the full runs, at most this share goes to the samples near the boundary
 REDUCED_KEYS = ("impact.speed", "impact.attack_angle", "impact.oblique_angle")
 STRATA = ("stable", "unstable", "near")  # the sort's codes 0, 1, 2
+PILOT = 1024  # samples sorted first, whose sort guesses which run decides each other sample
 
 
 def check_applies(scene: Scene, keys: Sequence[str]) -> None:
@@ -94,40 +96,72 @@ def _model(scene_json: str) -> Any:  # a ReducedModel, made once per process and
     return ReducedModel(scene, prepare_projectile(scene))
 
 
-def sort_chunk(scene_json: str, speeds: np.ndarray, attacks: np.ndarray, obliques: np.ndarray) -> np.ndarray:
-    """The sort (codes of :data:`STRATA`) of samples of the scene (m/s, deg): a worker's job."""
-    from ..speeds.instability import UNSTABLE_TURN
-
+def sort_chunk(
+    scene_json: str, speeds: np.ndarray, attacks: np.ndarray, obliques: np.ndarray, stable_first: np.ndarray
+) -> np.ndarray:
+    """The sort (codes of :data:`STRATA`) of samples of the scene (m/s, deg): a worker's job.  A sample marked
+    ``stable_first`` is run at its raised speed first (stable there, it is stable), any other at its lowered
+    speed first (unstable there, it is unstable): the same sort either way, one run for most samples when the
+    guess is right."""
     model = _model(scene_json)
     unit = model.starts(np.ones(len(speeds)), attacks, obliques)  # velocities scale with the speed
-    codes = np.empty(len(speeds), dtype=np.int8)
-    for i, speed in enumerate(speeds):
-        outcome = []
-        for factor in (1.0 - MARGIN, 1.0 + MARGIN):
-            start = unit[i].copy()
-            start[3:5] *= speed * factor
-            outcome.append(model.run(speed * factor, turn_limit=UNSTABLE_TURN, start=start).unstable)
-            if outcome[0]:
-                break
-        codes[i] = 1 if outcome[0] else (2 if outcome[1] else 0)
-    return codes
+    first = np.where(stable_first, 1.0 + MARGIN, 1.0 - MARGIN) * speeds
+    unstable_first = model.unstable(first, _at(unit, first))
+    # decided by the first run: stable at the raised speed, or unstable at the lowered one
+    undecided = np.flatnonzero(stable_first == unstable_first)
+    second = np.where(stable_first, 1.0 - MARGIN, 1.0 + MARGIN)[undecided] * speeds[undecided]
+    unstable_second = np.zeros(len(speeds), dtype=bool)
+    unstable_second[undecided] = model.unstable(second, _at(unit[undecided], second))
+    lowered = np.where(stable_first, unstable_second, unstable_first)
+    raised = np.where(stable_first, unstable_first, unstable_second)
+    # unstable at the lowered speed: unstable; else unstable at the raised one: near; else stable
+    return np.where(lowered, 1, np.where(raised, 2, 0)).astype(np.int8)
+
+
+def _at(unit_starts: np.ndarray, speeds: np.ndarray) -> np.ndarray:
+    """The starts at 1 m/s (rows of :meth:`~..reduced.pitch_plane.ReducedModel.starts`) with their velocities
+    at ``speeds`` (m/s)."""
+    starts = unit_starts.copy()
+    starts[:, 3:5] *= speeds[:, None]
+    return starts
 
 
 def sort_samples(scene: Scene, values: Mapping[str, np.ndarray], width: int) -> np.ndarray:
-    """Sort every sample (``values``: sampled key -> one value per sample) on ``width`` local processes."""
+    """Sort every sample (``values``: sampled key -> one value per sample) on ``width`` local processes.
+
+    The first :data:`PILOT` samples are sorted first; each other sample is guessed to sort as its nearest pilot
+    sample (each key scaled by its spread) and run first at the speed that confirms that guess.  The guess
+    changes only how many runs a sample costs, never its stratum."""
+    from scipy.spatial import cKDTree
+
     from ..engine.pool import map_local
 
     count = len(next(iter(values.values())))
     impact = scene.impact
-    columns = [
-        np.asarray(values.get(key, np.full(count, default)), dtype=float)
-        for key, default in zip(REDUCED_KEYS, (impact.speed, impact.attack_angle, impact.oblique_angle))
-    ]
+    columns = np.array(
+        [
+            np.asarray(values.get(key, np.full(count, default)), dtype=float)
+            for key, default in zip(REDUCED_KEYS, (impact.speed, impact.attack_angle, impact.oblique_angle))
+        ]
+    ).reshape(len(REDUCED_KEYS), count)
     scene_json = scene.model_dump_json()
-    _model(scene_json).run(impact.speed, time_limit=0.0)  # numba loads the model here, before workers fork
-    chunks = np.array_split(np.arange(count), max(1, min(count // 500, 8 * width)))
-    jobs = [(scene_json, *(column[chunk] for column in columns)) for chunk in chunks if len(chunk)]
-    return np.concatenate(map_local(sort_chunk, jobs, width)) if jobs else np.zeros(0, dtype=np.int8)
+    _model(scene_json).unstable(np.zeros(0), np.zeros((0, 6)))  # numba loads the model here, before workers fork
+
+    def sort(indices: np.ndarray, stable_first: np.ndarray, pieces: int) -> np.ndarray:
+        chunks = np.array_split(np.arange(len(indices)), max(1, min(len(indices) // 500, pieces)))
+        jobs = [(scene_json, *columns[:, indices[c]], stable_first[c]) for c in chunks if len(c)]
+        return np.concatenate(map_local(sort_chunk, jobs, width)) if jobs else np.zeros(0, dtype=np.int8)
+
+    pilot = np.arange(min(count, PILOT))
+    codes = np.empty(count, dtype=np.int8)
+    codes[pilot] = sort(pilot, np.zeros(len(pilot), dtype=bool), width)
+    rest = np.arange(len(pilot), count)
+    if len(rest):
+        scale = columns[:, pilot].std(axis=1)
+        scale[scale == 0.0] = 1.0
+        _, nearest = cKDTree((columns[:, pilot] / scale[:, None]).T).query((columns[:, rest] / scale[:, None]).T)
+        codes[rest] = sort(rest, codes[pilot][nearest] == 0, 8 * width)
+    return codes
 
 
 def choose(codes: np.ndarray, full_runs: int, seed: int) -> np.ndarray:
@@ -303,7 +337,7 @@ def multi_markdown(record: dict, name: str) -> str:
         f"# {name}: a multi-fidelity ensemble of {record['runs']} samples, {record['full_runs']} full runs",
         "",
         f"Design {record['design']}, seed {record['seed']}. The reduced pitch-plane model sorted every sample by"
-        f" two runs at its speed -/+ {100 * record['margin']:.1f} % ({record['sort_time']:.1f} s): stable"
+        f" its runs at its speed -/+ {100 * record['margin']:.1f} % ({record['sort_time']:.1f} s): stable"
         f" {strata['stable']}, unstable {strata['unstable']}, near the boundary {strata['near']}. Full runs:"
         f" {record['by_stratum']['near']['runs']} near, an audit of {record['by_stratum']['stable']['runs']} stable"
         f" and {record['by_stratum']['unstable']['runs']} unstable. Each stratum's probability is measured by its"

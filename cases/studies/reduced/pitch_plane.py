@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import asdict, dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -38,6 +39,9 @@ from ...run.compiled import announce_compiling, use_numba_cache
 from ...scene import InputError, Scene
 from ..engine.search import Bracket, search
 from ..speeds.instability import MAX_SPEED, UNSTABLE_TURN, disturbance_fix, raised_speeds, range_fix
+
+if TYPE_CHECKING:
+    from dynamics.pitch_plane import PlaneEnds, PlaneSteps
 
 __all__ = [
     "ReducedModel",
@@ -152,6 +156,24 @@ class ReducedModel:
             ]
         )
 
+    def _controls(
+        self, speed: float, turn_limit: float, time_limit: float | None, stop_when_converged: bool
+    ) -> tuple[PlaneSteps, PlaneEnds]:
+        """The step control and ends of a reduced run at ``speed`` (m/s; ``turn_limit`` in deg)."""
+        from dynamics.pitch_plane import PlaneEnds, PlaneSteps
+
+        length, numerics = self.prepared.length, self.scene.numerics
+        # absolute tolerances as the full model's error control sets them (cases.run.step_control)
+        scales = np.array([length, length, 0.01, speed, speed, 0.01 * speed / length])
+        return PlaneSteps(self.rtol, scales, 1e-3 * length / speed, math.inf), PlaneEnds(
+            numerics.stop_speed_at(speed),
+            numerics.time_limit if time_limit is None else time_limit,
+            math.radians(turn_limit),
+            math.radians(CONVERGENCE_THRESHOLD),
+            0.1 * speed,
+            stop_when_converged,
+        )
+
     def run(
         self,
         speed: float,
@@ -163,10 +185,7 @@ class ReducedModel:
         """A reduced run from impact at ``speed`` (m/s) to its end (``turn_limit``: an axis turn that ends it, deg;
         ``time_limit``: s, the scene's by default; ``start``: a state of :meth:`starts` with this speed instead of
         the scene's)."""
-        length, numerics = self.prepared.length, self.scene.numerics
-        # absolute tolerances as the full model's error control sets them (cases.run.step_control)
-        scales = np.array([length, length, 0.01, speed, speed, 0.01 * speed / length])
-        from dynamics.pitch_plane import END_REASONS, PlaneBody, PlaneEnds, PlaneSteps
+        from dynamics.pitch_plane import END_REASONS, PlaneBody
 
         outcome = self._trajectory(
             self.surface.rings,
@@ -175,15 +194,7 @@ class ReducedModel:
             self.surface.outline,
             self.start(speed) if start is None else start,
             PlaneBody(self.mass, self.inertia, self.gravity),
-            PlaneSteps(self.rtol, scales, 1e-3 * length / speed, math.inf),
-            PlaneEnds(
-                numerics.stop_speed_at(speed),
-                numerics.time_limit if time_limit is None else time_limit,
-                math.radians(turn_limit),
-                math.radians(CONVERGENCE_THRESHOLD),
-                0.1 * speed,
-                stop_when_converged,
-            ),
+            *self._controls(speed, turn_limit, time_limit, stop_when_converged),
         )
         end, _, _, turn, peak, _, converged, _, _, evaluations = outcome
         turn = math.degrees(turn)  # the run's axis_angle_change
@@ -196,6 +207,40 @@ class ReducedModel:
             converged if converged >= 0.0 else None,
             int(evaluations),
         )
+
+    def unstable(self, speeds: np.ndarray, starts: np.ndarray) -> np.ndarray:
+        """Whether each reduced run turns unstable, from the rows of ``starts`` (:meth:`starts`) at ``speeds``
+        (m/s): :meth:`run`'s ``unstable`` with ``turn_limit`` the unstable turn, for many runs in one compiled call
+        (what sorting an ensemble's samples costs is then the runs alone)."""
+        from dynamics.pitch_plane import PlaneBody
+
+        from ...run.pitch_plane_step import pitch_plane_turns
+
+        controls = [self._controls(float(speed), UNSTABLE_TURN, None, True) for speed in speeds]
+        steps, ends = controls[0] if controls else self._controls(1.0, UNSTABLE_TURN, None, True)
+        turns = pitch_plane_turns(
+            self.surface.rings,
+            self.laws,
+            self.effects,
+            self.surface.outline,
+            np.ascontiguousarray(starts, dtype=float).reshape(-1, 6),
+            PlaneBody(self.mass, self.inertia, self.gravity),
+            (
+                steps.rtol,
+                np.array([c[0].scales for c in controls]).reshape(-1, 6),
+                np.array([c[0].first_step for c in controls]),
+                steps.max_step,
+            ),
+            (
+                np.array([c[1].stop_speed for c in controls]),
+                ends.time_limit,
+                ends.turn_limit,
+                ends.threshold,
+                np.array([c[1].peak_floor for c in controls]),
+                ends.stop_when_converged,
+            ),
+        )
+        return np.array([abs(math.degrees(turn)) >= UNSTABLE_TURN for turn in turns], dtype=bool)
 
 
 @dataclass

@@ -82,20 +82,49 @@ def coarse_p3():
     return load_scene(scene_path("paper_p3"), {"numerics.mesh_size": 0.04})
 
 
-def test_the_sort_is_the_reduced_runs_at_the_speed_minus_and_plus_the_margin(coarse_p3):
+@pytest.mark.parametrize("stable_first", [False, True])
+def test_the_sort_is_the_reduced_runs_at_the_speed_minus_and_plus_the_margin(coarse_p3, stable_first):
     from cases.run import prepare_projectile
     from cases.studies.reduced.pitch_plane import ReducedModel
 
     speeds = np.array([700.0, 905.0, 915.0, 1300.0, 1000.0])
     attacks = np.array([1.0, 1.0, 1.0, 0.05, 3.0])
     obliques = np.zeros(5)
-    codes = sort_chunk(coarse_p3.model_dump_json(), speeds, attacks, obliques)
+    codes = sort_chunk(coarse_p3.model_dump_json(), speeds, attacks, obliques, np.full(5, stable_first))
     for speed, attack, code in zip(speeds, attacks, codes):
         scene = coarse_p3.model_copy(update={"impact": coarse_p3.impact.model_copy(update={"attack_angle": attack})})
         model = ReducedModel(scene, prepare_projectile(scene))
         low, high = (model.run(speed * f, turn_limit=30.0).unstable for f in (1 - MARGIN, 1 + MARGIN))
         assert STRATA[code] == ("unstable" if low else "near" if high else "stable")
     assert list(codes) == [0, 2, 2, 0, 1]
+
+
+def test_the_pilot_guess_changes_the_runs_a_sample_costs_not_its_stratum(coarse_p3, monkeypatch):
+    from cases.studies.ensemble import multifidelity
+    from cases.studies.reduced.pitch_plane import ReducedModel
+
+    rng = np.random.default_rng(5)
+    values = {"impact.speed": rng.uniform(700.0, 1300.0, 400), "impact.attack_angle": rng.uniform(0.0, 3.0, 400)}
+    runs = [0]
+    unstable = ReducedModel.unstable
+
+    def counted(self, speeds, starts):
+        runs[0] += len(speeds)
+        return unstable(self, speeds, starts)
+
+    monkeypatch.setattr(ReducedModel, "unstable", counted)
+    monkeypatch.setattr(multifidelity, "PILOT", 100)
+    guessed = multifidelity.sort_samples(coarse_p3, values, 1)
+    guessed_runs, runs[0] = runs[0], 0
+    columns = (values["impact.speed"], values["impact.attack_angle"], np.zeros(400))
+    lowered_first = sort_chunk(coarse_p3.model_dump_json(), *columns, np.zeros(400, dtype=bool))
+    np.testing.assert_array_equal(guessed, lowered_first)
+    assert set(guessed) == {0, 1, 2}  # all three strata, so that the guess had something to get wrong
+    # the lowered speed first costs a second run for every sample not unstable; after the pilot (sorted that
+    # way), the guess costs a second run only for the near samples and the few it gets wrong (here under 5 %)
+    assert runs[0] == 400 + np.count_nonzero(lowered_first != 1)
+    pilot, rest = lowered_first[:100], lowered_first[100:]
+    assert guessed_runs <= 100 + np.count_nonzero(pilot != 1) + 300 + np.count_nonzero(rest == 2) + 15 < runs[0]
 
 
 @pytest.mark.parametrize(
