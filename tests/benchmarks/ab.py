@@ -70,7 +70,16 @@ FAMILY = [
 ]
 
 
-STUDIES = {"sweep", "critical", "convergent", "compare", "accuracy", "contact", "entry", "paper"}
+def _study_commands() -> set[str]:
+    """The commands that keep their runs in a store (those that take ``--store``), from this checkout's parser:
+    each gets a fresh store, so that a study is timed from an empty one."""
+    from cases.cli import build_parser
+
+    commands = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)).choices
+    return {name for name, sub in commands.items() if any("--store" in a.option_strings for a in sub._actions)}
+
+
+STUDIES = _study_commands()
 
 
 def _timed(checkout: Path, cache: Path, args: list[str]) -> tuple[float, dict | None]:
