@@ -5,8 +5,8 @@ fresh machine compiles nothing and meshes nothing (the README's promise).  Each 
 scene given) is prepared (gmsh mesh, mass properties and quadrature, into the disk cache of
 :func:`cases.run.cache_dir`); a scene a study would run compiled builds its compiled step (numba compiles
 each argument type once: a scene with gravity is another signature), and a scene the reduced model takes
-runs one reduced trajectory.  On a warm cache this only loads (a few seconds); what it has to compile or
-mesh it announces on stderr first.
+runs one reduced trajectory and the ensembles' sort of samples.  On a warm cache this only loads (a few
+seconds); what it has to compile or mesh it announces on stderr first.
 """
 
 from __future__ import annotations
@@ -16,6 +16,8 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
+
+import numpy as np
 
 from .. import SCENE_DIR
 from ..run import PreparedProjectile, prepare_projectile
@@ -42,6 +44,7 @@ def _reduced(scene: Scene, prepared: PreparedProjectile) -> None:
     except InputError:  # a body or target the reduced model does not take: nothing of it to compile
         return
     model.run(scene.impact.speed)
+    model.unstable(np.zeros(0), np.zeros((0, 6)))  # the multi-fidelity sort's many runs in one call
 
 
 def warm_caches(
