@@ -6,7 +6,6 @@ DataFrame for the studies and pictures.  A plain run needs no pandas (it costs 0
 
 from __future__ import annotations
 
-import io
 import re
 from collections.abc import Mapping
 from typing import TYPE_CHECKING
@@ -154,16 +153,16 @@ def history_csv(table: pd.DataFrame | Mapping[str, np.ndarray], every: int = 1) 
     """The table as CSV with ten significant digits, every ``every``-th row and always the last.
 
     Undefined cells (``resistance_centre_from_tip`` without a transverse force) are
-    empty, never ``nan``.  numpy's writer: four times faster than pandas' here.
+    empty, never ``nan``.  Formatted as numpy's ``savetxt`` does, without its per-row overhead.
     """
     names = list(table.keys())
     values = np.column_stack([np.asarray(table[name], dtype=float) for name in names])
     kept = values[::every]
     if (len(values) - 1) % every:
         kept = np.vstack([kept, values[-1:]])  # always keep the end
-    buffer = io.StringIO()
-    np.savetxt(buffer, kept, fmt="%.10g", delimiter=",", header=",".join(names), comments="")
-    return _NON_FINITE_CELL.sub("", buffer.getvalue()).encode()
+    row = ",".join(["%.10g"] * len(names))  # numpy's savetxt formats each row so, one call a row
+    text = "\n".join([",".join(names), *(row % tuple(values) for values in kept.tolist()), ""])
+    return (text if np.isfinite(kept).all() else _NON_FINITE_CELL.sub("", text)).encode()
 
 
 def attack_angle_peak(history: pd.DataFrame | Mapping[str, np.ndarray]) -> int:

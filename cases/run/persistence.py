@@ -70,8 +70,10 @@ CODE = {
 }
 
 
+@functools.cache
 def _umask() -> int:
-    """The process's umask, read without changing it where the system tells it (Linux)."""
+    """The process's umask, read without changing it where the system tells it (Linux); once per process (this
+    project never changes it; reading it at every write cost the 1 024 full runs of an ensemble about 1.6 s)."""
     try:
         with open("/proc/self/status") as f:
             for line in f:

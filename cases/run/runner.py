@@ -19,7 +19,7 @@ import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from threadpoolctl import ThreadpoolController
@@ -41,7 +41,7 @@ from dynamics import (
     simulate,
 )
 from dynamics.integrators import Stepper
-from dynamics.quaternion import multiply, rotation_matrix
+from dynamics.quaternion import hamilton_scalars, rotation_matrix
 from fem_loads.target import FrontFace, face_height_scalars
 
 from ..scene import Scene
@@ -51,6 +51,7 @@ if TYPE_CHECKING:
     from dynamics import RungeKutta
     from dynamics.compiled_rk import CompiledLoad, CompiledRungeKutta
     from fem_loads import DAFLLoads
+    from mesh import Profile
 
 __all__ = [
     "RunResult",
@@ -112,8 +113,11 @@ class RunResult:
     integration_time: float
 
 
-def initial_attitude(oblique_angle: float, attack_angle: float, yaw_angle: float) -> np.ndarray:
-    """Body-to-world attitude quaternion at impact (angles in degrees).
+def initial_attitude(
+    oblique_angle: float | np.ndarray, attack_angle: float | np.ndarray, yaw_angle: float | np.ndarray
+) -> np.ndarray:
+    """Body-to-world attitude quaternion at impact (angles in degrees), shape ``(4,)``; for arrays of angles
+    (broadcast together) one quaternion per entry, shape ``(..., 4)``.
 
     The axis leaves the downward vertical by ``oblique_angle + attack_angle`` in the
     ``XZ`` plane and turns by ``yaw_angle`` towards ``Y``; the body ``y`` axis stays in
@@ -122,14 +126,13 @@ def initial_attitude(oblique_angle: float, attack_angle: float, yaw_angle: float
     straight normal impact starts exactly on the axis (``cos`` and ``sin`` of 45 degrees
     differ by one ulp in floating point).
     """
-    pitch = math.radians(oblique_angle + attack_angle) / 2  # about -Y
-    yaw = math.radians(yaw_angle) / 2  # about body z
+    # floats or arrays (the quaternion arithmetic is elementwise)
+    pitch: Any = np.radians(np.add(oblique_angle, attack_angle)) / 2  # about -Y
+    yaw: Any = np.radians(yaw_angle) / 2  # about body z
     half = math.sqrt(0.5)
-    nose_down = np.array([half, 0.0, half, 0.0])
-    return multiply(
-        multiply(nose_down, np.array([math.cos(pitch), 0.0, -math.sin(pitch), 0.0])),
-        np.array([math.cos(yaw), 0.0, 0.0, math.sin(yaw)]),
-    )
+    pitched = hamilton_scalars(half, 0.0, half, 0.0, np.cos(pitch), 0.0, -np.sin(pitch), 0.0)
+    turned = hamilton_scalars(*pitched, np.cos(yaw), 0.0, 0.0, np.sin(yaw))
+    return np.stack(np.broadcast_arrays(*turned), axis=-1).astype(float)
 
 
 def initial_state(scene: Scene, prepared: PreparedProjectile) -> State:
@@ -152,21 +155,50 @@ def impact_positions(
     positions = -rotations @ prepared.tip  # the tip at the origin
     ups = np.asarray(normal) @ rotations  # R^T n: the face's normal in each body frame
     if prepared.outline is None:
-        # lowest point of the exact surface relative to the tip: min over s of
-        # (-s axis_Z - r(s) |transverse part of Z|), in blocks that keep the (n, 20001) products small
-        profile = prepared.profile
-        s = np.linspace(0.0, profile.length, 20001)
-        radius = profile.radius_at(s)
-        lowest = np.concatenate(
-            [
-                np.min(-np.outer(up[:, 0], s) - np.outer(np.hypot(up[:, 1], up[:, 2]), radius), axis=1)
-                for up in np.array_split(ups, max(1, len(ups) // 256))
-            ]
-        )
+        lowest = profile_lowest(prepared.profile, ups[:, 0], np.hypot(ups[:, 1], ups[:, 2]))
     else:  # a file's body: its lowest quadrature point (on the exact surface, within a fraction of an element)
         lowest = np.min((prepared.quadrature.points - prepared.tip) @ ups.T, axis=0)
     positions -= np.minimum(lowest, 0.0)[:, None] * np.asarray(normal)
     return positions
+
+
+#: the points of a profile that :func:`profile_lowest` takes, evenly spaced along the axis
+PROFILE_POINTS = 20001
+
+
+@functools.lru_cache(maxsize=8)
+def _upper_hull(profile: Profile) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The upper convex hull of the profile's points ``(s, r(s))`` (:data:`PROFILE_POINTS` of them): its
+    vertices' ``s`` and ``r`` (m, by ``s``) and the negated slopes of its edges, which rise along it.
+
+    Points under the chord of their neighbours are dropped, all at once, until none is left: each dropped
+    point lies under the hull, so dropping them together is safe, and a profile needs a few passes."""
+    s = np.linspace(0.0, profile.length, PROFILE_POINTS)
+    r = profile.radius_at(s)
+    keep = np.ones(len(s), dtype=bool)
+    while True:
+        si, ri = s[keep], r[keep]
+        above = (ri[1:-1] - ri[:-2]) * (si[2:] - si[:-2]) - (ri[2:] - ri[:-2]) * (si[1:-1] - si[:-2]) > 0.0
+        if above.all():
+            return si, ri, -np.diff(ri) / np.diff(si)
+        kept = np.flatnonzero(keep)
+        keep[kept[1:-1][~above]] = False
+
+
+def profile_lowest(profile: Profile, along: np.ndarray, across: np.ndarray) -> np.ndarray:
+    """The lowest height of the body surface relative to its tip, along an upward direction with body
+    components ``along`` the axis and ``across`` it (``>= 0``, the transverse part's length), one per entry:
+    the minimum over the profile's points of ``-s along - r(s) across`` (m).
+
+    Evaluated on the upper convex hull of the points (:func:`_upper_hull`), where a linear function's
+    extreme lies: the vertex where the edges' slopes pass ``-along / across`` and its two neighbours, so
+    any number of directions costs a search each, not a sweep over the points."""
+    s, r, falling = _upper_hull(profile)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.divide(along, across)
+    vertex = np.searchsorted(falling, ratio)
+    candidates = np.clip(vertex[:, None] + np.arange(-1, 2), 0, len(s) - 1)
+    return np.min(-(along[:, None] * s[candidates]) - across[:, None] * r[candidates], axis=1)
 
 
 class WithGravity:

@@ -9,8 +9,9 @@ own modules; a :class:`Scene` builds its DAFL load function from them.
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal, Self
+from typing import Annotated, Any, Literal, Self
 
+import numpy as np
 from pydantic import BeforeValidator, model_validator
 
 from fem_loads import DAFLLoads, SurfaceQuadrature
@@ -107,10 +108,11 @@ class Numerics(Strict):
         " separation; numpy for a single run, a user's law or another switch)",
     )
 
-    def stop_speed_at(self, impact_speed: float) -> float:
+    def stop_speed_at(self, impact_speed: float | np.ndarray) -> Any:
         """The speed (m/s) below which a run at ``impact_speed`` (m/s) has stopped: ``stop_speed``, at most
-        :data:`STOP_SPEED_FRACTION` of the impact speed."""
-        return min(self.stop_speed, STOP_SPEED_FRACTION * impact_speed)
+        :data:`STOP_SPEED_FRACTION` of the impact speed (a float, or an array for an array of speeds)."""
+        stop = np.minimum(self.stop_speed, STOP_SPEED_FRACTION * np.asarray(impact_speed, dtype=float))
+        return float(stop) if stop.ndim == 0 else stop
 
     @model_validator(mode="after")
     def _reachable_time_limit(self) -> Self:

@@ -41,10 +41,16 @@ class Report:
         return [*names, f"{self.name}.md", *self.figures]
 
 
-def write_report(out: str | os.PathLike, report: Report) -> list[Path]:
+def write_report(out: str | os.PathLike, report: Report, width: int = 1) -> list[Path]:
     """Write ``report`` into the folder ``out`` (made if missing), each file atomically: the one way a study puts
-    its report on disk.  Returns the paths written."""
+    its report on disk.  Returns the paths written.
+
+    ``width`` > 1 draws the figures on that many local processes (the study's warm workers,
+    :func:`~.pool.map_local`): each figure function must then be a module's function with its data bound
+    (``functools.partial``), which a process can be sent.  A figure costs about half a second, most of it
+    matplotlib's drawing."""
     from ...run import atomic_write_text, write_json
+    from .pool import map_local
 
     folder = Path(out)
     folder.mkdir(parents=True, exist_ok=True)
@@ -53,9 +59,13 @@ def write_report(out: str | os.PathLike, report: Report) -> list[Path]:
     if report.record is not None:
         write_json(folder / f"{report.name}.json", report.record)
     atomic_write_text(folder / f"{report.name}.md", report.markdown)
-    for name, draw in report.figures.items():
-        draw(folder / name)
+    map_local(_draw, [(draw, folder / name) for name, draw in report.figures.items()], width)
     return [folder / name for name in report.files()]
+
+
+def _draw(draw: Callable[[Path], None], path: Path) -> None:
+    """One figure of a report (a job of :func:`~.pool.map_local`)."""
+    draw(path)
 
 
 def number_cell(value: Any, spec: str = ".3g", missing: str = "-") -> str:

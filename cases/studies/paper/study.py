@@ -78,6 +78,7 @@ def reproduce(out: str | Path, store: RunStore, pool: Pool | None = None) -> dic
             record=record,
             figures=drawn,
         ),
+        study.pool.width,
     )
     return record
 
@@ -91,20 +92,19 @@ def _figures(
     fits: dict[str, dict],
     boundaries: list[TurnBoundary],
 ) -> dict[str, Callable[[Path], None]]:
-    """The study's figures by file name, each a function that draws it into the path it is given."""
+    """The study's figures by file name, each a function that draws it into the path it is given (a module's
+    function with its data bound, so that the study's workers can draw them)."""
     drawn: dict[str, Callable[[Path], None]] = {}
     p3_boundary = boundaries[ratios.index(P3)]
-    drawn["turn_boundary_p3.png"] = lambda path: figures.boundary_figure(
-        study, p3_boundary, runs[("attack 1", P3)], path
-    )
+    p3_runs = runs[("attack 1", P3)]
+    drawn["turn_boundary_p3.png"] = functools.partial(figures.boundary_figure, study, p3_boundary, p3_runs)
     for r in ratios:
         named = [(f"{run.speed:.0f} m/s", run.key) for run in runs[("attack 1", r)]]
         title = f"Lc/L = {label(r)}, 1 degree attack: six impact speeds around the critical"
         drawn[f"{figure_name(r)}.png"] = functools.partial(figures.angle_figure, study, named, title)
     attack5 = [(f"{run.speed:.0f} m/s", run.key) for run in runs[("attack 5", P3)]]
-    drawn["angles_p3_attack5.png"] = lambda path: figures.angle_figure(
-        study, attack5, "projectile #3, 5 degrees attack", path
-    )
+    attack5_title = "projectile #3, 5 degrees attack"
+    drawn["angles_p3_attack5.png"] = functools.partial(figures.angle_figure, study, attack5, attack5_title)
     oblique = [
         (f"{angle} deg oblique, {run.speed:.0f} m/s", run.key)
         for angle in (10, 20, 30)
@@ -112,7 +112,7 @@ def _figures(
         if run.speed in (800, 1200)
     ]
     oblique_title = "projectile #3, 1 degree attack with 10, 20 and 30 degrees oblique"
-    drawn["angles_p3_oblique.png"] = lambda path: figures.angle_figure(study, oblique, oblique_title, path)
+    drawn["angles_p3_oblique.png"] = functools.partial(figures.angle_figure, study, oblique, oblique_title)
     p3 = runs[("attack 1", P3)]
     stable, unstable = [run for run in p3 if not run.unstable], [run for run in p3 if run.unstable]
     pair = ([max(stable, key=lambda run: run.speed)] if stable else []) + (
@@ -134,7 +134,7 @@ def _figures(
     }
     for name, (named, title) in histories.items():
         drawn[name] = functools.partial(figures.history_figure, study, named, centre, title)
-    drawn["speeds_vs_lc.png"] = lambda path: figures.speeds_figure(ratios, critical, convergent["attack 1"], fits, path)
+    drawn["speeds_vs_lc.png"] = functools.partial(figures.speeds_figure, ratios, critical, convergent["attack 1"], fits)
     return drawn
 
 

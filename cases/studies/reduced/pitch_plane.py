@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import asdict, dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -138,12 +138,11 @@ class ReducedModel:
     def starts(self, speeds: np.ndarray, attack_angles: np.ndarray, oblique_angles: np.ndarray) -> np.ndarray:
         """The planar states at impact, shape ``(n, 6)``, for impact ``speeds`` (m/s) and attack and oblique angles
         (deg) in place of the scene's, with its pitch rate: the run's own start (:func:`cases.run.initial_state`)."""
-        from dynamics.quaternion import rotation_matrix
+        from dynamics.quaternion import rotation_scalars
 
-        rotations = np.array(
-            [rotation_matrix(initial_attitude(b, a, 0.0)) for a, b in zip(attack_angles, oblique_angles)]
-        )
-        positions = impact_positions(self.prepared, rotations.reshape(-1, 3, 3))
+        attitudes = initial_attitude(np.asarray(oblique_angles, dtype=float), np.asarray(attack_angles), 0.0)
+        rotations = np.stack(rotation_scalars(*attitudes.reshape(-1, 4).T), axis=-1).reshape(-1, 3, 3)
+        positions = impact_positions(self.prepared, rotations)
         beta = np.radians(oblique_angles)
         return np.column_stack(
             [
@@ -157,14 +156,16 @@ class ReducedModel:
         )
 
     def _controls(
-        self, speed: float, turn_limit: float, time_limit: float | None, stop_when_converged: bool
+        self, speed: Any, turn_limit: float, time_limit: float | None, stop_when_converged: bool
     ) -> tuple[PlaneSteps, PlaneEnds]:
-        """The step control and ends of a reduced run at ``speed`` (m/s; ``turn_limit`` in deg)."""
+        """The step control and ends of a reduced run at ``speed`` (m/s, a float; ``turn_limit`` in deg).  For an
+        array of speeds, one entry per run where they depend on it: the scales then have shape ``(n, 6)``."""
         from dynamics.pitch_plane import PlaneEnds, PlaneSteps
 
         length, numerics = self.prepared.length, self.scene.numerics
         # absolute tolerances as the full model's error control sets them (cases.run.step_control)
-        scales = np.array([length, length, 0.01, speed, speed, 0.01 * speed / length])
+        v = np.asarray(speed, dtype=float)
+        scales = np.stack(np.broadcast_arrays(length, length, 0.01, v, v, 0.01 * v / length), axis=-1)
         return PlaneSteps(self.rtol, scales, 1e-3 * length / speed, math.inf), PlaneEnds(
             numerics.stop_speed_at(speed),
             numerics.time_limit if time_limit is None else time_limit,
@@ -216,8 +217,8 @@ class ReducedModel:
 
         from ...run.pitch_plane_step import pitch_plane_turns
 
-        controls = [self._controls(float(speed), UNSTABLE_TURN, None, True) for speed in speeds]
-        steps, ends = controls[0] if controls else self._controls(1.0, UNSTABLE_TURN, None, True)
+        speeds = np.asarray(speeds, dtype=float)
+        steps, ends = self._controls(speeds, UNSTABLE_TURN, None, True)
         turns = pitch_plane_turns(
             self.surface.rings,
             self.laws,
@@ -225,22 +226,17 @@ class ReducedModel:
             self.surface.outline,
             np.ascontiguousarray(starts, dtype=float).reshape(-1, 6),
             PlaneBody(self.mass, self.inertia, self.gravity),
+            (steps.rtol, steps.scales.reshape(-1, 6), np.asarray(steps.first_step), steps.max_step),
             (
-                steps.rtol,
-                np.array([c[0].scales for c in controls]).reshape(-1, 6),
-                np.array([c[0].first_step for c in controls]),
-                steps.max_step,
-            ),
-            (
-                np.array([c[1].stop_speed for c in controls]),
+                np.asarray(ends.stop_speed),
                 ends.time_limit,
                 ends.turn_limit,
                 ends.threshold,
-                np.array([c[1].peak_floor for c in controls]),
+                np.asarray(ends.peak_floor),
                 ends.stop_when_converged,
             ),
         )
-        return np.array([abs(math.degrees(turn)) >= UNSTABLE_TURN for turn in turns], dtype=bool)
+        return np.abs(np.degrees(turns)) >= UNSTABLE_TURN
 
 
 @dataclass

@@ -63,16 +63,18 @@ def pitch_moment(loads: LoadFunction, mass: float, speed: float, attack: float, 
 
 
 def _crossing(loads: LoadFunction, mass: float, attack: float, steady_turn: bool, speeds: np.ndarray) -> float | None:
-    """The highest speed where ``M_y`` changes sign, refined by Brent's method."""
-    values = np.array([pitch_moment(loads, mass, v, attack, steady_turn) for v in speeds])
-    finite = np.isfinite(values[:-1]) & np.isfinite(values[1:])
-    changes = np.flatnonzero(finite & (np.sign(values[:-1]) != np.sign(values[1:])))
-    if len(changes) == 0:
-        return None
-    i = int(changes[-1])
-    return optimize.brentq(
-        lambda v: pitch_moment(loads, mass, v, attack, steady_turn), speeds[i], speeds[i + 1], xtol=0.01
-    )
+    """The highest speed where ``M_y`` changes sign between neighbours of the grid ``speeds`` (both finite),
+    refined by Brent's method.  The grid is walked down from its top, so the speeds below the crossing cost
+    nothing."""
+    above = pitch_moment(loads, mass, speeds[-1], attack, steady_turn)
+    for i in range(len(speeds) - 2, -1, -1):
+        value = pitch_moment(loads, mass, speeds[i], attack, steady_turn)
+        if math.isfinite(value) and math.isfinite(above) and np.sign(value) != np.sign(above):
+            return optimize.brentq(
+                lambda v: pitch_moment(loads, mass, v, attack, steady_turn), speeds[i], speeds[i + 1], xtol=0.01
+            )
+        above = value
+    return None
 
 
 @dataclass

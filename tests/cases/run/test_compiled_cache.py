@@ -70,3 +70,24 @@ def test_an_edit_elsewhere_keeps_the_cache(tree, name):
         assert digest(tree) == before
     finally:
         path.write_bytes(text)
+
+
+def test_an_entry_point_needs_compiling_until_each_of_its_functions_is_cached_for_this_copy(tmp_path, monkeypatch):
+    """Each compiled function of an entry point has its own index file; one found in the folder of another copy of
+    the code (another checkout) is not this copy's machine code."""
+    from numba.core.caching import _CacheLocator
+
+    monkeypatch.setattr(compiled, "numba_cache_folder", lambda: tmp_path)
+    source = Path(compiled.__file__).with_name("pitch_plane_step.py")
+    here = tmp_path / _CacheLocator.get_suitable_cache_subpath(str(source))
+    elsewhere = tmp_path / _CacheLocator.get_suitable_cache_subpath(str(tmp_path / "other" / "run" / "x.py"))
+    for folder in (here, elsewhere):
+        folder.mkdir(parents=True)
+    (elsewhere / "pitch_plane_step.pitch_plane_trajectory-35.py311.nbi").touch()
+    (elsewhere / "pitch_plane_step.pitch_plane_turns-52.py311.nbi").touch()
+    assert compiled.needs_compiling("pitch_plane_step")
+    (here / "pitch_plane_step.pitch_plane_trajectory-35.py311.nbi").touch()
+    assert compiled.needs_compiling("pitch_plane_step")  # the batch of the multi-fidelity sort is not compiled yet
+    (here / "pitch_plane_step.pitch_plane_turns-52.py311.nbi").touch()
+    assert not compiled.needs_compiling("pitch_plane_step")
+    assert compiled.needs_compiling("dafl_step")

@@ -8,9 +8,11 @@ import pytest
 
 from cases import history_table, load_scene, prepare_projectile, run_scene, scene_path, summarise
 from cases.reference.normal_impact import axial_depth_1d, closed_form_depth, scene_depth_1d
-from cases.run import initial_state
+from cases.run import initial_attitude, initial_state
+from cases.run.runner import PROFILE_POINTS, profile_lowest
 from dynamics import ENERGY_TOLERANCE, State
 from dynamics.quaternion import from_rotation_matrix, multiply
+from mesh import BluntOgiveNose, ConeNose, OgiveNose, Profile, ProfileBody, SecantOgiveNose
 
 SHARP = (("effects.contact_incidence", 0.0), ("numerics.entry_smoothing", 0.0))  # the paper's switches
 TABLE3 = {  # test: (paper's prediction of the distance travelled, m)
@@ -248,3 +250,40 @@ def test_the_summary_is_typed_with_units_and_round_trips_through_json():
     assert RunSummary.from_record({**record, "scene_resolved": {}}) == summary
     nan_free = summary.model_copy(update={"final_speed": math.nan}).record()
     assert nan_free["final_speed"] is None and math.isnan(RunSummary.from_record(nan_free).final_speed)
+
+
+_SHANK = 0.0775  # m: the 155 mm family's shank radius
+_PROFILES = {
+    "ogive": Profile(0.155, 0.93, OgiveNose(3.0)),
+    "cone": Profile(0.155, 0.93, ConeNose(12.0)),
+    "secant": Profile(0.155, 0.93, SecantOgiveNose(6.0, 0.3)),
+    "blunt": Profile(0.155, 0.93, BluntOgiveNose(3.0, 0.02)),
+    "boat_tail": Profile(0.155, 0.93, OgiveNose(5.0), ProfileBody(((0.75, _SHANK), (0.85, 0.073), (0.93, 0.062)))),
+    "flare": Profile(0.155, 0.93, OgiveNose(5.0), ProfileBody(((0.70, _SHANK), (0.82, 0.082), (0.93, 0.095)))),
+}
+
+
+@pytest.mark.parametrize("name", _PROFILES)
+def test_the_lowest_point_on_the_hull_is_the_lowest_of_all_the_profiles_points(name):
+    """Against the minimum over every one of the profile's points, for directions all round (the hull is a search
+    structure only: it must give the same minimum, to the last bit or within an ulp of rounding)."""
+    profile = _PROFILES[name]
+    angle = np.random.default_rng(7).uniform(0.0, np.pi, 3000)
+    along, across = np.cos(angle), np.abs(np.sin(angle))
+    along, across = np.concatenate([along, [1.0, -1.0, 0.0]]), np.concatenate([across, [0.0, 0.0, 1.0]])
+    s = np.linspace(0.0, profile.length, PROFILE_POINTS)
+    every = np.min(-np.outer(along, s) - np.outer(across, profile.radius_at(s)), axis=1)
+    hull = profile_lowest(profile, along, across)
+    assert np.max(np.abs(hull - every)) <= 4 * np.finfo(float).eps * profile.length
+    assert np.mean(hull == every) > 0.99
+
+
+def test_initial_attitudes_of_arrays_are_those_of_each_entry():
+    rng = np.random.default_rng(3)
+    oblique, attack, yaw = rng.uniform(0, 80, 50), rng.normal(size=50), rng.normal(size=50)
+    many = initial_attitude(oblique, attack, yaw)
+    assert many.shape == (50, 4)
+    for row, b, a, y in zip(many, oblique, attack, yaw):
+        assert np.array_equal(row, initial_attitude(float(b), float(a), float(y)))
+    straight = initial_attitude(0.0, 0.0, 0.0)
+    assert straight.shape == (4,) and straight[0] == straight[2] and straight[1] == straight[3] == 0.0

@@ -11,6 +11,7 @@ from support import dask_cluster
 from cases import scene_path
 from cases.scene import InputError, load_scene
 from cases.studies.ensemble.sampling import (
+    RANDOM_BLOCK,
     Estimate,
     curve,
     draw,
@@ -74,6 +75,10 @@ def test_random_design_is_reproducible_and_extends():
     assert np.array_equal(first, draw(dists, 20, seed=11))
     assert np.array_equal(draw(dists, 50, seed=11)[:20], first)
     assert not np.array_equal(draw(dists, 20, seed=12), first)
+    # across the generators' blocks: more runs keep the earlier points, and the blocks are not copies
+    many = unit_points("random", 2 * RANDOM_BLOCK + 5, 2, seed=11)
+    assert np.array_equal(unit_points("random", RANDOM_BLOCK + 3, 2, seed=11), many[: RANDOM_BLOCK + 3])
+    assert not np.any(np.all(many[:RANDOM_BLOCK] == many[RANDOM_BLOCK : 2 * RANDOM_BLOCK], axis=1))
 
 
 def test_latin_hypercube_is_reproducible_but_not_extensible():

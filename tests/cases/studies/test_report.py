@@ -60,6 +60,28 @@ def test_a_report_is_written_by_the_one_writer(tmp_path):
     assert (tmp_path / "out" / "study.md").read_text() == "# a study\n"
 
 
+def _figure(text: str, path) -> None:
+    import os
+
+    path.write_text(f"{text} {os.getpid()}")
+
+
+def test_figures_drawn_on_workers_are_each_where_the_report_lists_them(tmp_path):
+    """``width`` 2: the figures (functions with their data bound) drawn by the local workers, each into its own
+    file with its own data, none by this process."""
+    import functools
+    import os
+
+    from cases.studies.engine.report import Report, write_report
+
+    figures = {f"f{i}.png": functools.partial(_figure, f"figure {i}") for i in range(5)}
+    paths = write_report(tmp_path, Report("study", "# a study\n", figures=figures), width=2)
+    assert [p.name for p in paths] == ["study.md", *figures]
+    for i, path in enumerate(paths[1:]):
+        text, pid = path.read_text().rsplit(" ", 1)
+        assert text == f"figure {i}" and int(pid) != os.getpid()
+
+
 def test_no_study_writes_a_file_itself():
     """Every study's files go through the one writer: no module of the studies but the writer calls the atomic
     writers or the JSON writer."""
