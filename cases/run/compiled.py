@@ -200,28 +200,30 @@ def use_numba_cache() -> None:
         config.CACHE_DIR = str(numba_cache_folder())  # type: ignore[attr-defined]  # set from the environment at import: numba's stubs omit it
 
 
-#: what each compiled entry point (a module of this package) is, about how long numba takes to compile it (s, as
-#: measured on 2 cores; the time depends on the machine and on what else runs), for the message a first compilation
-#: prints, and the compiled functions it defines, each with a machine code of its own in the cache
+#: each compiled entry point (a function numba caches): the module of this package that defines it, what it is,
+#: and about how long numba takes to compile it (s, as measured on 2 cores; the time depends on the machine and on
+#: what else runs), for the message a first compilation prints
 ENTRY_POINTS = {
-    "dafl_step": ("the compiled step (the DAFL load inside the Runge-Kutta step)", "15-30", ("dafl_step",)),
-    "pitch_plane_step": (
-        "the reduced pitch-plane model (penetrate predict, the multi-fidelity sort)",
-        "20-30",
-        ("pitch_plane_trajectory", "pitch_plane_turns"),
+    "dafl_step": ("dafl_step", "the compiled step (the DAFL load inside the Runge-Kutta step)", "15-30"),
+    "pitch_plane_trajectory": ("pitch_plane_step", "the reduced pitch-plane model (penetrate predict)", "15-25"),
+    "pitch_plane_turns": (
+        "pitch_plane_step",
+        "the reduced pitch-plane model's batch of runs (the multi-fidelity sort)",
+        "5-10",
     ),
 }
 
 
 def needs_compiling(entry: str) -> bool:
-    """Whether numba's cache for this code version lacks the machine code of a function of ``entry`` (a key of
+    """Whether numba's cache for this code version lacks the machine code of ``entry`` (a key of
     :data:`ENTRY_POINTS`) for this copy of the code: numba writes a function's index file when it first compiles
     it, in a folder named for the source's own folder (another checkout's code is not this one's)."""
     from numba.core.caching import _CacheLocator
 
-    source = Path(__file__).with_name(f"{entry}.py")
+    module = ENTRY_POINTS[entry][0]
+    source = Path(__file__).with_name(f"{module}.py")
     folder = numba_cache_folder() / _CacheLocator.get_suitable_cache_subpath(str(source))
-    return not all(any(folder.glob(f"{entry}.{function}-*.nbi")) for function in ENTRY_POINTS[entry][2])
+    return not any(folder.glob(f"{module}.{entry}-*.nbi"))
 
 
 #: the entry points this process has looked for in the cache: the first call compiles or loads the machine
@@ -238,7 +240,7 @@ def announce_compiling(entry: str) -> None:
         return
     _LOOKED_FOR.add(entry)
     if needs_compiling(entry):
-        what, seconds, _ = ENTRY_POINTS[entry]
+        _, what, seconds = ENTRY_POINTS[entry]
         print(
             f"penetrate: compiling {what} with numba, about {seconds} s, once for this version of the code"
             f" (kept in {numba_cache_folder()})",

@@ -97,7 +97,6 @@ class ReducedModel:
         self, scene: Scene, prepared: PreparedProjectile, rtol: float = RTOL, rings: dict[str, int] | None = None
     ) -> None:
         check_supported(scene)
-        announce_compiling("pitch_plane_step")
         use_numba_cache()
         from fem_loads.kernels.rings import revolved_surface, ring_data
 
@@ -188,6 +187,7 @@ class ReducedModel:
         the scene's)."""
         from dynamics.pitch_plane import END_REASONS, PlaneBody
 
+        announce_compiling("pitch_plane_trajectory")
         outcome = self._trajectory(
             self.surface.rings,
             self.laws,
@@ -217,6 +217,7 @@ class ReducedModel:
 
         from ...run.pitch_plane_step import pitch_plane_turns
 
+        announce_compiling("pitch_plane_turns")
         speeds = np.asarray(speeds, dtype=float)
         steps, ends = self._controls(speeds, UNSTABLE_TURN, None, True)
         turns = pitch_plane_turns(
