@@ -19,6 +19,7 @@ __all__ = [
     "exp_map",
     "compose",
     "rotation_matrix",
+    "rotation_matrices",
     "from_rotation_matrix",
     "right_jacobian_inverse",
     "normalize",
@@ -98,6 +99,13 @@ def rotation_scalars(w: float, x: float, y: float, z: float) -> tuple[float, ...
 def rotation_matrix(q: np.ndarray) -> np.ndarray:
     """Body-to-world rotation matrix of a unit quaternion."""
     return np.array(rotation_scalars(*q.tolist())).reshape(3, 3)
+
+
+def rotation_matrices(q: np.ndarray) -> np.ndarray:
+    """Body-to-world rotation matrices of unit quaternions ``q``, shape ``(..., 4)``, as shape ``(..., 3, 3)``: each
+    :func:`rotation_matrix`'s to the bit (the same arithmetic on arrays)."""
+    q = np.asarray(q, dtype=float)
+    return np.stack(rotation_scalars(*np.moveaxis(q, -1, 0)), axis=-1).reshape(*q.shape[:-1], 3, 3)
 
 
 def from_rotation_matrix(matrix: np.ndarray) -> np.ndarray:

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from dynamics.convergence import crossing_speed_scalars
-from dynamics.quaternion import rotation_matrix
+from dynamics.quaternion import rotation_matrices
 from fem_loads.target import face_height_scalars
 
 from .runner import RunResult
@@ -98,7 +98,7 @@ def history_columns(result: RunResult) -> dict[str, np.ndarray]:
     the curve stops, as the paper's does.
     """
     tr = result.trajectory
-    rotation = np.array([rotation_matrix(q) for q in tr.attitude])
+    rotation = rotation_matrices(tr.attitude)
     axis = rotation[:, :, 0]
     tip = tr.position + rotation @ result.prepared.tip
     face = result.scene.target.face

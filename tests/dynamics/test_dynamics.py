@@ -22,7 +22,7 @@ from dynamics import (
     State,
     simulate,
 )
-from dynamics.quaternion import exp_map, from_rotation_matrix, multiply, rotation_matrix
+from dynamics.quaternion import exp_map, from_rotation_matrix, multiply, rotation_matrices, rotation_matrix
 
 I_AXIAL, I_TRANSVERSE = 0.25, 2.3
 BODY = RigidBody(75.0, np.diag([I_AXIAL, I_TRANSVERSE, I_TRANSVERSE]))
@@ -257,6 +257,19 @@ def test_quaternion_helpers_agree_with_scipy():
         )
     assert np.allclose(exp_map(np.array([1e-12, 0, 0])), [1, 5e-13, 0, 0])
     assert math.isclose(np.linalg.norm(exp_map(np.array([3.0, 4.0, 0.0]))), 1.0)
+
+
+def test_the_array_form_gives_each_rotation_matrix_to_the_bit():
+    """``rotation_matrices`` over any leading shape is ``rotation_matrix`` of each quaternion, bit for bit (the run's
+    history and the reduced model's starts use it)."""
+    rng = np.random.default_rng(3)
+    q = rng.normal(size=(2, 50, 4))
+    q /= np.linalg.norm(q, axis=-1, keepdims=True)
+    q[0, :5, 1:] = 0.0  # the identity's neighbours: exact zeros off the diagonal
+    matrices = rotation_matrices(q)
+    assert matrices.shape == (2, 50, 3, 3)
+    assert np.array_equal(matrices, [[rotation_matrix(p) for p in row] for row in q])
+    assert np.array_equal(rotation_matrices(q[1, 7]), rotation_matrix(q[1, 7]))
 
 
 @pytest.mark.parametrize(

@@ -17,6 +17,7 @@ The rules:
 from __future__ import annotations
 
 import ast
+import functools
 import io
 import re
 import tokenize
@@ -170,9 +171,14 @@ def _code_lines(source: str, node: ast.AST) -> int:
         and isinstance(body[0].value.value, str)
     ):
         lines -= set(range(body[0].lineno, body[0].end_lineno + 1))
+    return len(lines & _statement_ends(source))
+
+
+@functools.lru_cache(maxsize=8)
+def _statement_ends(source: str) -> frozenset[int]:
+    """The lines on which the statements of ``source`` end (tokenised once a module, not once a function)."""
     tokens = tokenize.generate_tokens(io.StringIO(source).readline)
-    ends = {tok.end[0] for tok in tokens if tok.type == tokenize.NEWLINE}
-    return len(lines & ends)
+    return frozenset(tok.end[0] for tok in tokens if tok.type == tokenize.NEWLINE)
 
 
 @pytest.mark.parametrize("module", sorted(MODULES))

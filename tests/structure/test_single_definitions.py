@@ -14,6 +14,7 @@ coefficients (6, 15, 10) may appear in one function only; and no ``x._name`` is 
 from __future__ import annotations
 
 import ast
+import functools
 import subprocess
 import sys
 from collections.abc import Callable
@@ -136,6 +137,13 @@ def test_the_numpy_path_calls_the_same_definitions():
     assert "euler_scalars(" in Path(rigid_body.__file__).read_text().split("def accelerations(", 1)[1]
 
 
+@functools.cache
+def _parse(source: str) -> ast.Module:
+    """``ast.parse(source)``, once a source: each check walks every module of the project (the trees are read,
+    never changed)."""
+    return ast.parse(source)
+
+
 def _modules() -> list[Path]:
     return [path for package in PACKAGES for path in sorted((ROOT / package).rglob("*.py"))]
 
@@ -149,7 +157,7 @@ def test_the_smooth_step_s_coefficients_appear_in_one_function():
     """``t^3 (10 - 15 t + 6 t^2)``: any function holding the constants 6, 15 and 10 is another copy of it."""
     holders = []
     for path in _modules():
-        for node in ast.walk(ast.parse(path.read_text())):
+        for node in ast.walk(_parse(path.read_text())):
             if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
                 numbers = {
                     c.value for c in ast.walk(node) if isinstance(c, ast.Constant) and isinstance(c.value, float)
@@ -189,13 +197,13 @@ def _called_name(call: ast.Call) -> str:
 
 
 def _ramp_callers(source: str) -> list[str]:
-    return [f.name for f in _functions_calling(ast.parse(source), {"smooth_step", "smooth_step_scalars"})]
+    return [f.name for f in _functions_calling(_parse(source), {"smooth_step", "smooth_step_scalars"})]
 
 
 def _cap_takers(source: str) -> list[str]:
     """Functions taking a minimum with a name that holds ``cap``: a friction cap."""
     found = []
-    for function in _functions_calling(ast.parse(source), {"min", "minimum"}):
+    for function in _functions_calling(_parse(source), {"min", "minimum"}):
         for call in ast.walk(function):
             is_min = isinstance(call, ast.Call) and _called_name(call) in ("min", "minimum")
             if is_min and any("cap" in name for name in _names(*call.args)):
@@ -218,7 +226,7 @@ def test_a_friction_cap_is_taken_in_one_function():
 
 def _width_writers(source: str) -> list[str]:
     """Functions multiplying a name that holds ``incidence``: the contact width ``W = w + delta U`` written out."""
-    functions = [n for n in ast.walk(ast.parse(source)) if isinstance(n, ast.FunctionDef | ast.AsyncFunctionDef)]
+    functions = [n for n in ast.walk(_parse(source)) if isinstance(n, ast.FunctionDef | ast.AsyncFunctionDef)]
     found = []
     for function in functions:
         products = [n for n in ast.walk(function) if isinstance(n, ast.BinOp) and isinstance(n.op, ast.Mult)]
@@ -238,7 +246,7 @@ def test_the_contact_width_is_written_in_one_function():
 def _separation_writers(source: str) -> list[str]:
     """Functions taking ``max(Vn, 0)`` of a normal velocity: the law's velocity under separation written out."""
     found = []
-    for function in _functions_calling(ast.parse(source), {"max", "maximum"}):
+    for function in _functions_calling(_parse(source), {"max", "maximum"}):
         for call in ast.walk(function):
             if isinstance(call, ast.Call) and _called_name(call) in ("max", "maximum"):
                 names = {a.id for a in call.args if isinstance(a, ast.Name)}  # the velocity itself, not a sum
@@ -272,7 +280,7 @@ def test_the_factor_checks_find_a_copy():
 
 
 def _switches_builders(source: str) -> list[str]:
-    return [f.name for f in _functions_calling(ast.parse(source), {"Switches"})]
+    return [f.name for f in _functions_calling(_parse(source), {"Switches"})]
 
 
 def test_the_switches_are_built_from_the_effects_in_one_function():
@@ -290,11 +298,11 @@ PIPELINE_FACTORS = {"contact_factor", "contact_factor_scalars", "surface_factor"
 
 
 def _factor_callers(source: str) -> list[str]:
-    return [f.name for f in _functions_calling(ast.parse(source), PIPELINE_FACTORS)]
+    return [f.name for f in _functions_calling(_parse(source), PIPELINE_FACTORS)]
 
 
 def _pipeline_callers(source: str) -> list[str]:
-    return [f.name for f in _functions_calling(ast.parse(source), {"point_stress", "point_stress_scalars"})]
+    return [f.name for f in _functions_calling(_parse(source), {"point_stress", "point_stress_scalars"})]
 
 
 @pytest.mark.parametrize("module", LOADS)
@@ -319,7 +327,7 @@ def test_no_module_reads_another_s_private_attributes():
     """``x._name`` only on ``self`` and ``cls`` (argparse's sub-parsers action has no public name for its type)."""
     found = []
     for path in _modules():
-        for node in ast.walk(ast.parse(path.read_text())):
+        for node in ast.walk(_parse(path.read_text())):
             if not (isinstance(node, ast.Attribute) and node.attr.startswith("_") and not node.attr.startswith("__")):
                 continue
             if isinstance(node.value, ast.Name) and node.value.id in ("self", "cls"):
@@ -333,7 +341,7 @@ def test_no_module_reads_another_s_private_attributes():
 def test_the_check_finds_a_copy():
     """Control: a function with the smooth step's coefficients, and a private read, are found."""
     source = "def step(t):\n    return t * t * t * (10.0 + t * (6.0 * t - 15.0))\n\nvalue = loads._weights\n"
-    tree = ast.parse(source)
+    tree = _parse(source)
     functions = [n for n in ast.walk(tree) if isinstance(n, ast.FunctionDef)]
     numbers = {c.value for c in ast.walk(functions[0]) if isinstance(c, ast.Constant)}
     assert {6.0, 15.0, 10.0} <= numbers

@@ -137,17 +137,18 @@ class ReducedModel:
     def starts(self, speeds: np.ndarray, attack_angles: np.ndarray, oblique_angles: np.ndarray) -> np.ndarray:
         """The planar states at impact, shape ``(n, 6)``, for impact ``speeds`` (m/s) and attack and oblique angles
         (deg) in place of the scene's, with its pitch rate: the run's own start (:func:`cases.run.initial_state`)."""
-        from dynamics.quaternion import rotation_scalars
+        from dynamics.quaternion import rotation_matrices
 
-        attitudes = initial_attitude(np.asarray(oblique_angles, dtype=float), np.asarray(attack_angles), 0.0)
-        rotations = np.stack(rotation_scalars(*attitudes.reshape(-1, 4).T), axis=-1).reshape(-1, 3, 3)
+        attack = np.asarray(attack_angles, dtype=float)
+        attitudes = initial_attitude(np.asarray(oblique_angles, dtype=float), attack, 0.0)
+        rotations = rotation_matrices(attitudes.reshape(-1, 4))
         positions = impact_positions(self.prepared, rotations)
         beta = np.radians(oblique_angles)
         return np.column_stack(
             [
                 positions[:, 0],
                 positions[:, 2],
-                np.radians(np.asarray(oblique_angles) + np.asarray(attack_angles)),
+                np.radians(np.asarray(oblique_angles) + attack),
                 speeds * np.sin(beta),
                 -speeds * np.cos(beta),
                 np.full(len(speeds), self._start[5]),
