@@ -14,9 +14,8 @@ import numpy as np
 
 from dynamics.convergence import crossing_speed_scalars
 from dynamics.quaternion import rotation_matrices
-from fem_loads.target import face_height_scalars
 
-from .runner import RunResult
+from .runner import RunResult, tip_depths
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -100,8 +99,6 @@ def history_columns(result: RunResult) -> dict[str, np.ndarray]:
     tr = result.trajectory
     rotation = rotation_matrices(tr.attitude)
     axis = rotation[:, :, 0]
-    tip = tr.position + rotation @ result.prepared.tip
-    face = result.scene.target.face
     speed = np.linalg.norm(tr.velocity, axis=1)
     direction = tr.velocity / np.where(speed > 0, speed, 1.0)[:, None]
     total_attack = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", axis, direction), -1.0, 1.0)))
@@ -124,7 +121,7 @@ def history_columns(result: RunResult) -> dict[str, np.ndarray]:
         "velocity_z": tr.velocity[:, 2],
         "speed": speed,
         "path_length": tr.path_length,
-        "tip_depth": -face_height_scalars(tip.T, face.normal, face.offset),  # below the front face
+        "tip_depth": tip_depths(tr.position, rotation, result.prepared.tip, result.scene.target.face),
         "attitude_w": tr.attitude[:, 0],
         "attitude_x": tr.attitude[:, 1],
         "attitude_y": tr.attitude[:, 2],

@@ -317,7 +317,7 @@ def run_warnings(end_reason: str, statistics: dict) -> list[str]:
         if not math.isfinite(error):
             moved = "ends otherwise"
         else:
-            moved = f"moves the path length by {error:.1%} and the final axis by {turn:.2g} deg"
+            moved = f"moves the depth or the path length by {error:.1%} and the final axis by {turn:.2g} deg"
         warnings.append(
             f"only {steps} fixed steps, and the same run at half numerics.time_step {moved}: the step is too"
             " coarse to trust this run's figures to better than that (shorten it, or use numerics.integrator ="

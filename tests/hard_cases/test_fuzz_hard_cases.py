@@ -7,10 +7,13 @@ Each drawn scene is run twice: with the drawn numerics, and with Dormand-Prince 
 stop time, or carry a warning that says why it may not; no fixed-step run may end by the time limit without a
 warning.  In three dimensions the run's end must also agree with its trajectory, a body that leaves by the front
 face must keep more than ``numerics.slow_fraction`` of its speed or move nose first (a body that hooks round in soil
-and climbs out, slowly), and the kinetic energy must never rise.  Three draws that once failed (a stop after a step
-that turned the velocity; a finned body's nose measured to its fins; a run of five coarse steps judged by a check
-that erred as it did) are kept as tests of their own.  The draws are derandomised (the same every run) and few in
-the default suite; the slow variants draw more; ``PENETRATE_FUZZ_SCALE=N`` multiplies both and draws new ones
+and climbs out, slowly), and the kinetic energy must never rise.  Seven draws that once failed (a stop after a
+step that turned the velocity; a finned body's nose measured to its fins; a run of five coarse steps judged by a
+check that erred as it did; a glancing shot whose coarse-step check measured its path, not its depth; a converged
+run whose steps failed at the floor as good as at rest; a flank grazing the face with the tip never in; a run that
+agreed with its twice-as-coarse run while both erred) are kept as tests of their own.  The draws are derandomised
+(the same every run) and few in the default suite; the slow variants draw more; ``PENETRATE_FUZZ_SCALE=N``
+multiplies both and draws new ones
 (docs/numerics.md, "The end of a run").
 """
 
@@ -92,7 +95,9 @@ def check(draw: dict) -> None:
     depth, stop_time, end = reference(*keys)
     data = scene_data(*keys)
     if draw["integrator"] == "rk4":
-        data["numerics"].update({"integrator": "rk4", "time_step": min(0.01, draw["fraction"] * stop_time)})
+        # no shorter than the scene allows: at most MAX_STEPS steps to the time limit
+        step = min(0.01, max(draw["fraction"] * stop_time, data["numerics"]["time_limit"] / MAX_STEPS))
+        data["numerics"].update({"integrator": "rk4", "time_step": step})
     else:
         data["numerics"].update({"integrator": "dopri54", "rtol": draw["rtol"]})
     summary = summarise(run_scene(scene_from_dict(data)))
@@ -322,11 +327,23 @@ def check_trajectory(result: RunResult, summary: RunSummary, why: tuple) -> None
     assert np.all(gains <= ENERGY_TOLERANCE), ("energy gained", float(np.max(gains)), int(np.argmax(gains)), *why)
 
 
+def travel_to_rest(result: RunResult) -> float:
+    """How far (m) a run that ended slow (at most ``numerics.slow_fraction`` of its impact speed) and braked would
+    still travel to rest under its last load, ``v^2 / (2 a)``; inf when it ended faster or not braked."""
+    velocity, force = result.trajectory.velocity[-1], result.trajectory.force[-1]
+    speed = float(np.linalg.norm(velocity))
+    deceleration = -float(force @ velocity) / (result.prepared.mass.mass * speed) if speed > 0.0 else 0.0
+    slow = speed <= result.scene.numerics.slow_fraction * result.scene.impact.speed
+    return speed**2 / (2 * deceleration) if slow and deceleration > 0.0 else math.inf
+
+
 def check_oblique(draw: dict) -> None:
     """The drawn shot with its drawn numerics and at Dormand-Prince rtol 1e-9: each run's end agrees with its
     trajectory (:func:`check_trajectory`); the drawn run ends as the converged one, within 2 % of its depth and,
-    when it stops, by twice its stop time, or carries a warning; when the converged run itself ends numerically
-    the drawn run warns."""
+    when it stops, by twice its stop time (by 2 % of its final speed when the tip never goes below the face), or
+    carries a warning; when the converged run itself ends numerically
+    the drawn run warns, unless its steps failed at the floor with the body slow and braked (:func:`travel_to_rest`):
+    then the drawn run stops within 2 % of where the converged one would rest, or warns."""
     reference, converged = oblique_reference(_reference_key(draw))
     check_trajectory(reference, converged, ("reference", draw))
     data = oblique_scene_data(draw)
@@ -344,11 +361,22 @@ def check_oblique(draw: dict) -> None:
         (converged.end_reason, converged.depth, converged.final_time, converged.final_speed, converged.warnings),
     )
     check_trajectory(result, summary, why)
-    if converged.end_reason not in PHYSICAL_ENDS:  # the reference itself ended numerically: the run must say so
-        assert summary.warnings, why
+    left = travel_to_rest(reference) if converged.end_reason == "step_floor" else math.inf
+    if converged.end_reason not in PHYSICAL_ENDS and not math.isfinite(left):
+        assert summary.warnings, why  # the reference itself ended numerically: the run must say so
         return
-    depth_error = abs(summary.depth - converged.depth)
-    close = summary.end_reason == converged.end_reason and depth_error <= 0.02 * abs(converged.depth)
+    if converged.end_reason not in PHYSICAL_ENDS:
+        # the reference's steps failed at the floor with the body slow and braked: it rests within ``left`` of where
+        # it ended, so the run must stop within 2 % of that (plus ``left``) and by twice its time, or warn
+        depth_error = max(0.0, abs(summary.depth - converged.depth) - left)
+        close = summary.end_reason == "stopped" and depth_error <= 0.02 * abs(converged.depth)
+        assert (close and summary.final_time <= 2 * converged.final_time) or summary.warnings, (left, *why)
+        return
+    if converged.depth > 0.0:
+        close = abs(summary.depth - converged.depth) <= 0.02 * converged.depth
+    else:  # the tip never went below the face (the flank grazed it): its height is no depth; hold the speed instead
+        close = abs(summary.final_speed - converged.final_speed) <= 0.02 * converged.final_speed
+    close = close and summary.end_reason == converged.end_reason
     if converged.end_reason == "stopped":
         close = close and summary.final_time <= 2 * converged.final_time
     assert close or summary.warnings, why
@@ -477,9 +505,9 @@ FINNED_REBOUND = {
 
 
 def test_a_run_of_a_few_coarse_steps_ends_near_the_converged_run_or_warns():
-    """The rebounding shot at five RK4 steps of 0.5 ms ends 4.1 % deeper than the converged run, and is warned.  Its
-    run at twice the step moves the path by only 0.44 %, but that run's energy guard retook all its steps and errs
-    as this one does, so the check goes on to half the step (1.6 % deep) and warns."""
+    """The rebounding shot at five RK4 steps of 0.5 ms ends 4.1 % deeper than the converged run, and is warned: the
+    same run at half the step moves it by 1.6 % (at twice the step, whose energy guard retakes all its steps, it
+    errs alike and moves it by only 0.44 %)."""
     _, converged = oblique_reference(_reference_key(FINNED_REBOUND))
     data = oblique_scene_data(FINNED_REBOUND)
     data["numerics"].update({"integrator": "rk4", "time_step": 4.9937e-4})
@@ -487,3 +515,113 @@ def test_a_run_of_a_few_coarse_steps_ends_near_the_converged_run_or_warns():
     assert summary.end_reason == converged.end_reason == "stopped" and not converged.warnings, (summary, converged)
     assert abs(summary.depth - converged.depth) > 0.02 * converged.depth, (summary, converged)
     assert any("fixed steps, and the same run at half numerics.time_step" in line for line in summary.warnings), summary
+
+
+#: found by the property at PENETRATE_FUZZ_SCALE: a 30 mm CRH 3 ogive at 100 m/s and 4 deg into a 0.56 GPa target;
+#: the converged run's steps fail at the floor 36.9 mm deep at 1.0 m/s, sliding sideways and braked, 8 um from rest
+#: (2.2e-4 of its path, more than the rest rule's 1e-4), so it ends ``step_floor`` and warns
+SLOW_AT_THE_FLOOR = {
+    "body": "ogive CRH 3, L/D 8",
+    "target": {"law": polynomial(10.0**8.75, 2000.0), "inclination": 0.0},
+    "speed": 100.0,
+    "obliquity": 4.0,
+    "attack_angle": 0.0,
+    "yaw_angle": 0.0,
+    "rates": (0.0, 0.0, 0.0),
+    "integrator": "rk4",
+    "fraction": 0.1,
+    "rtol": 0.01,
+}
+
+#: found by the property at PENETRATE_FUZZ_SCALE: the same rod at 100 m/s, 42 deg and attack 11 deg glancing off a
+#: 1 GPa target; at 17 RK4 steps its path is 1.5 % short and its depth 2.5 % short of the converged run's
+GLANCING_OFF_STRONG = {
+    "body": "ogive CRH 3, L/D 8",
+    "target": {"law": polynomial(1e9, 2000.0), "inclination": 0.0},
+    "speed": 100.0,
+    "obliquity": 42.0,
+    "attack_angle": 11.0,
+    "yaw_angle": 0.0,
+    "rates": (0.0, 0.0, 0.0),
+    "integrator": "rk4",
+    "fraction": 10.0**-1.25,
+    "rtol": 0.01,
+}
+
+
+def test_a_run_near_a_reference_that_ends_at_rest_on_the_floor_needs_no_warning():
+    """The converged run of :data:`SLOW_AT_THE_FLOOR` ends ``step_floor`` as good as at rest (under a thousandth of
+    its path from rest); the drawn RK4 run stops 0.5 % deeper without a warning, which :func:`check_oblique` accepts
+    as the same stop."""
+    reference, converged = oblique_reference(_reference_key(SLOW_AT_THE_FLOOR))
+    assert converged.end_reason == "step_floor" and converged.warnings, converged  # the draw's conditions
+    assert travel_to_rest(reference) <= 1e-3 * converged.path_length, converged
+    check_oblique(SLOW_AT_THE_FLOOR)
+
+
+def test_a_glancing_shot_is_warned_of_a_step_that_misses_its_depth():
+    """:data:`GLANCING_OFF_STRONG` at its drawn step: it ricochets as the converged run does, with its depth 2.5 %
+    short, and its coarse-step check, which measures the depth as well as the path, warns (the path alone moves
+    by 0.75 % at half the step, the depth by 2.1 %)."""
+    _, converged = oblique_reference(_reference_key(GLANCING_OFF_STRONG))
+    data = oblique_scene_data(GLANCING_OFF_STRONG)
+    data["numerics"].update({"integrator": "rk4", "time_step": GLANCING_OFF_STRONG["fraction"] * converged.final_time})
+    summary = summarise(run_scene(scene_from_dict(data)))
+    assert summary.end_reason == converged.end_reason == "ricocheted", (summary, converged)
+    assert abs(summary.depth - converged.depth) > 0.02 * converged.depth, (summary, converged)
+    assert any("moves the depth or the path length by 2." in line for line in summary.warnings), summary
+    check_oblique(GLANCING_OFF_STRONG)
+
+
+#: found by the slow property at PENETRATE_FUZZ_SCALE: the rod at 198 m/s and 80 deg, its axis 0.5 deg off its
+#: velocity, grazes a 0.56 GPa layer over concrete with its flank and glances off at 192 m/s, its tip 6.5 mm above
+#: the face at its lowest: 9 RK4 steps put the tip 0.7 mm higher (11 % of that height) and leave at the same speed
+FLANK_GRAZING = {
+    "body": "ogive CRH 3, L/D 8",
+    "target": {
+        "layers": [{"thickness_lengths": 1.0, "law": polynomial(10.0**8.75, 2000.0)}, {"law": concrete(20e6, 2200.0)}],
+        "inclination": 0.0,
+    },
+    "speed": 198.0,
+    "obliquity": 80.0,
+    "attack_angle": 0.5,
+    "yaw_angle": 1.0,
+    "rates": (0.0, 0.0, 0.0),
+    "integrator": "rk4",
+    "fraction": 0.1,
+    "rtol": 0.01,
+}
+
+
+def test_a_flank_that_grazes_the_face_is_held_to_its_speed_not_its_tip_height():
+    """:data:`FLANK_GRAZING`: the converged run ricochets with the tip never below the face, so the summary's depth
+    is a height; :func:`check_oblique` holds the drawn run to the converged speed it leaves with."""
+    _, converged = oblique_reference(_reference_key(FLANK_GRAZING))
+    assert converged.end_reason == "ricocheted" and converged.depth < 0.0, converged  # the draw's conditions
+    check_oblique(FLANK_GRAZING)
+
+
+#: found by the slow property at PENETRATE_FUZZ_SCALE: the finned test 2 body into 20 MPa concrete at 299 m/s, normal,
+#: yawed by 0.03 deg; the converged run stops 0.506 m deep at 3.18 ms
+FINNED_INTO_CONCRETE = {
+    "body": "finned test 2",
+    "target": {"law": concrete(20e6, 2200.0), "inclination": 0.0},
+    "speed": 299.0,
+    "obliquity": 0.0,
+    "attack_angle": 0.0,
+    "yaw_angle": 0.03125,
+    "rates": (0.0, 0.0, 0.0),
+}
+
+
+def test_a_run_that_errs_as_its_run_at_twice_the_step_is_warned():
+    """:data:`FINNED_INTO_CONCRETE` at RK4 steps of 1e-4 s (52 steps) stops 4.8 % deep; at 2e-4 s it is 4.3 % deep,
+    within 0.5 % of it (the error has not begun to fall with the step), at 5e-5 s 2.9 %: the check, which compares
+    with half the step, warns of a 1.9 % move."""
+    _, converged = oblique_reference(_reference_key(FINNED_INTO_CONCRETE))
+    data = oblique_scene_data(FINNED_INTO_CONCRETE)
+    data["numerics"].update({"integrator": "rk4", "time_step": 1.005e-4})
+    summary = summarise(run_scene(scene_from_dict(data)))
+    assert summary.end_reason == converged.end_reason == "stopped" and not converged.warnings, (summary, converged)
+    assert abs(summary.depth - converged.depth) > 0.04 * converged.depth, (summary, converged)  # the error
+    assert any("moves the depth or the path length by 1.9%" in line for line in summary.warnings), summary

@@ -406,7 +406,7 @@ def _strip_none(value):
 # (a) mutated scenes, as dictionaries and as TOML files
 
 
-@fuzz(500)
+@fuzz(250)
 @given(mutated_scenes())
 def test_mutated_scenes_validate_or_explain(data):
     outcome("mutated scene (dict)", lambda: scene_from_dict(data), "scene")
@@ -456,7 +456,7 @@ def profile_noses(draw):
     return data
 
 
-@fuzz(300)
+@fuzz(150)
 @given(profile_noses())
 def test_profile_noses_validate_or_explain(data):
     outcome("measured nose tables", lambda: scene_from_dict(data), "scene")
@@ -487,7 +487,7 @@ def measured_bodies(draw):
     return data
 
 
-@fuzz(200)
+@fuzz(100)
 @given(measured_bodies())
 def test_measured_bodies_validate_or_explain(data):
     outcome("measured body tables", lambda: scene_from_dict(data), "scene")
@@ -554,7 +554,7 @@ def geometry_projectiles(draw):
     return data
 
 
-@fuzz(200)
+@fuzz(100)
 @given(geometry_projectiles())
 def test_geometry_projectiles_validate_or_explain(body_files, data):
     geometry = data["projectile"]["geometry"]
@@ -568,7 +568,7 @@ def scratch(tmp_path_factory):
     return tmp_path_factory.mktemp("fuzz")
 
 
-@fuzz(300)
+@fuzz(150)
 @given(mutated_scenes())
 def test_mutated_scene_files_validate_or_explain(scratch, data):
     path = scratch / "mutated.toml"
@@ -580,7 +580,7 @@ def test_mutated_scene_files_validate_or_explain(scratch, data):
 # (b) garbage: random bytes, random text, random TOML documents, shipped files with random edits
 
 
-@fuzz(200)
+@fuzz(100)
 @given(st.one_of(st.binary(max_size=300), st.text(max_size=300).map(lambda t: t.encode("utf-8", "surrogatepass"))))
 def test_random_bytes_and_text(scratch, raw):
     path = scratch / "garbage.toml"
@@ -588,7 +588,7 @@ def test_random_bytes_and_text(scratch, raw):
     outcome("random bytes and text", lambda: load_scene(path), path)
 
 
-@fuzz(200)
+@fuzz(100)
 @given(st.dictionaries(keys, values, max_size=6))
 def test_random_toml_documents(scratch, data):
     path = scratch / "random.toml"
@@ -614,7 +614,7 @@ def edited_text(draw):
     return _edits(draw, text, ["[", "]", "=", "\n", '"', "{", ".", "nan", "-", "1e999", "\\", "#", "'''"], 5, 12)
 
 
-@fuzz(300)
+@fuzz(150)
 @given(edited_text())
 def test_edited_scene_files(scratch, text):
     path = scratch / "edited.toml"
@@ -653,7 +653,7 @@ def edited_series(draw):
     return _edits(draw, text, pieces, 4, 10)
 
 
-@fuzz(200)
+@fuzz(100)
 @given(edited_series())
 def test_edited_series_files(scratch, text):
     path = scratch / "edited.csv"
@@ -688,7 +688,7 @@ COLUMNS = st.sampled_from(
 )
 
 
-@fuzz(200)
+@fuzz(100)
 @given(st.lists(COLUMNS, min_size=1, max_size=6), st.lists(st.lists(CELLS, min_size=1, max_size=7), max_size=4))
 def test_random_series_files(scratch, header, rows):
     path = scratch / "random.csv"
@@ -796,7 +796,7 @@ overrides = st.one_of(
 )
 
 
-@fuzz(400)
+@fuzz(200)
 @given(st.lists(overrides, min_size=1, max_size=3))
 # found by an exploration: an unknown top-level key, then a key through it
 @example(["0=", "0.0="])
@@ -1053,7 +1053,7 @@ EXTRA = {
 }
 
 
-@fuzz(250)
+@fuzz(125)
 @given(st.data())
 def test_command_line_bad_input(cli_files, tmp_path_factory, data):
     args = data.draw(bad_command_lines(cli_files))
@@ -1094,7 +1094,7 @@ FIT_PARAMETERS = [
 ]
 
 
-@fuzz(60)
+@fuzz(30)
 @given(
     parameters=st.lists(st.sampled_from(FIT_PARAMETERS), min_size=1, max_size=len(FIT_PARAMETERS), unique=True),
     observations=st.lists(
@@ -1149,7 +1149,7 @@ class StableOrUnstable:
         return SweepResult(sweep, runs, store)
 
 
-@fuzz(60)
+@fuzz(30)
 @given(
     unstable=st.booleans(),
     low=st.floats(1, 9000),
@@ -1344,7 +1344,7 @@ USABLE_LAW = st.tuples(
 )
 
 
-@fuzz(60)
+@fuzz(30)
 @given(case=st.one_of(ANY_LAW, USABLE_LAW))
 def test_a_user_law_is_used_or_refused_in_one_line(tmp_path_factory, case):
     """A law file with any of these bodies, arguments and parameters: the scene is valid and its law gives finite
@@ -1388,7 +1388,7 @@ TARGETS = st.fixed_dictionaries(
 )
 
 
-@fuzz(300)
+@fuzz(150)
 @given(target=TARGETS)
 @example(target={"layers": [{"thickness": 1.0, "law": "soil"}, {"thickness": 0.5, "law": "air"}, {"law": "soil"}]})
 @example(target={"layers": [{"thickness": 2.0, "law": "soil"}], "inclination": 30.0})
