@@ -5,7 +5,7 @@ or in a :class:`SceneError` of one line that names the field and says what is al
 exception may escape.  The command ends in exit code 0 or in one line on stderr with a non-zero
 code, and creates nothing when it fails on bad input.
 
-``PENETRATE_FUZZ_SCALE=N`` multiplies the number of examples (the default run takes about 30 s);
+``PENETRATE_FUZZ_SCALE=N`` multiplies the number of examples (the default run takes about 20 s);
 the outcome counts are printed at the end of the module (``pytest -s`` or in the terminal summary).
 """
 
